@@ -1,0 +1,1 @@
+"""Affordance reasoning: object context to semantic actions. Never imports pybullet."""

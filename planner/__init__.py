@@ -1,0 +1,1 @@
+"""Behaviour trees (py_trees) that sequence skills; talks to the world through a port."""

@@ -1,0 +1,1 @@
+"""Dynamic Movement Primitive skills: numpy and scipy only."""

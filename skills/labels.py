@@ -1,0 +1,80 @@
+"""Semantic vocabulary shared by skills, the affordance reasoner and the planner.
+
+A skill carries an :class:`Action` label (what it does) and the :class:`AffordanceElement`
+labels it serves (which object properties make it relevant), after the paper's Fig. 4b.
+"""
+
+from __future__ import annotations
+
+from enum import Enum, StrEnum
+
+
+class Space(StrEnum):
+    """The space a skill acts in (paper Sec. 2.2): the object's pose or each palm's pose in {O}."""
+
+    ABSOLUTE = "absolute"
+    RELATIVE = "relative"
+
+
+class Arm(StrEnum):
+    """One of the two arms; ``LEFT`` is on the robot's +y side."""
+
+    LEFT = "left"
+    RIGHT = "right"
+
+
+class Action(StrEnum):
+    """What a skill does, as named in the library, the rule files and the trees."""
+
+    APPROACH = "approach"
+    GRASP_LATERAL = "grasp_lateral"
+    TRANSPORT = "transport"
+    ROTATE_Z = "rotate_z"
+    AVOID_OBSTACLE = "avoid_obstacle"
+    AVOID_LINKS = "avoid_links"
+    HOLD_LATERAL = "hold_lateral"
+    HOLD_FORCE = "hold_force"
+    KEEP_UPRIGHT = "keep_upright"
+    KEEP_LEVEL = "keep_level"
+    LIMIT_REPULSION = "limit_repulsion"
+    RELEASE = "release"
+    RETREAT = "retreat"
+
+
+class AffordanceElement(StrEnum):
+    """Object and scene facts a skill serves (context elements of the affordance map)."""
+
+    GRASPABLE_LATERAL = "graspable_lateral"
+    PARALLEL_FACES = "parallel_faces"
+    HEAVY = "heavy"
+    LIGHT = "light"
+    WIDE = "wide"
+    FRAGILE = "fragile"
+    OPEN = "open"
+    FULL = "full"
+    HOT = "hot"
+    CONTAINS_ITEMS = "contains_items"
+    OBSTACLE_NEAR_PATH = "obstacle_near_path"
+    OBSTACLE_NEAR_LINKS = "obstacle_near_links"
+    ON_SURFACE = "on_surface"
+    ROTATABLE = "rotatable"
+
+
+class Grasp(StrEnum):
+    """Grasp types the reasoner can choose."""
+
+    TWO_PALM_LATERAL = "two_palm_lateral"
+    TWO_ARM_SUPPORT = "two_arm_support"
+    ONE_ARM_TOP = "one_arm_top"
+    ONE_ARM_SIDE = "one_arm_side"
+    NONE = "none"
+
+
+def _check_unique(enum_cls: type[Enum]) -> None:
+    values = [m.value for m in enum_cls]
+    if len(values) != len(set(values)):
+        raise RuntimeError(f"{enum_cls.__name__}: duplicate values")
+
+
+for _cls in (Space, Arm, Action, AffordanceElement, Grasp):
+    _check_unique(_cls)
