@@ -1,0 +1,679 @@
+"""Pose DMPs: three positional DMPs and one quaternion DMP sharing one phase.
+
+This is the unit the paper composes: an absolute skill moves the object's pose, a relative
+skill moves a palm's pose in the object frame. Position and orientation outputs always have
+the same length because they are integrated in the same loop over the same phase.
+
+Pure functions first (:func:`pose_step`, :func:`pose_rollout`, :func:`fit_pose`), then the
+thin stateful :class:`PoseDMP`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field, replace
+from functools import cached_property
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from skills import quaternion as quat
+from skills.basis import phase_step
+from skills.coupling import CouplingTerm
+from skills.demonstration import Demonstration
+from skills.dmp import (
+    DMPParams,
+    ForcingTerm,
+    PositionModel,
+    check_demonstrations,
+    design_matrix,
+    linear_rollout,
+    normalised_position_targets,
+    ridge,
+)
+from skills.quaternion_dmp import (
+    OrientationModel,
+    integrate_orientation,
+    normalised_orientation_targets,
+    orientation_reference,
+)
+from skills.scaling import Scaling
+from skills.types import Array
+
+
+@dataclass(frozen=True)
+class PoseState:
+    """Full state of a pose DMP, the unit of handover between skills.
+
+    Attributes
+    ----------
+    position, velocity, acceleration : ndarray, shape (3,)
+        World (or parent) frame; m, m/s, m/s^2.
+    orientation : ndarray, shape (4,)
+        Unit quaternion ``(x, y, z, w)``.
+    angular_velocity, angular_acceleration : ndarray, shape (3,)
+        rad/s, rad/s^2, same frame as the position.
+    phase : float
+        Canonical phase in (0, 1].
+    """
+
+    position: Array
+    velocity: Array
+    acceleration: Array
+    orientation: Array
+    angular_velocity: Array
+    angular_acceleration: Array
+    phase: float = 1.0
+
+    @staticmethod
+    def at_rest(position: ArrayLike, orientation: ArrayLike = quat.IDENTITY) -> PoseState:
+        """At ``position`` and ``orientation`` with zero velocities, phase 1."""
+        y = np.array(position, dtype=float)
+        if y.shape != (3,) or not np.all(np.isfinite(y)):
+            raise ValueError(f"position: expected 3 finite numbers, got {position!r}")
+        q = quat.as_quaternions(orientation, "orientation")
+        if q.shape != (4,):
+            raise ValueError(f"orientation: expected one quaternion (4,), got shape {q.shape}")
+        z = np.zeros(3)
+        return PoseState(y, z, z.copy(), q, z.copy(), z.copy(), 1.0)
+
+    def twist(self) -> Array:
+        """Linear and angular velocity stacked, shape (6,)."""
+        return np.concatenate((self.velocity, self.angular_velocity))
+
+    def with_phase(self, s: float) -> PoseState:
+        """The same pose and motion at another phase (a fresh skill starts at ``s = 1``)."""
+        return replace(self, phase=float(s))
+
+
+@dataclass(frozen=True)
+class PoseTarget:
+    """Where a pose DMP goes and how fast: start, goal, ``tau`` and the forcing scalings.
+
+    Build with :meth:`PoseModel.target` so the scaling matrices match the model.
+
+    Attributes
+    ----------
+    start_position, goal_position : ndarray, shape (3,)
+    start_orientation, goal_orientation : ndarray, shape (4,)
+    tau : float
+        Temporal scaling, s; the motion takes about ``tau``.
+    position_matrix, orientation_matrix : ndarray, shape (3, 3)
+        Forcing scalings for this start and goal.
+    effective_weights : ndarray, shape (K, 7)
+        The model's weights with the scalings folded in, plus a column of ones that yields the
+        basis normaliser from the same product: ``psi @ W = [f * sum(psi) / s, sum(psi)]``.
+    """
+
+    start_position: Array
+    start_orientation: Array
+    goal_position: Array
+    goal_orientation: Array
+    tau: float
+    position_matrix: Array
+    orientation_matrix: Array
+    effective_weights: Array
+
+    @cached_property
+    def goal_tuple(self) -> quat.Quat:
+        """Goal orientation as floats, for the scalar quaternion maths of the step."""
+        x, y, z, w = self.goal_orientation.tolist()
+        return (x, y, z, w)
+
+
+@dataclass(frozen=True)
+class PoseModel:
+    """A learnt pose DMP: a positional and an orientation model with one basis and phase."""
+
+    position: PositionModel
+    orientation: OrientationModel
+
+    @property
+    def params(self) -> DMPParams:
+        """Shared gains and basis settings."""
+        return self.position.params
+
+    @property
+    def demo_tau(self) -> float:
+        """Duration of the first demonstration, s."""
+        return self.position.demo_tau
+
+    def target(
+        self,
+        start_position: ArrayLike,
+        start_orientation: ArrayLike,
+        goal_position: ArrayLike,
+        goal_orientation: ArrayLike,
+        tau: float | None = None,
+    ) -> PoseTarget:
+        """A validated target for this model.
+
+        Raises
+        ------
+        ValueError
+            On non-finite positions, zero-norm quaternions or a non-positive ``tau``.
+        """
+        y0 = _vec3(start_position, "start_position")
+        g = _vec3(goal_position, "goal_position")
+        q0 = quat.as_quaternions(start_orientation, "start_orientation")
+        qg = quat.as_quaternions(goal_orientation, "goal_orientation")
+        t = float(self.demo_tau if tau is None else tau)
+        if not (np.isfinite(t) and t > 0):
+            raise ValueError(f"tau: expected a positive duration in s, got {tau!r}")
+        m_pos = self.position.forcing.matrix(g - y0)
+        m_ori = self.orientation.matrix(q0, qg)
+        effective = np.hstack(
+            (
+                self.position.forcing.weights @ m_pos.T,
+                self.orientation.forcing.weights @ m_ori.T,
+                np.ones((self.position.forcing.basis.size, 1)),
+            )
+        )
+        return PoseTarget(y0, q0, g, qg, t, m_pos, m_ori, effective)
+
+    @cached_property
+    def stacked_weights(self) -> Array:
+        """Position and orientation weights side by side, shape (K, 6)."""
+        return np.hstack((self.position.forcing.weights, self.orientation.forcing.weights))
+
+    @staticmethod
+    def still(params: DMPParams | None = None) -> PoseModel:
+        """A model with zero forcing: a critically damped spring to the goal pose."""
+        p = params or DMPParams()
+        basis = p.basis()
+        zero = ForcingTerm.zero(3, basis)
+        pos = PositionModel(p, zero, np.zeros(3), np.zeros(3), 1.0)
+        ori = OrientationModel(p, zero, quat.IDENTITY.copy(), quat.IDENTITY.copy(), 1.0)
+        return PoseModel(pos, ori)
+
+
+def _vec3(v: ArrayLike, name: str) -> Array:
+    arr = np.array(v, dtype=float)
+    if arr.shape != (3,) or not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name}: expected 3 finite numbers, got {v!r}")
+    return arr
+
+
+def fit_pose(
+    demos: Demonstration | Sequence[Demonstration],
+    params: DMPParams | None = None,
+    position_scaling: Scaling = Scaling.AMPLITUDE,
+    orientation_scaling: Scaling = Scaling.AMPLITUDE,
+    min_amplitude: float = 1e-3,
+    min_rotation: float = 1e-2,
+) -> PoseModel:
+    """Learn a pose DMP from demonstrations with 3-D positions and orientations.
+
+    Positions and orientations share one phase, one basis and one design matrix, so all
+    six dimensions are fitted by a single ridge solve.
+
+    Parameters
+    ----------
+    demos : Demonstration or sequence of Demonstration
+    params : DMPParams, optional
+    position_scaling, orientation_scaling : Scaling
+    min_amplitude : float
+        Reference displacement (m) below which a position axis does not scale.
+    min_rotation : float
+        Reference rotation (rad) below which a rotation axis does not scale.
+
+    Raises
+    ------
+    ValueError
+        If a demonstration has no orientations or its positions are not 3-D.
+    """
+    demo_list = [demos] if isinstance(demos, Demonstration) else list(demos)
+    for d in demo_list:
+        if d.positions.shape[1] != 3:
+            raise ValueError(f"{d.name}: positions: expected shape (N, 3), got {d.positions.shape}")
+        if d.orientations is None:
+            raise ValueError(f"{d.name}: orientations: expected (N, 4) quaternions, got none")
+    p = params or DMPParams()
+    check_demonstrations(demo_list, p.n_basis)
+    basis = p.basis()
+    first = demo_list[0]
+    ref_pos = first.positions[-1] - first.positions[0]
+    ref_ori = orientation_reference(first)
+    xs, fs = [], []
+    for d in demo_list:  # one design matrix per demonstration serves all six dimensions
+        _, x = design_matrix(d.t, d.duration, basis, p.alpha_s)
+        xs.append(x)
+        fs.append(
+            np.hstack(
+                (
+                    normalised_position_targets(d, p, ref_pos, position_scaling, min_amplitude),
+                    normalised_orientation_targets(
+                        d, p, ref_ori, orientation_scaling, min_rotation
+                    ),
+                )
+            )
+        )
+    w = ridge(xs, fs, p.regularisation)
+    pos = PositionModel(
+        p,
+        ForcingTerm(w[:, :3].copy(), basis, ref_pos, position_scaling, min_amplitude),
+        first.positions[0].copy(),
+        first.positions[-1].copy(),
+        first.duration,
+    )
+    assert first.orientations is not None
+    ori = OrientationModel(
+        p,
+        ForcingTerm(w[:, 3:].copy(), basis, ref_ori, orientation_scaling, min_rotation),
+        first.orientations[0].copy(),
+        first.orientations[-1].copy(),
+        first.duration,
+    )
+    return PoseModel(pos, ori)
+
+
+def forcing_accelerations(model: PoseModel, target: PoseTarget, s: float) -> tuple[Array, Array]:
+    """Learnt forcing as accelerations ``f / tau^2`` at phase ``s``: (linear, angular), (3,) each.
+
+    The RBF forcing term is itself a coupling term (the paper's skill encoding); this is it
+    in acceleration units, shared by :func:`pose_step` and :class:`LearntForcing`.
+    """
+    basis = model.position.forcing.basis
+    psi = np.exp(-basis.widths * (s - basis.centres) ** 2)
+    # One product for all six dimensions: position and orientation share the phase.
+    f = (psi @ model.stacked_weights) * (s / (max(psi.sum(), 1e-300) * target.tau * target.tau))
+    return target.position_matrix @ f[:3], target.orientation_matrix @ f[3:]
+
+
+@dataclass(frozen=True)
+class LearntForcing:
+    """The learnt RBF forcing term of ``model`` as a :class:`CouplingTerm`.
+
+    Use it to add one skill's learnt shape to another DMP (e.g. a zero-forcing spring).
+    """
+
+    model: PoseModel
+
+    def acceleration(self, state: PoseState, target: PoseTarget) -> tuple[Array, Array]:
+        """(linear m/s^2, angular rad/s^2) at ``state.phase``."""
+        return forcing_accelerations(self.model, target, state.phase)
+
+
+def sum_couplings(
+    couplings: Sequence[CouplingTerm], state: PoseState, target: PoseTarget
+) -> tuple[Array, Array]:
+    """Sum of the coupling accelerations ``(3,), (3,)`` at ``state``."""
+    lin = np.zeros(3)
+    ang = np.zeros(3)
+    for c in couplings:
+        a_lin, a_ang = c.acceleration(state, target)
+        lin += a_lin
+        ang += a_ang
+    return lin, ang
+
+
+def pose_acceleration(
+    state: PoseState,
+    model: PoseModel,
+    target: PoseTarget,
+    couplings: Sequence[CouplingTerm] = (),
+) -> tuple[Array, Array]:
+    """Linear and angular acceleration ``(3,), (3,)`` of the DMP at ``state``.
+
+    ``(alpha (beta (g - y) - tau yd) + f) / tau^2 + c`` for position and the same with the
+    short-way rotation error ``2 log(g conj(q))`` for orientation. The forcing comes from
+    ``target.effective_weights`` (the target binds the model's forcing to a start and goal).
+    """
+    lin, ang = _accelerations(state, model, target, couplings)
+    return np.array(lin), np.array(ang)
+
+
+def _accelerations(
+    state: PoseState,
+    model: PoseModel,
+    target: PoseTarget,
+    couplings: Sequence[CouplingTerm],
+) -> tuple[list[float], list[float]]:
+    # Scalar floats after the one vector operation (the basis): numpy's per-call overhead
+    # would otherwise dominate arithmetic on 3-vectors.
+    p = model.params
+    tau = target.tau
+    s = state.phase
+    basis = model.position.forcing.basis
+    raw = (basis.activations_at(s) @ target.effective_weights).tolist()
+    inv_tau2 = 1.0 / (tau * tau)
+    k = s * inv_tau2 / max(raw[6], 1e-300)
+    kp = p.alpha * p.beta * inv_tau2
+    kd = p.alpha / tau
+    y0, y1, y2 = state.position.tolist()
+    v0, v1, v2 = state.velocity.tolist()
+    w0, w1, w2 = state.angular_velocity.tolist()
+    g0, g1, g2 = target.goal_position.tolist()
+    e0, e1, e2 = quat.rotation_error_scalar(target.goal_tuple, _quat_tuple(state.orientation))
+    lin = [
+        kp * (g0 - y0) - kd * v0 + k * raw[0],
+        kp * (g1 - y1) - kd * v1 + k * raw[1],
+        kp * (g2 - y2) - kd * v2 + k * raw[2],
+    ]
+    ang = [
+        kp * e0 - kd * w0 + k * raw[3],
+        kp * e1 - kd * w1 + k * raw[4],
+        kp * e2 - kd * w2 + k * raw[5],
+    ]
+    for c in couplings:
+        c_lin, c_ang = c.acceleration(state, target)
+        cl = c_lin.tolist()
+        ca = c_ang.tolist()
+        for i in range(3):
+            lin[i] += cl[i]
+            ang[i] += ca[i]
+    return lin, ang
+
+
+def _quat_tuple(q: Array) -> quat.Quat:
+    x, y, z, w = q.tolist()
+    return (x, y, z, w)
+
+
+def pose_step(
+    state: PoseState,
+    model: PoseModel,
+    target: PoseTarget,
+    dt: float,
+    couplings: Sequence[CouplingTerm] = (),
+) -> PoseState:
+    """Advance a pose DMP by ``dt`` (closed loop: ``state`` may be the measured one).
+
+    Semi-implicit Euler for position and angular velocity, the exponential map for the
+    quaternion, the exact solution for the phase.
+
+    Parameters
+    ----------
+    state : PoseState
+    model : PoseModel
+    target : PoseTarget
+        Built by ``model.target``.
+    dt : float
+        Step, s.
+    couplings : sequence of CouplingTerm
+        Additive accelerations, summed.
+
+    Returns
+    -------
+    PoseState
+        The next state; its accelerations are the ones applied over this step.
+    """
+    lin, ang = _accelerations(state, model, target, couplings)
+    y0, y1, y2 = state.position.tolist()
+    v0, v1, v2 = state.velocity.tolist()
+    w0, w1, w2 = state.angular_velocity.tolist()
+    v0 += lin[0] * dt
+    v1 += lin[1] * dt
+    v2 += lin[2] * dt
+    w0 += ang[0] * dt
+    w1 += ang[1] * dt
+    w2 += ang[2] * dt
+    q = quat.integrate_scalar(_quat_tuple(state.orientation), (w0, w1, w2), dt)
+    # One allocation for the whole state; the fields are views into it.
+    buf = np.array(
+        (y0 + v0 * dt, y1 + v1 * dt, y2 + v2 * dt, v0, v1, v2, *lin, *q, w0, w1, w2, *ang)
+    )
+    return PoseState(
+        buf[0:3],
+        buf[3:6],
+        buf[6:9],
+        buf[9:13],
+        buf[13:16],
+        buf[16:19],
+        phase_step(state.phase, dt, target.tau, model.params.alpha_s),
+    )
+
+
+@dataclass(frozen=True)
+class PoseTrajectory:
+    """A sampled pose trajectory; every array has the same first length ``N``.
+
+    Attributes
+    ----------
+    t : ndarray, shape (N,)
+        s since the rollout started.
+    positions, velocities, accelerations : ndarray, shape (N, 3)
+    orientations : ndarray, shape (N, 4)
+    angular_velocities, angular_accelerations : ndarray, shape (N, 3)
+    phase : ndarray, shape (N,)
+    """
+
+    t: Array
+    positions: Array
+    velocities: Array
+    accelerations: Array
+    orientations: Array
+    angular_velocities: Array
+    angular_accelerations: Array
+    phase: Array
+
+    def __len__(self) -> int:
+        return int(self.t.shape[0])
+
+    def state(self, i: int) -> PoseState:
+        """Full state at sample ``i`` (negative indices count from the end)."""
+        return PoseState(
+            self.positions[i].copy(),
+            self.velocities[i].copy(),
+            self.accelerations[i].copy(),
+            self.orientations[i].copy(),
+            self.angular_velocities[i].copy(),
+            self.angular_accelerations[i].copy(),
+            float(self.phase[i]),
+        )
+
+    def twists(self) -> Array:
+        """Linear and angular velocities stacked, shape (N, 6)."""
+        return np.concatenate((self.velocities, self.angular_velocities), axis=1)
+
+    @staticmethod
+    def from_states(states: Sequence[PoseState], dt: float) -> PoseTrajectory:
+        """Stack a list of states sampled every ``dt`` seconds."""
+        return PoseTrajectory(
+            np.arange(len(states)) * dt,
+            np.array([s.position for s in states]),
+            np.array([s.velocity for s in states]),
+            np.array([s.acceleration for s in states]),
+            np.array([s.orientation for s in states]),
+            np.array([s.angular_velocity for s in states]),
+            np.array([s.angular_acceleration for s in states]),
+            np.array([s.phase for s in states]),
+        )
+
+
+def pose_rollout(
+    model: PoseModel,
+    target: PoseTarget,
+    start: PoseState,
+    dt: float,
+    n_steps: int | None = None,
+    couplings: Sequence[CouplingTerm] = (),
+) -> PoseTrajectory:
+    """Open-loop rollout of ``n_steps`` steps (``n_steps + 1`` samples, start included).
+
+    Without couplings, positions are integrated for all steps at once
+    (:func:`skills.dmp.linear_rollout`) and orientations in a scalar loop; with couplings,
+    which may depend on the state, it steps :func:`pose_step`. Both give the same numbers
+    as stepping.
+
+    Parameters
+    ----------
+    model : PoseModel
+    target : PoseTarget
+    start : PoseState
+        Initial full state; its phase may be mid-motion.
+    dt : float
+        Step, s.
+    n_steps : int, optional
+        Defaults to ``1.5 * tau / dt``.
+    couplings : sequence of CouplingTerm
+    """
+    if not (np.isfinite(dt) and dt > 0):
+        raise ValueError(f"dt: expected a positive step in s, got {dt!r}")
+    p = model.params
+    tau = target.tau
+    n = int(n_steps if n_steps is not None else np.ceil(1.5 * tau / dt))
+    if n < 1:
+        raise ValueError(f"n_steps: expected at least 1, got {n}")
+    if couplings:
+        states = [start]
+        st = start
+        for _ in range(n):
+            st = pose_step(st, model, target, dt, couplings)
+            states.append(st)
+        traj = PoseTrajectory.from_states(states, dt)
+        return _with_final_acceleration(traj, model, target, couplings)
+    k = np.arange(n + 1)
+    s = start.phase * np.exp(-p.alpha_s * k * dt / tau)
+    phi = model.position.forcing.basis.normalised(s) * s[:, None]
+    f_lin = (phi @ model.position.forcing.weights) @ target.position_matrix.T
+    f_ang = (phi @ model.orientation.forcing.weights) @ target.orientation_matrix.T
+    y, yd, ydd = linear_rollout(
+        start.position,
+        start.velocity,
+        target.goal_position,
+        f_lin[:-1] / (tau * tau),
+        p.alpha,
+        p.beta,
+        tau,
+        dt,
+    )
+    q, w, wd = integrate_orientation(
+        start.orientation,
+        start.angular_velocity,
+        target.goal_orientation,
+        f_ang[:-1],
+        None,
+        p.alpha,
+        p.beta,
+        tau,
+        dt,
+    )
+    traj = PoseTrajectory(
+        k * dt, y, yd, np.vstack((ydd, ydd[-1:])), q, w, np.vstack((wd, wd[-1:])), s
+    )
+    return _with_final_acceleration(traj, model, target, couplings)
+
+
+def _with_final_acceleration(
+    traj: PoseTrajectory,
+    model: PoseModel,
+    target: PoseTarget,
+    couplings: Sequence[CouplingTerm],
+) -> PoseTrajectory:
+    """Replace the last sample's accelerations by the ones the DMP has at that state."""
+    acc, ang = pose_acceleration(traj.state(-1), model, target, couplings)
+    traj.accelerations[-1] = acc
+    traj.angular_accelerations[-1] = ang
+    return traj
+
+
+@dataclass(frozen=True)
+class HandoverBlend:
+    """Fades the acceleration mismatch at a skill switch, so acceleration stays continuous.
+
+    A new skill starting from its predecessor's full state matches position and velocity by
+    construction; its own acceleration at that state generally differs. This coupling adds
+    the difference and lets it decay as ``(s / s0)^rate``: about ``exp(-t / t_blend)``
+    (Nemec and Ude 2012 use a similar transient for DMP sequencing).
+
+    Attributes
+    ----------
+    linear, angular : ndarray, shape (3,)
+        Mismatch at the switch, m/s^2 and rad/s^2.
+    phase0 : float
+        Phase at the switch.
+    rate : float
+        Decay exponent in phase, ``1 / (alpha_s * blend_fraction)``.
+    """
+
+    linear: Array
+    angular: Array
+    phase0: float
+    rate: float
+
+    def acceleration(self, state: PoseState, target: PoseTarget) -> tuple[Array, Array]:
+        """The remaining mismatch at ``state.phase``."""
+        k = (max(state.phase, 1e-300) / self.phase0) ** self.rate
+        return self.linear * k, self.angular * k
+
+
+@dataclass
+class PoseDMP:
+    """A running pose DMP: model, target, state and coupling terms.
+
+    Goal and ``tau`` can change while it runs. Start it from any full state
+    (:meth:`start`) for a jump-free handover from the previous skill.
+    """
+
+    model: PoseModel
+    target: PoseTarget
+    state: PoseState
+    couplings: list[CouplingTerm] = field(default_factory=list)
+
+    @staticmethod
+    def start(
+        model: PoseModel,
+        state: PoseState,
+        goal_position: ArrayLike,
+        goal_orientation: ArrayLike,
+        tau: float | None = None,
+        couplings: Sequence[CouplingTerm] = (),
+        blend_fraction: float = 0.1,
+        fresh_phase: bool = True,
+    ) -> PoseDMP:
+        """Start ``model`` from a handed-over full state.
+
+        Parameters
+        ----------
+        model : PoseModel
+        state : PoseState
+            The previous skill's last full state (pose, velocities, accelerations).
+        goal_position, goal_orientation : array_like
+        tau : float, optional
+        couplings : sequence of CouplingTerm
+        blend_fraction : float
+            Acceleration mismatch decays over about ``blend_fraction * tau``; 0 disables.
+        fresh_phase : bool
+            Start the new skill at phase 1 (a new motion) rather than the handed-over phase.
+        """
+        st = state.with_phase(1.0) if fresh_phase else state
+        target = model.target(st.position, st.orientation, goal_position, goal_orientation, tau)
+        dmp = PoseDMP(model, target, st, list(couplings))
+        if blend_fraction > 0:
+            acc, ang = pose_acceleration(st, model, target, dmp.couplings)
+            dmp.couplings.append(
+                HandoverBlend(
+                    st.acceleration - acc,
+                    st.angular_acceleration - ang,
+                    st.phase,
+                    1.0 / (model.params.alpha_s * blend_fraction),
+                )
+            )
+        return dmp
+
+    def set_goal(self, goal_position: ArrayLike, goal_orientation: ArrayLike | None = None) -> None:
+        """Move the attractor while running; the forcing rescales to the new displacement."""
+        q = self.target.goal_orientation if goal_orientation is None else goal_orientation
+        self.target = self.model.target(
+            self.target.start_position,
+            self.target.start_orientation,
+            goal_position,
+            q,
+            self.target.tau,
+        )
+
+    def set_tau(self, tau: float) -> None:
+        """Change the temporal scaling while running."""
+        if not (np.isfinite(tau) and tau > 0):
+            raise ValueError(f"tau: expected a positive duration in s, got {tau!r}")
+        self.target = replace(self.target, tau=float(tau))
+
+    def step(self, dt: float, measured: PoseState | None = None) -> PoseState:
+        """Advance by ``dt`` from the measured state if given, else from the internal one."""
+        self.state = pose_step(measured or self.state, self.model, self.target, dt, self.couplings)
+        return self.state
+
+    def rollout(self, dt: float, n_steps: int | None = None) -> PoseTrajectory:
+        """Predict the rest of the motion from the current state, open loop (state unchanged)."""
+        return pose_rollout(self.model, self.target, self.state, dt, n_steps, self.couplings)

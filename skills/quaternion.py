@@ -1,0 +1,264 @@
+"""Unit-quaternion maths, scalar-last ``(x, y, z, w)`` as scipy and PyBullet use.
+
+Every function broadcasts over leading axes: a quaternion array has shape ``(..., 4)``
+and a rotation vector ``(..., 3)``. ``log`` and ``exp`` follow Ude et al. (2014):
+``log(q)`` is half the rotation vector of ``q``, so ``2 * log(g * conj(q))`` is the
+rotation vector that takes ``q`` to ``g`` (in the world frame).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from skills.types import Array
+
+IDENTITY: Array = np.array([0.0, 0.0, 0.0, 1.0])
+_SMALL = 1e-12
+
+
+def as_quaternions(q: ArrayLike, name: str = "quaternion") -> Array:
+    """Coerce to float quaternions ``(..., 4)`` and normalise them.
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 4)
+        Scalar-last quaternions, not necessarily unit.
+    name : str
+        Argument name used in error messages.
+
+    Returns
+    -------
+    ndarray, shape (..., 4)
+        Unit quaternions.
+
+    Raises
+    ------
+    ValueError
+        If the last axis is not 4, a value is not finite, or a norm is (near) zero.
+    """
+    arr = np.asarray(q, dtype=float)
+    if arr.ndim == 0 or arr.shape[-1] != 4:
+        raise ValueError(
+            f"{name}: expected shape (..., 4) scalar-last (x, y, z, w), got {arr.shape}"
+        )
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name}: expected finite values, got NaN or inf")
+    norms = np.linalg.norm(arr, axis=-1, keepdims=True)
+    if np.any(norms < 1e-9):
+        bad = int(np.argmin(norms.reshape(-1)))
+        raise ValueError(f"{name}: expected a non-zero quaternion, got norm 0 at index {bad}")
+    return arr / norms
+
+
+def multiply(p: ArrayLike, q: ArrayLike) -> Array:
+    """Hamilton product ``p * q`` of scalar-last quaternions, shape ``(..., 4)``."""
+    a = np.asarray(p, dtype=float)
+    b = np.asarray(q, dtype=float)
+    px, py, pz, pw = a[..., 0], a[..., 1], a[..., 2], a[..., 3]
+    qx, qy, qz, qw = b[..., 0], b[..., 1], b[..., 2], b[..., 3]
+    return np.stack(
+        (
+            pw * qx + px * qw + py * qz - pz * qy,
+            pw * qy - px * qz + py * qw + pz * qx,
+            pw * qz + px * qy - py * qx + pz * qw,
+            pw * qw - px * qx - py * qy - pz * qz,
+        ),
+        axis=-1,
+    )
+
+
+def conjugate(q: ArrayLike) -> Array:
+    """Conjugate ``(-x, -y, -z, w)``; the inverse of a unit quaternion."""
+    c = np.array(q, dtype=float, copy=True)
+    c[..., :3] *= -1.0
+    return c
+
+
+def log(q: ArrayLike) -> Array:
+    """Quaternion logarithm of unit quaternions, ``(..., 4) -> (..., 3)``.
+
+    Returns ``theta/2 * axis`` for ``q = (sin(theta/2) axis, cos(theta/2))``; zero for the
+    identity. No sign canonicalisation is applied: ``log(-q)`` is the long way round.
+    """
+    arr = np.asarray(q, dtype=float)
+    v = arr[..., :3]
+    w = np.clip(arr[..., 3], -1.0, 1.0)
+    vnorm = np.linalg.norm(v, axis=-1)
+    angle = np.arctan2(vnorm, w)
+    # angle / vnorm -> 1 as vnorm -> 0 (w -> 1); the series keeps it smooth near identity.
+    scale = np.where(vnorm > _SMALL, angle / np.maximum(vnorm, _SMALL), 1.0)
+    return v * scale[..., None]
+
+
+def exp(r: ArrayLike) -> Array:
+    """Quaternion exponential, ``(..., 3) -> (..., 4)``: inverse of :func:`log`."""
+    arr = np.asarray(r, dtype=float)
+    n = np.linalg.norm(arr, axis=-1)
+    # sin(n)/n -> 1 - n^2/6 near zero
+    sinc = np.where(n > 1e-8, np.sin(n) / np.maximum(n, 1e-300), 1.0 - n * n / 6.0)
+    out = np.empty((*arr.shape[:-1], 4))
+    out[..., :3] = arr * sinc[..., None]
+    out[..., 3] = np.cos(n)
+    return out
+
+
+def canonical(q: ArrayLike) -> Array:
+    """The representative with ``w >= 0`` (same rotation, shortest-path log)."""
+    arr = np.asarray(q, dtype=float)
+    return np.where(arr[..., 3:4] < 0.0, -arr, arr)
+
+
+def rotation_error(goal: ArrayLike, q: ArrayLike) -> Array:
+    """Rotation vector ``2 log(goal * conj(q))`` taking ``q`` to ``goal`` the short way.
+
+    The short way is chosen by canonicalising the error quaternion, so ``goal`` and
+    ``-goal`` give the same result.
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        Rotation vector in the world frame, radians, norm in [0, pi].
+    """
+    return 2.0 * log(canonical(multiply(goal, conjugate(q))))
+
+
+def make_continuous(q: ArrayLike) -> Array:
+    """Flip signs along a sequence so consecutive quaternions have a positive dot product.
+
+    Parameters
+    ----------
+    q : array_like, shape (N, 4)
+        A time series of unit quaternions (a demonstration).
+
+    Returns
+    -------
+    ndarray, shape (N, 4)
+        The same rotations with no sign jumps (the first sample's sign is kept).
+    """
+    arr = np.asarray(q, dtype=float)
+    if arr.ndim != 2 or arr.shape[1] != 4:
+        raise ValueError(f"quaternions: expected shape (N, 4), got {arr.shape}")
+    dots = np.einsum("ij,ij->i", arr[1:], arr[:-1])
+    # Each negative dot flips the sign of everything after it: a cumulative parity.
+    flips = np.concatenate(([1.0], np.cumprod(np.where(dots < 0.0, -1.0, 1.0))))
+    return arr * flips[:, None]
+
+
+def integrate(q: ArrayLike, omega: ArrayLike, dt: float) -> Array:
+    """Advance orientation by a world-frame angular velocity over ``dt``.
+
+    ``q(t + dt) = exp(dt/2 * omega) * q(t)``: the exponential map keeps the norm at one.
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 4)
+    omega : array_like, shape (..., 3)
+        Angular velocity in the world frame, rad/s.
+    dt : float
+        Time step, s.
+    """
+    return multiply(exp(0.5 * dt * np.asarray(omega, dtype=float)), q)
+
+
+def angular_velocity(q: ArrayLike, t: ArrayLike) -> Array:
+    """World-frame angular velocity of a sampled orientation trajectory.
+
+    Uses second-order finite differences of the (sign-continuous) quaternions:
+    ``omega = 2 * qdot * conj(q)``, valid for non-uniform time stamps.
+
+    Parameters
+    ----------
+    q : array_like, shape (N, 4)
+    t : array_like, shape (N,)
+        Strictly increasing time stamps, s.
+
+    Returns
+    -------
+    ndarray, shape (N, 3)
+        rad/s, world frame.
+    """
+    qc = make_continuous(q)
+    qdot = np.gradient(qc, np.asarray(t, dtype=float), axis=0)
+    return 2.0 * multiply(qdot, conjugate(qc))[:, :3]
+
+
+def to_matrix(q: ArrayLike) -> Array:
+    """Rotation matrices ``(..., 3, 3)`` from unit quaternions ``(..., 4)``."""
+    arr = np.asarray(q, dtype=float)
+    x, y, z, w = arr[..., 0], arr[..., 1], arr[..., 2], arr[..., 3]
+    m = np.empty((*arr.shape[:-1], 3, 3))
+    m[..., 0, 0] = 1 - 2 * (y * y + z * z)
+    m[..., 0, 1] = 2 * (x * y - z * w)
+    m[..., 0, 2] = 2 * (x * z + y * w)
+    m[..., 1, 0] = 2 * (x * y + z * w)
+    m[..., 1, 1] = 1 - 2 * (x * x + z * z)
+    m[..., 1, 2] = 2 * (y * z - x * w)
+    m[..., 2, 0] = 2 * (x * z - y * w)
+    m[..., 2, 1] = 2 * (y * z + x * w)
+    m[..., 2, 2] = 1 - 2 * (x * x + y * y)
+    return m
+
+
+def rotate(q: ArrayLike, v: ArrayLike) -> Array:
+    """Rotate vectors ``(..., 3)`` by unit quaternions ``(..., 4)``."""
+    arr = np.asarray(q, dtype=float)
+    vec = np.asarray(v, dtype=float)
+    u = arr[..., :3]
+    w = arr[..., 3:4]
+    t = 2.0 * np.cross(u, vec)
+    return vec + w * t + np.cross(u, t)
+
+
+def from_axis_angle(axis: ArrayLike, angle: ArrayLike) -> Array:
+    """Quaternions ``(..., 4)`` for rotations of ``angle`` rad about unit ``axis`` ``(..., 3)``."""
+    ax = np.asarray(axis, dtype=float)
+    ax = ax / np.linalg.norm(ax, axis=-1, keepdims=True)
+    half = 0.5 * np.asarray(angle, dtype=float)
+    return np.concatenate((ax * np.sin(half)[..., None], np.cos(half)[..., None]), axis=-1)
+
+
+def angle_between(p: ArrayLike, q: ArrayLike) -> Array:
+    """Rotation angle (rad, in [0, pi]) between orientations, sign-independent."""
+    rel = multiply(p, conjugate(q))
+    # atan2 keeps full precision near zero, where arccos of a dot product loses half the digits.
+    return 2.0 * np.arctan2(np.linalg.norm(rel[..., :3], axis=-1), np.abs(rel[..., 3]))
+
+
+# Scalar versions for per-step loops, where numpy's call overhead dominates 4-vector maths.
+Quat = tuple[float, float, float, float]
+Vec3 = tuple[float, float, float]
+
+
+def rotation_error_scalar(goal: Quat, q: Quat) -> Vec3:
+    """:func:`rotation_error` for one pair of quaternions given as float tuples."""
+    gx, gy, gz, gw = goal
+    qx, qy, qz, qw = q
+    # g * conj(q), then the short way (w >= 0)
+    ex = -gw * qx + gx * qw - gy * qz + gz * qy
+    ey = -gw * qy + gx * qz + gy * qw - gz * qx
+    ez = -gw * qz - gx * qy + gy * qx + gz * qw
+    ew = gw * qw + gx * qx + gy * qy + gz * qz
+    if ew < 0.0:
+        ex, ey, ez, ew = -ex, -ey, -ez, -ew
+    vn = math.sqrt(ex * ex + ey * ey + ez * ez)
+    sc = 2.0 * math.atan2(vn, ew) / vn if vn > _SMALL else 2.0
+    return ex * sc, ey * sc, ez * sc
+
+
+def integrate_scalar(q: Quat, omega: Vec3, dt: float) -> Quat:
+    """:func:`integrate` for one quaternion and angular velocity given as float tuples."""
+    wx, wy, wz = omega
+    half = 0.5 * dt
+    rn = half * math.sqrt(wx * wx + wy * wy + wz * wz)
+    sn = math.sin(rn) / rn * half if rn > 1e-8 else half
+    ax, ay, az, aw = wx * sn, wy * sn, wz * sn, math.cos(rn)
+    bx, by, bz, bw = q
+    return (
+        aw * bx + ax * bw + ay * bz - az * by,
+        aw * by - ax * bz + ay * bw + az * bx,
+        aw * bz + ax * by - ay * bx + az * bw,
+        aw * bw - ax * bx - ay * by - az * bz,
+    )

@@ -1,0 +1,31 @@
+"""Demonstrations with known shapes for the DMP tests."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from skills import quaternion as quat
+from skills.demonstration import Demonstration
+
+
+def min_jerk(u: np.ndarray) -> np.ndarray:
+    """Minimum-jerk profile from 0 to 1 over ``u`` in [0, 1]."""
+    return 10 * u**3 - 15 * u**4 + 6 * u**5
+
+
+def pick_place_demo(n: int = 1000, duration: float = 2.0) -> Demonstration:
+    """A lift-carry-lower motion at rest at both ends, turning 1.2 rad about a tilted axis."""
+    t = np.linspace(0.0, duration, n)
+    u = t / duration
+    s = min_jerk(u)
+    positions = np.stack(
+        (0.4 * s, 0.2 * np.sin(np.pi * s), 0.15 * np.sin(np.pi * u) ** 2), axis=1
+    ) + np.array([0.5, -0.1, 0.7])
+    orientations = quat.from_axis_angle(np.array([0.2, 0.3, 1.0]), 1.2 * s)
+    return Demonstration.create(t, positions, orientations, name="pick_place")
+
+
+@pytest.fixture
+def demo() -> Demonstration:
+    return pick_place_demo()

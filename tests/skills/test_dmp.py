@@ -1,0 +1,241 @@
+"""Positional, quaternion and pose DMPs: known answers of the maths."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+
+from skills import quaternion as quat
+from skills.demonstration import Demonstration
+from skills.dmp import (
+    DMPParams,
+    DMPState,
+    PositionDMP,
+    fit_position,
+    position_rollout,
+)
+from skills.pose_dmp import PoseDMP, PoseState, fit_pose, pose_rollout, pose_step
+from skills.quaternion_dmp import fit_orientation
+from skills.scaling import Scaling
+from tests.skills.conftest import min_jerk, pick_place_demo
+
+DT = 0.002
+
+
+def test_reproduces_a_demonstration_within_one_millimetre(demo: Demonstration) -> None:
+    model = fit_pose(demo)
+    target = model.target(demo.positions[0], demo.orientations[0], demo.positions[-1],
+                          demo.orientations[-1])  # fmt: skip
+    start = PoseState.at_rest(demo.positions[0], demo.orientations[0])
+    n = demo.n_samples - 1
+    traj = pose_rollout(model, target, start, demo.duration / n, n)
+    # Bound: 1 mm on a 0.45 m motion, 1 mrad on a 1.2 rad turn.
+    assert np.max(np.linalg.norm(traj.positions - demo.positions, axis=1)) < 1e-3
+    assert np.max(quat.angle_between(traj.orientations, demo.orientations)) < 1e-3
+
+
+def test_positional_dmp_works_in_any_dimension() -> None:
+    t = np.linspace(0, 1, 400)
+    s = min_jerk(t)
+    y = np.stack([s * k + np.sin(np.pi * t) ** 2 * 0.1 * k for k in range(1, 8)], axis=1)
+    model = fit_position(Demonstration.create(t, y), DMPParams(n_basis=30))
+    traj = position_rollout(model, DMPState.at_rest(y[0]), y[-1], 1.0, t[1], 399)
+    assert traj.positions.shape == (400, 7)
+    # Bound: 0.2 % of each dimension's travel (integration and finite-difference error).
+    assert np.all(np.max(np.abs(traj.positions - y), axis=0) < 2e-3 * np.abs(y[-1] - y[0]))
+
+
+def test_converges_to_random_goals_with_zero_final_velocity(demo: Demonstration) -> None:
+    model = fit_pose(demo)
+    rng = np.random.default_rng(0)
+    for _ in range(20):
+        goal = rng.uniform(-1.0, 1.0, 3)
+        goal_q = quat.as_quaternions(rng.normal(size=4))
+        start = PoseState.at_rest(demo.positions[0], demo.orientations[0])
+        target = model.target(start.position, start.orientation, goal, goal_q)
+        traj = pose_rollout(model, target, start, DT, int(3 * demo.duration / DT))
+        assert np.linalg.norm(traj.positions[-1] - goal) < 1e-4
+        assert np.linalg.norm(traj.velocities[-1]) < 1e-3
+        assert quat.angle_between(traj.orientations[-1], goal_q) < 1e-4
+        assert np.linalg.norm(traj.angular_velocities[-1]) < 1e-3
+
+
+def test_amplitude_scaling_generalises_as_an_exact_affine_copy(demo: Demonstration) -> None:
+    model = fit_position(demo)
+    y0, g = demo.positions[0], demo.positions[-1]
+    base = position_rollout(model, DMPState.at_rest(y0), g, dt=DT)
+    new_y0 = np.array([0.1, 0.4, 0.65])
+    scale = np.array([1.5, -0.7, 2.0])
+    new_g = new_y0 + scale * (g - y0)
+    moved = position_rollout(model, DMPState.at_rest(new_y0), new_g, dt=DT)
+    # The DMP is linear: per-axis scaling of g - y0 scales the whole path about the start.
+    # y and z start and end at one value in the demo, so their excursions are kept unscaled.
+    still = np.abs(g - y0) < model.forcing.min_amplitude
+    assert still.tolist() == [False, True, True]
+    effective = np.where(still, 1.0, scale)
+    assert_allclose(moved.positions, new_y0 + effective * (base.positions - y0), atol=1e-9)
+
+
+def test_rotation_z_scaling_turns_the_horizontal_shape_and_keeps_the_lift() -> None:
+    demo = pick_place_demo()
+    model = fit_position(demo, scaling=Scaling.ROTATION_Z)
+    y0, g = demo.positions[0], demo.positions[-1]
+    base = position_rollout(model, DMPState.at_rest(y0), g, dt=DT)
+    angle, k = 2.0, 0.6
+    rot = np.array([[np.cos(angle), -np.sin(angle), 0], [np.sin(angle), np.cos(angle), 0],
+                    [0, 0, 1]])  # fmt: skip
+    m = rot @ np.diag([k, k, 1.0])
+    new_y0 = np.array([0.6, 0.0, 0.7])
+    new_g = new_y0 + m @ (g - y0)
+    moved = position_rollout(model, DMPState.at_rest(new_y0), new_g, dt=DT)
+    assert_allclose(moved.positions, new_y0 + (base.positions - y0) @ m.T, atol=1e-9)
+    lift = base.positions[:, 2].max() - y0[2]
+    assert moved.positions[:, 2].max() - new_y0[2] == pytest.approx(lift, abs=1e-9)
+
+
+def test_amplitude_scaling_keeps_a_lift_whose_start_and_goal_share_a_height() -> None:
+    t = np.linspace(0, 2, 800)
+    s = min_jerk(t / 2)
+    y = np.stack((0.3 * s, 0 * s, 0.1 * np.sin(np.pi * t / 2) ** 2), axis=1)
+    model = fit_position(Demonstration.create(t, y))
+    moved = position_rollout(model, DMPState.at_rest([0, 0, 0]), [0.6, 0, 0], dt=DT)
+    assert moved.positions[:, 2].max() == pytest.approx(0.1, rel=0.02)
+
+
+def _settling_time(t: np.ndarray, y: np.ndarray, goal: np.ndarray, y0: np.ndarray) -> float:
+    err = np.linalg.norm(y - goal, axis=1) / np.linalg.norm(goal - y0)
+    outside = np.flatnonzero(err > 0.01)
+    return float(t[outside[-1] + 1])
+
+
+def test_doubling_tau_doubles_the_duration(demo: Demonstration) -> None:
+    model = fit_pose(demo)
+    start = PoseState.at_rest(demo.positions[0], demo.orientations[0])
+    times = []
+    for tau in (1.5, 3.0):
+        target = model.target(start.position, start.orientation, demo.positions[-1],
+                              demo.orientations[-1], tau)  # fmt: skip
+        traj = pose_rollout(model, target, start, 0.0005, int(3 * tau / 0.0005))
+        times.append(_settling_time(traj.t, traj.positions, demo.positions[-1], start.position))
+    assert times[1] / times[0] == pytest.approx(2.0, rel=0.01)
+
+
+def test_quaternion_norm_stays_unit_and_antipodal_goal_converges(demo: Demonstration) -> None:
+    model = fit_pose(demo)
+    start = PoseState.at_rest(demo.positions[0], demo.orientations[0])
+    goal_q = -quat.as_quaternions([0.3, -0.5, 0.2, 0.7])  # w < 0: the "other" sign
+    target = model.target(start.position, start.orientation, [0.2, 0.1, 0.9], goal_q)
+    state = start
+    norms, angles = [], []
+    for _ in range(int(3 * demo.duration / DT)):  # closed-loop stepping
+        state = pose_step(state, model, target, DT)
+        norms.append(np.linalg.norm(state.orientation))
+        angles.append(quat.angle_between(state.orientation, goal_q))
+    assert np.max(np.abs(np.array(norms) - 1.0)) < 1e-9
+    assert angles[-1] < 1e-4
+    # It turned the short way: the angle to the goal never grew much past its start value
+    # (the learnt forcing may bend the path a little; the long way would pass pi).
+    assert np.max(angles) < quat.angle_between(start.orientation, goal_q) + 0.01
+
+
+def test_orientation_only_dmp_reproduces_the_turn(demo: Demonstration) -> None:
+    model = fit_orientation(demo)
+    assert model.forcing.weights.shape == (50, 3)
+    assert_allclose(model.demo_goal, demo.orientations[-1])
+
+
+def test_fast_rollout_matches_stepping(demo: Demonstration) -> None:
+    model = fit_pose(demo)
+    start = PoseState.at_rest(demo.positions[0], demo.orientations[0])
+    target = model.target(start.position, start.orientation, [0.9, 0.2, 0.75], quat.IDENTITY)
+    fast = pose_rollout(model, target, start, DT, 600)
+    state = start
+    for i in range(1, 601):
+        state = pose_step(state, model, target, DT)
+        if i % 150 == 0:
+            assert_allclose(state.position, fast.positions[i], atol=1e-12)
+            assert_allclose(state.velocity, fast.velocities[i], atol=1e-11)
+            assert_allclose(state.orientation, fast.orientations[i], atol=1e-12)
+    assert len(fast.t) == len(fast.positions) == len(fast.orientations) == 601
+
+
+def test_resuming_from_a_mid_motion_full_state_continues_exactly(demo: Demonstration) -> None:
+    model = fit_pose(demo)
+    start = PoseState.at_rest(demo.positions[0], demo.orientations[0])
+    target = model.target(start.position, start.orientation, demo.positions[-1],
+                          demo.orientations[-1])  # fmt: skip
+    whole = pose_rollout(model, target, start, DT, 1000)
+    mid = whole.state(400)
+    rest = pose_rollout(model, target, mid, DT, 600)
+    assert_allclose(rest.positions, whole.positions[400:], atol=1e-12)
+    assert_allclose(rest.velocities, whole.velocities[400:], atol=1e-11)
+
+
+def test_handover_to_a_new_skill_has_no_velocity_or_acceleration_jump(
+    demo: Demonstration,
+) -> None:
+    model = fit_pose(demo)
+    start = PoseState.at_rest(demo.positions[0], demo.orientations[0])
+    first = PoseDMP.start(model, start, [0.8, 0.1, 0.8], quat.IDENTITY)
+    for _ in range(500):
+        first.step(DT)
+    handed = first.state
+    second = PoseDMP.start(model, handed, [0.4, -0.3, 0.75], [0, 0, 0.3826834, 0.9238795])
+    nxt = second.step(DT)
+    # Velocity changes by one step of acceleration; acceleration by a fraction of its size.
+    assert np.linalg.norm(nxt.velocity - handed.velocity) < np.linalg.norm(
+        handed.acceleration) * DT * 1.05 + 1e-9  # fmt: skip
+    assert np.linalg.norm(nxt.acceleration - handed.acceleration) < 0.05 * max(
+        1.0, np.linalg.norm(handed.acceleration))  # fmt: skip
+    # Without the blend the new skill's own acceleration differs a lot at the switch.
+    raw = PoseDMP.start(model, handed, [0.4, -0.3, 0.75], quat.IDENTITY, blend_fraction=0.0)
+    assert np.linalg.norm(raw.step(DT).acceleration - handed.acceleration) > 0.5
+
+
+def test_goal_and_tau_can_change_while_running(demo: Demonstration) -> None:
+    model = fit_pose(demo)
+    start = PoseState.at_rest(demo.positions[0], demo.orientations[0])
+    dmp = PoseDMP.start(model, start, demo.positions[-1], demo.orientations[-1])
+    for _ in range(300):
+        dmp.step(DT)
+    dmp.set_goal([0.3, 0.3, 0.9])
+    dmp.set_tau(1.0)
+    for _ in range(3000):
+        dmp.step(DT)
+    assert np.linalg.norm(dmp.state.position - [0.3, 0.3, 0.9]) < 1e-4
+
+
+def test_position_dmp_closed_loop_with_a_coupling() -> None:
+    demo = pick_place_demo()
+    model = fit_position(demo)
+    dmp = PositionDMP.from_model(model, demo.positions[-1])
+    dmp.couplings.append(lambda st: np.array([0.0, 0.0, -0.5]))  # a constant push down
+    for _ in range(int(6 * demo.duration / DT)):
+        dmp.step(DT)
+    # Steady state: K (g - y) = 0.5  =>  offset 0.5 / K below the goal.
+    k = model.params.alpha * model.params.beta / model.demo_tau**2
+    assert dmp.state.position[2] == pytest.approx(demo.positions[-1, 2] - 0.5 / k, abs=1e-6)
+
+
+def test_fitting_several_demonstrations_averages_them() -> None:
+    a = pick_place_demo(800, 2.0)
+    b = Demonstration.create(a.t * 1.5, a.positions * [1.0, 1.0, 1.0] + 0.2, a.orientations)
+    m1 = fit_pose(a)
+    m2 = fit_pose([a, b])
+    # b is a translated, slower copy of a: same normalised forcing, so the same weights.
+    assert_allclose(m2.position.forcing.weights, m1.position.forcing.weights, rtol=1e-3,
+                    atol=1e-3 * np.abs(m1.position.forcing.weights).max())  # fmt: skip
+
+
+def test_amplitude_scaling_mirrors_and_stretches_every_axis() -> None:
+    t = np.linspace(0, 2, 900)
+    s = min_jerk(t / 2)
+    bump = np.sin(np.pi * t / 2) ** 2
+    y = np.stack((0.4 * s, 0.2 * s + 0.1 * bump, -0.1 * s + 0.15 * bump), axis=1)
+    model = fit_position(Demonstration.create(t, y))
+    base = position_rollout(model, DMPState.at_rest(y[0]), y[-1], dt=DT)
+    scale = np.array([-1.0, 2.5, 0.5])
+    new_y0 = np.array([0.2, -0.3, 0.8])
+    moved = position_rollout(model, DMPState.at_rest(new_y0), new_y0 + scale * y[-1], dt=DT)
+    assert_allclose(moved.positions, new_y0 + scale * base.positions, atol=1e-9)

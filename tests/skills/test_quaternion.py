@@ -1,0 +1,101 @@
+"""Quaternion maths against scipy's Rotation (scalar-last, like ours)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+from scipy.spatial.transform import Rotation
+
+from skills import quaternion as quat
+
+RNG = np.random.default_rng(7)
+
+
+def random_quats(n: int) -> np.ndarray:
+    return Rotation.random(n, random_state=3).as_quat()
+
+
+def test_multiply_matches_scipy_composition() -> None:
+    p, q = random_quats(50), random_quats(50)[::-1]
+    expected = (Rotation.from_quat(p) * Rotation.from_quat(q)).as_quat()
+    assert_allclose(quat.canonical(quat.multiply(p, q)), quat.canonical(expected), atol=1e-12)
+
+
+def test_log_exp_are_inverse_and_match_rotvec() -> None:
+    q = quat.canonical(random_quats(100))
+    r = quat.log(q)
+    assert_allclose(2.0 * r, Rotation.from_quat(q).as_rotvec(), atol=1e-12)
+    assert_allclose(quat.exp(r), q, atol=1e-12)
+
+
+def test_log_and_exp_near_identity_are_smooth() -> None:
+    tiny = np.array([1e-10, -2e-10, 3e-10])
+    assert_allclose(quat.log(quat.exp(tiny)), tiny, atol=1e-18)
+    assert_allclose(quat.log(quat.IDENTITY), np.zeros(3), atol=0)
+
+
+def test_rotation_error_takes_the_short_way_for_either_sign() -> None:
+    q, g = random_quats(30), random_quats(30)[::-1]
+    expected = (Rotation.from_quat(g) * Rotation.from_quat(q).inv()).as_rotvec()
+    assert_allclose(quat.rotation_error(g, q), expected, atol=1e-10)
+    assert_allclose(quat.rotation_error(-g, q), expected, atol=1e-10)
+    assert np.all(np.linalg.norm(quat.rotation_error(g, q), axis=1) <= np.pi + 1e-12)
+
+
+def test_scalar_versions_match_vector_versions() -> None:
+    q, g = random_quats(20), random_quats(20)[::-1]
+    omega = RNG.normal(size=(20, 3))
+    for i in range(20):
+        gi, qi = tuple(g[i].tolist()), tuple(q[i].tolist())
+        assert_allclose(quat.rotation_error_scalar(gi, qi), quat.rotation_error(g[i], q[i]),
+                        atol=1e-12)  # fmt: skip
+        assert_allclose(quat.integrate_scalar(qi, tuple(omega[i].tolist()), 0.01),
+                        quat.integrate(q[i], omega[i], 0.01), atol=1e-15)  # fmt: skip
+
+
+def test_make_continuous_removes_sign_flips_only() -> None:
+    angles = np.linspace(0, 3 * np.pi, 200)
+    q = quat.from_axis_angle(np.array([0.0, 0.0, 1.0]), angles)
+    flipped = q * np.where(RNG.random(200) < 0.5, -1.0, 1.0)[:, None]
+    flipped[0] = q[0]
+    fixed = quat.make_continuous(flipped)
+    assert_allclose(fixed, q, atol=1e-12)
+    assert np.all(np.einsum("ij,ij->i", fixed[1:], fixed[:-1]) > 0)
+
+
+def test_integrate_constant_rate_matches_rotvec_and_keeps_unit_norm() -> None:
+    omega = np.array([0.3, -0.5, 1.1])
+    q = quat.IDENTITY.copy()
+    for _ in range(1000):
+        q = quat.integrate(q, omega, 0.002)
+    expected = Rotation.from_rotvec(omega * 2.0).as_quat()
+    assert abs(np.linalg.norm(q) - 1.0) < 1e-12
+    assert quat.angle_between(q, expected) < 1e-9
+
+
+def test_angular_velocity_of_a_sampled_rotation() -> None:
+    t = np.linspace(0, 1, 500)
+    omega = np.array([0.0, 0.4, -0.2])
+    q = Rotation.from_rotvec(np.outer(t, omega)).as_quat()
+    assert_allclose(quat.angular_velocity(q, t)[5:-5], np.tile(omega, (490, 1)), atol=1e-6)
+
+
+@pytest.mark.parametrize(
+    ("value", "match"),
+    [
+        ([0.0, 0.0, 0.0, 0.0], "expected a non-zero quaternion"),
+        ([0.0, 0.0, 1.0], r"expected shape \(\.\.\., 4\)"),
+        ([np.nan, 0.0, 0.0, 1.0], "expected finite values"),
+    ],
+)
+def test_as_quaternions_rejects_bad_values(value: list[float], match: str) -> None:
+    with pytest.raises(ValueError, match=match):
+        quat.as_quaternions(value, "goal")
+
+
+def test_to_matrix_and_rotate_match_scipy() -> None:
+    q = random_quats(10)
+    v = RNG.normal(size=(10, 3))
+    assert_allclose(quat.to_matrix(q), Rotation.from_quat(q).as_matrix(), atol=1e-12)
+    assert_allclose(quat.rotate(q, v), Rotation.from_quat(q).apply(v), atol=1e-12)
