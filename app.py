@@ -12,6 +12,7 @@ import os
 import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -97,6 +98,39 @@ def _schema_command(args: argparse.Namespace) -> int:
     return world_cli_schema()
 
 
+def _load_world_or_exit(path: str) -> Any:
+    """Load a world file; on a bad file print the error and raise SystemExit(2)."""
+    from worlds.world_file import WorldFileError, load_world
+
+    try:
+        return load_world(path)
+    except WorldFileError as err:
+        print(err, file=sys.stderr)
+        raise SystemExit(EXIT_BAD_INPUT) from None
+
+
+def _affordances_command(args: argparse.Namespace) -> int:
+    """Print the affordance reasoning for each object of a world."""
+    from affordances import AffordanceReasoner, render_json, render_text
+    from affordances.rules import RuleFileError, rule_set
+    from worlds.adapters import object_contexts, robot_capabilities
+
+    world = _load_world_or_exit(args.world)
+    try:
+        rules = rule_set([Path(p) for p in args.rules], include_default=not args.no_default_rules)
+    except (RuleFileError, OSError) as err:
+        print(err, file=sys.stderr)
+        return EXIT_BAD_INPUT
+    reasoner = AffordanceReasoner(robot_capabilities(world), rules=rules)
+    ranked = reasoner.rank_all(object_contexts(world))
+    if args.json:
+        print(render_text(ranked), file=sys.stderr)
+        print(render_json(ranked, indent=None))
+    else:
+        print(render_text(ranked))
+    return EXIT_OK
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser with one sub-command per job."""
     parser = argparse.ArgumentParser(prog="app.py", description=__doc__.splitlines()[0])
@@ -110,6 +144,18 @@ def build_parser() -> argparse.ArgumentParser:
     validate.set_defaults(handler=_validate_command)
     schema = sub.add_parser("schema", help="print the world-file JSON Schema (for editors)")
     schema.set_defaults(handler=_schema_command)
+    aff = sub.add_parser("affordances", help="rank semantic actions for each object of a world")
+    aff.add_argument("world", help="world file")
+    aff.add_argument(
+        "--rules",
+        action="append",
+        default=[],
+        metavar="FILE",
+        help="extra YAML rule file (repeatable); applied after the defaults",
+    )
+    aff.add_argument("--no-default-rules", action="store_true", help="use only the --rules files")
+    aff.add_argument("--json", action="store_true", help="print a JSON summary as the last line")
+    aff.set_defaults(handler=_affordances_command)
     return parser
 
 

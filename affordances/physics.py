@@ -1,0 +1,510 @@
+"""Stage 1: hard physics constraints on how the object can be held.
+
+Friction follows Bullet's default contact model: the coefficient of a contact is the product
+of the two bodies' coefficients (``btManifoldResult::calculateCombinedFriction``), clamped
+to 10. A two-palm lateral squeeze holds the object by friction alone, so with both palms
+pressing with ``F`` the grasp carries the weight when ``2 * mu * F >= k * m * g``.
+
+Which shapes offer two parallel faces for a squeeze:
+
+- box: the two pairs of side faces (x and y of {O}); the top and bottom are not reachable
+  from the sides;
+- cylinder (axis along z of {O}): two palms on planes tangent to opposite sides of the
+  diameter are parallel, and each touches the cylinder along a vertical line as tall as the
+  cylinder, which resists tipping about the line joining the contacts; so it counts, with
+  the diameter as the span;
+- sphere: no; each palm touches a single point, and two point contacts cannot stop the
+  sphere spinning about the line joining them;
+- mesh: no; its faces are unknown from the bounding box alone.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from enum import StrEnum
+
+from affordances.actions import DEFAULT_SPACE, SkillSelection
+from affordances.config import ReasonerConfig
+from affordances.context import (
+    Fragility,
+    ObjectContext,
+    ObjectState,
+    RobotCapabilities,
+    Shape,
+    Vector3,
+)
+from skills.labels import Action, AffordanceElement, Arm, Grasp
+
+#: Bullet clamps the combined friction coefficient to this value.
+BULLET_MAX_FRICTION = 10.0
+
+_STATE_ELEMENTS = {
+    ObjectState.OPEN: AffordanceElement.OPEN,
+    ObjectState.FULL: AffordanceElement.FULL,
+    ObjectState.HOT: AffordanceElement.HOT,
+    ObjectState.CONTAINS_ITEMS: AffordanceElement.CONTAINS_ITEMS,
+}
+
+
+class FaceAxis(StrEnum):
+    """Normal of a pair of parallel faces in {O}; ``diameter`` is any horizontal one."""
+
+    X = "x"
+    Y = "y"
+    DIAMETER = "diameter"
+
+
+@dataclass(frozen=True)
+class FacePair:
+    """Two parallel faces a lateral squeeze can press on.
+
+    Attributes
+    ----------
+    axis : FaceAxis
+        Normal of the faces in {O}.
+    separation_m : float
+        Distance between the faces, metres: the palm span the squeeze needs.
+    contact_height_m : float
+        Height of the faces, metres.
+    """
+
+    axis: FaceAxis
+    separation_m: float
+    contact_height_m: float
+
+
+@dataclass(frozen=True)
+class GraspOption:
+    """A grasp that passes the hard constraints.
+
+    Attributes
+    ----------
+    grasp : Grasp
+        The grasp type.
+    arms : tuple of Arm
+        Arms used, in :class:`~skills.labels.Arm` order.
+    palms : tuple of tuple of float, each shape (3,)
+        Palm centre of each arm (same order as ``arms``) in {W} at the start pose, metres.
+    skills : tuple of SkillSelection
+        Skills the grasp needs physically (transport, grasp maintenance).
+    because : tuple of str
+        Reasons specific to this grasp.
+    """
+
+    grasp: Grasp
+    arms: tuple[Arm, ...]
+    palms: tuple[Vector3, ...]
+    skills: tuple[SkillSelection, ...]
+    because: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class HardAssessment:
+    """Everything stage 1 decides about an object.
+
+    Attributes
+    ----------
+    arms_needed : int
+        1 or 2; 0 when even both arms together cannot lift the object.
+    elements : frozenset of AffordanceElement
+        Object facts the rules can match.
+    options : tuple of GraspOption
+        Feasible grasps using ``arms_needed`` arms, in :data:`~affordances.actions.GRASP_ORDER`.
+    skills : tuple of SkillSelection
+        Skills every grasp needs (orientation constraints, ``rotate_z``).
+    because : tuple of str
+        Reasons shared by every grasp, including why other grasps were rejected.
+    """
+
+    arms_needed: int
+    elements: frozenset[AffordanceElement]
+    options: tuple[GraspOption, ...]
+    skills: tuple[SkillSelection, ...]
+    because: tuple[str, ...]
+
+
+def combined_friction(mu_object: float, mu_palm: float) -> float:
+    """Friction coefficient of a palm-object contact as Bullet combines it (product, <= 10)."""
+    return min(mu_object * mu_palm, BULLET_MAX_FRICTION)
+
+
+def required_squeeze_force(
+    mass_kg: float, mu: float, safety_factor: float, gravity: float
+) -> float:
+    """Normal force per palm, N, for two palms to hold ``safety_factor`` times the weight.
+
+    Solves ``2 * mu * F = k * m * g`` for ``F``; infinite when ``mu`` is 0.
+    """
+    if mu <= 0.0:
+        return math.inf
+    return safety_factor * mass_kg * gravity / (2.0 * mu)
+
+
+def horizontal_extents(context: ObjectContext) -> tuple[float, float]:
+    """Full extents along x and y of {O}, metres."""
+    dims = context.dimensions
+    if context.shape in (Shape.BOX, Shape.MESH):
+        return dims[0], dims[1]
+    return 2.0 * dims[0], 2.0 * dims[0]
+
+
+def object_height(context: ObjectContext) -> float:
+    """Full extent along z of {O}, metres."""
+    dims = context.dimensions
+    if context.shape in (Shape.BOX, Shape.MESH):
+        return dims[2]
+    if context.shape == Shape.CYLINDER:
+        return dims[1]
+    return 2.0 * dims[0]
+
+
+def grip_width(context: ObjectContext) -> float:
+    """Narrowest horizontal extent, metres: what one hand must close around."""
+    return min(horizontal_extents(context))
+
+
+def bounding_radius(context: ObjectContext) -> float:
+    """Radius of the sphere about the object's centre that contains it, metres."""
+    dims = context.dimensions
+    if context.shape in (Shape.BOX, Shape.MESH):
+        return 0.5 * math.hypot(*dims)
+    if context.shape == Shape.CYLINDER:
+        return math.hypot(dims[0], 0.5 * dims[1])
+    return dims[0]
+
+
+def parallel_face_pairs(context: ObjectContext) -> tuple[FacePair, ...]:
+    """Pairs of parallel faces a lateral squeeze could press on (see the module docstring)."""
+    height = object_height(context)
+    if context.shape == Shape.BOX:
+        ex, ey = horizontal_extents(context)
+        return (FacePair(FaceAxis.X, ex, height), FacePair(FaceAxis.Y, ey, height))
+    if context.shape == Shape.CYLINDER:
+        return (FacePair(FaceAxis.DIAMETER, 2.0 * context.dimensions[0], height),)
+    return ()
+
+
+def axis_in_world(axis: FaceAxis, yaw: float) -> Vector3:
+    """Unit vector of a face normal in {W}; a cylinder's diameter is taken along world y."""
+    if axis == FaceAxis.X:
+        return (math.cos(yaw), math.sin(yaw), 0.0)
+    if axis == FaceAxis.Y:
+        return (-math.sin(yaw), math.cos(yaw), 0.0)
+    return (0.0, 1.0, 0.0)
+
+
+def _offset(position: Vector3, direction: Vector3, distance: float) -> Vector3:
+    return (
+        position[0] + distance * direction[0],
+        position[1] + distance * direction[1],
+        position[2] + distance * direction[2],
+    )
+
+
+def _left_right(
+    position: Vector3, direction: Vector3, half_span: float, near_arm: Arm
+) -> tuple[Vector3, Vector3]:
+    """Palms at +-half_span along ``direction`` as (left, right); the left one is on the +y side.
+
+    When both palms have the same y (faces seen front and back), ``near_arm`` takes the palm
+    nearer the robot (smaller x), so a mirrored scene gives the mirrored assignment.
+    """
+    a = _offset(position, direction, half_span)
+    b = _offset(position, direction, -half_span)
+    if a[1] != b[1]:
+        return (a, b) if a[1] > b[1] else (b, a)
+    near, far = (a, b) if a[0] <= b[0] else (b, a)
+    return (near, far) if near_arm == Arm.LEFT else (far, near)
+
+
+def _fmt(value: float) -> str:
+    return f"{value:.3g}" if math.isfinite(value) else "inf"
+
+
+def _best_lateral_pair(pairs: Sequence[FacePair], yaw: float) -> FacePair:
+    # Palms come from the robot's left and right, so squeeze the faces whose normal is
+    # closest to world y; then the narrower span (less reach); then x before y.
+    def key(pair: FacePair) -> tuple[float, float, str]:
+        alignment = abs(axis_in_world(pair.axis, yaw)[1])
+        return (-round(alignment, 9), pair.separation_m, pair.axis.value)
+
+    return min(pairs, key=key)
+
+
+def assess_lateral(
+    context: ObjectContext, robot: RobotCapabilities, config: ReasonerConfig
+) -> tuple[GraspOption | None, tuple[str, ...]]:
+    """Check the two-palm lateral squeeze.
+
+    Returns
+    -------
+    option : GraspOption or None
+        The grasp with its ``hold_lateral`` skill, or ``None`` if a constraint fails.
+    because : tuple of str
+        The reasons, with the numbers.
+    """
+    if context.fragility == Fragility.FRAGILE:
+        return None, ("hard: no squeeze: fragile object",)
+    pairs = parallel_face_pairs(context)
+    if not pairs:
+        why = (
+            "a sphere has no parallel faces"
+            if context.shape == Shape.SPHERE
+            else "mesh faces unknown"
+        )
+        return None, (f"hard: no lateral squeeze: {why}",)
+    min_height = config.min_contact_height_factor * robot.palm_width_m
+    span = f"{_fmt(robot.min_span_m)}..{_fmt(robot.max_span_m)} m"
+    in_span = [p for p in pairs if robot.min_span_m <= p.separation_m <= robot.max_span_m]
+    if not in_span:
+        seps = ", ".join(f"{_fmt(p.separation_m)} m" for p in pairs)
+        return None, (f"hard: no lateral squeeze: faces {seps} apart, outside span {span}",)
+    tall = [p for p in in_span if p.contact_height_m >= min_height]
+    if not tall:
+        return None, (
+            f"hard: no lateral squeeze: faces {_fmt(in_span[0].contact_height_m)} m tall "
+            f"< {_fmt(min_height)} m for a flat palm contact",
+        )
+    pair = _best_lateral_pair(tall, context.yaw)
+    mu = combined_friction(context.friction, robot.palm_friction)
+    need = required_squeeze_force(context.mass_kg, mu, config.safety_factor, config.gravity)
+    friction_note = (
+        f"mu = {_fmt(context.friction)} x {_fmt(robot.palm_friction)} = {_fmt(mu)}, "
+        f"k = {_fmt(config.safety_factor)}, m = {_fmt(context.mass_kg)} kg"
+    )
+    if need > robot.squeeze_force_n:
+        return None, (
+            f"hard: no lateral squeeze: needs {_fmt(need)} N per palm > "
+            f"{_fmt(robot.squeeze_force_n)} N available ({friction_note})",
+        )
+    direction = axis_in_world(pair.axis, context.yaw)
+    left, right = _left_right(
+        context.position, direction, 0.5 * pair.separation_m, choose_arm(context)
+    )
+    hold = SkillSelection(
+        Action.HOLD_LATERAL,
+        DEFAULT_SPACE[Action.HOLD_LATERAL],
+        1.0,
+        {
+            "squeeze_force_n": need,
+            "required_force_n": need,
+            "span_m": pair.separation_m,
+            "squeeze_axis": pair.axis.value,
+        },
+    )
+    because = (
+        f"hard: faces {_fmt(pair.separation_m)} m apart along {pair.axis.value}, "
+        f"within span {span}",
+        f"hard: squeeze needs {_fmt(need)} N per palm <= {_fmt(robot.squeeze_force_n)} N "
+        f"available ({friction_note})",
+    )
+    option = GraspOption(
+        Grasp.TWO_PALM_LATERAL,
+        (Arm.LEFT, Arm.RIGHT),
+        (left, right),
+        (_transport((Arm.LEFT, Arm.RIGHT)), hold),
+        because,
+    )
+    return option, because
+
+
+def assess_support(
+    context: ObjectContext, robot: RobotCapabilities, config: ReasonerConfig
+) -> tuple[GraspOption | None, tuple[str, ...]]:
+    """Check holding the object from below with both palms, spread left and right.
+
+    Returns
+    -------
+    option : GraspOption or None
+        The grasp with its ``hold_force`` skill, or ``None`` if the object is too narrow.
+    because : tuple of str
+        The reasons, with the numbers.
+    """
+    ex, ey = horizontal_extents(context)
+    if context.shape in (Shape.BOX, Shape.MESH):
+        along_x = abs(math.sin(context.yaw)) > abs(math.cos(context.yaw)) + 1e-9
+        axis, extent = (FaceAxis.X, ex) if along_x else (FaceAxis.Y, ey)
+    else:
+        axis, extent = FaceAxis.DIAMETER, ex
+    if extent < robot.min_span_m:
+        return None, (
+            f"hard: no two-arm support: {_fmt(extent)} m across < smallest span "
+            f"{_fmt(robot.min_span_m)} m",
+        )
+    span = min(max(extent - robot.palm_width_m, robot.min_span_m), robot.max_span_m)
+    bottom = (
+        context.position[0],
+        context.position[1],
+        context.position[2] - 0.5 * object_height(context),
+    )
+    direction = axis_in_world(axis, context.yaw)
+    left, right = _left_right(bottom, direction, 0.5 * span, choose_arm(context))
+    load = 0.5 * context.mass_kg * config.gravity
+    hold = SkillSelection(
+        Action.HOLD_FORCE,
+        DEFAULT_SPACE[Action.HOLD_FORCE],
+        1.0,
+        {"load_per_palm_n": load, "span_m": span},
+    )
+    because = (
+        f"hard: two palms {_fmt(span)} m apart under the object ({_fmt(extent)} m across), "
+        f"{_fmt(load)} N each",
+    )
+    option = GraspOption(
+        Grasp.TWO_ARM_SUPPORT,
+        (Arm.LEFT, Arm.RIGHT),
+        (left, right),
+        (_transport((Arm.LEFT, Arm.RIGHT)), hold),
+        because,
+    )
+    return option, because
+
+
+def choose_arm(context: ObjectContext) -> Arm:
+    """The arm on the object's side (left is +y); at y = 0 the goals' side, then the right."""
+    y = context.position[1]
+    if y == 0.0 and context.goals:
+        y = sum(g[1] for g in context.goals) / len(context.goals)
+    return Arm.LEFT if y > 0.0 else Arm.RIGHT
+
+
+def one_arm_options(context: ObjectContext) -> tuple[GraspOption, ...]:
+    """Side and top grasps with the arm on the object's side."""
+    arm = choose_arm(context)
+    ex, ey = horizontal_extents(context)
+    c, s = abs(math.cos(context.yaw)), abs(math.sin(context.yaw))
+    half_y = 0.5 * (c * ey + s * ex) if context.shape in (Shape.BOX, Shape.MESH) else 0.5 * ey
+    sign = 1.0 if arm == Arm.LEFT else -1.0
+    x, y, z = context.position
+    side = (x, y + sign * half_y, z)
+    top = (x, y, z + 0.5 * object_height(context))
+    note = f"hard: {arm.value} arm, on the object's side"
+    return (
+        GraspOption(Grasp.ONE_ARM_SIDE, (arm,), (side,), (_transport((arm,)),), (note,)),
+        GraspOption(Grasp.ONE_ARM_TOP, (arm,), (top,), (_transport((arm,)),), (note,)),
+    )
+
+
+def _transport(arms: tuple[Arm, ...]) -> SkillSelection:
+    return SkillSelection(
+        Action.TRANSPORT,
+        DEFAULT_SPACE[Action.TRANSPORT],
+        1.0,
+        {"arms": tuple(a.value for a in arms)},
+    )
+
+
+def wrap_angle(angle: float) -> float:
+    """Wrap an angle to [-pi, pi), radians."""
+    return (angle + math.pi) % (2.0 * math.pi) - math.pi
+
+
+def _common_skills(
+    context: ObjectContext, config: ReasonerConfig
+) -> tuple[list[SkillSelection], list[str]]:
+    skills: list[SkillSelection] = []
+    because: list[str] = []
+    upright = sorted(s.value for s in context.state & {ObjectState.OPEN, ObjectState.FULL})
+    if upright:
+        skills.append(SkillSelection(Action.KEEP_UPRIGHT, DEFAULT_SPACE[Action.KEEP_UPRIGHT]))
+        because.append(f"hard: {' and '.join(upright)}: keep upright")
+    if ObjectState.CONTAINS_ITEMS in context.state:
+        skills.append(SkillSelection(Action.KEEP_LEVEL, DEFAULT_SPACE[Action.KEEP_LEVEL]))
+        because.append("hard: contains items: keep level")
+    if context.goal_yaw is not None:
+        delta = wrap_angle(context.goal_yaw - context.yaw)
+        if abs(delta) > config.yaw_tolerance_rad:
+            skills.append(
+                SkillSelection(
+                    Action.ROTATE_Z, DEFAULT_SPACE[Action.ROTATE_Z], 1.0, {"delta_yaw_rad": delta}
+                )
+            )
+            because.append(
+                f"hard: goal yaw differs by {_fmt(math.degrees(delta))} deg: rotate about z"
+            )
+    return skills, because
+
+
+def assess(
+    context: ObjectContext, robot: RobotCapabilities, config: ReasonerConfig
+) -> HardAssessment:
+    """Apply the hard constraints: how many arms, which grasps, which constraints.
+
+    Parameters
+    ----------
+    context : ObjectContext
+        The object.
+    robot : RobotCapabilities
+        The robot.
+    config : ReasonerConfig
+        Safety factor, gravity and the one-hand limit.
+
+    Returns
+    -------
+    HardAssessment
+        Feasible grasps and the reasons.
+    """
+    mass, payload = context.mass_kg, robot.payload_per_arm_kg
+    width = grip_width(context)
+    hand_limit = config.one_hand_width_factor * robot.palm_width_m
+    heavy, wide = mass > payload, width > hand_limit
+    because: list[str] = []
+    if heavy:
+        because.append(
+            f"hard: mass {_fmt(mass)} kg > payload {_fmt(payload)} kg per arm: both arms"
+        )
+    else:
+        because.append(f"hard: mass {_fmt(mass)} kg <= payload {_fmt(payload)} kg per arm")
+    width_note = (
+        f"{_fmt(width)} m {{}} one-hand limit {_fmt(hand_limit)} m "
+        f"({_fmt(config.one_hand_width_factor)} x palm width {_fmt(robot.palm_width_m)} m)"
+    )
+    if wide:
+        because.append(f"hard: width {width_note.format('>')}: both arms")
+    else:
+        because.append(f"hard: width {width_note.format('<=')}")
+
+    elements = {AffordanceElement.HEAVY if heavy else AffordanceElement.LIGHT}
+    if wide:
+        elements.add(AffordanceElement.WIDE)
+    if parallel_face_pairs(context):
+        elements.add(AffordanceElement.PARALLEL_FACES)
+    if context.fragility == Fragility.FRAGILE:
+        elements.add(AffordanceElement.FRAGILE)
+    elements.update(_STATE_ELEMENTS[s] for s in context.state if s in _STATE_ELEMENTS)
+
+    lateral, lateral_notes = assess_lateral(context, robot, config)
+    if lateral is not None:
+        elements.add(AffordanceElement.GRASPABLE_LATERAL)
+    skills, common_notes = _common_skills(context, config)
+
+    if mass > 2.0 * payload:
+        because.append(
+            f"hard: mass {_fmt(mass)} kg > both arms' payload {_fmt(2.0 * payload)} kg: cannot lift"
+        )
+        return HardAssessment(0, frozenset(elements), (), tuple(skills), tuple(because))
+
+    options: list[GraspOption] = []
+    if heavy or wide:
+        arms_needed = 2
+        support, support_notes = assess_support(context, robot, config)
+        if lateral is None:
+            because.extend(lateral_notes)
+        else:
+            options.append(lateral)
+        if support is None:
+            because.extend(support_notes)
+        else:
+            options.append(support)
+    else:
+        arms_needed = 1
+        because.append("hard: one arm suffices")
+        if lateral is None and context.fragility == Fragility.FRAGILE:
+            because.extend(lateral_notes)
+        options.extend(one_arm_options(context))
+    because.extend(common_notes)
+    return HardAssessment(
+        arms_needed, frozenset(elements), tuple(options), tuple(skills), tuple(because)
+    )

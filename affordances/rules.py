@@ -1,0 +1,550 @@
+"""Stage 2: weighted soft rules, read from YAML files users extend without code.
+
+A rule file::
+
+    version: 1
+    rules:
+      - name: parcel_lateral
+        description: the paper's parcel is held between both palms
+        when:
+          category: parcel                 # equals
+          material: [glass, ceramic]       # one of
+          mass_kg: {gt: 2.0, le: 10.0}     # operators on numbers
+          state: {contains: open}          # sets: contains (all), contains_any, excludes
+          elements: [wide, parallel_faces] # a list on a set means "contains all"
+        effects:
+          - {grasp: two_palm_lateral, weight: 2.0}            # adds to that grasp's score
+          - {skill: hold_force, weight: 0.5, params: {...}}   # composes a skill
+          - {param: max_speed, value: 0.2}                    # sets a parameter of a skill
+
+Facts a rule can match are listed in :class:`Fact`. Every condition must hold for the rule
+to fire. Rules are evaluated per candidate grasp, so ``grasp`` and the scene elements are
+facts too. When several rules set the same parameter or skill weight, the later rule wins
+(a user file loaded after the default file overrides it).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from enum import Enum, StrEnum
+from functools import lru_cache
+from importlib import resources
+from pathlib import Path
+from types import MappingProxyType
+from typing import Any
+
+import yaml
+
+from affordances.actions import DEFAULT_SPACE, ParamValue
+from affordances.context import Fragility, ObjectState, Shape
+from skills.labels import Action, AffordanceElement, Grasp, Space
+
+#: File the package ships; used unless the caller leaves it out.
+DEFAULT_RULES_FILE = "default.yaml"
+SUPPORTED_VERSION = 1
+
+
+class RuleFileError(ValueError):
+    """A rule file is malformed; the message names the file, the rule and the field."""
+
+
+class Fact(StrEnum):
+    """Facts about an object and a candidate grasp that rules can match."""
+
+    NAME = "name"
+    CATEGORY = "category"
+    SHAPE = "shape"
+    MATERIAL = "material"
+    FRAGILITY = "fragility"
+    MASS_KG = "mass_kg"
+    FRICTION = "friction"
+    WIDTH_M = "width_m"
+    HEIGHT_M = "height_m"
+    STATE = "state"
+    ELEMENTS = "elements"
+    GRASP = "grasp"
+
+
+class Op(StrEnum):
+    """Operators of a condition."""
+
+    EQ = "eq"
+    NE = "ne"
+    GT = "gt"
+    GE = "ge"
+    LT = "lt"
+    LE = "le"
+    IN = "in"
+    NOT_IN = "not_in"
+    CONTAINS = "contains"
+    CONTAINS_ANY = "contains_any"
+    EXCLUDES = "excludes"
+
+
+class _Kind(Enum):
+    NUMBER = "number"
+    TEXT = "text"
+    SET = "set"
+
+
+#: How each fact is compared, and the enum its values must belong to (if any).
+_FACT_KINDS: Mapping[Fact, tuple[_Kind, type[StrEnum] | None]] = {
+    Fact.NAME: (_Kind.TEXT, None),
+    Fact.CATEGORY: (_Kind.TEXT, None),
+    Fact.SHAPE: (_Kind.TEXT, Shape),
+    Fact.MATERIAL: (_Kind.TEXT, None),
+    Fact.FRAGILITY: (_Kind.TEXT, Fragility),
+    Fact.MASS_KG: (_Kind.NUMBER, None),
+    Fact.FRICTION: (_Kind.NUMBER, None),
+    Fact.WIDTH_M: (_Kind.NUMBER, None),
+    Fact.HEIGHT_M: (_Kind.NUMBER, None),
+    Fact.STATE: (_Kind.SET, ObjectState),
+    Fact.ELEMENTS: (_Kind.SET, AffordanceElement),
+    Fact.GRASP: (_Kind.TEXT, Grasp),
+}
+
+_OPS: Mapping[_Kind, tuple[Op, ...]] = {
+    _Kind.NUMBER: (Op.EQ, Op.NE, Op.GT, Op.GE, Op.LT, Op.LE, Op.IN, Op.NOT_IN),
+    _Kind.TEXT: (Op.EQ, Op.NE, Op.IN, Op.NOT_IN),
+    _Kind.SET: (Op.CONTAINS, Op.CONTAINS_ANY, Op.EXCLUDES),
+}
+
+_SYMBOLS = {Op.EQ: "=", Op.NE: "!=", Op.GT: ">", Op.GE: ">=", Op.LT: "<", Op.LE: "<="}
+
+#: Skill each known parameter belongs to when an effect does not name one.
+PARAM_SKILLS: Mapping[str, Action] = MappingProxyType(
+    {
+        "squeeze_force_n": Action.HOLD_LATERAL,
+        "max_speed": Action.TRANSPORT,
+        "obstacle_gain": Action.AVOID_OBSTACLE,
+        "link_gain": Action.AVOID_LINKS,
+    }
+)
+
+#: A fact's value: text, a number, or a set of words.
+FactValue = str | float | frozenset[str]
+Facts = Mapping[Fact, FactValue]
+
+_RULE_KEYS = ("name", "description", "when", "effects")
+_EFFECT_KEYS = {
+    "grasp": ("grasp", "weight"),
+    "skill": ("skill", "weight", "space", "params"),
+    "param": ("param", "value", "skill"),
+}
+
+
+@dataclass(frozen=True)
+class Condition:
+    """One test of a fact, e.g. ``mass_kg > 2.0``.
+
+    Attributes
+    ----------
+    fact : Fact
+        The fact tested.
+    op : Op
+        The operator.
+    value : float, str or tuple of str
+        The operand; a tuple for ``in``, ``not_in`` and the set operators.
+    """
+
+    fact: Fact
+    op: Op
+    value: float | str | tuple[str, ...] | tuple[float, ...]
+
+    def holds(self, facts: Facts) -> bool:
+        """Whether the condition holds for these facts (a missing fact never holds)."""
+        if self.fact not in facts:
+            return False
+        actual = facts[self.fact]
+        value = self.value
+        if isinstance(actual, frozenset):
+            wanted = set(value) if isinstance(value, tuple) else {value}
+            if self.op == Op.CONTAINS:
+                return wanted <= actual
+            if self.op == Op.CONTAINS_ANY:
+                return bool(wanted & actual)
+            return not wanted & actual
+        if self.op == Op.IN:
+            return isinstance(value, tuple) and actual in value
+        if self.op == Op.NOT_IN:
+            return isinstance(value, tuple) and actual not in value
+        if self.op == Op.EQ:
+            return actual == value
+        if self.op == Op.NE:
+            return actual != value
+        if not isinstance(actual, float) or not isinstance(value, float):
+            return False
+        if self.op == Op.GT:
+            return actual > value
+        if self.op == Op.GE:
+            return actual >= value
+        if self.op == Op.LT:
+            return actual < value
+        return actual <= value
+
+    def describe(self, facts: Facts) -> str:
+        """Short text, e.g. ``mass_kg 12 > 5`` or ``category parcel``."""
+        actual = facts.get(self.fact)
+        shown = ", ".join(sorted(actual)) if isinstance(actual, frozenset) else _show(actual)
+        value = self.value
+        operand = ", ".join(_show(v) for v in value) if isinstance(value, tuple) else _show(value)
+        if self.op == Op.EQ:
+            return f"{self.fact.value} {operand}"
+        if self.op in _SYMBOLS:
+            return f"{self.fact.value} {shown} {_SYMBOLS[self.op]} {operand}"
+        if self.op in (Op.IN, Op.NOT_IN):
+            word = "in" if self.op == Op.IN else "not in"
+            return f"{self.fact.value} {shown} {word} [{operand}]"
+        word = {
+            Op.CONTAINS: "contains",
+            Op.CONTAINS_ANY: "contains any of",
+            Op.EXCLUDES: "excludes",
+        }[self.op]
+        return f"{self.fact.value} {word} {operand}"
+
+
+def _show(value: Any) -> str:
+    if isinstance(value, float):
+        return f"{value:g}"
+    return str(value)
+
+
+@dataclass(frozen=True)
+class GraspEffect:
+    """Add ``weight`` to the score of ``grasp``."""
+
+    grasp: Grasp
+    weight: float
+
+
+@dataclass(frozen=True)
+class SkillEffect:
+    """Compose ``action`` in ``space`` with composition ``weight`` and extra ``params``."""
+
+    action: Action
+    space: Space
+    weight: float
+    params: Mapping[str, ParamValue]
+
+
+@dataclass(frozen=True)
+class ParamEffect:
+    """Set parameter ``name`` of the skill ``action`` to ``value`` (if that skill is composed)."""
+
+    name: str
+    value: float | str
+    action: Action
+
+
+Effect = GraspEffect | SkillEffect | ParamEffect
+
+
+@dataclass(frozen=True)
+class Rule:
+    """A named pattern of facts and what it does when it matches.
+
+    Attributes
+    ----------
+    name : str
+        Unique name within its file.
+    conditions : tuple of Condition
+        All must hold; none means the rule always fires.
+    effects : tuple of Effect
+        What the rule does.
+    source : str
+        File (or label) the rule came from.
+    description : str
+        Free text for people.
+    """
+
+    name: str
+    conditions: tuple[Condition, ...]
+    effects: tuple[Effect, ...]
+    source: str = "<memory>"
+    description: str = ""
+
+    def matches(self, facts: Facts) -> bool:
+        """Whether every condition holds."""
+        return all(c.holds(facts) for c in self.conditions)
+
+    def describe(self, facts: Facts) -> str:
+        """The matched conditions as text, e.g. ``category parcel, mass_kg 1 <= 5``."""
+        return ", ".join(c.describe(facts) for c in self.conditions) or "always"
+
+
+class _Where:
+    """Builds error messages naming the file, the rule and the field."""
+
+    def __init__(self, source: str, index: int | None = None, name: str | None = None) -> None:
+        self.source, self.index, self.name = source, index, name
+
+    def error(self, field: str, message: str) -> RuleFileError:
+        where = self.source
+        if self.index is not None:
+            where += f": rule {self.index}"
+            if self.name is not None:
+                where += f" ({self.name!r})"
+        return RuleFileError(f"{where}: field {field!r}: {message}")
+
+
+def _number(value: Any, where: _Where, field: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise where.error(field, f"expected a number, got {value!r}")
+    if not math.isfinite(value):
+        raise where.error(field, f"expected a finite number, got {value!r}")
+    return float(value)
+
+
+def _member(value: Any, enum_cls: type[StrEnum], where: _Where, field: str) -> str:
+    if not isinstance(value, str) or value not in {m.value for m in enum_cls}:
+        allowed = ", ".join(m.value for m in enum_cls)
+        raise where.error(
+            field, f"unknown {enum_cls.__name__} {value!r}; expected one of {allowed}"
+        )
+    return value
+
+
+def _operand(
+    value: Any, fact: Fact, op: Op, where: _Where, field: str
+) -> float | str | tuple[Any, ...]:
+    kind, enum_cls = _FACT_KINDS[fact]
+    many = op in (Op.IN, Op.NOT_IN, Op.CONTAINS_ANY) or (
+        op in (Op.CONTAINS, Op.EXCLUDES) and isinstance(value, list)
+    )
+    if many:
+        if not isinstance(value, list) or not value:
+            raise where.error(field, f"expected a non-empty list for {op.value!r}, got {value!r}")
+        return tuple(
+            _scalar(v, kind, enum_cls, where, f"{field}[{i}]") for i, v in enumerate(value)
+        )
+    if isinstance(value, list | dict):
+        raise where.error(field, f"expected a single value for {op.value!r}, got {value!r}")
+    return _scalar(value, kind, enum_cls, where, field)
+
+
+def _scalar(
+    value: Any, kind: _Kind, enum_cls: type[StrEnum] | None, where: _Where, field: str
+) -> float | str:
+    if kind == _Kind.NUMBER:
+        return _number(value, where, field)
+    if enum_cls is not None:
+        return _member(value, enum_cls, where, field)
+    if not isinstance(value, str) or not value.strip():
+        raise where.error(field, f"expected a non-empty string, got {value!r}")
+    return value.strip().lower()
+
+
+def _conditions(when: Any, where: _Where) -> tuple[Condition, ...]:
+    if when is None:
+        return ()
+    if not isinstance(when, dict):
+        raise where.error("when", f"expected a mapping of facts, got {when!r}")
+    conditions: list[Condition] = []
+    for key, spec in when.items():
+        field = f"when.{key}"
+        if key not in {f.value for f in Fact}:
+            raise where.error(
+                field, f"unknown fact {key!r}; expected one of {', '.join(f.value for f in Fact)}"
+            )
+        fact = Fact(key)
+        kind = _FACT_KINDS[fact][0]
+        allowed = _OPS[kind]
+        if isinstance(spec, dict):
+            if not spec:
+                raise where.error(field, "expected at least one operator")
+            for op_name, operand in spec.items():
+                if op_name not in {o.value for o in allowed}:
+                    raise where.error(
+                        field,
+                        f"bad operator {op_name!r} for a {kind.value} fact; expected one of "
+                        f"{', '.join(o.value for o in allowed)}",
+                    )
+                op = Op(op_name)
+                conditions.append(
+                    Condition(fact, op, _operand(operand, fact, op, where, f"{field}.{op_name}"))
+                )
+        else:
+            if kind == _Kind.SET:
+                op = Op.CONTAINS
+            else:
+                op = Op.IN if isinstance(spec, list) else Op.EQ
+            conditions.append(Condition(fact, op, _operand(spec, fact, op, where, field)))
+    return tuple(conditions)
+
+
+def _check_keys(item: dict[str, Any], allowed: Sequence[str], where: _Where, field: str) -> None:
+    unknown = sorted(set(item) - set(allowed))
+    if unknown:
+        raise where.error(
+            f"{field}.{unknown[0]}" if field else unknown[0],
+            f"unknown key; expected one of {', '.join(allowed)}",
+        )
+
+
+def _params(value: Any, where: _Where, field: str) -> dict[str, ParamValue]:
+    if value is None:
+        return {}
+    if not isinstance(value, dict):
+        raise where.error(field, f"expected a mapping, got {value!r}")
+    params: dict[str, ParamValue] = {}
+    for key, item in value.items():
+        if not isinstance(key, str):
+            raise where.error(field, f"expected string keys, got {key!r}")
+        params[key] = _param_value(item, where, f"{field}.{key}")
+    return params
+
+
+def _param_value(value: Any, where: _Where, field: str) -> float | str:
+    if isinstance(value, str):
+        return value
+    return _number(value, where, field)
+
+
+def _effect(item: Any, where: _Where, field: str) -> Effect:
+    if not isinstance(item, dict):
+        raise where.error(field, f"expected a mapping, got {item!r}")
+    kinds = [k for k in ("param", "grasp") if k in item] or (["skill"] if "skill" in item else [])
+    if len(kinds) != 1:
+        raise where.error(
+            field, f"expected exactly one of 'grasp', 'skill' or 'param', got keys {sorted(item)}"
+        )
+    kind = kinds[0]
+    _check_keys(item, _EFFECT_KEYS[kind], where, field)
+    if kind == "grasp":
+        if "weight" not in item:
+            raise where.error(f"{field}.weight", "missing; a grasp effect needs a weight")
+        grasp = Grasp(_member(item["grasp"], Grasp, where, f"{field}.grasp"))
+        return GraspEffect(grasp, _number(item["weight"], where, f"{field}.weight"))
+    if kind == "skill":
+        action = Action(_member(item["skill"], Action, where, f"{field}.skill"))
+        space = DEFAULT_SPACE[action]
+        if "space" in item:
+            space = Space(_member(item["space"], Space, where, f"{field}.space"))
+        weight = _number(item.get("weight", 1.0), where, f"{field}.weight")
+        return SkillEffect(
+            action,
+            space,
+            weight,
+            MappingProxyType(_params(item.get("params"), where, f"{field}.params")),
+        )
+    name = item["param"]
+    if not isinstance(name, str) or not name:
+        raise where.error(f"{field}.param", f"expected a parameter name, got {name!r}")
+    if "value" not in item:
+        raise where.error(f"{field}.value", "missing; a param effect needs a value")
+    value = _param_value(item["value"], where, f"{field}.value")
+    if "skill" in item:
+        action = Action(_member(item["skill"], Action, where, f"{field}.skill"))
+    elif name in PARAM_SKILLS:
+        action = PARAM_SKILLS[name]
+    else:
+        raise where.error(
+            f"{field}.skill",
+            f"missing; {name!r} is not one of {', '.join(PARAM_SKILLS)}, so name its skill",
+        )
+    return ParamEffect(name, value, action)
+
+
+def parse_rules(data: Any, source: str) -> tuple[Rule, ...]:
+    """Validate a loaded rule document and build its rules.
+
+    Parameters
+    ----------
+    data : Any
+        The document as ``yaml.safe_load`` returns it.
+    source : str
+        File name (or label) used in error messages and kept on each rule.
+
+    Returns
+    -------
+    tuple of Rule
+        In file order.
+
+    Raises
+    ------
+    RuleFileError
+        Naming the file, the rule (index and name) and the field.
+    """
+    top = _Where(source)
+    if not isinstance(data, dict):
+        raise top.error(
+            "", f"expected a mapping with 'version' and 'rules', got {type(data).__name__}"
+        )
+    _check_keys(data, ("version", "rules"), top, "")
+    if data.get("version") != SUPPORTED_VERSION:
+        raise top.error("version", f"expected {SUPPORTED_VERSION}, got {data.get('version')!r}")
+    items = data.get("rules")
+    if not isinstance(items, list):
+        raise top.error("rules", f"expected a list of rules, got {items!r}")
+    rules: list[Rule] = []
+    seen: set[str] = set()
+    for index, item in enumerate(items):
+        where = _Where(source, index)
+        if not isinstance(item, dict):
+            raise where.error("", f"expected a mapping, got {item!r}")
+        name = item.get("name")
+        if not isinstance(name, str) or not name.strip():
+            raise where.error("name", f"expected a non-empty string, got {name!r}")
+        where = _Where(source, index, name)
+        if name in seen:
+            raise where.error("name", "duplicate rule name")
+        seen.add(name)
+        _check_keys(item, _RULE_KEYS, where, "")
+        description = item.get("description", "")
+        if not isinstance(description, str):
+            raise where.error("description", f"expected a string, got {description!r}")
+        effects = item.get("effects")
+        if not isinstance(effects, list) or not effects:
+            raise where.error("effects", f"expected a non-empty list, got {effects!r}")
+        rules.append(
+            Rule(
+                name=name,
+                conditions=_conditions(item.get("when"), where),
+                effects=tuple(_effect(e, where, f"effects[{i}]") for i, e in enumerate(effects)),
+                source=source,
+                description=description,
+            )
+        )
+    return tuple(rules)
+
+
+def load_rules(path: str | Path) -> tuple[Rule, ...]:
+    """Read and validate one rule file.
+
+    Raises
+    ------
+    RuleFileError
+        If the file is not valid YAML or not a valid rule file; names the file.
+    """
+    path = Path(path)
+    try:
+        data = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except yaml.YAMLError as err:
+        raise RuleFileError(f"{path}: not valid YAML: {err}") from None
+    except OSError as err:
+        raise RuleFileError(f"{path}: cannot read: {err.strerror}") from None
+    return parse_rules(data, str(path))
+
+
+@lru_cache(maxsize=1)
+def default_rules() -> tuple[Rule, ...]:
+    """The rules shipped in ``affordances/rulesets/default.yaml``."""
+    text = (
+        resources.files("affordances")
+        .joinpath("rulesets", DEFAULT_RULES_FILE)
+        .read_text(encoding="utf-8")
+    )
+    return parse_rules(yaml.safe_load(text), f"affordances/rulesets/{DEFAULT_RULES_FILE}")
+
+
+def rule_set(paths: Sequence[str | Path] = (), *, include_default: bool = True) -> tuple[Rule, ...]:
+    """The default rules (unless left out) followed by the rules of each file, in order.
+
+    Later rules win when they set the same parameter, so user files refine the defaults.
+    """
+    rules: list[Rule] = list(default_rules()) if include_default else []
+    for path in paths:
+        rules.extend(load_rules(path))
+    return tuple(rules)

@@ -1,0 +1,92 @@
+"""Hard constraints: friction, squeeze force, faces and the number of arms."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+from numpy.testing import assert_allclose
+
+from affordances import ReasonerConfig, combined_friction, required_squeeze_force
+from affordances.physics import (
+    FaceAxis,
+    assess,
+    bounding_radius,
+    grip_width,
+    parallel_face_pairs,
+    wrap_angle,
+)
+from skills.labels import AffordanceElement, Grasp
+from tests.affordances.cases import ROBOT, heavy_box, open_bottle, parcel, small_box, tray
+
+
+def test_friction_combines_as_bullet_does() -> None:
+    assert combined_friction(0.8, 0.8) == pytest.approx(0.64)
+    assert combined_friction(5.0, 4.0) == 10.0
+
+
+def test_required_squeeze_force() -> None:
+    # 2 * mu * F = k * m * g
+    assert_allclose(required_squeeze_force(12.0, 0.64, 1.5, 9.81), 137.953125)
+    assert required_squeeze_force(1.0, 0.0, 1.5, 9.81) == math.inf
+
+
+def test_face_pairs_per_shape() -> None:
+    box = parallel_face_pairs(parcel())
+    assert [(p.axis, p.separation_m, p.contact_height_m) for p in box] == [
+        (FaceAxis.X, 0.2, 0.15),
+        (FaceAxis.Y, 0.3, 0.15),
+    ]
+    (pair,) = parallel_face_pairs(open_bottle())
+    assert (pair.axis, pair.separation_m, pair.contact_height_m) == (FaceAxis.DIAMETER, 0.07, 0.25)
+    ball = parcel(shape="sphere", dimensions=(0.1,))
+    assert parallel_face_pairs(ball) == ()
+    assert parallel_face_pairs(parcel(shape="mesh")) == ()
+
+
+def test_sizes() -> None:
+    assert grip_width(parcel()) == 0.2
+    assert grip_width(open_bottle()) == 0.07
+    assert_allclose(bounding_radius(parcel()), 0.5 * math.sqrt(0.2**2 + 0.3**2 + 0.15**2))
+    assert_allclose(bounding_radius(open_bottle()), math.hypot(0.035, 0.125))
+
+
+def test_arms_needed_and_elements() -> None:
+    config = ReasonerConfig()
+    assert assess(small_box(), ROBOT, config).arms_needed == 1
+    wide = assess(parcel(), ROBOT, config)
+    assert wide.arms_needed == 2
+    assert {AffordanceElement.WIDE, AffordanceElement.LIGHT} <= wide.elements
+    assert AffordanceElement.GRASPABLE_LATERAL in wide.elements
+    heavy = assess(heavy_box(), ROBOT, config)
+    assert heavy.arms_needed == 2 and AffordanceElement.HEAVY in heavy.elements
+    assert [o.grasp for o in heavy.options] == [Grasp.TWO_ARM_SUPPORT]
+    assert assess(heavy_box(mass_kg=14.5), ROBOT, config).arms_needed == 0
+
+
+def test_span_limits_the_squeeze() -> None:
+    config = ReasonerConfig()
+    # both face pairs 0.7 m apart: wider than the 0.6 m span
+    big = assess(parcel(dimensions=(0.7, 0.7, 0.2)), ROBOT, config)
+    assert [o.grasp for o in big.options] == [Grasp.TWO_ARM_SUPPORT]
+    assert any("outside span 0.15..0.6 m" in line for line in big.because)
+
+
+def test_lateral_palms_face_the_robot_sides() -> None:
+    (lateral, _) = assess(parcel(yaw=math.pi / 2), ROBOT, ReasonerConfig()).options
+    # rotated by 90 deg, the 0.20 m faces now face left and right
+    assert lateral.grasp == Grasp.TWO_PALM_LATERAL
+    left, right = lateral.palms
+    assert_allclose(left, (0.4, 0.1, 0.075), atol=1e-12)
+    assert_allclose(right, (0.4, -0.1, 0.075), atol=1e-12)
+
+
+def test_tray_keeps_level_and_open_bottle_upright() -> None:
+    config = ReasonerConfig()
+    assert [s.action.value for s in assess(tray(), ROBOT, config).skills] == ["keep_level"]
+    assert [s.action.value for s in assess(open_bottle(), ROBOT, config).skills] == ["keep_upright"]
+
+
+def test_wrap_angle() -> None:
+    wrapped = [wrap_angle(a) for a in (0.5, 3 * math.pi, -3.5)]
+    assert_allclose(wrapped, [0.5, -math.pi, 2 * math.pi - 3.5])

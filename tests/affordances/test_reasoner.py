@@ -1,0 +1,246 @@
+"""Decisions of the reasoner on the objects of the brief, and how rules shape them."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import pytest
+from numpy.testing import assert_allclose
+
+from affordances import (
+    AffordanceReasoner,
+    ObjectContext,
+    RobotCapabilities,
+    SemanticAction,
+    needs_both_arms,
+    reason,
+    rule_set,
+)
+from skills.labels import Action, Grasp, Space
+from tests.affordances.cases import (
+    ROBOT,
+    STRONG_ROBOT,
+    heavy_box,
+    number,
+    open_bottle,
+    parcel,
+    small_box,
+    tray,
+    wine_glass,
+)
+
+ONE_ARM = (Grasp.ONE_ARM_SIDE, Grasp.ONE_ARM_TOP)
+
+
+@dataclass(frozen=True)
+class Case:
+    """An object, a robot and the decision expected of the top-ranked action."""
+
+    name: str
+    make: Callable[[], ObjectContext]
+    robot: RobotCapabilities
+    grasps: tuple[Grasp, ...]
+    required: tuple[Action, ...]
+    forbidden: tuple[Action, ...] = ()
+
+
+CASES = [
+    Case(
+        "paper parcel",
+        parcel,
+        ROBOT,
+        (Grasp.TWO_PALM_LATERAL,),
+        (Action.TRANSPORT, Action.HOLD_LATERAL),
+        (Action.KEEP_UPRIGHT, Action.KEEP_LEVEL),
+    ),
+    Case(
+        "heavy box, 40 N palms: friction cannot carry it",
+        heavy_box,
+        ROBOT,
+        (Grasp.TWO_ARM_SUPPORT,),
+        (Action.TRANSPORT, Action.HOLD_FORCE),
+        (Action.HOLD_LATERAL,),
+    ),
+    Case(
+        "heavy box, 150 N palms: squeeze possible, support from below still preferred",
+        heavy_box,
+        STRONG_ROBOT,
+        (Grasp.TWO_ARM_SUPPORT,),
+        (Action.TRANSPORT, Action.HOLD_FORCE),
+    ),
+    Case("small light box", small_box, ROBOT, ONE_ARM, (Action.TRANSPORT,), (Action.HOLD_LATERAL,)),
+    Case(
+        "full fragile glass",
+        wine_glass,
+        ROBOT,
+        ONE_ARM,
+        (Action.TRANSPORT, Action.KEEP_UPRIGHT),
+        (Action.HOLD_LATERAL,),
+    ),
+    Case(
+        "open bottle",
+        open_bottle,
+        ROBOT,
+        (Grasp.ONE_ARM_SIDE,),
+        (Action.TRANSPORT, Action.KEEP_UPRIGHT),
+    ),
+    Case(
+        "tray with items",
+        tray,
+        ROBOT,
+        (Grasp.TWO_ARM_SUPPORT,),
+        (Action.TRANSPORT, Action.KEEP_LEVEL, Action.HOLD_FORCE),
+        (Action.HOLD_LATERAL,),
+    ),
+]
+
+
+@pytest.mark.parametrize("case", CASES, ids=[c.name for c in CASES])
+def test_top_action(case: Case) -> None:
+    actions = reason(case.make(), case.robot)
+    top = actions[0]
+    assert top.grasp in case.grasps, top
+    for action in case.required:
+        assert action in top.actions, f"{action} missing from {top.actions}"
+    for action in case.forbidden:
+        assert action not in top.actions, f"{action} unexpected in {top.actions}"
+    scores = [a.score for a in actions]
+    assert scores == sorted(scores, reverse=True)
+
+
+def _only(actions: tuple[SemanticAction, ...], grasp: Grasp) -> SemanticAction:
+    return next(a for a in actions if a.grasp == grasp)
+
+
+def test_paper_parcel_squeezes_its_y_faces_with_the_needed_force() -> None:
+    top = reason(parcel(), ROBOT)[0]
+    hold = top.skill(Action.HOLD_LATERAL)
+    assert hold is not None and hold.space == Space.RELATIVE
+    # F = k m g / (2 mu) = 1.5 * 1.0 * 9.81 / (2 * 0.8 * 0.8)
+    assert_allclose(number(hold.params["required_force_n"]), 1.5 * 9.81 / 1.28, rtol=1e-12)
+    assert_allclose(number(hold.params["span_m"]), 0.30)
+    assert hold.params["squeeze_axis"] == "y"
+    transport = top.skill(Action.TRANSPORT)
+    assert transport is not None and transport.space == Space.ABSOLUTE
+    assert transport.params["arms"] == ("left", "right")
+    assert "hard: mass 1 kg <= payload 7 kg per arm" in top.because
+    assert "rule parcel_lateral (+2): category parcel" in top.because
+
+
+def test_heavy_box_reports_why_it_cannot_be_squeezed() -> None:
+    top = reason(heavy_box(), ROBOT)[0]
+    assert needs_both_arms(top)
+    assert any("mass 12 kg > payload 7 kg per arm" in line for line in top.because)
+    # 1.5 * 12 * 9.81 / (2 * 0.64) = 138 N per palm, more than the 40 N the palms have
+    assert any("needs 138 N per palm > 40 N available" in line for line in top.because)
+    assert all(a.grasp != Grasp.TWO_PALM_LATERAL for a in reason(heavy_box(), ROBOT))
+
+
+def test_heavy_box_with_strong_palms_can_be_squeezed_with_the_needed_force() -> None:
+    lateral = _only(reason(heavy_box(), STRONG_ROBOT), Grasp.TWO_PALM_LATERAL)
+    hold = lateral.skill(Action.HOLD_LATERAL)
+    assert hold is not None
+    assert_allclose(number(hold.params["squeeze_force_n"]), 1.5 * 12.0 * 9.81 / 1.28, rtol=1e-12)
+    assert any("needs 138 N per palm <= 150 N available" in line for line in lateral.because)
+    # a heavy object held by friction also gets its squeeze force regulated (default rule)
+    hold_force = lateral.skill(Action.HOLD_FORCE)
+    assert hold_force is not None and hold_force.weight == 0.5
+
+
+def test_too_heavy_for_both_arms_gives_none_with_reason() -> None:
+    actions = reason(heavy_box(mass_kg=15.0), ROBOT)
+    assert [a.grasp for a in actions] == [Grasp.NONE]
+    assert actions[0].skills == ()
+    assert any("cannot lift" in line for line in actions[0].because)
+
+
+def test_small_box_uses_the_arm_on_its_side() -> None:
+    right = reason(small_box(), ROBOT)[0].skill(Action.TRANSPORT)
+    left = reason(small_box(position=(0.4, 0.2, 0.03)), ROBOT)[0].skill(Action.TRANSPORT)
+    assert right is not None and right.params["arms"] == ("right",)
+    assert left is not None and left.params["arms"] == ("left",)
+
+
+def test_fragile_glass_is_never_squeezed_and_says_so() -> None:
+    actions = reason(wine_glass(), ROBOT)
+    assert all(Action.HOLD_LATERAL not in a.actions for a in actions)
+    assert "hard: no squeeze: fragile object" in actions[0].because
+    assert "hard: full: keep upright" in actions[0].because
+    transport = actions[0].skill(Action.TRANSPORT)
+    assert transport is not None and transport.params["max_speed"] == pytest.approx(0.08)
+
+
+def test_fragile_wide_box_is_supported_not_squeezed() -> None:
+    actions = reason(parcel(fragility="fragile"), ROBOT)
+    assert actions[0].grasp == Grasp.TWO_ARM_SUPPORT
+    assert all(a.grasp != Grasp.TWO_PALM_LATERAL for a in actions)
+
+
+def test_tray_is_too_thin_to_squeeze() -> None:
+    top = reason(tray(), ROBOT)[0]
+    assert any("0.03 m tall < 0.045 m" in line for line in top.because)
+
+
+def test_sphere_has_no_parallel_faces() -> None:
+    ball = parcel(name="ball", category="ball", shape="sphere", dimensions=(0.12,))
+    actions = reason(ball, ROBOT)
+    assert [a.grasp for a in actions] == [Grasp.TWO_ARM_SUPPORT]
+    assert any("sphere has no parallel faces" in line for line in actions[0].because)
+
+
+def test_goal_yaw_adds_rotate_z_with_the_signed_difference() -> None:
+    top = reason(parcel(yaw=0.1, goal_yaw=0.6), ROBOT)[0]
+    rotate = top.skill(Action.ROTATE_Z)
+    assert rotate is not None and rotate.space == Space.ABSOLUTE
+    assert_allclose(number(rotate.params["delta_yaw_rad"]), 0.5, atol=1e-12)
+    assert reason(parcel(yaw=0.1, goal_yaw=0.11), ROBOT)[0].skill(Action.ROTATE_Z) is None
+
+
+def test_skills_are_listed_absolute_first() -> None:
+    top = reason(tray(goal_yaw=1.0), ROBOT)[0]
+    spaces = [s.space for s in top.skills]
+    assert spaces == sorted(spaces, key=lambda s: s != Space.ABSOLUTE)
+
+
+def test_user_rule_file_adds_to_the_defaults(tmp_path: Path) -> None:
+    path = tmp_path / "mine.yaml"
+    path.write_text(
+        "version: 1\n"
+        "rules:\n"
+        "  - name: parcels_from_below\n"
+        "    when: {category: parcel, mass_kg: {lt: 5}}\n"
+        "    effects:\n"
+        "      - {grasp: two_arm_support, weight: 10}\n"
+        "      - {param: max_speed, value: 0.05}\n"
+        "      - {param: squeeze_force_n, value: 100}\n",
+        encoding="utf-8",
+    )
+    reasoner = AffordanceReasoner(ROBOT, rules=rule_set([path]))
+    actions = reasoner.rank(parcel())
+    assert actions[0].grasp == Grasp.TWO_ARM_SUPPORT
+    assert actions[0].score == pytest.approx(10.0)
+    assert "rule parcels_from_below (+10): category parcel, mass_kg 1 < 5" in actions[0].because
+    lateral = _only(actions, Grasp.TWO_PALM_LATERAL)
+    assert lateral.score == pytest.approx(3.0)
+    # the later rule wins over default_speed; the squeeze force is clamped to the 40 N available
+    transport, hold = lateral.skill(Action.TRANSPORT), lateral.skill(Action.HOLD_LATERAL)
+    assert transport is not None and transport.params["max_speed"] == pytest.approx(0.05)
+    assert hold is not None and hold.params["squeeze_force_n"] == pytest.approx(40.0)
+    assert any("clamped to 40 N" in line for line in lateral.because)
+
+
+def test_user_rule_file_can_replace_the_defaults(tmp_path: Path) -> None:
+    path = tmp_path / "only.yaml"
+    path.write_text(
+        "version: 1\nrules:\n  - name: side\n    effects: [{grasp: one_arm_side, weight: 1}]\n",
+        encoding="utf-8",
+    )
+    actions = reason(parcel(), ROBOT, rules=rule_set([path], include_default=False))
+    # no rule scores two-arm grasps, so they tie at 0 and keep the grasp order
+    assert [a.grasp for a in actions] == [Grasp.TWO_PALM_LATERAL, Grasp.TWO_ARM_SUPPORT]
+    assert all(a.score == 0.0 for a in actions)
+    top = actions[0]
+    assert top.actions == (Action.TRANSPORT, Action.HOLD_LATERAL)
+    assert not any(line.startswith("rule ") for line in top.because)
