@@ -18,7 +18,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from skills import quaternion as quat
-from skills.basis import phase_step
+from skills.basis import DEFAULT_ALPHA_S, phase_step
 from skills.coupling import CouplingTerm
 from skills.demonstration import Demonstration
 from skills.dmp import (
@@ -280,18 +280,52 @@ def forcing_accelerations(model: PoseModel, target: PoseTarget, s: float) -> tup
     return target.position_matrix @ f[:3], target.orientation_matrix @ f[3:]
 
 
-@dataclass(frozen=True)
 class LearntForcing:
     """The learnt RBF forcing term of ``model`` as a :class:`CouplingTerm`.
 
-    Use it to add one skill's learnt shape to another DMP (e.g. a zero-forcing spring).
+    Used to compose a learnt skill with others on a shared transformation system: its forcing
+    is scaled for the running target's start and goal with ``model``'s own scaling, and read
+    at the running phase.
     """
 
-    model: PoseModel
+    def __init__(self, model: PoseModel) -> None:
+        self.model = model
+        self._for: PoseTarget | None = None
+        self._own: PoseTarget | None = None
+
+    def _own_target(self, target: PoseTarget) -> PoseTarget:
+        if self._for is not target:
+            self._own = self.model.target(
+                target.start_position,
+                target.start_orientation,
+                target.goal_position,
+                target.goal_orientation,
+                target.tau,
+            )
+            self._for = target
+        assert self._own is not None
+        return self._own
 
     def acceleration(self, state: PoseState, target: PoseTarget) -> tuple[Array, Array]:
         """(linear m/s^2, angular rad/s^2) at ``state.phase``."""
-        return forcing_accelerations(self.model, target, state.phase)
+        own = self._own_target(target)
+        basis = self.model.position.forcing.basis
+        raw = basis.activations_at(state.phase) @ own.effective_weights
+        f = raw[:6] * (state.phase / (max(float(raw[6]), 1e-300) * own.tau * own.tau))
+        return f[:3], f[3:]
+
+
+@dataclass(frozen=True)
+class Weighted:
+    """A coupling term scaled by a composition weight (the paper's ``w_j`` / ``w_k``)."""
+
+    term: CouplingTerm
+    weight: float
+
+    def acceleration(self, state: PoseState, target: PoseTarget) -> tuple[Array, Array]:
+        """``weight`` times the term's accelerations."""
+        lin, ang = self.term.acceleration(state, target)
+        return self.weight * lin, self.weight * ang
 
 
 def sum_couplings(
@@ -421,6 +455,32 @@ def pose_step(
         buf[13:16],
         buf[16:19],
         phase_step(state.phase, dt, target.tau, model.params.alpha_s),
+    )
+
+
+def coupled_step(
+    state: PoseState,
+    target: PoseTarget,
+    dt: float,
+    couplings: Sequence[CouplingTerm],
+    alpha_s: float = DEFAULT_ALPHA_S,
+) -> PoseState:
+    """Advance a pose driven by coupling terms alone (no attractor of its own).
+
+    Relative-space skills such as grasp maintenance carry their own reference; this integrates
+    their summed accelerations with the same scheme as :func:`pose_step`.
+    """
+    lin, ang = sum_couplings(couplings, state, target)
+    vel = state.velocity + lin * dt
+    omega = state.angular_velocity + ang * dt
+    return PoseState(
+        state.position + vel * dt,
+        vel,
+        lin,
+        quat.integrate(state.orientation, omega, dt),
+        omega,
+        ang,
+        phase_step(state.phase, dt, target.tau, alpha_s),
     )
 
 

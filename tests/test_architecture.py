@@ -1,4 +1,4 @@
-"""Dependencies flow one way: skills, affordances and planner never import pybullet, fcl or trimesh."""
+"""Dependencies flow one way: skills, affordances and planner never import the simulator."""
 
 from __future__ import annotations
 

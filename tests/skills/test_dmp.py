@@ -25,8 +25,9 @@ DT = 0.002
 
 def test_reproduces_a_demonstration_within_one_millimetre(demo: Demonstration) -> None:
     model = fit_pose(demo)
-    target = model.target(demo.positions[0], demo.orientations[0], demo.positions[-1],
-                          demo.orientations[-1])  # fmt: skip
+    target = model.target(
+        demo.positions[0], demo.orientations[0], demo.positions[-1], demo.orientations[-1]
+    )
     start = PoseState.at_rest(demo.positions[0], demo.orientations[0])
     n = demo.n_samples - 1
     traj = pose_rollout(model, target, start, demo.duration / n, n)
@@ -83,8 +84,9 @@ def test_rotation_z_scaling_turns_the_horizontal_shape_and_keeps_the_lift() -> N
     y0, g = demo.positions[0], demo.positions[-1]
     base = position_rollout(model, DMPState.at_rest(y0), g, dt=DT)
     angle, k = 2.0, 0.6
-    rot = np.array([[np.cos(angle), -np.sin(angle), 0], [np.sin(angle), np.cos(angle), 0],
-                    [0, 0, 1]])  # fmt: skip
+    rot = np.array(
+        [[np.cos(angle), -np.sin(angle), 0], [np.sin(angle), np.cos(angle), 0], [0, 0, 1]]
+    )
     m = rot @ np.diag([k, k, 1.0])
     new_y0 = np.array([0.6, 0.0, 0.7])
     new_g = new_y0 + m @ (g - y0)
@@ -114,8 +116,9 @@ def test_doubling_tau_doubles_the_duration(demo: Demonstration) -> None:
     start = PoseState.at_rest(demo.positions[0], demo.orientations[0])
     times = []
     for tau in (1.5, 3.0):
-        target = model.target(start.position, start.orientation, demo.positions[-1],
-                              demo.orientations[-1], tau)  # fmt: skip
+        target = model.target(
+            start.position, start.orientation, demo.positions[-1], demo.orientations[-1], tau
+        )
         traj = pose_rollout(model, target, start, 0.0005, int(3 * tau / 0.0005))
         times.append(_settling_time(traj.t, traj.positions, demo.positions[-1], start.position))
     assert times[1] / times[0] == pytest.approx(2.0, rel=0.01)
@@ -163,8 +166,9 @@ def test_fast_rollout_matches_stepping(demo: Demonstration) -> None:
 def test_resuming_from_a_mid_motion_full_state_continues_exactly(demo: Demonstration) -> None:
     model = fit_pose(demo)
     start = PoseState.at_rest(demo.positions[0], demo.orientations[0])
-    target = model.target(start.position, start.orientation, demo.positions[-1],
-                          demo.orientations[-1])  # fmt: skip
+    target = model.target(
+        start.position, start.orientation, demo.positions[-1], demo.orientations[-1]
+    )
     whole = pose_rollout(model, target, start, DT, 1000)
     mid = whole.state(400)
     rest = pose_rollout(model, target, mid, DT, 600)
@@ -184,10 +188,13 @@ def test_handover_to_a_new_skill_has_no_velocity_or_acceleration_jump(
     second = PoseDMP.start(model, handed, [0.4, -0.3, 0.75], [0, 0, 0.3826834, 0.9238795])
     nxt = second.step(DT)
     # Velocity changes by one step of acceleration; acceleration by a fraction of its size.
-    assert np.linalg.norm(nxt.velocity - handed.velocity) < np.linalg.norm(
-        handed.acceleration) * DT * 1.05 + 1e-9  # fmt: skip
+    assert (
+        np.linalg.norm(nxt.velocity - handed.velocity)
+        < np.linalg.norm(handed.acceleration) * DT * 1.05 + 1e-9
+    )
     assert np.linalg.norm(nxt.acceleration - handed.acceleration) < 0.05 * max(
-        1.0, np.linalg.norm(handed.acceleration))  # fmt: skip
+        1.0, np.linalg.norm(handed.acceleration)
+    )
     # Without the blend the new skill's own acceleration differs a lot at the switch.
     raw = PoseDMP.start(model, handed, [0.4, -0.3, 0.75], quat.IDENTITY, blend_fraction=0.0)
     assert np.linalg.norm(raw.step(DT).acceleration - handed.acceleration) > 0.5
@@ -224,8 +231,12 @@ def test_fitting_several_demonstrations_averages_them() -> None:
     m1 = fit_pose(a)
     m2 = fit_pose([a, b])
     # b is a translated, slower copy of a: same normalised forcing, so the same weights.
-    assert_allclose(m2.position.forcing.weights, m1.position.forcing.weights, rtol=1e-3,
-                    atol=1e-3 * np.abs(m1.position.forcing.weights).max())  # fmt: skip
+    assert_allclose(
+        m2.position.forcing.weights,
+        m1.position.forcing.weights,
+        rtol=1e-3,
+        atol=1e-3 * np.abs(m1.position.forcing.weights).max(),
+    )
 
 
 def test_amplitude_scaling_mirrors_and_stretches_every_axis() -> None:

@@ -48,10 +48,14 @@ def test_scalar_versions_match_vector_versions() -> None:
     omega = RNG.normal(size=(20, 3))
     for i in range(20):
         gi, qi = tuple(g[i].tolist()), tuple(q[i].tolist())
-        assert_allclose(quat.rotation_error_scalar(gi, qi), quat.rotation_error(g[i], q[i]),
-                        atol=1e-12)  # fmt: skip
-        assert_allclose(quat.integrate_scalar(qi, tuple(omega[i].tolist()), 0.01),
-                        quat.integrate(q[i], omega[i], 0.01), atol=1e-15)  # fmt: skip
+        assert_allclose(
+            quat.rotation_error_scalar(gi, qi), quat.rotation_error(g[i], q[i]), atol=1e-12
+        )
+        assert_allclose(
+            quat.integrate_scalar(qi, tuple(omega[i].tolist()), 0.01),
+            quat.integrate(q[i], omega[i], 0.01),
+            atol=1e-15,
+        )
 
 
 def test_make_continuous_removes_sign_flips_only() -> None:

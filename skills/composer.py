@@ -1,0 +1,228 @@
+"""Simultaneous composition of absolute and relative skills into both palms' commands.
+
+Absolute space: one transformation system (eq. 1-4 with zero forcing) pulls the object pose
+towards the move's goal over ``tau``; every selected absolute skill adds its coupling term
+with its weight ``w_j`` (the learnt pick-and-place and rotation forcing terms, obstacle
+steering, link-level potential-field avoidance, ...). Integrated over a step, skill ``j``
+contributes the velocity ``w_j * dt * c_j``, so the object twist is the weighted sum of the
+skills' velocities of the paper's eq. (5) on top of the shared attractor.
+
+Relative space: each palm's pose in {O} moves under its relative skills alone (grasp
+maintenance tracks the grasp geometry; a force-tracking variant regulates the squeeze).
+
+Output: the palms' world poses (object pose composed with the palms' relative poses) and
+world twists ``G^T y_o' + R_o y_C'`` (:func:`skills.dual_arm.compose_twists`), which is what
+a Cartesian controller tracks.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from skills import quaternion as quat
+from skills.coupling import CouplingTerm
+from skills.dmp import DMPParams
+from skills.dual_arm import ARMS, compose_twists, palm_poses
+from skills.labels import Arm
+from skills.pose_dmp import (
+    PoseModel,
+    PoseState,
+    PoseTarget,
+    Weighted,
+    coupled_step,
+    pose_acceleration,
+    pose_step,
+)
+from skills.types import Array
+
+
+@dataclass(frozen=True)
+class DualArmState:
+    """Full state of the closed chain: the object in the world and each palm in {O}.
+
+    Attributes
+    ----------
+    object : PoseState
+        ``object2world`` pose, twist and accelerations; its phase is the task phase.
+    left, right : PoseState
+        ``palm2object`` pose and motion of each palm, expressed in {O}.
+    """
+
+    object: PoseState
+    left: PoseState
+    right: PoseState
+
+    def relative(self, arm: Arm) -> PoseState:
+        """The palm's state in {O}."""
+        return self.left if arm is Arm.LEFT else self.right
+
+
+@dataclass(frozen=True)
+class PalmCommands:
+    """What the controller should track this step.
+
+    Attributes
+    ----------
+    positions : ndarray, shape (2, 3)
+        ``palm2world`` positions, left then right, m.
+    orientations : ndarray, shape (2, 4)
+        ``palm2world`` orientations.
+    twists : ndarray, shape (2, 6)
+        Palm twists (linear m/s, angular rad/s), world frame.
+    object_twist : ndarray, shape (6,)
+        The composed absolute twist of the object centre.
+    """
+
+    positions: Array
+    orientations: Array
+    twists: Array
+    object_twist: Array
+
+
+@dataclass
+class DualArmComposer:
+    """Runs one composition of absolute and relative skills for one move.
+
+    Build with :meth:`start`; call :meth:`step` every control tick, with the measured state
+    when the loop is closed.
+    """
+
+    base: PoseModel
+    target: PoseTarget
+    state: DualArmState
+    absolute: list[Weighted] = field(default_factory=list)
+    relative: dict[Arm, list[Weighted]] = field(default_factory=dict)
+    relative_targets: dict[Arm, PoseTarget] = field(default_factory=dict)
+
+    @staticmethod
+    def start(
+        state: DualArmState,
+        goal_position: ArrayLike,
+        goal_orientation: ArrayLike,
+        tau: float,
+        absolute: Sequence[tuple[CouplingTerm, float]] = (),
+        relative: Mapping[Arm, Sequence[tuple[CouplingTerm, float]]] | None = None,
+        params: DMPParams | None = None,
+        fresh_phase: bool = True,
+    ) -> DualArmComposer:
+        """Compose skills from a handed-over full state towards a goal pose of the object.
+
+        Parameters
+        ----------
+        state : DualArmState
+            The previous skill's last full state (the handover).
+        goal_position, goal_orientation : array_like, shapes (3,), (4,)
+            Where the object should end, world frame.
+        tau : float
+            Temporal scaling of the move, s.
+        absolute : sequence of (CouplingTerm, weight)
+            Absolute skills' coupling terms and their weights ``w_j``.
+        relative : mapping Arm -> sequence of (CouplingTerm, weight)
+            Relative skills per palm and their weights ``w_k``.
+        params : DMPParams, optional
+            Gains of the shared transformation system.
+        fresh_phase : bool
+            Restart the phase at 1 (a new move) rather than continue the handed-over one.
+        """
+        base = PoseModel.still(params)
+        obj = state.object.with_phase(1.0) if fresh_phase else state.object
+        target = base.target(obj.position, obj.orientation, goal_position, goal_orientation, tau)
+        rel_targets = {
+            arm: PoseModel.still(params).target(
+                state.relative(arm).position,
+                state.relative(arm).orientation,
+                state.relative(arm).position,
+                state.relative(arm).orientation,
+                tau,
+            )
+            for arm in ARMS
+        }
+        return DualArmComposer(
+            base,
+            target,
+            replace(state, object=obj),
+            [Weighted(c, float(w)) for c, w in absolute],
+            {
+                arm: [Weighted(c, float(w)) for c, w in (relative or {}).get(arm, ())]
+                for arm in ARMS
+            },
+            rel_targets,
+        )
+
+    def object_acceleration(self, state: PoseState | None = None) -> tuple[Array, Array]:
+        """Composed object acceleration (linear, angular) at ``state`` (default: current)."""
+        return pose_acceleration(state or self.state.object, self.base, self.target, self.absolute)
+
+    def step(self, dt: float, measured: DualArmState | None = None) -> PalmCommands:
+        """Advance every space by ``dt`` and return the palms' commands.
+
+        Parameters
+        ----------
+        dt : float
+            Control period, s.
+        measured : DualArmState, optional
+            Close the loop on a measured state (e.g. the object's pose from the simulator).
+        """
+        current = measured or self.state
+        obj = pose_step(current.object, self.base, self.target, dt, self.absolute)
+        rel = {
+            arm: coupled_step(
+                current.relative(arm),
+                self.relative_targets[arm],
+                dt,
+                self.relative[arm],
+                self.base.params.alpha_s,
+            )
+            for arm in ARMS
+        }
+        self.state = DualArmState(obj, rel[Arm.LEFT], rel[Arm.RIGHT])
+        return self.commands()
+
+    def commands(self) -> PalmCommands:
+        """Palm poses and twists for the current state."""
+        return commands_for(self.state)
+
+
+def commands_for(state: DualArmState) -> PalmCommands:
+    """Palm world poses and eq. (5) twists for a dual-arm state."""
+    obj = state.object
+    rel_p = np.stack((state.left.position, state.right.position))
+    rel_q = np.stack((state.left.orientation, state.right.orientation))
+    positions, orientations = palm_poses(obj.position, obj.orientation, rel_p, rel_q)
+    r = positions - obj.position
+    object_twist = obj.twist()
+    rel_twists = np.stack((state.left.twist(), state.right.twist()))[None]
+    twists = compose_twists(object_twist[None], [1.0], r, rel_twists, [1.0], obj.orientation)
+    return PalmCommands(positions, orientations, twists, object_twist)
+
+
+def grasped_state(
+    object_position: ArrayLike,
+    object_orientation: ArrayLike,
+    left_in_object: tuple[ArrayLike, ArrayLike],
+    right_in_object: tuple[ArrayLike, ArrayLike],
+) -> DualArmState:
+    """A dual-arm state at rest: the object's pose and each palm's pose in {O}."""
+    return DualArmState(
+        PoseState.at_rest(object_position, object_orientation),
+        PoseState.at_rest(*left_in_object),
+        PoseState.at_rest(*right_in_object),
+    )
+
+
+def relative_from_world(
+    object_position: Array,
+    object_orientation: Array,
+    palm_position: Array,
+    palm_orientation: Array,
+) -> tuple[Array, Array]:
+    """``palm2object`` from ``object2world`` and ``palm2world``."""
+    inv = quat.conjugate(object_orientation)
+    return (
+        quat.rotate(inv, palm_position - object_position),
+        quat.multiply(inv, palm_orientation),
+    )

@@ -1,0 +1,295 @@
+"""Dynamic potential field (Park et al. 2008) on points rigidly attached to the object.
+
+For a point at ``x`` moving with ``v``, with ``c`` the nearest obstacle point, ``r = x - c``,
+``p`` the distance and ``n = r / |r|`` (obstacle to point):
+
+    cos(theta) = v . n / |v|        theta: angle between v and the obstacle-to-point vector
+    U = lambda (-cos theta)^beta |v| g(p)    if theta in (pi/2, pi] (approaching), else 0
+    g(p) = 1/p - 1/p0 for p < p0, else 0    (p0 = inf is Park et al.'s 1/p)
+
+so a point heading straight at the obstacle has ``theta = pi``. The coupling is ``-grad_x U``
+with the nearest point held fixed (Park et al.'s point obstacle; exact for point obstacles, a
+first-order model for surfaces). With ``C = -cos theta > 0``::
+
+    -grad U = lambda [ beta C^(beta-1) g(p) (v - (v.n) n) / p  +  |v| C^beta n / p^2 ]
+
+The first term turns the velocity away from the obstacle (it is perpendicular to ``n``), the
+second pushes along ``n``; head on, it is ``lambda |v| / p^2`` opposite to the velocity.
+``p`` is clipped below at ``min_distance`` so contact stays finite. ``lambda`` is in m^2/s.
+
+Mapping to the object (a documented choice)
+-------------------------------------------
+Points are offsets ``r_i`` in the object frame; in the world ``x_i = y + R(q) r_i`` and
+``v_i = v + omega x (R r_i)``. The object gets ``linear = sum_i a_i`` (a sum, not a mean, so
+one forearm point near an obstacle is not diluted by the far ones) and
+``angular = sum_i (R r_i) x a_i / rho^2``, with ``rho`` a radius of gyration (default the RMS
+lever arm): a single point at lever arm ``rho`` pushed tangentially by ``a`` then gets exactly
+``a`` of tangential acceleration from the rotation.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from skills.couplings._checks import ZERO3, positive, vector
+from skills.pose_dmp import PoseState, PoseTarget
+from skills.types import Array
+
+#: ``query(points (N, 3)) -> (distances (N,), closest_points (N, 3))``, world frame, m.
+DistanceQuery = Callable[[Array], tuple[Array, Array]]
+
+
+def potential(
+    points: Array,
+    velocities: Array,
+    closest: Array,
+    distances: Array,
+    gain: float,
+    beta: float,
+    influence: float = math.inf,
+    min_distance: float = 1e-3,
+) -> Array:
+    """The dynamic potential ``U`` per point (for checks and plots), shape (N,), 1/s.
+
+    Parameters
+    ----------
+    points, velocities, closest : ndarray, shape (N, 3)
+        Positions, velocities and nearest obstacle points, world frame, m and m/s.
+    distances : ndarray, shape (N,)
+        Distances to the obstacle, m.
+    gain, beta, influence, min_distance
+        As :class:`PotentialFieldAvoidance`.
+    """
+    r = points - closest
+    rn = np.linalg.norm(r, axis=1)
+    speed = np.linalg.norm(velocities, axis=1)
+    c = -np.einsum("nk,nk->n", velocities, r) / np.maximum(rn * speed, 1e-300)
+    p = np.maximum(distances, min_distance)
+    g = np.where(p < influence, 1.0 / p - 1.0 / influence, 0.0)
+    u: Array = gain * np.maximum(c, 0.0) ** beta * speed * g
+    return u
+
+
+def point_accelerations(
+    points: Array,
+    velocities: Array,
+    closest: Array,
+    distances: Array,
+    gain: float,
+    beta: float,
+    influence: float = math.inf,
+    min_distance: float = 1e-3,
+) -> Array:
+    """``-grad_x U`` per point, shape (N, 3), m/s^2 (arguments as :func:`potential`)."""
+    r = points - closest
+    alpha, kappa = _coefficients(
+        _dot(r, r),
+        _dot(velocities, r),
+        _dot(velocities, velocities),
+        distances,
+        beta,
+        influence,
+        min_distance,
+    )
+    out: Array = gain * (alpha[:, None] * velocities + kappa[:, None] * r)
+    return out
+
+
+def _einsum_dot(a: Array, b: Array) -> Array:
+    """Row-wise dot products of (N, 3) arrays, shape (N,)."""
+    return np.einsum("nk,nk->n", a, b)
+
+
+# numpy >= 2 has vecdot, a ufunc several times cheaper than einsum on a few rows.
+_dot: Callable[[Array, Array], Array] = getattr(np, "vecdot", _einsum_dot)
+
+
+def _coefficients(
+    rr: Array,
+    vr: Array,
+    vv: Array,
+    distances: Array,
+    beta: float,
+    influence: float,
+    min_distance: float,
+) -> tuple[Array, Array]:
+    """Per-point ``alpha, kappa`` with ``-grad U = lambda (alpha v + kappa r)``.
+
+    With ``q = -v.r``, ``C = q / (|r| |v|)``, ``h = C^(beta-1) / p``::
+
+        alpha = beta h g(p)        kappa = (q / |r|^2) h (beta g(p) + 1 / p)
+
+    which is the docstring's gradient regrouped (``v.n = -q / |r|``, ``|v| C / |r| = q / |r|^2``)
+    so that every operation is one call on N values: this runs every control tick.
+    """
+    q = -vr
+    c = np.maximum(q, 0.0)
+    c /= np.maximum(np.sqrt(rr * vv), 1e-300)
+    ip = np.reciprocal(np.maximum(distances, min_distance))
+    g = np.maximum(ip - 1.0 / influence, 0.0) if math.isfinite(influence) else ip
+    if beta == 2.0:
+        h = c * ip
+    elif beta == 1.0:  # C^0 = 1 would leak into receding points, where U is flat
+        h = np.where(q > 0.0, ip, 0.0)
+    else:
+        h = c ** (beta - 1.0) * ip
+    alpha = beta * g
+    kappa = alpha + ip
+    alpha *= h
+    kappa *= h
+    kappa *= q
+    kappa /= np.maximum(rr, 1e-300)
+    return alpha, kappa
+
+
+def _matrix(q: Array) -> tuple[float, ...]:
+    # Rotation matrix entries, row-major, in float arithmetic (9 numpy calls would cost more).
+    x, y, z, w = q.tolist()
+    return (
+        1.0 - 2.0 * (y * y + z * z),
+        2.0 * (x * y - z * w),
+        2.0 * (x * z + y * w),
+        2.0 * (x * y + z * w),
+        1.0 - 2.0 * (x * x + z * z),
+        2.0 * (y * z - x * w),
+        2.0 * (x * z - y * w),
+        2.0 * (y * z + x * w),
+        1.0 - 2.0 * (x * x + y * y),
+    )
+
+
+@dataclass(frozen=True, eq=False)
+class PotentialFieldAvoidance:
+    """Pushes the object away when any of its attached points approaches an obstacle.
+
+    Parameters
+    ----------
+    query : DistanceQuery
+        ``query(points (N, 3)) -> (distances (N,), closest_points (N, 3))`` in the world
+        frame, m: the nearest obstacle point per query point (e.g. from FCL).
+    points_object : array_like, shape (N, 3)
+        Points in the object frame {O}, m (object corners, arm-link points). N may be 0.
+    gain : float
+        ``lambda``, m^2/s (> 0).
+    beta : float
+        Exponent on ``-cos theta`` (>= 1 keeps the acceleration finite at theta = pi/2).
+    influence : float
+        ``p0``, m: beyond it a point is ignored (> 0; inf for Park et al.'s plain ``1/p``).
+    min_distance : float
+        Distances are clipped below at this, m (> 0).
+    gyration_radius : float or None
+        ``rho``, m, for the angular mapping; None uses the RMS of the offsets' norms.
+    """
+
+    query: DistanceQuery
+    points_object: Array
+    gain: float = 0.05
+    beta: float = 2.0
+    influence: float = 0.3
+    min_distance: float = 1e-3
+    gyration_radius: float | None = None
+    _inv_rho2: float = field(init=False, repr=False)
+    _points_t: Array = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        set_ = object.__setattr__
+        pts = vector(
+            np.reshape(np.asarray(self.points_object, dtype=float), (-1, 3)),
+            (-1, 3),
+            "points_object",
+        )
+        set_(self, "points_object", pts)
+        set_(self, "_points_t", np.ascontiguousarray(pts.T))
+        set_(self, "gain", positive(self.gain, "gain"))
+        beta = float(self.beta)
+        if not (math.isfinite(beta) and beta >= 1.0):
+            raise ValueError(f"beta: expected a finite number >= 1, got {self.beta!r}")
+        set_(self, "beta", beta)
+        influence = float(self.influence)
+        if not influence > 0.0:
+            raise ValueError(
+                f"influence: expected a distance > 0 m (or inf), got {self.influence!r}"
+            )
+        set_(self, "influence", influence)
+        set_(self, "min_distance", positive(self.min_distance, "min_distance"))
+        if self.gyration_radius is None:
+            rho2 = float(np.mean(np.einsum("nk,nk->n", pts, pts))) if pts.shape[0] else 0.0
+        else:
+            rho2 = positive(self.gyration_radius, "gyration_radius") ** 2
+        set_(self, "_inv_rho2", 1.0 / rho2 if rho2 > 1e-12 else 0.0)
+        if not callable(self.query):
+            raise ValueError(
+                f"query: expected a callable points -> (distances, closest), got {self.query!r}"
+            )
+
+    def with_points(self, points_object: ArrayLike) -> PotentialFieldAvoidance:
+        """The same field on other points (N, 3) in the object frame, m."""
+        return replace(self, points_object=np.asarray(points_object))
+
+    def with_query(self, query: DistanceQuery) -> PotentialFieldAvoidance:
+        """The same field against other obstacles."""
+        return replace(self, query=query)
+
+    def world_points(self, state: PoseState) -> tuple[Array, Array, Array]:
+        """Lever arms ``R r_i``, positions and velocities of the points, each (N, 3), world."""
+        m00, m01, m02, m10, m11, m12, m20, m21, m22 = _matrix(state.orientation)
+        wx, wy, wz = state.angular_velocity.tolist()
+        # [R | S(omega) R] transposed: one product gives lever arms and their velocities.
+        rot_t = np.array(
+            (
+                (m00, m10, m20, wy * m20 - wz * m10, wz * m00 - wx * m20, wx * m10 - wy * m00),
+                (m01, m11, m21, wy * m21 - wz * m11, wz * m01 - wx * m21, wx * m11 - wy * m01),
+                (m02, m12, m22, wy * m22 - wz * m12, wz * m02 - wx * m22, wx * m12 - wy * m02),
+            )
+        )
+        both = self.points_object @ rot_t
+        arms = both[:, :3]
+        return arms, arms + state.position, both[:, 3:] + state.velocity
+
+    def point_accelerations(self, state: PoseState) -> Array:
+        """``-grad U`` of every point, (N, 3), world frame, m/s^2."""
+        _, x, v = self.world_points(state)
+        distances, closest = self.query(x)
+        return point_accelerations(
+            x, v, closest, distances, self.gain, self.beta, self.influence, self.min_distance
+        )
+
+    def acceleration(self, state: PoseState, target: PoseTarget) -> tuple[Array, Array]:
+        """Linear (m/s^2) and angular (rad/s^2) push on the object, world frame.
+
+        Parameters
+        ----------
+        state : PoseState
+            The object's pose and twist in the world.
+        target : PoseTarget
+            Unused.
+
+        Returns
+        -------
+        linear, angular : ndarray, shape (3,)
+        """
+        if self.points_object.shape[0] == 0:
+            return ZERO3.copy(), ZERO3.copy()
+        arms, x, v = self.world_points(state)
+        distances, closest = self.query(x)
+        r = x - closest
+        vr = _dot(v, r)
+        if distances.min() >= self.influence or vr.min() >= 0.0:
+            return ZERO3.copy(), ZERO3.copy()  # nothing near or nothing approaching: the usual case
+        alpha, kappa = _coefficients(
+            _dot(r, r), vr, _dot(v, v), distances, self.beta, self.influence, self.min_distance
+        )
+        a = alpha[:, None] * v
+        a += kappa[:, None] * r
+        m = arms.T @ a  # m[i, j] = sum_n arm_i a_j; the torque is its antisymmetric part
+        ml = m.ravel().tolist()
+        lam = self.gain
+        k = lam * self._inv_rho2
+        return lam * a.sum(axis=0), np.array(
+            (k * (ml[5] - ml[7]), k * (ml[6] - ml[2]), k * (ml[1] - ml[3]))
+        )

@@ -1,0 +1,298 @@
+"""The skill library: add, find by label, list; save and load as a versioned directory.
+
+On disk a library is a folder with ``library.json`` (format name, version, and per skill its
+labels, kind, scalar parameters, array names and provenance) and ``arrays.npz`` (arrays keyed
+``<skill>/<array>``). Saving writes a new folder beside the target and swaps it in, so a crash
+never leaves half a library; loading validates every field and names the file, the field and
+what was expected.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import tempfile
+import zipfile
+from collections.abc import Iterator, Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from skills.labels import Action, AffordanceElement, Space
+from skills.skill import Provenance, Skill, SkillKind, model_from_data
+from skills.types import Array
+
+FORMAT = "duet-skill-library"
+VERSION = 1
+META_FILE = "library.json"
+ARRAYS_FILE = "arrays.npz"
+
+
+class LibraryFileError(ValueError):
+    """A library folder that cannot be loaded; names the file, the field and the problem."""
+
+    def __init__(self, file: str | Path, field: str, expected: str, got: Any) -> None:
+        self.file, self.field, self.expected, self.got = str(file), field, expected, got
+        where = f"{self.file}: {field}: " if field else f"{self.file}: "
+        super().__init__(f"{where}expected {expected}, got {got}")
+
+
+class SkillLibrary:
+    """An ordered collection of uniquely named skills."""
+
+    def __init__(self, skills: tuple[Skill, ...] | list[Skill] = ()) -> None:
+        self._skills: dict[str, Skill] = {}
+        for s in skills:
+            self.add(s)
+
+    def add(self, skill: Skill, replace: bool = False) -> None:
+        """Add ``skill``; a name already present is an error unless ``replace``."""
+        if skill.name in self._skills and not replace:
+            raise ValueError(
+                f"skill name: expected a new name, got {skill.name!r} (already present)"
+            )
+        self._skills[skill.name] = skill
+
+    def __len__(self) -> int:
+        return len(self._skills)
+
+    def __iter__(self) -> Iterator[Skill]:
+        return iter(self._skills.values())
+
+    def __contains__(self, name: object) -> bool:
+        return name in self._skills
+
+    def get(self, name: str) -> Skill:
+        """The skill called ``name``."""
+        try:
+            return self._skills[name]
+        except KeyError:
+            known = ", ".join(self._skills) or "none"
+            raise KeyError(f"skill: expected one of {known}, got {name!r}") from None
+
+    def by_action(self, action: Action, space: Space | None = None) -> tuple[Skill, ...]:
+        """Skills labelled with ``action`` (and in ``space`` if given), in insertion order."""
+        return tuple(s for s in self if s.action is action and (space is None or s.space is space))
+
+    def first(self, action: Action, space: Space | None = None) -> Skill:
+        """The first skill labelled ``action``; KeyError naming the action if none."""
+        found = self.by_action(action, space)
+        if not found:
+            raise KeyError(f"skill library: expected a skill for action {action.value!r}, got none")
+        return found[0]
+
+    def serving(self, element: AffordanceElement) -> tuple[Skill, ...]:
+        """Skills labelled with affordance ``element``."""
+        return tuple(s for s in self if s.serves(element))
+
+    def names(self) -> tuple[str, ...]:
+        """Skill names in insertion order."""
+        return tuple(self._skills)
+
+    def describe(self) -> list[dict[str, Any]]:
+        """One plain dictionary per skill: labels, kind and provenance (no arrays)."""
+        return [
+            {
+                "name": s.name,
+                "action": s.action.value,
+                "space": s.space.value,
+                "kind": s.kind.value,
+                "elements": [e.value for e in s.elements],
+                "demonstrations": list(s.provenance.demonstrations),
+                "learnt_at": s.provenance.learnt_at,
+                "method": s.provenance.method,
+                "fit": dict(s.provenance.fit),
+            }
+            for s in self
+        ]
+
+    # -- storage ---------------------------------------------------------------------------
+
+    def save(self, folder: str | os.PathLike[str]) -> Path:
+        """Write the library to ``folder`` atomically (replacing an existing library there)."""
+        target = Path(folder)
+        target.parent.mkdir(parents=True, exist_ok=True)
+        tmp = Path(tempfile.mkdtemp(dir=target.parent, prefix=f".{target.name}.new-"))
+        try:
+            meta = {"format": FORMAT, "version": VERSION, "skills": self._metadata()}
+            (tmp / META_FILE).write_text(json.dumps(meta, indent=2) + "\n", encoding="utf-8")
+            arrays = {f"{s.name}/{k}": np.asarray(v) for s in self for k, v in s.arrays.items()}
+            with open(tmp / ARRAYS_FILE, "wb") as fh:
+                np.savez(fh, **arrays)  # type: ignore[arg-type]
+            _swap_in(tmp, target)
+        except BaseException:
+            shutil.rmtree(tmp, ignore_errors=True)
+            raise
+        return target
+
+    def _metadata(self) -> list[dict[str, Any]]:
+        return [
+            {
+                "name": s.name,
+                "action": s.action.value,
+                "space": s.space.value,
+                "kind": s.kind.value,
+                "elements": [e.value for e in s.elements],
+                "params": dict(s.params),
+                "arrays": sorted(s.arrays),
+                "provenance": {
+                    "demonstrations": list(s.provenance.demonstrations),
+                    "learnt_at": s.provenance.learnt_at,
+                    "method": s.provenance.method,
+                    "fit": dict(s.provenance.fit),
+                },
+            }
+            for s in self
+        ]
+
+    @staticmethod
+    def load(folder: str | os.PathLike[str]) -> SkillLibrary:
+        """Load and validate a library folder.
+
+        Raises
+        ------
+        LibraryFileError
+            Naming the file, the field (``skills[2].action``) and what was expected.
+        """
+        root = Path(folder)
+        meta_path = root / META_FILE
+        if not root.is_dir():
+            raise LibraryFileError(root, "", "a skill library folder", "no such folder")
+        try:
+            meta = json.loads(meta_path.read_text(encoding="utf-8"))
+        except FileNotFoundError:
+            raise LibraryFileError(meta_path, "", "a library.json file", "no such file") from None
+        except json.JSONDecodeError as err:
+            raise LibraryFileError(
+                f"{meta_path}:{err.lineno}:{err.colno}", "", "valid JSON", err.msg
+            ) from None
+        arrays = _load_arrays(root / ARRAYS_FILE)
+        return SkillLibrary(_parse_metadata(meta, meta_path, arrays, root / ARRAYS_FILE))
+
+
+def _swap_in(new: Path, target: Path) -> None:
+    if target.exists():
+        if not (target / META_FILE).exists():
+            raise FileExistsError(
+                f"{target}: expected a skill library folder (with {META_FILE}) or nothing, "
+                "got another folder: not overwriting it"
+            )
+        old = Path(tempfile.mkdtemp(dir=target.parent, prefix=f".{target.name}.old-"))
+        os.replace(target, old / "lib")
+        os.replace(new, target)
+        shutil.rmtree(old, ignore_errors=True)
+    else:
+        os.replace(new, target)
+
+
+def _load_arrays(path: Path) -> dict[str, Array]:
+    try:
+        with np.load(path, allow_pickle=False) as npz:
+            return {k: npz[k] for k in npz.files}
+    except FileNotFoundError:
+        raise LibraryFileError(path, "", "an arrays.npz file", "no such file") from None
+    except (zipfile.BadZipFile, ValueError, OSError) as err:
+        raise LibraryFileError(path, "", "a readable NPZ archive", err) from None
+
+
+def _enum(value: Any, enum: type[Any], file: Path, field: str) -> Any:
+    try:
+        return enum(value)
+    except ValueError:
+        options = ", ".join(m.value for m in enum)
+        raise LibraryFileError(file, field, f"one of {options}", repr(value)) from None
+
+
+def _need(
+    entry: Mapping[str, Any],
+    key: str,
+    kind: type | tuple[type, ...],
+    file: Path,
+    field: str,
+    what: str,
+) -> Any:
+    if key not in entry:
+        raise LibraryFileError(file, f"{field}.{key}", what, "nothing (missing)")
+    value = entry[key]
+    if not isinstance(value, kind) or (isinstance(value, bool) and bool not in _as_tuple(kind)):
+        raise LibraryFileError(file, f"{field}.{key}", what, repr(value))
+    return value
+
+
+def _as_tuple(kind: type | tuple[type, ...]) -> tuple[type, ...]:
+    return kind if isinstance(kind, tuple) else (kind,)
+
+
+def _parse_metadata(
+    meta: Any, file: Path, arrays: Mapping[str, Array], arrays_file: Path
+) -> list[Skill]:
+    if not isinstance(meta, dict):
+        raise LibraryFileError(file, "", "a JSON object", type(meta).__name__)
+    if meta.get("format") != FORMAT:
+        raise LibraryFileError(file, "format", repr(FORMAT), repr(meta.get("format")))
+    if meta.get("version") != VERSION:
+        raise LibraryFileError(file, "version", str(VERSION), repr(meta.get("version")))
+    unknown = sorted(set(meta) - {"format", "version", "skills"})
+    if unknown:
+        raise LibraryFileError(file, unknown[0], "only format, version and skills", "unknown key")
+    entries = meta.get("skills")
+    if not isinstance(entries, list):
+        raise LibraryFileError(file, "skills", "a list of skills", repr(entries))
+    keys = {"name", "action", "space", "kind", "elements", "params", "arrays", "provenance"}
+    skills = []
+    for i, entry in enumerate(entries):
+        field = f"skills[{i}]"
+        if not isinstance(entry, dict):
+            raise LibraryFileError(file, field, "an object", repr(entry))
+        extra = sorted(set(entry) - keys)
+        if extra:
+            raise LibraryFileError(file, f"{field}.{extra[0]}", "a known key", "unknown key")
+        name = _need(entry, "name", str, file, field, "a skill name")
+        action = _enum(
+            _need(entry, "action", str, file, field, "an action"), Action, file, f"{field}.action"
+        )
+        space = _enum(
+            _need(entry, "space", str, file, field, "a space"), Space, file, f"{field}.space"
+        )
+        kind = _enum(
+            _need(entry, "kind", str, file, field, "a skill kind"), SkillKind, file, f"{field}.kind"
+        )
+        elements = tuple(
+            _enum(e, AffordanceElement, file, f"{field}.elements[{j}]")
+            for j, e in enumerate(_need(entry, "elements", list, file, field, "a list"))
+        )
+        params = _need(entry, "params", dict, file, field, "an object of parameters")
+        for k, v in params.items():
+            if not isinstance(v, int | float | str | bool):
+                raise LibraryFileError(file, f"{field}.params.{k}", "a number or string", repr(v))
+        names = _need(entry, "arrays", list, file, field, "a list of array names")
+        own: dict[str, Array] = {}
+        for a in names:
+            key = f"{name}/{a}"
+            if key not in arrays:
+                raise LibraryFileError(
+                    arrays_file, key, "an array named in library.json", "nothing (missing)"
+                )
+            own[str(a)] = arrays[key]
+        prov = _need(entry, "provenance", dict, file, field, "an object")
+        provenance = Provenance(
+            tuple(_need(prov, "demonstrations", list, file, f"{field}.provenance", "a list")),
+            _need(prov, "learnt_at", str, file, f"{field}.provenance", "a time stamp"),
+            _need(prov, "method", str, file, f"{field}.provenance", "a description"),
+            dict(_need(prov, "fit", dict, file, f"{field}.provenance", "an object")),
+        )
+        try:
+            skill = Skill(name, action, space, kind, elements, params, own, provenance)
+            if kind is SkillKind.LEARNT_DMP:
+                model_from_data(params, own)
+        except (ValueError, KeyError, TypeError) as err:
+            raise LibraryFileError(file, field, f"a consistent {kind.value} skill", err) from None
+        skills.append(skill)
+    seen: set[str] = set()
+    for i, s in enumerate(skills):
+        if s.name in seen:
+            raise LibraryFileError(file, f"skills[{i}].name", "a unique name", repr(s.name))
+        seen.add(s.name)
+    return skills

@@ -1,0 +1,115 @@
+"""Grasp map and composition: rigid-body consistency and space orthogonality."""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.testing import assert_allclose
+
+from skills import quaternion as quat
+from skills.dual_arm import (
+    GraspGeometry,
+    compose_twists,
+    contact_twists,
+    grasp_matrix,
+    integrate_twist,
+    palm_poses,
+    skew,
+)
+from skills.labels import Arm
+
+RNG = np.random.default_rng(11)
+
+
+def test_skew_is_the_cross_product() -> None:
+    r, x = RNG.normal(size=3), RNG.normal(size=3)
+    assert_allclose(skew(r) @ x, np.cross(r, x), atol=1e-15)
+
+
+def test_grasp_matrix_transpose_gives_rigid_body_contact_twists() -> None:
+    r = RNG.normal(size=(2, 3))
+    twist = RNG.normal(size=6)
+    g = grasp_matrix(r)
+    assert g.shape == (6, 12)
+    per_contact = (g.T @ twist).reshape(2, 6)
+    for i in range(2):
+        assert_allclose(per_contact[i, :3], twist[:3] + np.cross(twist[3:], r[i]), atol=1e-14)
+        assert_allclose(per_contact[i, 3:], twist[3:], atol=1e-15)
+    assert_allclose(contact_twists(twist, r), per_contact, atol=1e-14)
+
+
+def test_grasp_matrix_sums_contact_wrenches_at_the_centre() -> None:
+    r = np.array([[0.0, 0.15, 0.0], [0.0, -0.15, 0.0]])
+    squeeze = np.array([0.0, -20.0, 0.0, 0, 0, 0, 0.0, 20.0, 0.0, 0, 0, 0])
+    assert_allclose(grasp_matrix(r) @ squeeze, np.zeros(6), atol=1e-12)  # internal force only
+    lift = np.array([0.0, 0.0, 5.0, 0, 0, 0, 0.0, 0.0, 5.0, 0, 0, 0])
+    assert_allclose(grasp_matrix(r) @ lift, [0, 0, 10.0, 0, 0, 0], atol=1e-12)
+
+
+def test_absolute_skills_alone_move_the_palms_as_one_rigid_body() -> None:
+    geometry = GraspGeometry.lateral(0.30)
+    obj_p, obj_q = np.array([0.6, 0.0, 0.675]), quat.from_axis_angle([0.1, 0.2, 1.0], 0.3)
+    rel_p = np.stack((geometry.left_position, geometry.right_position))
+    rel_q = np.stack((geometry.left_orientation, geometry.right_orientation))
+    palms_p, palms_q = palm_poses(obj_p, obj_q, rel_p, rel_q)
+    d0 = np.linalg.norm(palms_p[0] - palms_p[1])
+    rel0 = quat.multiply(quat.conjugate(palms_q[0]), palms_q[1])
+    dt = 0.004
+    for k in range(1000):
+        # Two absolute skills with time-varying twists, mixed with weights.
+        t = k * dt
+        twists = np.array(
+            [
+                [0.1 * np.cos(t), 0.05, 0.02 * np.sin(3 * t), 0.0, 0.0, 0.4 * np.sin(t)],
+                [0.0, -0.03, 0.01, 0.2 * np.cos(2 * t), -0.1, 0.3],
+            ]
+        )
+        r = palms_p - obj_p
+        palm_twists = compose_twists(twists, [0.7, 0.3], r)
+        obj_twist = np.array([0.7, 0.3]) @ twists
+        obj_p, obj_q = integrate_twist(obj_p, obj_q, obj_twist, dt)
+        palms_p, palms_q = integrate_twist(palms_p, palms_q, palm_twists, dt)
+    # Distance and relative orientation between the palms are unchanged (rounding only).
+    assert abs(np.linalg.norm(palms_p[0] - palms_p[1]) - d0) < 1e-9
+    rel = quat.multiply(quat.conjugate(palms_q[0]), palms_q[1])
+    assert quat.angle_between(rel, rel0) < 1e-9
+    # And the palms are still where the object's pose says they are.
+    expect_p, expect_q = palm_poses(obj_p, obj_q, rel_p, rel_q)
+    assert_allclose(palms_p, expect_p, atol=1e-9)
+    assert np.all(quat.angle_between(palms_q, expect_q) < 1e-9)
+
+
+def test_relative_skills_alone_leave_the_object_still() -> None:
+    obj_q = quat.from_axis_angle([0.0, 0.0, 1.0], 0.7)
+    r = np.array([[0.0, 0.15, 0.0], [0.0, -0.15, 0.0]])
+    rel = RNG.normal(size=(2, 2, 6))
+    palms = compose_twists(np.zeros((1, 6)), [1.0], r, rel, [0.5, 0.5], obj_q)
+    # The object twist is the absolute part only: zero.
+    assert_allclose(np.array([1.0]) @ np.zeros((1, 6)), np.zeros(6))
+    # Each palm moves by the weighted relative twists rotated into the world frame.
+    expected = 0.5 * rel[0] + 0.5 * rel[1]
+    rot = quat.to_matrix(obj_q)
+    assert_allclose(palms[:, :3], expected[:, :3] @ rot.T, atol=1e-14)
+    assert_allclose(palms[:, 3:], expected[:, 3:] @ rot.T, atol=1e-14)
+
+
+def test_lateral_geometry_faces_the_palms_inward() -> None:
+    g = GraspGeometry.lateral(0.30)
+    assert_allclose(g.position(Arm.LEFT), [0, 0.15, 0])
+    # The palm's contact axis (z) points along the inward normal.
+    assert_allclose(quat.rotate(g.orientation(Arm.LEFT), [0, 0, 1.0]), [0, -1.0, 0], atol=1e-12)
+    assert_allclose(quat.rotate(g.orientation(Arm.RIGHT), [0, 0, 1.0]), [0, 1.0, 0], atol=1e-12)
+    assert_allclose(g.squeezed(0.015).position(Arm.RIGHT), [0, -0.135, 0], atol=1e-15)
+
+
+def test_integrate_twist_matches_a_pure_rotation_about_a_point() -> None:
+    # Spin about z at 1 rad/s through the origin; a frame at (1, 0, 0) moves on a circle.
+    p, q = np.array([1.0, 0.0, 0.0]), quat.IDENTITY.copy()
+    for _ in range(100):
+        p, q = integrate_twist(p, q, twist_at(p, twist_origin=np.array([0, 0, 0, 0, 0, 1.0])), 0.01)
+    assert_allclose(p, [np.cos(1.0), np.sin(1.0), 0.0], atol=1e-12)
+    assert quat.angle_between(q, quat.from_axis_angle([0, 0, 1], 1.0)) < 1e-12
+
+
+def twist_at(point: np.ndarray, twist_origin: np.ndarray) -> np.ndarray:
+    """The twist of a body, given at the origin, expressed at ``point``."""
+    return np.concatenate((twist_origin[:3] + np.cross(twist_origin[3:], point), twist_origin[3:]))
