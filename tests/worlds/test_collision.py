@@ -1,0 +1,243 @@
+"""FCL collision world: agreement with PyBullet, group distances, trajectory and point queries."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+
+import numpy as np
+import pybullet as pb
+import pytest
+
+from skills.labels import Arm
+from worlds.collision import OBSTACLES, TABLE, CollisionWorld, arm_group
+from worlds.scene import (
+    LATERAL_PALM_QUATERNIONS,
+    ObstacleSpec,
+    Scene,
+    SceneSpec,
+    ShapeSpec,
+    lateral_grasp_palm_poses,
+)
+
+pytestmark = pytest.mark.sim
+
+OBSTACLE_SPECS = (
+    ObstacleSpec("ball", ShapeSpec.sphere(0.05), (0.6, 0.0, 0.9)),
+    ObstacleSpec("block", ShapeSpec.box((0.1, 0.2, 0.1)), (0.45, -0.3, 1.0)),
+    ObstacleSpec("post", ShapeSpec.cylinder(0.04, 0.3), (0.5, 0.35, 0.85)),
+)
+
+
+@pytest.fixture(scope="module")
+def world() -> Iterator[CollisionWorld]:
+    with Scene(SceneSpec(obstacles=OBSTACLE_SPECS)) as scene:
+        scene.set_active_obstacles(["ball", "block", "post"])
+        yield CollisionWorld(scene)
+
+
+def _set_random_configuration(scene: Scene, rng: np.random.Generator) -> None:
+    # Test setup only: the run itself never resets joints.
+    for arm in (Arm.LEFT, Arm.RIGHT):
+        spec = scene.robot.arms[arm]
+        body = scene.robot_ids[spec.body]
+        q = rng.uniform(0.8 * np.asarray(spec.lower), 0.8 * np.asarray(spec.upper))
+        for joint, value in zip(spec.joint_indices, q, strict=True):
+            pb.resetJointState(body, joint, float(value), 0.0, physicsClientId=scene.client)
+
+
+def _pybullet_distance(scene: Scene, body_a: int, body_b: int) -> float:
+    points = pb.getClosestPoints(body_a, body_b, 10.0, physicsClientId=scene.client)
+    return min(p[8] for p in points)
+
+
+def test_distances_agree_with_pybullet_on_random_configurations(world: CollisionWorld) -> None:
+    scene = world.scene
+    rng = np.random.default_rng(7)
+    checked = 0
+    worst = 0.0
+    for _ in range(20):
+        _set_random_configuration(scene, rng)
+        world.sync()
+        for arm in (Arm.LEFT, Arm.RIGHT):
+            body = scene.robot_ids[scene.robot.arms[arm].body]
+            for group, others in (
+                (OBSTACLES, scene.obstacle_ids.values()),
+                (TABLE, [scene.table_id]),
+            ):
+                expected = min(_pybullet_distance(scene, body, other) for other in others)
+                got = world.distance(arm_group(arm), group).distance
+                if expected < 0.0:
+                    # Penetration depths come from different algorithms; agree on the sign.
+                    assert got <= 1e-6
+                    continue
+                worst = max(worst, abs(got - expected))
+                assert got == pytest.approx(expected, abs=0.002), (arm, group)
+                checked += 1
+    assert checked >= 60
+    assert worst < 0.002
+
+
+def test_link_distances_match_the_group_distance(world: CollisionWorld) -> None:
+    scene = world.scene
+    _set_random_configuration(scene, np.random.default_rng(11))
+    world.sync()
+    for arm in (Arm.LEFT, Arm.RIGHT):
+        links = world.link_distances(arm)
+        assert links.links == world.arm_links(arm)
+        assert links.links[-1] == f"{arm_group(arm)}/palm"
+        assert links.distances.shape == (len(links.links),)
+        closest = world.distance(arm_group(arm), OBSTACLES)
+        assert links.distances.min() == pytest.approx(closest.distance, abs=1e-9)
+        k = int(np.argmin(links.distances))
+        np.testing.assert_allclose(
+            np.linalg.norm(links.link_points[k] - links.obstacle_points[k]),
+            max(links.distances[k], 0.0),
+            atol=1e-6,
+        )
+
+
+def test_closest_points_lie_at_the_reported_distance(world: CollisionWorld) -> None:
+    scene = world.scene
+    _set_random_configuration(scene, np.random.default_rng(5))
+    world.sync()
+    found = world.distance("left_arm", TABLE)
+    if found.distance > 0:
+        np.testing.assert_allclose(
+            np.linalg.norm(found.point_a - found.point_b), found.distance, atol=1e-6
+        )
+    # The table's closest point is on (or in) the table box.
+    table = scene.spec.table
+    assert found.point_b[2] <= table.position[2] + 1e-6
+
+
+def test_palms_squeezing_the_parcel_are_reported_in_contact() -> None:
+    with Scene(SceneSpec()) as scene:
+        scene.place_palms(lateral_grasp_palm_poses((0.6, 0.0, 0.675), 0.15, 0.02, gap=-0.005))
+        world = CollisionWorld(scene)
+        pairs = world.colliding_pairs()
+        assert ("left_arm/palm", "parcel") in pairs
+        assert ("right_arm/palm", "parcel") in pairs
+        assert world.distance("left_arm", "parcel").distance < 0.0
+    with Scene(SceneSpec()) as scene:
+        scene.place_palms(lateral_grasp_palm_poses((0.6, 0.0, 0.675), 0.15, 0.02, gap=0.03))
+        world = CollisionWorld(scene)
+        assert world.colliding_pairs(["left_arm", "right_arm", "parcel"]) == []
+        assert world.distance("left_arm", "parcel").distance == pytest.approx(0.03, abs=1e-3)
+
+
+def _lift_trajectory(n: int, rise: float) -> tuple[np.ndarray, ...]:
+    s = np.linspace(0.0, 1.0, n)
+    centre = np.stack([np.full(n, 0.6), np.zeros(n), 0.675 + rise * s], axis=1)
+    offset = np.array([0.0, 0.16, 0.0])
+    palms = np.stack([centre + offset, centre - offset], axis=1)
+    quaternions = np.broadcast_to(
+        np.array([LATERAL_PALM_QUATERNIONS[Arm.LEFT], LATERAL_PALM_QUATERNIONS[Arm.RIGHT]]),
+        (n, 2, 4),
+    )
+    parcel_q = np.tile([0.0, 0.0, 0.0, 1.0], (n, 1))
+    return palms, quaternions, centre, parcel_q
+
+
+def test_trajectory_check_finds_the_first_collision(world: CollisionWorld) -> None:
+    palms, quaternions, centre, parcel_q = _lift_trajectory(1000, 0.4)
+    result = world.check_trajectory(palms, quaternions, "parcel", centre, parcel_q)
+    # The parcel's top (0.75 + 0.4 s) meets the ball's bottom (0.85) at s = 0.25.
+    assert abs(result.first_collision - 250) <= 1
+    assert not result.collision_free
+    assert result.collides[: result.first_collision].sum() == 0
+    with_margin = world.check_trajectory(palms, quaternions, "parcel", centre, parcel_q, 0.02)
+    # 2 cm earlier: s = 0.2.
+    assert abs(with_margin.first_collision - 200) <= 1
+    # Without the parcel, the palms alone pass beside the ball.
+    assert world.check_trajectory(palms, quaternions).collision_free
+
+
+def test_trajectory_check_ignores_inactive_obstacles(world: CollisionWorld) -> None:
+    scene = world.scene
+    palms, quaternions, centre, parcel_q = _lift_trajectory(200, 0.4)
+    scene.set_active_obstacles(["block"])
+    world.sync()
+    try:
+        assert world.check_trajectory(palms, quaternions, "parcel", centre, parcel_q).collision_free
+    finally:
+        scene.set_active_obstacles(["ball", "block", "post"])
+        world.sync()
+
+
+def test_trajectory_check_validates_shapes(world: CollisionWorld) -> None:
+    with pytest.raises(ValueError, match=r"expected palm_positions of shape \(N, 2, 3\)"):
+        world.check_trajectory(np.zeros((5, 3)), np.zeros((5, 2, 4)))
+    with pytest.raises(ValueError, match="expected object poses with object_name"):
+        world.check_trajectory(np.zeros((5, 2, 3)), np.zeros((5, 2, 4)), "parcel")
+
+
+def test_point_query_gives_distance_and_closest_point(world: CollisionWorld) -> None:
+    points = np.array(
+        [
+            [0.6, 0.0, 1.0],  # 5 cm above the ball's top
+            [0.45, -0.3, 1.1],  # 5 cm above the block's top
+            [0.6, 0.35, 0.85],  # 10 cm from the post's axis, 6 cm from its side
+            [0.6, 0.0, 0.9],  # the ball's centre: inside
+        ]
+    )
+    distances, closest = world.query(points)
+    np.testing.assert_allclose(distances, [0.05, 0.05, 0.06, -0.05], atol=1e-4)
+    np.testing.assert_allclose(closest[0], [0.6, 0.0, 0.95], atol=1e-6)
+    np.testing.assert_allclose(closest[1], [0.45, -0.3, 1.05], atol=1e-6)
+    np.testing.assert_allclose(closest[2], [0.54, 0.35, 0.85], atol=1e-4)
+    with pytest.raises(ValueError, match=r"expected points of shape \(N, 3\)"):
+        world.query(np.zeros(3))
+
+
+def test_unknown_group_is_explained(world: CollisionWorld) -> None:
+    with pytest.raises(ValueError, match="expected a group in"):
+        world.distance("left_arm", "nonsense")
+
+
+def _solve_palm(scene: Scene, arm: Arm, position: np.ndarray, quaternion: np.ndarray) -> float:
+    """Best palm position error over a few IK starts, m (test setup resets the joints)."""
+    spec = scene.robot.arms[arm]
+    body = scene.robot_ids[spec.body]
+    rng = np.random.default_rng(0)
+    lower, upper = np.asarray(spec.lower), np.asarray(spec.upper)
+    best = np.inf
+    for start in range(4):
+        seed = (
+            np.asarray(spec.rest_posture) if start == 0 else rng.uniform(0.7 * lower, 0.7 * upper)
+        )
+        for joint, value in zip(spec.joint_indices, seed, strict=True):
+            pb.resetJointState(body, joint, float(value), physicsClientId=scene.client)
+        for _ in range(3):
+            q = pb.calculateInverseKinematics(
+                body, spec.palm_link, position.tolist(), quaternion.tolist(),
+                lowerLimits=list(lower), upperLimits=list(upper), jointRanges=list(upper - lower),
+                restPoses=seed.tolist(), maxNumIterations=300, residualThreshold=1e-7,
+                physicsClientId=scene.client,
+            )  # fmt: skip
+            for joint, value in zip(spec.joint_indices, q, strict=True):
+                pb.resetJointState(body, joint, float(value), physicsClientId=scene.client)
+        link = pb.getLinkState(
+            body, spec.palm_link, computeForwardKinematics=1, physicsClientId=scene.client
+        )
+        best = min(best, float(np.linalg.norm(np.asarray(link[4]) - position)))
+        if best < 1e-3:
+            break
+    return best
+
+
+def test_palms_reach_the_parcel_sides_over_the_table_workspace() -> None:
+    """Parcel centres at the corners of x 0.45..0.8, y -0.2..0.2, z 0.675..0.95; table clear."""
+    with Scene(SceneSpec(objects=())) as scene:
+        world = CollisionWorld(scene)
+        worst = 0.0
+        for x in (0.45, 0.8):
+            for y in (-0.2, 0.2):
+                for z in (0.675, 0.95):
+                    poses = lateral_grasp_palm_poses((x, y, z), 0.15, 0.02)
+                    for arm, (position, quaternion) in poses.items():
+                        worst = max(worst, _solve_palm(scene, arm, position, quaternion))
+                    world.sync()
+                    for arm in (Arm.LEFT, Arm.RIGHT):
+                        assert world.distance(arm_group(arm), TABLE).distance > 0.0, (x, y, z)
+        # Upright bases missed the far low corner by 5 cm; the 9 degree lean brings it in.
+        assert worst < 0.012

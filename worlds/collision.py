@@ -1,0 +1,609 @@
+"""FCL collision geometry of a :class:`worlds.scene.Scene`, kept in step with PyBullet.
+
+Every robot link (from ``getCollisionShapeData``: iiwa meshes as convex hulls, as PyBullet
+collides them; boxes), the table, the objects and the obstacles become FCL collision objects,
+each with a bounding sphere for a numpy prefilter. :meth:`CollisionWorld.sync` reads all link
+poses (one ``getLinkStates`` call per robot body) and object poses.
+
+Groups name sets of elements: ``"left_arm"``, ``"right_arm"`` (all links of the arm's body,
+palm included), ``"table"``, ``"obstacles"`` (the active ones) and each object by its name.
+Element names are ``"left_arm/<link>"``, ``"table"``, the object or obstacle name.
+
+Poses in this module are (position (3,), quaternion (4,) scalar-last) pairs in the world frame.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import fcl
+import numpy as np
+import pybullet as pb
+import trimesh
+from numpy.typing import ArrayLike, NDArray
+
+from skills.labels import Arm
+from worlds.scene import Scene, ShapeKind, ShapeSpec
+
+FloatArray = NDArray[np.float64]
+
+TABLE = "table"
+OBSTACLES = "obstacles"
+
+
+def arm_group(arm: Arm) -> str:
+    """Group name of an arm's links: ``"left_arm"`` or ``"right_arm"``."""
+    return f"{Arm(arm).value}_arm"
+
+
+# ---------------------------------------------------------------------------------------------
+# Geometry helpers
+
+
+def quaternions_to_matrices(quaternions: ArrayLike) -> FloatArray:
+    """Rotation matrices of scalar-last unit quaternions, (..., 4) -> (..., 3, 3)."""
+    q = np.asarray(quaternions, dtype=float)
+    x, y, z, w = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
+    return np.stack(
+        [
+            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)], -1),
+            np.stack([2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)], -1),
+            np.stack([2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], -1),
+        ],
+        axis=-2,
+    )
+
+
+def _convex_from_mesh(mesh: trimesh.Trimesh) -> tuple[fcl.Convex, FloatArray]:
+    hull = mesh.convex_hull
+    faces = np.hstack([np.full((len(hull.faces), 1), 3), hull.faces]).ravel()
+    return fcl.Convex(np.asarray(hull.vertices, dtype=float), len(hull.faces), faces), np.asarray(
+        hull.vertices, dtype=float
+    )
+
+
+_MESH_CACHE: dict[tuple[str, float], tuple[fcl.Convex, FloatArray]] = {}
+
+
+def _mesh_geometry(path: Path, scale: float) -> tuple[fcl.Convex, FloatArray]:
+    key = (str(path), scale)
+    if key not in _MESH_CACHE:
+        mesh = trimesh.load(path, force="mesh")
+        if not isinstance(mesh, trimesh.Trimesh):
+            raise ValueError(f"collision: expected a triangle mesh in {path}, got {type(mesh)}")
+        mesh = mesh.copy()
+        mesh.apply_scale(scale)
+        _MESH_CACHE[key] = _convex_from_mesh(mesh)
+    return _MESH_CACHE[key]
+
+
+def _shape_geometry(shape: ShapeSpec) -> tuple[fcl.CollisionGeometry, FloatArray, float]:
+    """FCL geometry, bounding-sphere centre (3,) in the shape frame and radius of a shape."""
+    if shape.kind == ShapeKind.BOX:
+        geometry: fcl.CollisionGeometry = fcl.Box(*shape.size)
+        return geometry, np.zeros(3), 0.5 * float(np.linalg.norm(shape.size))
+    if shape.kind == ShapeKind.SPHERE:
+        return fcl.Sphere(shape.radius), np.zeros(3), shape.radius
+    if shape.kind == ShapeKind.CYLINDER:
+        radius = float(np.hypot(shape.radius, shape.height / 2.0))
+        return fcl.Cylinder(shape.radius, shape.height), np.zeros(3), radius
+    assert shape.mesh_path is not None
+    convex, vertices = _mesh_geometry(shape.mesh_path, shape.scale)
+    centre = 0.5 * (vertices.min(axis=0) + vertices.max(axis=0))
+    return convex, centre, float(np.max(np.linalg.norm(vertices - centre, axis=1)))
+
+
+def _pybullet_geometry(data: Sequence[Any]) -> tuple[fcl.CollisionGeometry, FloatArray, float]:
+    """FCL geometry of one ``getCollisionShapeData`` entry (box, sphere, cylinder, mesh)."""
+    kind = int(data[2])
+    dims = np.asarray(data[3], dtype=float)
+    if kind == pb.GEOM_BOX:
+        return _shape_geometry(ShapeSpec.box(dims))
+    if kind == pb.GEOM_SPHERE:
+        return _shape_geometry(ShapeSpec.sphere(float(dims[0])))
+    if kind == pb.GEOM_CYLINDER:
+        return _shape_geometry(ShapeSpec.cylinder(float(dims[1]), float(dims[0])))
+    if kind == pb.GEOM_MESH:
+        name = data[4]
+        path = Path(name.decode() if isinstance(name, bytes) else str(name))
+        return _shape_geometry(ShapeSpec(ShapeKind.MESH, mesh_path=path, scale=float(dims[0])))
+    raise ValueError(f"collision: expected a box, sphere, cylinder or mesh shape, got type {kind}")
+
+
+# ---------------------------------------------------------------------------------------------
+# Results
+
+
+@dataclass(frozen=True)
+class Proximity:
+    """Closest approach between two groups.
+
+    Attributes
+    ----------
+    distance : float
+        Minimum distance, m (negative when FCL reports penetration depth).
+    point_a, point_b : ndarray
+        (3,) closest points on the two groups, world frame, m.
+    element_a, element_b : str
+        Names of the two elements that are closest.
+    """
+
+    distance: float
+    point_a: FloatArray
+    point_b: FloatArray
+    element_a: str
+    element_b: str
+
+
+@dataclass(frozen=True)
+class LinkDistances:
+    """Distance of each link of one arm to the nearest active obstacle.
+
+    Attributes
+    ----------
+    links : tuple of str
+        Element names, base to palm.
+    distances : ndarray
+        (L,) distances, m; ``inf`` when no obstacle is active.
+    link_points, obstacle_points : ndarray
+        (L, 3) closest points on the link and on the obstacle, world frame, m (nan if none).
+    """
+
+    links: tuple[str, ...]
+    distances: FloatArray
+    link_points: FloatArray
+    obstacle_points: FloatArray
+
+
+@dataclass(frozen=True)
+class TrajectoryCheck:
+    """Result of checking predicted palm (and held-object) poses against the obstacles.
+
+    Attributes
+    ----------
+    collides : ndarray
+        (N,) True where some palm or the held object is within ``margin`` of an obstacle.
+    first_collision : int
+        Index of the first such waypoint, -1 if none.
+    """
+
+    collides: NDArray[np.bool_]
+    first_collision: int
+
+    @property
+    def collision_free(self) -> bool:
+        """No waypoint collides."""
+        return self.first_collision < 0
+
+
+# ---------------------------------------------------------------------------------------------
+# The collision world
+
+
+@dataclass
+class _Element:
+    name: str
+    group: str
+    obj: fcl.CollisionObject
+    geometry: fcl.CollisionGeometry
+    centre_local: FloatArray  # (3,) bounding-sphere centre in the shape frame
+    radius: float
+    centre: FloatArray  # (3,) bounding-sphere centre in the world frame
+
+
+class CollisionWorld:
+    """FCL mirror of a scene's collision geometry.
+
+    Parameters
+    ----------
+    scene : Scene
+        The scene to mirror; obstacles follow ``scene.active_obstacles`` at each :meth:`sync`.
+    """
+
+    def __init__(self, scene: Scene) -> None:
+        self.scene = scene
+        c = scene.client
+        self._elements: list[_Element] = []
+        # Robot links: per body, the link indices (with -1 the base) and their local shape frames.
+        self._link_tracks: list[tuple[int, list[int], list[int], FloatArray, FloatArray]] = []
+        for arm in (Arm.LEFT, Arm.RIGHT):
+            spec = scene.robot.arms[arm]
+            body = scene.robot_ids[spec.body]
+            group = arm_group(arm)
+            links: list[int] = []
+            rows: list[int] = []
+            local_p: list[FloatArray] = []
+            local_q: list[FloatArray] = []
+            for link in range(-1, pb.getNumJoints(body, physicsClientId=c)):
+                if link < 0:
+                    link_name = "base"
+                else:
+                    link_name = pb.getJointInfo(body, link, physicsClientId=c)[12].decode()
+                shapes = pb.getCollisionShapeData(body, link, physicsClientId=c)
+                for k, data in enumerate(shapes):
+                    geometry, centre, radius = _pybullet_geometry(data)
+                    suffix = f"#{k}" if len(shapes) > 1 else ""
+                    rows.append(len(self._elements))
+                    links.append(link)
+                    local_p.append(np.asarray(data[5], dtype=float))
+                    local_q.append(np.asarray(data[6], dtype=float))
+                    self._add(f"{group}/{link_name}{suffix}", group, geometry, centre, radius)
+            self._link_tracks.append((body, links, rows, np.array(local_p), np.array(local_q)))
+
+        table = scene.spec.table
+        geometry, centre, radius = _shape_geometry(ShapeSpec.box(table.size))
+        self._add(TABLE, TABLE, geometry, centre, radius)
+        self._set_pose(
+            self._elements[-1],
+            np.array([table.position[0], table.position[1], table.position[2] - table.size[2] / 2]),
+            np.eye(3),
+        )
+        self._objects: dict[str, int] = {}
+        for obj in scene.spec.objects:
+            geometry, centre, radius = _shape_geometry(obj.shape)
+            self._objects[obj.name] = len(self._elements)
+            self._add(obj.name, obj.name, geometry, centre, radius)
+        self._obstacles: dict[str, int] = {}
+        for obstacle in scene.spec.obstacles:
+            geometry, centre, radius = _shape_geometry(obstacle.shape)
+            self._obstacles[obstacle.name] = len(self._elements)
+            self._add(obstacle.name, OBSTACLES, geometry, centre, radius)
+            self._set_pose(self._elements[-1], np.asarray(obstacle.position, float), np.eye(3))
+        self._palm_rows = {
+            arm: self._index(f"{arm_group(arm)}/palm") for arm in (Arm.LEFT, Arm.RIGHT)
+        }
+        self._request = fcl.DistanceRequest(enable_nearest_points=True, enable_signed_distance=True)
+        self.sync()
+
+    # -- building ----------------------------------------------------------------------------
+
+    def _add(
+        self,
+        name: str,
+        group: str,
+        geometry: fcl.CollisionGeometry,
+        centre: FloatArray,
+        radius: float,
+    ) -> None:
+        obj = fcl.CollisionObject(geometry, fcl.Transform())
+        self._elements.append(_Element(name, group, obj, geometry, centre, radius, centre.copy()))
+
+    def _index(self, name: str) -> int:
+        for i, element in enumerate(self._elements):
+            if element.name == name:
+                return i
+        raise ValueError(f"CollisionWorld: expected an element named {name!r}")
+
+    @staticmethod
+    def _set_pose(element: _Element, position: FloatArray, rotation: FloatArray) -> None:
+        element.obj.setTransform(fcl.Transform(rotation, position))
+        element.centre = rotation @ element.centre_local + position
+
+    @property
+    def element_names(self) -> tuple[str, ...]:
+        """Names of all elements, robot links first."""
+        return tuple(e.name for e in self._elements)
+
+    def group_names(self) -> tuple[str, ...]:
+        """Names of all groups."""
+        return tuple(dict.fromkeys(e.group for e in self._elements))
+
+    def arm_links(self, arm: Arm) -> tuple[str, ...]:
+        """Element names of an arm, base to palm."""
+        group = arm_group(arm)
+        return tuple(e.name for e in self._elements if e.group == group)
+
+    # -- keeping in step ---------------------------------------------------------------------
+
+    def sync(self) -> None:
+        """Read link, object and obstacle poses from PyBullet (one getLinkStates per body)."""
+        c = self.scene.client
+        for body, links, rows, local_p, local_q in self._link_tracks:
+            moving = [link for link in links if link >= 0]
+            states = pb.getLinkStates(body, moving, computeForwardKinematics=1, physicsClientId=c)
+            by_link = {link: (s[0], s[1]) for link, s in zip(moving, states, strict=True)}
+            base = pb.getBasePositionAndOrientation(body, physicsClientId=c)
+            frame_p = np.array([by_link[link][0] if link >= 0 else base[0] for link in links])
+            frame_q = np.array([by_link[link][1] if link >= 0 else base[1] for link in links])
+            frame_r = quaternions_to_matrices(frame_q)
+            positions = np.einsum("nij,nj->ni", frame_r, local_p) + frame_p
+            rotations = frame_r @ quaternions_to_matrices(local_q)
+            for row, position, rotation in zip(rows, positions, rotations, strict=True):
+                self._set_pose(self._elements[row], position, rotation)
+        for name, row in self._objects.items():
+            position, quaternion = self.scene.object_pose(name)
+            self._set_pose(self._elements[row], position, quaternions_to_matrices(quaternion))
+        self._active = [self._obstacles[name] for name in sorted(self.scene.active_obstacles)]
+
+    # -- queries -----------------------------------------------------------------------------
+
+    def _rows(self, group: str) -> list[int]:
+        if group == OBSTACLES:
+            return list(self._active)
+        rows = [i for i, e in enumerate(self._elements) if e.group == group]
+        if not rows:
+            raise ValueError(
+                f"CollisionWorld: expected a group in {list(self.group_names())}, got {group!r}"
+            )
+        return rows
+
+    def colliding_pairs(self, groups: Iterable[str] | None = None) -> list[tuple[str, str]]:
+        """Element pairs in contact or penetration, between different groups.
+
+        Parameters
+        ----------
+        groups : iterable of str, optional
+            Only these groups; default all (inactive obstacles never count).
+
+        Returns
+        -------
+        list of (str, str)
+            Element name pairs, in element order.
+        """
+        wanted = set(groups) if groups is not None else set(self.group_names())
+        active = set(self._active)
+        rows = [
+            i
+            for i, e in enumerate(self._elements)
+            if e.group in wanted and (e.group != OBSTACLES or i in active)
+        ]
+        centres = np.array([self._elements[i].centre for i in rows])
+        radii = np.array([self._elements[i].radius for i in rows])
+        gaps = np.linalg.norm(centres[:, None] - centres[None], axis=-1) - radii[:, None] - radii
+        pairs = []
+        for a, b in zip(*np.nonzero(np.triu(gaps <= 0.0, k=1)), strict=True):
+            ea, eb = self._elements[rows[a]], self._elements[rows[b]]
+            if ea.group == eb.group:
+                continue
+            if fcl.collide(ea.obj, eb.obj, fcl.CollisionRequest(), fcl.CollisionResult()):
+                pairs.append((ea.name, eb.name))
+        return pairs
+
+    def distance(self, group_a: str, group_b: str) -> Proximity:
+        """Minimum distance and closest points between two groups.
+
+        Pairs are visited in order of their bounding-sphere lower bound and the search stops
+        once that bound exceeds the best distance found.
+
+        Raises
+        ------
+        ValueError
+            If a group is unknown or empty (no active obstacles).
+        """
+        rows_a, rows_b = self._rows(group_a), self._rows(group_b)
+        if not rows_a or not rows_b:
+            raise ValueError(
+                f"CollisionWorld.distance: group {group_a if not rows_a else group_b!r} is empty"
+            )
+        ca = np.array([self._elements[i].centre for i in rows_a])
+        cb = np.array([self._elements[i].centre for i in rows_b])
+        ra = np.array([self._elements[i].radius for i in rows_a])
+        rb = np.array([self._elements[i].radius for i in rows_b])
+        bounds = np.linalg.norm(ca[:, None] - cb[None], axis=-1) - ra[:, None] - rb
+        best: Proximity | None = None
+        for flat in np.argsort(bounds, axis=None):
+            a, b = np.unravel_index(flat, bounds.shape)
+            if best is not None and bounds[a, b] > best.distance:
+                break
+            found = self._pair_distance(rows_a[a], rows_b[b])
+            if best is None or found.distance < best.distance:
+                best = found
+        assert best is not None
+        return best
+
+    def _pair_distance(self, row_a: int, row_b: int) -> Proximity:
+        ea, eb = self._elements[row_a], self._elements[row_b]
+        result = fcl.DistanceResult()
+        d = fcl.distance(ea.obj, eb.obj, self._request, result)
+        return Proximity(
+            float(d),
+            np.asarray(result.nearest_points[0], dtype=float),
+            np.asarray(result.nearest_points[1], dtype=float),
+            ea.name,
+            eb.name,
+        )
+
+    def link_distances(self, arm: Arm) -> LinkDistances:
+        """Distance of every link of ``arm`` to the nearest active obstacle (for avoidance)."""
+        rows = self._rows(arm_group(arm))
+        n = len(rows)
+        distances = np.full(n, np.inf)
+        link_points = np.full((n, 3), np.nan)
+        obstacle_points = np.full((n, 3), np.nan)
+        for k, row in enumerate(rows):
+            for obstacle in self._active:
+                found = self._pair_distance(row, obstacle)
+                if found.distance < distances[k]:
+                    distances[k] = found.distance
+                    link_points[k] = found.point_a
+                    obstacle_points[k] = found.point_b
+        return LinkDistances(
+            tuple(self._elements[r].name for r in rows), distances, link_points, obstacle_points
+        )
+
+    def query(self, points: ArrayLike) -> tuple[FloatArray, FloatArray]:
+        """Distance from points to the nearest active obstacle.
+
+        Spheres and boxes are solved in closed form (signed: negative inside); other shapes go
+        through FCL (0 inside).
+
+        Parameters
+        ----------
+        points : array_like
+            (N, 3) query points, world frame, m.
+
+        Returns
+        -------
+        distances : ndarray
+            (N,) distance to the nearest active obstacle, m; ``inf`` with none active.
+        closest_points : ndarray
+            (N, 3) closest point on that obstacle's surface, world frame, m (nan with none).
+        """
+        p = np.asarray(points, dtype=float)
+        if p.ndim != 2 or p.shape[1] != 3:
+            raise ValueError(
+                f"CollisionWorld.query: expected points of shape (N, 3), got {p.shape}"
+            )
+        distances = np.full(len(p), np.inf)
+        closest = np.full((len(p), 3), np.nan)
+        for row in self._active:
+            d, c = self._point_distance(row, p)
+            better = d < distances
+            distances[better] = d[better]
+            closest[better] = c[better]
+        return distances, closest
+
+    def _point_distance(self, row: int, points: FloatArray) -> tuple[FloatArray, FloatArray]:
+        element = self._elements[row]
+        transform = element.obj.getTransform()
+        rotation, origin = (
+            np.asarray(transform.getRotation()),
+            np.asarray(transform.getTranslation()),
+        )
+        geometry = element.geometry
+        if isinstance(geometry, fcl.Sphere):
+            offset = points - origin
+            norm = np.linalg.norm(offset, axis=1)
+            direction = offset / np.where(norm > 1e-12, norm, 1.0)[:, None]
+            direction[norm <= 1e-12] = (0.0, 0.0, 1.0)
+            return norm - geometry.radius, origin + geometry.radius * direction
+        if isinstance(geometry, fcl.Box):
+            half = 0.5 * np.asarray(geometry.side, dtype=float)
+            local = (points - origin) @ rotation
+            clamped = np.clip(local, -half, half)
+            outside = np.linalg.norm(local - clamped, axis=1)
+            inside_gap = np.min(half - np.abs(local), axis=1)
+            inside = outside == 0.0
+            if np.any(inside):
+                # Project inside points onto the nearest face.
+                axis = np.argmin(half - np.abs(local[inside]), axis=1)
+                face = clamped[inside]
+                face[np.arange(len(axis)), axis] = np.copysign(
+                    half[axis], local[inside][np.arange(len(axis)), axis]
+                )
+                clamped[inside] = face
+            distances = np.where(inside, -inside_gap, outside)
+            return distances, clamped @ rotation.T + origin
+        probe = fcl.CollisionObject(fcl.Sphere(1e-6), fcl.Transform())
+        distances = np.empty(len(points))
+        closest = np.empty((len(points), 3))
+        for k, point in enumerate(points):
+            probe.setTransform(fcl.Transform(point))
+            result = fcl.DistanceResult()
+            distances[k] = max(fcl.distance(probe, element.obj, self._request, result), 0.0)
+            closest[k] = result.nearest_points[1]
+        return distances, closest
+
+    def check_trajectory(
+        self,
+        palm_positions: ArrayLike,
+        palm_quaternions: ArrayLike,
+        object_name: str | None = None,
+        object_positions: ArrayLike | None = None,
+        object_quaternions: ArrayLike | None = None,
+        margin: float = 0.0,
+    ) -> TrajectoryCheck:
+        """Check predicted palm (and held-object) poses against the active obstacles.
+
+        A numpy bounding-sphere test drops every (waypoint, body, obstacle) triple that cannot be
+        within ``margin``; FCL checks the rest.
+
+        Parameters
+        ----------
+        palm_positions : array_like
+            (N, 2, 3) left and right palm positions, world frame, m.
+        palm_quaternions : array_like
+            (N, 2, 4) left and right palm orientations, scalar-last.
+        object_name : str, optional
+            The held object, checked with the poses below.
+        object_positions : array_like, optional
+            (N, 3) held object positions, world frame, m.
+        object_quaternions : array_like, optional
+            (N, 4) held object orientations, scalar-last.
+        margin : float
+            Clearance below which a waypoint counts as colliding, m.
+
+        Returns
+        -------
+        TrajectoryCheck
+        """
+        positions = np.asarray(palm_positions, dtype=float)
+        quaternions = np.asarray(palm_quaternions, dtype=float)
+        if positions.ndim != 3 or positions.shape[1:] != (2, 3):
+            raise ValueError(
+                "check_trajectory: expected palm_positions of shape (N, 2, 3), "
+                f"got {positions.shape}"
+            )
+        n = len(positions)
+        if quaternions.shape != (n, 2, 4):
+            raise ValueError(
+                f"check_trajectory: expected palm_quaternions of shape {(n, 2, 4)}, "
+                f"got {quaternions.shape}"
+            )
+        rows = [self._palm_rows[Arm.LEFT], self._palm_rows[Arm.RIGHT]]
+        body_p = [positions[:, 0], positions[:, 1]]
+        body_q = [quaternions[:, 0], quaternions[:, 1]]
+        if object_name is not None:
+            if object_positions is None or object_quaternions is None:
+                raise ValueError("check_trajectory: expected object poses with object_name")
+            if object_name not in self._objects:
+                raise ValueError(
+                    f"check_trajectory: expected an object in {sorted(self._objects)}, "
+                    f"got {object_name!r}"
+                )
+            op = np.asarray(object_positions, dtype=float)
+            oq = np.asarray(object_quaternions, dtype=float)
+            if op.shape != (n, 3) or oq.shape != (n, 4):
+                raise ValueError(
+                    f"check_trajectory: expected object poses of shapes {(n, 3)} and {(n, 4)}, "
+                    f"got {op.shape} and {oq.shape}"
+                )
+            rows.append(self._objects[object_name])
+            body_p.append(op)
+            body_q.append(oq)
+        collides = np.zeros(n, dtype=bool)
+        if self._active and n:
+            obstacles = [self._elements[r] for r in self._active]
+            o_centre = np.array([o.centre for o in obstacles])
+            o_radius = np.array([o.radius for o in obstacles])
+            p_all = np.stack(body_p, axis=1)  # (N, B, 3)
+            r_all = quaternions_to_matrices(np.stack(body_q, axis=1))  # (N, B, 3, 3)
+            local = np.array([self._elements[r].centre_local for r in rows])
+            radius = np.array([self._elements[r].radius for r in rows])
+            centres = np.einsum("nbij,bj->nbi", r_all, local) + p_all
+            gaps = (
+                np.linalg.norm(centres[:, :, None] - o_centre, axis=-1) - radius[:, None] - o_radius
+            )
+            candidates = np.argwhere(gaps <= margin)  # (K, 3): waypoint, body, obstacle
+            probes = [
+                fcl.CollisionObject(self._elements[r].geometry, fcl.Transform()) for r in rows
+            ]
+            for w, b, o in candidates:
+                if collides[w]:
+                    continue
+                probe = probes[b]
+                probe.setTransform(fcl.Transform(r_all[w, b], p_all[w, b]))
+                if margin > 0.0:
+                    hit = fcl.distance(probe, obstacles[o].obj, fcl.DistanceRequest()) < margin
+                else:
+                    hit = fcl.collide(
+                        probe, obstacles[o].obj, fcl.CollisionRequest(), fcl.CollisionResult()
+                    )
+                collides[w] = bool(hit)
+        hits = np.flatnonzero(collides)
+        return TrajectoryCheck(collides, int(hits[0]) if len(hits) else -1)
+
+
+__all__ = [
+    "OBSTACLES",
+    "TABLE",
+    "CollisionWorld",
+    "LinkDistances",
+    "Proximity",
+    "TrajectoryCheck",
+    "arm_group",
+    "quaternions_to_matrices",
+]

@@ -1,0 +1,817 @@
+"""The PyBullet scene: two palm arms behind a table, objects on it, static obstacles.
+
+A :class:`Scene` is built from a :class:`SceneSpec` (plain parameters) or from a validated world
+(:meth:`Scene.from_world`). It owns one PyBullet client in DIRECT mode and the
+:class:`worlds.control.DualArmImpedanceController` that drives the palms; :meth:`Scene.step`
+applies the control torques and advances physics by one step.
+
+Rules kept here: objects are held by friction and squeeze only (no constraints to the palms, no
+teleporting or mass changes once the scene runs); obstacles are static (mass 0) and are switched
+on or off per move by parking them far below the floor.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
+from enum import StrEnum
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pybullet as pb
+from numpy.typing import ArrayLike, NDArray
+from scipy.spatial.transform import Rotation
+
+from skills.labels import Arm
+from worlds.control import DualArmImpedanceController, ImpedanceGains, PalmCommand, PalmState
+from worlds.robots import RobotModel, build_robot_model
+
+FloatArray = NDArray[np.float64]
+Vec3 = tuple[float, float, float]
+Quat = tuple[float, float, float, float]
+
+#: Slowest rate of re-linearising the control law (Jacobian, gravity, inertia), Hz. The
+#: spring and damper still act on the measured joint state at every physics step; the grasp
+#: tests hold the parcel the same with these defaults and with the exact law at every step.
+RELINEARISE_HZ = 10.0
+#: Re-linearise sooner once a joint has moved this far from the linearisation point, rad.
+RELINEARISE_TOLERANCE = 0.01
+
+#: Where inactive obstacles wait: far below the floor, out of every contact.
+PARKING_OFFSET = (0.0, 0.0, -100.0)
+
+
+class ShapeKind(StrEnum):
+    """Primitive or mesh geometry of an object or obstacle."""
+
+    BOX = "box"
+    CYLINDER = "cylinder"
+    SPHERE = "sphere"
+    MESH = "mesh"
+
+
+@dataclass(frozen=True)
+class ShapeSpec:
+    """Geometry in the body frame, centred on the body origin.
+
+    Attributes
+    ----------
+    kind : ShapeKind
+        Which of the fields below apply.
+    size : tuple of float
+        (3,) full box extents along x, y, z, m (BOX).
+    radius : float
+        Radius, m (CYLINDER, SPHERE).
+    height : float
+        Full height along z, m (CYLINDER).
+    mesh_path : Path or None
+        Mesh file (MESH); dynamic bodies collide with its convex hull.
+    scale : float
+        Uniform mesh scale (MESH).
+    """
+
+    kind: ShapeKind
+    size: Vec3 = (0.0, 0.0, 0.0)
+    radius: float = 0.0
+    height: float = 0.0
+    mesh_path: Path | None = None
+    scale: float = 1.0
+
+    def __post_init__(self) -> None:
+        ok = {
+            ShapeKind.BOX: min(self.size) > 0.0,
+            ShapeKind.CYLINDER: self.radius > 0.0 and self.height > 0.0,
+            ShapeKind.SPHERE: self.radius > 0.0,
+            ShapeKind.MESH: self.mesh_path is not None and self.scale > 0.0,
+        }[ShapeKind(self.kind)]
+        if not ok:
+            raise ValueError(
+                f"ShapeSpec: expected positive dimensions for a {self.kind}, got {self}"
+            )
+
+    @staticmethod
+    def box(size: ArrayLike) -> ShapeSpec:
+        """Box of full extents ``size`` (3,), m."""
+        x, y, z = (float(v) for v in np.asarray(size, dtype=float).reshape(3))
+        return ShapeSpec(ShapeKind.BOX, size=(x, y, z))
+
+    @staticmethod
+    def sphere(radius: float) -> ShapeSpec:
+        """Sphere of ``radius``, m."""
+        return ShapeSpec(ShapeKind.SPHERE, radius=float(radius))
+
+    @staticmethod
+    def cylinder(radius: float, height: float) -> ShapeSpec:
+        """Cylinder along z of ``radius`` and full ``height``, m."""
+        return ShapeSpec(ShapeKind.CYLINDER, radius=float(radius), height=float(height))
+
+    def bounding_radius(self) -> float:
+        """Radius of a sphere around the body origin that holds the shape, m."""
+        if self.kind == ShapeKind.BOX:
+            return 0.5 * float(np.linalg.norm(self.size))
+        if self.kind == ShapeKind.SPHERE:
+            return self.radius
+        if self.kind == ShapeKind.CYLINDER:
+            return float(np.hypot(self.radius, self.height / 2.0))
+        import trimesh
+
+        assert self.mesh_path is not None
+        mesh = trimesh.load(self.mesh_path, force="mesh")
+        assert isinstance(mesh, trimesh.Trimesh)
+        return float(np.max(np.linalg.norm(mesh.vertices, axis=1))) * self.scale
+
+
+@dataclass(frozen=True)
+class ObjectSpec:
+    """A movable object on the table.
+
+    Attributes
+    ----------
+    name : str
+        Unique name.
+    shape : ShapeSpec
+        Geometry.
+    mass : float
+        Mass, kg.
+    friction : float
+        Lateral friction coefficient (Bullet multiplies the two bodies' coefficients).
+    position : tuple of float
+        (3,) initial centre in the world frame, m.
+    quaternion : tuple of float
+        (4,) initial orientation, scalar-last.
+    """
+
+    name: str
+    shape: ShapeSpec
+    mass: float
+    friction: float
+    position: Vec3
+    quaternion: Quat = (0.0, 0.0, 0.0, 1.0)
+
+    def __post_init__(self) -> None:
+        if self.mass <= 0.0 or self.friction < 0.0:
+            raise ValueError(
+                f"ObjectSpec {self.name!r}: expected mass > 0 and friction >= 0, "
+                f"got {self.mass} and {self.friction}"
+            )
+
+
+@dataclass(frozen=True)
+class ObstacleSpec:
+    """A static obstacle (mass 0, no physics response).
+
+    Attributes
+    ----------
+    name : str
+        Unique name.
+    shape : ShapeSpec
+        Geometry.
+    position : tuple of float
+        (3,) centre in the world frame, m.
+    """
+
+    name: str
+    shape: ShapeSpec
+    position: Vec3
+
+
+@dataclass(frozen=True)
+class TableSpec:
+    """The table: a static box whose top surface centre is ``position``.
+
+    Attributes
+    ----------
+    position : tuple of float
+        (3,) centre of the top surface, world frame, m.
+    size : tuple of float
+        (3,) length along x, width along y, height of the top above the floor, m.
+    friction : float
+        Lateral friction coefficient of the top.
+    """
+
+    position: Vec3 = (0.65, 0.0, 0.6)
+    size: Vec3 = (0.6, 1.0, 0.6)
+    friction: float = 0.5
+
+
+@dataclass(frozen=True)
+class RobotSpec:
+    """Parameters of the robot builder (:func:`worlds.robots.build_robot_model`).
+
+    Attributes
+    ----------
+    model : str
+        Robot model name.
+    base_position : tuple of float
+        (3,) robot frame origin in the world, m.
+    base_rpy_deg : tuple of float
+        (3,) robot frame roll, pitch, yaw, degrees.
+    arm_separation : float
+        Distance between the arm bases, m.
+    mount_height : float
+        Arm base height above the robot frame, m.
+    palm_size : tuple of float
+        (3,) palm box extents, m.
+    """
+
+    model: str = "kuka_iiwa"
+    base_position: Vec3 = (0.0, 0.0, 0.0)
+    base_rpy_deg: Vec3 = (0.0, 0.0, 0.0)
+    arm_separation: float = 0.7
+    mount_height: float = 0.6
+    palm_size: Vec3 = (0.12, 0.09, 0.02)
+
+    def build(self) -> RobotModel:
+        """The robot model these parameters describe."""
+        return build_robot_model(
+            self.model,
+            base_position=self.base_position,
+            base_rpy_deg=self.base_rpy_deg,
+            arm_separation=self.arm_separation,
+            mount_height=self.mount_height,
+            palm_size=self.palm_size,
+        )
+
+
+def _lateral_palm_quaternions() -> dict[Arm, Quat]:
+    # Palm z (the contact normal) points at the object along -+y; palm x points down.
+    left = Rotation.from_matrix(np.array([[0.0, 1.0, 0.0], [0.0, 0.0, -1.0], [-1.0, 0.0, 0.0]]))
+    right = Rotation.from_matrix(np.array([[0.0, -1.0, 0.0], [0.0, 0.0, 1.0], [-1.0, 0.0, 0.0]]))
+    quaternions: dict[Arm, Quat] = {}
+    for arm, rotation in ((Arm.LEFT, left), (Arm.RIGHT, right)):
+        x, y, z, w = (float(v) for v in rotation.as_quat())
+        quaternions[arm] = (x, y, z, w)
+    return quaternions
+
+
+#: Palm orientations (scalar-last, world frame) of a lateral grasp on an object's +-y faces.
+LATERAL_PALM_QUATERNIONS: Mapping[Arm, Quat] = _lateral_palm_quaternions()
+
+
+def lateral_grasp_palm_poses(
+    object_position: ArrayLike,
+    half_span: float,
+    palm_thickness: float,
+    gap: float = 0.0,
+) -> dict[Arm, tuple[FloatArray, FloatArray]]:
+    """Palm poses touching (or ``gap`` outside) an object's +-y faces, object unrotated.
+
+    Parameters
+    ----------
+    object_position : array_like
+        (3,) object centre, world frame, m.
+    half_span : float
+        Half the object's extent along y, m.
+    palm_thickness : float
+        Palm box thickness along its z axis, m.
+    gap : float
+        Distance between each palm's contact face and the object's face, m.
+
+    Returns
+    -------
+    dict of Arm to (position (3,), quaternion (4,))
+        Palm frame poses in the world frame.
+    """
+    centre = np.asarray(object_position, dtype=float).reshape(3)
+    offset = half_span + palm_thickness / 2.0 + gap
+    return {
+        arm: (centre + np.array([0.0, side * offset, 0.0]), np.array(LATERAL_PALM_QUATERNIONS[arm]))
+        for arm, side in ((Arm.LEFT, 1.0), (Arm.RIGHT, -1.0))
+    }
+
+
+def default_parcel() -> ObjectSpec:
+    """The 1 kg, 0.20 x 0.30 x 0.15 m parcel at (0.6, 0, 0.675), friction 0.8."""
+    return ObjectSpec(
+        name="parcel",
+        shape=ShapeSpec.box((0.20, 0.30, 0.15)),
+        mass=1.0,
+        friction=0.8,
+        position=(0.6, 0.0, 0.675),
+    )
+
+
+@dataclass(frozen=True)
+class SceneSpec:
+    """Everything needed to build a :class:`Scene`.
+
+    Attributes
+    ----------
+    robot : RobotSpec
+        Robot model parameters.
+    table : TableSpec
+        The table.
+    objects : tuple of ObjectSpec
+        Movable objects.
+    obstacles : tuple of ObstacleSpec
+        Static obstacles (all inactive at the start).
+    physics_hz : int
+        Physics rate, Hz.
+    control_hz : int
+        Rate at which callers are expected to update palm commands, Hz.
+    gravity : float
+        Gravity along world z, m/s^2.
+    seed : int
+        Seed of the scene's random generator.
+    """
+
+    robot: RobotSpec = field(default_factory=RobotSpec)
+    table: TableSpec = field(default_factory=TableSpec)
+    objects: tuple[ObjectSpec, ...] = field(default_factory=lambda: (default_parcel(),))
+    obstacles: tuple[ObstacleSpec, ...] = ()
+    physics_hz: int = 240
+    control_hz: int = 60
+    gravity: float = -9.81
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        if self.physics_hz <= 0 or self.control_hz <= 0 or self.physics_hz % self.control_hz:
+            raise ValueError(
+                "SceneSpec: expected physics_hz a positive multiple of control_hz, "
+                f"got {self.physics_hz} and {self.control_hz}"
+            )
+        names = [o.name for o in self.objects] + [o.name for o in self.obstacles]
+        duplicates = sorted({n for n in names if names.count(n) > 1})
+        if duplicates:
+            raise ValueError(f"SceneSpec: expected unique names, got duplicates {duplicates}")
+
+
+def _shape_from_world(shape: Any, resolve: Any) -> ShapeSpec:
+    kind = ShapeKind(str(getattr(shape.type, "value", shape.type)))
+    if kind == ShapeKind.BOX:
+        return ShapeSpec.box(shape.size)
+    if kind == ShapeKind.SPHERE:
+        return ShapeSpec.sphere(shape.radius)
+    if kind == ShapeKind.CYLINDER:
+        return ShapeSpec.cylinder(shape.radius, shape.height)
+    return ShapeSpec(ShapeKind.MESH, mesh_path=Path(resolve(shape.file)), scale=float(shape.scale))
+
+
+def scene_spec_from_world(world: Any) -> SceneSpec:
+    """Turn a validated :class:`worlds.world_file.World` into a :class:`SceneSpec`.
+
+    Parameters
+    ----------
+    world : World
+        A world loaded by :func:`worlds.world_file.load_world` (or built in code).
+
+    Returns
+    -------
+    SceneSpec
+    """
+    robot = world.robot
+    return SceneSpec(
+        robot=RobotSpec(
+            model=str(getattr(robot.model, "value", robot.model)),
+            base_position=tuple(robot.base.position),
+            base_rpy_deg=tuple(robot.base.rpy_deg),
+            arm_separation=float(robot.arm_separation),
+            mount_height=float(robot.mount_height),
+            palm_size=tuple(robot.palm_size),
+        ),
+        table=TableSpec(
+            position=tuple(world.table.position),
+            size=tuple(world.table.size),
+            friction=float(world.table.friction),
+        ),
+        objects=tuple(
+            ObjectSpec(
+                name=o.name,
+                shape=_shape_from_world(o.shape, world.resolve_path),
+                mass=float(o.mass),
+                friction=float(o.friction),
+                position=tuple(o.pose.position),
+                quaternion=tuple(o.pose.quaternion_xyzw()),
+            )
+            for o in world.objects
+        ),
+        obstacles=tuple(
+            ObstacleSpec(
+                name=o.name,
+                shape=_shape_from_world(o.shape, world.resolve_path),
+                position=tuple(o.position),
+            )
+            for o in world.obstacles
+        ),
+        physics_hz=int(world.sim.physics_hz),
+        control_hz=int(world.sim.control_hz),
+        gravity=float(world.sim.gravity),
+        seed=int(world.sim.seed),
+    )
+
+
+def _shape_ids(client: int, shape: ShapeSpec, rgba: Sequence[float]) -> tuple[int, int]:
+    """Collision and visual shape ids of ``shape``."""
+    if shape.kind == ShapeKind.BOX:
+        half = [s / 2.0 for s in shape.size]
+        col = pb.createCollisionShape(pb.GEOM_BOX, halfExtents=half, physicsClientId=client)
+        vis = pb.createVisualShape(
+            pb.GEOM_BOX, halfExtents=half, rgbaColor=rgba, physicsClientId=client
+        )
+    elif shape.kind == ShapeKind.SPHERE:
+        col = pb.createCollisionShape(pb.GEOM_SPHERE, radius=shape.radius, physicsClientId=client)
+        vis = pb.createVisualShape(
+            pb.GEOM_SPHERE, radius=shape.radius, rgbaColor=rgba, physicsClientId=client
+        )
+    elif shape.kind == ShapeKind.CYLINDER:
+        col = pb.createCollisionShape(
+            pb.GEOM_CYLINDER, radius=shape.radius, height=shape.height, physicsClientId=client
+        )
+        vis = pb.createVisualShape(
+            pb.GEOM_CYLINDER,
+            radius=shape.radius,
+            length=shape.height,
+            rgbaColor=rgba,
+            physicsClientId=client,
+        )
+    else:
+        scale = [shape.scale] * 3
+        col = pb.createCollisionShape(
+            pb.GEOM_MESH, fileName=str(shape.mesh_path), meshScale=scale, physicsClientId=client
+        )
+        vis = pb.createVisualShape(
+            pb.GEOM_MESH,
+            fileName=str(shape.mesh_path),
+            meshScale=scale,
+            rgbaColor=rgba,
+            physicsClientId=client,
+        )
+    return col, vis
+
+
+class Scene:
+    """A running PyBullet scene with two impedance-controlled palms.
+
+    Parameters
+    ----------
+    spec : SceneSpec, optional
+        What to build; default: the default robot, table and parcel, no obstacles.
+    gains : ImpedanceGains, optional
+        Palm impedance gains for both arms.
+    refresh_every : int, optional
+        Physics steps between re-linearisations of the control law (see
+        :mod:`worlds.control`) at most; 1 is the exact law; default physics_hz / RELINEARISE_HZ.
+    relinearise_tolerance : float
+        Re-linearise sooner once a joint has moved this far, rad (0: only by the clock).
+    """
+
+    def __init__(
+        self,
+        spec: SceneSpec | None = None,
+        gains: ImpedanceGains | None = None,
+        refresh_every: int | None = None,
+        relinearise_tolerance: float = RELINEARISE_TOLERANCE,
+    ) -> None:
+        self.spec = spec if spec is not None else SceneSpec()
+        if refresh_every is None:
+            refresh_every = max(1, round(self.spec.physics_hz / RELINEARISE_HZ))
+        self.rng = np.random.default_rng(self.spec.seed)
+        self.physics_dt = 1.0 / self.spec.physics_hz
+        self.client = pb.connect(pb.DIRECT)
+        try:
+            self._build(gains, refresh_every, relinearise_tolerance)
+        except Exception:
+            pb.disconnect(self.client)
+            raise
+        self.step_count = 0
+
+    @classmethod
+    def from_world(
+        cls,
+        world: Any,
+        gains: ImpedanceGains | None = None,
+        refresh_every: int | None = None,
+        relinearise_tolerance: float = RELINEARISE_TOLERANCE,
+    ) -> Scene:
+        """Build the scene of a validated world (:class:`worlds.world_file.World`)."""
+        return cls(
+            scene_spec_from_world(world),
+            gains=gains,
+            refresh_every=refresh_every,
+            relinearise_tolerance=relinearise_tolerance,
+        )
+
+    def _build(
+        self, gains: ImpedanceGains | None, refresh_every: int, relinearise_tolerance: float
+    ) -> None:
+        c = self.client
+        pb.resetSimulation(physicsClientId=c)
+        pb.setPhysicsEngineParameter(
+            fixedTimeStep=self.physics_dt,
+            numSubSteps=0,
+            deterministicOverlappingPairs=1,
+            physicsClientId=c,
+        )
+        pb.setGravity(0.0, 0.0, self.spec.gravity, physicsClientId=c)
+        floor = pb.createCollisionShape(pb.GEOM_PLANE, physicsClientId=c)
+        self.floor_id = pb.createMultiBody(0.0, floor, physicsClientId=c)
+
+        self.robot = self.spec.robot.build()
+        self.robot_ids: tuple[int, ...] = tuple(
+            pb.loadURDF(
+                str(body.urdf_path),
+                body.base2world_position,
+                body.base2world_quaternion,
+                useFixedBase=True,
+                flags=pb.URDF_USE_INERTIA_FROM_FILE,
+                physicsClientId=c,
+            )
+            for body in self.robot.bodies
+        )
+        for arm in (Arm.LEFT, Arm.RIGHT):
+            spec = self.robot.arms[arm]
+            body = self.robot_ids[spec.body]
+            for joint, q in zip(spec.joint_indices, spec.rest_posture, strict=True):
+                pb.resetJointState(body, joint, q, 0.0, physicsClientId=c)
+
+        table = self.spec.table
+        half = (table.size[0] / 2.0, table.size[1] / 2.0, table.size[2] / 2.0)
+        col = pb.createCollisionShape(pb.GEOM_BOX, halfExtents=half, physicsClientId=c)
+        vis = pb.createVisualShape(
+            pb.GEOM_BOX, halfExtents=half, rgbaColor=[0.6, 0.45, 0.3, 1.0], physicsClientId=c
+        )
+        self.table_id = pb.createMultiBody(
+            0.0,
+            col,
+            vis,
+            basePosition=[table.position[0], table.position[1], table.position[2] - half[2]],
+            physicsClientId=c,
+        )
+        pb.changeDynamics(self.table_id, -1, lateralFriction=table.friction, physicsClientId=c)
+
+        self.object_ids: dict[str, int] = {}
+        for obj in self.spec.objects:
+            col, vis = _shape_ids(c, obj.shape, [0.8, 0.6, 0.35, 1.0])
+            body = pb.createMultiBody(
+                obj.mass,
+                col,
+                vis,
+                basePosition=obj.position,
+                baseOrientation=obj.quaternion,
+                physicsClientId=c,
+            )
+            pb.changeDynamics(
+                body,
+                -1,
+                lateralFriction=obj.friction,
+                spinningFriction=0.0,
+                rollingFriction=0.0,
+                physicsClientId=c,
+            )
+            self.object_ids[obj.name] = body
+
+        self.obstacle_ids: dict[str, int] = {}
+        self._active_obstacles: set[str] = set()
+        for obstacle in self.spec.obstacles:
+            col, vis = _shape_ids(c, obstacle.shape, [0.8, 0.2, 0.2, 1.0])
+            self.obstacle_ids[obstacle.name] = pb.createMultiBody(
+                0.0, col, vis, basePosition=self._parking(obstacle), physicsClientId=c
+            )
+
+        self.controller = DualArmImpedanceController(
+            self.robot,
+            self.robot_ids,
+            self.physics_dt,
+            client=c,
+            gains=gains,
+            refresh_every=refresh_every,
+            relinearise_tolerance=relinearise_tolerance,
+        )
+        self.controller.enable()
+
+    # -- setup -------------------------------------------------------------------------------
+
+    @staticmethod
+    def _parking(obstacle: ObstacleSpec) -> list[float]:
+        return [p + o for p, o in zip(obstacle.position, PARKING_OFFSET, strict=True)]
+
+    @property
+    def active_obstacles(self) -> frozenset[str]:
+        """Names of the obstacles present now."""
+        return frozenset(self._active_obstacles)
+
+    def set_active_obstacles(self, names: Iterable[str]) -> None:
+        """Make exactly ``names`` present (scene setup between moves; they are static).
+
+        Raises
+        ------
+        ValueError
+            If a name is not an obstacle of the scene.
+        """
+        wanted = set(names)
+        unknown = sorted(wanted - set(self.obstacle_ids))
+        if unknown:
+            raise ValueError(
+                "set_active_obstacles: expected names in "
+                f"{sorted(self.obstacle_ids)}, got {unknown}"
+            )
+        for obstacle in self.spec.obstacles:
+            active = obstacle.name in wanted
+            if active == (obstacle.name in self._active_obstacles):
+                continue
+            position = list(obstacle.position) if active else self._parking(obstacle)
+            pb.resetBasePositionAndOrientation(
+                self.obstacle_ids[obstacle.name],
+                position,
+                [0, 0, 0, 1],
+                physicsClientId=self.client,
+            )
+        self._active_obstacles = wanted
+
+    def obstacle_overlaps(self, clearance: float = 0.0) -> dict[str, list[str]]:
+        """Bodies within ``clearance`` of each active obstacle (m); empty lists when clear.
+
+        An obstacle switched on while it overlaps the robot or an object would push them out
+        violently on the next step; check this after :meth:`set_active_obstacles`.
+
+        Returns
+        -------
+        dict of str to list of str
+            For each active obstacle, the names of the objects, ``"table"``, ``"left_arm"`` or
+            ``"right_arm"`` it overlaps or comes within ``clearance`` of.
+        """
+        others = {name: body for name, body in self.object_ids.items()}
+        others["table"] = self.table_id
+        for arm in (Arm.LEFT, Arm.RIGHT):
+            others[f"{arm.value}_arm"] = self.robot_ids[self.robot.arms[arm].body]
+        overlaps: dict[str, list[str]] = {}
+        for name in sorted(self._active_obstacles):
+            body = self.obstacle_ids[name]
+            overlaps[name] = [
+                other
+                for other, other_body in others.items()
+                if pb.getClosestPoints(body, other_body, clearance, physicsClientId=self.client)
+            ]
+        return overlaps
+
+    def place_palms(
+        self, palm2world: Mapping[Arm, tuple[ArrayLike, ArrayLike]]
+    ) -> dict[Arm, FloatArray]:
+        """Set the start posture: one inverse-kinematics solve per arm, before the run starts.
+
+        The arms are reset to the solutions, which also become the null-space rest postures,
+        and the palm commands are set to the requested poses.
+
+        Parameters
+        ----------
+        palm2world : mapping of Arm to (position (3,), quaternion (4,))
+            Start palm poses in the world frame (m, scalar-last quaternion).
+
+        Returns
+        -------
+        dict of Arm to ndarray
+            (n,) joint positions of each arm, rad.
+
+        Raises
+        ------
+        RuntimeError
+            If the scene has already been stepped.
+        """
+        if self.step_count:
+            raise RuntimeError("place_palms: the start posture can only be set before stepping")
+        solutions: dict[Arm, FloatArray] = {}
+        for arm, (position, quaternion) in palm2world.items():
+            arm = Arm(arm)
+            spec = self.robot.arms[arm]
+            body = self.robot_ids[spec.body]
+            ranges = [hi - lo for lo, hi in zip(spec.lower, spec.upper, strict=True)]
+            q_all = pb.calculateInverseKinematics(
+                body,
+                spec.palm_link,
+                list(np.asarray(position, dtype=float)),
+                list(np.asarray(quaternion, dtype=float)),
+                lowerLimits=list(spec.lower),
+                upperLimits=list(spec.upper),
+                jointRanges=ranges,
+                restPoses=list(spec.rest_posture),
+                maxNumIterations=200,
+                residualThreshold=1e-6,
+                physicsClientId=self.client,
+            )
+            movable = [
+                j
+                for j in range(pb.getNumJoints(body, physicsClientId=self.client))
+                if pb.getJointInfo(body, j, physicsClientId=self.client)[2] != pb.JOINT_FIXED
+            ]
+            q = np.array([q_all[movable.index(j)] for j in spec.joint_indices])
+            for joint, value in zip(spec.joint_indices, q, strict=True):
+                pb.resetJointState(body, joint, float(value), 0.0, physicsClientId=self.client)
+            self.controller.set_rest_posture(arm, q)
+            self.controller.set_command(
+                arm, PalmCommand(np.asarray(position, float), np.asarray(quaternion, float))
+            )
+            solutions[arm] = q
+        self.controller.refresh()
+        return solutions
+
+    # -- running -----------------------------------------------------------------------------
+
+    @property
+    def time(self) -> float:
+        """Simulated time since the start, s."""
+        return self.step_count * self.physics_dt
+
+    def step(self, steps: int = 1) -> None:
+        """Apply the palm control torques and advance physics, ``steps`` times."""
+        apply = self.controller.apply
+        step = pb.stepSimulation
+        c = self.client
+        for _ in range(steps):
+            apply()
+            step(physicsClientId=c)
+        self.step_count += steps
+
+    def set_palm_command(self, arm: Arm, command: PalmCommand) -> None:
+        """Set the target pose (and feed-forward twist, squeeze offset) of ``arm``'s palm."""
+        self.controller.set_command(arm, command)
+
+    def palm_state(self, arm: Arm) -> PalmState:
+        """Measured palm pose, twist and joint state of ``arm``, world frame."""
+        return self.controller.palm_state(arm)
+
+    def object_pose(self, name: str) -> tuple[FloatArray, FloatArray]:
+        """Pose of object ``name``: position (3,) m and quaternion (4,) scalar-last, world frame."""
+        position, quaternion = pb.getBasePositionAndOrientation(
+            self._object(name), physicsClientId=self.client
+        )
+        return np.asarray(position), np.asarray(quaternion)
+
+    def object_velocity(self, name: str) -> tuple[FloatArray, FloatArray]:
+        """Linear (3,) m/s and angular (3,) rad/s velocity of object ``name``, world frame."""
+        linear, angular = pb.getBaseVelocity(self._object(name), physicsClientId=self.client)
+        return np.asarray(linear), np.asarray(angular)
+
+    def palm_contact_force(self, arm: Arm, name: str) -> float:
+        """Sum of contact normal forces between ``arm``'s palm and object ``name``, N.
+
+        The scene runs without physics substeps, so these are the full forces (with substeps
+        PyBullet reports about 1/N of them).
+        """
+        spec = self.robot.arms[Arm(arm)]
+        contacts = pb.getContactPoints(
+            bodyA=self.robot_ids[spec.body],
+            bodyB=self._object(name),
+            linkIndexA=spec.palm_link,
+            physicsClientId=self.client,
+        )
+        return float(sum(c[9] for c in contacts))
+
+    def arm_contact_force(self, arm: Arm, body_id: int) -> float:
+        """Sum of contact normal forces between any link of ``arm``'s body and a body, N."""
+        spec = self.robot.arms[Arm(arm)]
+        contacts = pb.getContactPoints(
+            bodyA=self.robot_ids[spec.body], bodyB=body_id, physicsClientId=self.client
+        )
+        return float(sum(c[9] for c in contacts))
+
+    def _object(self, name: str) -> int:
+        try:
+            return self.object_ids[name]
+        except KeyError:
+            raise ValueError(
+                f"Scene: expected an object name in {sorted(self.object_ids)}, got {name!r}"
+            ) from None
+
+    def state_vector(self) -> FloatArray:
+        """Every joint position and velocity and every object's pose and twist, flat (k,)."""
+        parts: list[FloatArray] = []
+        for body in self.robot_ids:
+            n = pb.getNumJoints(body, physicsClientId=self.client)
+            states = pb.getJointStates(body, list(range(n)), physicsClientId=self.client)
+            parts.append(np.array([[s[0], s[1]] for s in states]).ravel())
+        for name in self.object_ids:
+            position, quaternion = self.object_pose(name)
+            linear, angular = self.object_velocity(name)
+            parts.extend([position, quaternion, linear, angular])
+        return np.concatenate(parts)
+
+    def close(self) -> None:
+        """Disconnect the PyBullet client."""
+        if self.client >= 0 and pb.isConnected(self.client):
+            pb.disconnect(self.client)
+        self.client = -1
+
+    def __enter__(self) -> Scene:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+__all__ = [
+    "LATERAL_PALM_QUATERNIONS",
+    "RELINEARISE_HZ",
+    "RELINEARISE_TOLERANCE",
+    "ObjectSpec",
+    "ObstacleSpec",
+    "RobotSpec",
+    "Scene",
+    "SceneSpec",
+    "ShapeKind",
+    "ShapeSpec",
+    "TableSpec",
+    "default_parcel",
+    "lateral_grasp_palm_poses",
+    "scene_spec_from_world",
+]
