@@ -131,6 +131,114 @@ def _affordances_command(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _load_library(folder: str | None) -> Any:
+    """The library in ``folder``, or the default one learnt from the shipped demonstrations."""
+    from skills.default_library import build_default_library
+    from skills.library import SkillLibrary
+
+    if folder is None:
+        return build_default_library()
+    return SkillLibrary.load(folder)
+
+
+def _skills_command(args: argparse.Namespace) -> int:
+    """List a skill library."""
+    from skills.library import LibraryFileError
+
+    try:
+        library = _load_library(args.library)
+    except LibraryFileError as err:
+        print(err, file=sys.stderr)
+        return EXIT_BAD_INPUT
+    rows = library.describe()
+    if args.json:
+        print(json.dumps({"skills": rows}))
+        return EXIT_OK
+    source = args.library or "default (learnt from skills/demos)"
+    print(f"skill library: {source}, {len(rows)} skills")
+    for r in rows:
+        fit = ", ".join(f"{k}={v:.3g}" for k, v in r["fit"].items())
+        demos = ", ".join(r["demonstrations"]) or "none"
+        print(f"  {r['name']:<16} {r['action']:<16} {r['space']:<9} {r['kind']}")
+        print(f"      from {demos}; {r['method']}" + (f"; fit {fit}" if fit else ""))
+    return EXIT_OK
+
+
+def _teach_command(args: argparse.Namespace) -> int:
+    """Learn a skill from a demonstration CSV into a library; report recognition first."""
+    from skills.demos.io import DemoFileError, read_demo_csv
+    from skills.labels import Action, Space
+    from skills.library import LibraryFileError
+    from skills.pose_dmp import fit_pose
+    from skills.recognition import recognise
+    from skills.skill import Provenance, learnt_skill
+
+    try:
+        action = Action(args.label)
+    except ValueError:
+        known = ", ".join(a.value for a in Action)
+        print(f"--label: expected one of {known}, got {args.label!r}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    space = Space(args.space)
+    folder = Path(args.library)
+    try:
+        demo_file = read_demo_csv(args.demo)
+        library = _load_library(str(folder) if (folder / "library.json").exists() else None)
+    except (DemoFileError, LibraryFileError) as err:
+        print(err, file=sys.stderr)
+        return EXIT_BAD_INPUT
+    demo = demo_file.demonstration
+    match = recognise(library, demo, space, args.threshold)
+    name = args.name or Path(args.demo).stem
+    summary: dict[str, Any] = {
+        "closest": match.best,
+        "similarity": round(match.similarity, 4),
+        "matched": match.matched,
+        "threshold": match.threshold,
+        "added": None,
+        "library": str(folder),
+    }
+    if match.best is None:
+        print(f"no {space.value} learnt skill to compare with: a new skill")
+    else:
+        verdict = "matches" if match.matched else "does not match"
+        print(
+            f"closest skill: {match.best} (similarity {match.similarity:.3f}); "
+            f"{verdict} at threshold {match.threshold:g}"
+        )
+    if match.matched and not args.force:
+        print(f"not added: it is the skill {match.best!r} already (use --force to add anyway)")
+    else:
+        if name in library:
+            print(
+                f"--name: expected a new skill name, got {name!r} (already in the library)",
+                file=sys.stderr,
+            )
+            return EXIT_BAD_INPUT
+        try:
+            model = fit_pose(demo)
+        except ValueError as err:
+            print(f"{args.demo}: {err}", file=sys.stderr)
+            return EXIT_BAD_INPUT
+        skill = learnt_skill(
+            name,
+            action,
+            space,
+            model,
+            (),
+            Provenance.now(
+                (Path(args.demo).name,), "pose DMP, 50 RBF per dimension, ridge regression"
+            ),
+        )
+        library.add(skill)
+        library.save(folder)
+        summary["added"] = name
+        print(f"added skill {name!r} ({action.value}, {space.value}) to {folder}")
+    if args.json:
+        print(json.dumps(summary))
+    return EXIT_OK
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser with one sub-command per job."""
     parser = argparse.ArgumentParser(prog="app.py", description=__doc__.splitlines()[0])
@@ -156,6 +264,25 @@ def build_parser() -> argparse.ArgumentParser:
     aff.add_argument("--no-default-rules", action="store_true", help="use only the --rules files")
     aff.add_argument("--json", action="store_true", help="print a JSON summary as the last line")
     aff.set_defaults(handler=_affordances_command)
+    skills = sub.add_parser("skills", help="list a skill library")
+    skills.add_argument("--library", help="library folder (default: learnt from skills/demos)")
+    skills.add_argument("--json", action="store_true", help="print JSON")
+    skills.set_defaults(handler=_skills_command)
+    teach = sub.add_parser("teach", help="learn a skill from a demonstration CSV into a library")
+    teach.add_argument("demo", help="CSV with columns t,x,y,z,qx,qy,qz,qw")
+    teach.add_argument("--label", required=True, help="the skill's action label")
+    teach.add_argument("--space", required=True, choices=["absolute", "relative"])
+    teach.add_argument("--library", default="library", help="library folder (default: library)")
+    teach.add_argument("--name", help="skill name (default: the file's stem)")
+    teach.add_argument(
+        "--threshold",
+        type=float,
+        default=0.9,
+        help="similarity above which the demo is an existing skill",
+    )
+    teach.add_argument("--force", action="store_true", help="add even if it matches a skill")
+    teach.add_argument("--json", action="store_true", help="print a JSON summary last")
+    teach.set_defaults(handler=_teach_command)
     return parser
 
 

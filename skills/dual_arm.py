@@ -111,27 +111,44 @@ class GraspGeometry:
     right_normal: Array
 
     @staticmethod
-    def lateral(width: float, palm_normal_axis: ArrayLike = (0.0, 0.0, 1.0)) -> GraspGeometry:
+    def lateral(
+        width: float,
+        palm_thickness: float = 0.0,
+        normal_axis: ArrayLike = (0.0, 0.0, 1.0),
+        down_axis: ArrayLike = (1.0, 0.0, 0.0),
+    ) -> GraspGeometry:
         """Two palms flat on the object's +y (left) and -y (right) faces.
 
         Parameters
         ----------
         width : float
             Distance between the two faces along the object's y axis, m (> 0).
-        palm_normal_axis : array_like, shape (3,)
-            The palm-frame axis that points out of the palm's contact face, towards the object.
+        palm_thickness : float
+            Palm thickness along its normal, m: the palm frame sits at the palm's centre, half
+            of it outside the face.
+        normal_axis : array_like, shape (3,)
+            The palm-frame axis that points out of the contact face, into the object.
+        down_axis : array_like, shape (3,)
+            The palm-frame axis that should point down (along the object's -z).
         """
         if not (np.isfinite(width) and width > 0):
             raise ValueError(f"width: expected a positive distance in m, got {width!r}")
-        axis = np.asarray(palm_normal_axis, dtype=float)
-        axis = axis / np.linalg.norm(axis)
+        if not (np.isfinite(palm_thickness) and palm_thickness >= 0):
+            raise ValueError(
+                f"palm_thickness: expected a distance >= 0 in m, got {palm_thickness!r}"
+            )
+        n = np.asarray(normal_axis, dtype=float)
+        d = np.asarray(down_axis, dtype=float)
+        if abs(float(np.dot(n, d))) > 1e-9 * np.linalg.norm(n) * np.linalg.norm(d):
+            raise ValueError("down_axis: expected an axis perpendicular to normal_axis")
+        offset = width / 2.0 + palm_thickness / 2.0
         left_in = np.array([0.0, -1.0, 0.0])  # the left palm pushes towards -y
         right_in = np.array([0.0, 1.0, 0.0])
         return GraspGeometry(
-            np.array([0.0, width / 2.0, 0.0]),
-            _align(axis, left_in),
-            np.array([0.0, -width / 2.0, 0.0]),
-            _align(axis, right_in),
+            np.array([0.0, offset, 0.0]),
+            _frame(n, d, left_in),
+            np.array([0.0, -offset, 0.0]),
+            _frame(n, d, right_in),
             left_in,
             right_in,
         )
@@ -160,17 +177,32 @@ class GraspGeometry:
         )
 
 
-def _align(axis: Array, direction: Array) -> Array:
-    """Shortest rotation (4,) taking ``axis`` onto ``direction``."""
-    c = float(np.dot(axis, direction))
-    if c < -1.0 + 1e-12:
-        perp = np.cross(axis, [1.0, 0.0, 0.0])
-        if np.linalg.norm(perp) < 1e-6:
-            perp = np.cross(axis, [0.0, 1.0, 0.0])
-        return quat.from_axis_angle(perp, np.pi)
-    v = np.cross(axis, direction)
-    q = np.array([v[0], v[1], v[2], 1.0 + c])
-    return q / np.linalg.norm(q)
+def _frame(normal_axis: Array, down_axis: Array, inward: Array) -> Array:
+    """Rotation (4,) taking ``normal_axis`` onto ``inward`` and ``down_axis`` onto -z."""
+    n = normal_axis / np.linalg.norm(normal_axis)
+    d = down_axis / np.linalg.norm(down_axis)
+    down = np.array([0.0, 0.0, -1.0])
+    body = np.stack((n, d, np.cross(n, d)), axis=1)
+    world = np.stack((inward, down, np.cross(inward, down)), axis=1)
+    return _matrix_to_quaternion(world @ body.T)
+
+
+def _matrix_to_quaternion(m: Array) -> Array:
+    """Unit quaternion (x, y, z, w) of a rotation matrix (Shepperd's method)."""
+    tr = float(np.trace(m))
+    if tr > 0:
+        s = 2.0 * np.sqrt(tr + 1.0)
+        q = [(m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s, s / 4]
+    else:
+        i = int(np.argmax(np.diag(m)))
+        j, k = (i + 1) % 3, (i + 2) % 3
+        s = 2.0 * np.sqrt(1.0 + m[i, i] - m[j, j] - m[k, k])
+        q = [0.0, 0.0, 0.0, (m[k, j] - m[j, k]) / s]
+        q[i] = s / 4
+        q[j] = (m[j, i] + m[i, j]) / s
+        q[k] = (m[k, i] + m[i, k]) / s
+    out = np.array(q)
+    return out / np.linalg.norm(out)
 
 
 def palm_poses(

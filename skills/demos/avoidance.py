@@ -1,10 +1,10 @@
 """A synthetic human-like teacher that moves around a spherical obstacle.
 
-The teacher does not use the steering law it will be fitted with: its path is the discrete
-minimum-jerk motion (least summed squared third differences) from rest at the start to rest at
-the goal that passes through a via-point beside the obstacle, at the obstacle's radius plus a
-clearance, placed perpendicular to the start-goal line where the straight motion would have
-reached the obstacle (Flash and Hogan's via-point model of human reaching). A seeded,
+The teacher does not use the steering law it will be fitted with: its path is the
+minimum-jerk motion from rest at the start to rest at the goal through a via-point beside the
+obstacle (Flash and Hogan's via-point model of human reaching), at the obstacle's radius plus a
+clearance, placed perpendicular to the start-goal line where, and when, the straight motion
+would have reached the obstacle. A seeded,
 smooth tremor that fades out at both ends makes it look recorded.
 """
 
@@ -18,25 +18,40 @@ from skills.couplings._checks import non_negative, positive, unit_vector, vector
 from skills.demos._smooth import min_jerk, tremor
 from skills.types import Array
 
-#: Rest at each end: the first and last three samples coincide (zero velocity and acceleration).
-_REST = 3
+
+def _derivative_row(u: float, order: int) -> Array:
+    """``d^order/du^order [1, u, ..., u^5]`` at ``u``, shape (6,)."""
+    k = np.arange(6)
+    falling = np.ones(6)
+    for i in range(order):  # k (k-1) ... (k-order+1), zero where k < order
+        falling *= k - i
+    return falling * np.where(k >= order, float(u) ** np.maximum(k - order, 0), 0.0)
 
 
 def _min_jerk_through(
-    start: Array, goal: Array, n: int, via: Array | None, via_index: int
+    start: Array, goal: Array, u: Array, via: Array | None, u_via: float
 ) -> Array:
-    """Discrete minimum-jerk positions (n, 3) from rest to rest, optionally through ``via``."""
-    jerk = np.diff(np.eye(n), 3, axis=0)  # (n - 3, n) third differences
-    rows = [*range(_REST), *range(n - _REST, n)]
-    values = [start] * _REST + [goal] * _REST
-    if via is not None:
-        rows.append(via_index)
-        values.append(via)
-    a = np.zeros((len(rows), n))
-    a[np.arange(len(rows)), rows] = 1.0
-    kkt = np.block([[jerk.T @ jerk, a.T], [a, np.zeros((len(rows), len(rows)))]])
-    rhs = np.vstack((np.zeros((n, 3)), np.array(values)))
-    return linalg.solve(kkt, rhs, assume_a="sym")[:n]
+    """Minimum-jerk positions (N, 3) at normalised times ``u``, rest to rest, through ``via``.
+
+    Without a via-point it is the quintic of Flash and Hogan. With one it is their via-point
+    solution: two quintics meeting at ``u_via``, equal in position, velocity, acceleration,
+    jerk and snap there (only the fifth derivative jumps), solved as one 12 x 12 system.
+    """
+    if via is None:
+        return start + np.outer(min_jerk(u), goal - start)
+    z6 = np.zeros(6)
+    rows, rhs = [], []
+    for d in range(3):  # rest at both ends
+        rows += [np.r_[_derivative_row(0.0, d), z6], np.r_[z6, _derivative_row(1.0, d)]]
+        rhs += [start if d == 0 else np.zeros(3), goal if d == 0 else np.zeros(3)]
+    rows += [np.r_[_derivative_row(u_via, 0), z6], np.r_[z6, _derivative_row(u_via, 0)]]
+    rhs += [via, via]
+    for d in range(1, 5):
+        rows.append(np.r_[_derivative_row(u_via, d), -_derivative_row(u_via, d)])
+        rhs.append(np.zeros(3))
+    coef = linalg.solve(np.array(rows), np.array(rhs))  # (12, 3)
+    powers = u[:, None] ** np.arange(6)
+    return np.where((u <= u_via)[:, None], powers @ coef[:6], powers @ coef[6:])
 
 
 def straight_demo(
@@ -147,15 +162,16 @@ def _demo(
     n = int(n_samples)
     gen = rng if rng is not None else np.random.default_rng(0)
     t = np.linspace(0.0, tau, n)
+    u = t / tau
     via = None
-    via_index = 0
+    u_via = 0.5
     if centre is not None:
         o = vector(centre, (3,), "obstacle_centre")
         axis = (g - y0) / length
         progress = float(np.clip((o - y0) @ axis / length, 0.1, 0.9))
-        # The straight min-jerk motion reaches the obstacle's projection at this sample.
-        via_index = int(np.searchsorted(min_jerk(np.linspace(0.0, 1.0, n)), progress))
-        via_index = int(np.clip(via_index, _REST + 1, n - _REST - 2))
+        # When the straight min-jerk motion reaches the obstacle's projection.
+        fine = np.linspace(0.0, 1.0, 2001)
+        u_via = float(np.interp(progress, min_jerk(fine), fine))
         lateral = (y0 + progress * length * axis) - o
         lateral -= (lateral @ axis) * axis
         if np.linalg.norm(lateral) < 1e-6:
@@ -165,7 +181,7 @@ def _demo(
                 lateral = np.cross(axis, np.eye(3)[int(np.argmin(np.abs(axis)))])
         via = o + (radius + clearance) * lateral / np.linalg.norm(lateral)
         via = via + gen.normal(0.0, noise, 3)
-    positions = _min_jerk_through(y0, g, n, via, via_index)
+    positions = _min_jerk_through(y0, g, u, via, u_via)
     positions += tremor(n, 3, noise, max(n // 40, 1), gen)
     orientations = np.tile(np.array((0.0, 0.0, 0.0, 1.0)), (n, 1))
     return t, positions, orientations

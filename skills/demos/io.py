@@ -144,6 +144,7 @@ def write_demo_csv(
     with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
         fh.write(",".join(names) + "\n")
         fh.writelines(",".join(_fmt(v) for v in row) + "\n" for row in table.tolist())
+    os.chmod(tmp, 0o644)  # mkstemp makes it private; demonstrations are meant to be read
     os.replace(tmp, out)
     return out
 

@@ -99,6 +99,19 @@ def test_lateral_geometry_faces_the_palms_inward() -> None:
     assert_allclose(quat.rotate(g.orientation(Arm.LEFT), [0, 0, 1.0]), [0, -1.0, 0], atol=1e-12)
     assert_allclose(quat.rotate(g.orientation(Arm.RIGHT), [0, 0, 1.0]), [0, 1.0, 0], atol=1e-12)
     assert_allclose(g.squeezed(0.015).position(Arm.RIGHT), [0, -0.135, 0], atol=1e-15)
+    # The palm's x axis points down, as the simulator's palms are mounted.
+    assert_allclose(quat.rotate(g.orientation(Arm.LEFT), [1.0, 0, 0]), [0, 0, -1.0], atol=1e-12)
+    thick = GraspGeometry.lateral(0.30, palm_thickness=0.02)
+    assert_allclose(thick.position(Arm.LEFT), [0, 0.16, 0], atol=1e-15)
+
+
+def test_lateral_geometry_matches_the_simulator_palm_frames() -> None:
+    # Palm axes as columns in the object frame: x down, z into the object.
+    left = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, -1.0], [-1.0, 0.0, 0.0]])
+    right = np.array([[0.0, -1.0, 0.0], [0.0, 0.0, 1.0], [-1.0, 0.0, 0.0]])
+    g = GraspGeometry.lateral(0.30)
+    assert_allclose(quat.to_matrix(g.orientation(Arm.LEFT)), left, atol=1e-12)
+    assert_allclose(quat.to_matrix(g.orientation(Arm.RIGHT)), right, atol=1e-12)
 
 
 def test_integrate_twist_matches_a_pure_rotation_about_a_point() -> None:

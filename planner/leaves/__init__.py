@@ -1,0 +1,22 @@
+"""The robot's leaves. Importing this package registers them for the XML loader."""
+
+from planner.leaves.approach import Approach
+from planner.leaves.base import WorldLeaf
+from planner.leaves.conditions import AtGoal, IsHeld, PathClear
+from planner.leaves.grasp import Grasp
+from planner.leaves.release import Release, Retreat
+from planner.leaves.select import SelectSkills
+from planner.leaves.transport import Transport
+
+__all__ = [
+    "Approach",
+    "AtGoal",
+    "Grasp",
+    "IsHeld",
+    "PathClear",
+    "Release",
+    "Retreat",
+    "SelectSkills",
+    "Transport",
+    "WorldLeaf",
+]

@@ -1,0 +1,100 @@
+"""Approach: bring both palms beside the object's faces through middle set-points."""
+
+from __future__ import annotations
+
+import numpy as np
+from py_trees.common import Status
+from py_trees.ports import PortInformation
+
+from planner.composition import lateral_geometry
+from planner.leaves.base import WorldLeaf, status_is_halt
+from planner.leaves.palm_motion import ViaPointMotion, measured_state
+from planner.port import Pose
+from skills import quaternion as quat
+from skills.dual_arm import ARMS
+from skills.labels import Arm
+
+
+def pregrasp_poses(
+    object_pose: Pose,
+    geometry_positions: dict[Arm, np.ndarray],
+    geometry_orientations: dict[Arm, np.ndarray],
+    normals: dict[Arm, np.ndarray],
+    standoff: float,
+    rise: float,
+) -> dict[Arm, list[Pose]]:
+    """Middle set-point (outside and above) then the pre-grasp pose, per palm, world frame."""
+    out: dict[Arm, list[Pose]] = {}
+    for arm in ARMS:
+        outward = -normals[arm]
+        rel_pre = geometry_positions[arm] + standoff * outward
+        rel_mid = geometry_positions[arm] + 2.0 * standoff * outward
+        q = quat.multiply(object_pose.orientation, geometry_orientations[arm])
+        pre = object_pose.position + quat.rotate(object_pose.orientation, rel_pre)
+        mid = object_pose.position + quat.rotate(object_pose.orientation, rel_mid)
+        mid = mid + np.array([0.0, 0.0, rise])
+        out[arm] = [Pose(mid, q), Pose(pre, q)]
+    return out
+
+
+class Approach(WorldLeaf):
+    """Move both palms to ``standoff`` m outside the object's faces via set-points above."""
+
+    INPUT_PORTS = {
+        "object": PortInformation(str, description="object to approach"),
+        "standoff_m": PortInformation(
+            float,
+            required=False,
+            default_value=0.04,
+            description="gap between palm and face at the end, m",
+        ),
+        "rise_m": PortInformation(
+            float,
+            required=False,
+            default_value=0.08,
+            description="height of the middle set-point above, m",
+        ),
+        "segment_s": PortInformation(
+            float,
+            required=False,
+            default_value=1.5,
+            description="duration scale of each segment, s",
+        ),
+    }
+    OUTPUT_PORTS: dict[str, PortInformation] = {}
+
+    def initialise(self) -> None:
+        """Plan the via-point motion from where the palms are now."""
+        self.motion: ViaPointMotion | None = None
+        if self.connected() is not None:
+            return
+        world = self.world
+        name = self.get_input("object")
+        g = lateral_geometry(world, name)
+        waypoints = pregrasp_poses(
+            world.object_pose(name),
+            {a: g.position(a) for a in ARMS},
+            {a: g.orientation(a) for a in ARMS},
+            {a: g.normal(a) for a in ARMS},
+            float(self.get_input("standoff_m")),
+            float(self.get_input("rise_m")),
+        )
+        starts = {a: measured_state(world.palm_pose(a), world.palm_twist(a)) for a in ARMS}
+        self.motion = ViaPointMotion(starts, waypoints, float(self.get_input("segment_s")))
+
+    def update(self) -> Status:
+        """Command one step of the motion; SUCCESS when both palms are at their pre-grasp."""
+        if (why := self.connected()) is not None:
+            return self.fail(why)
+        assert self.motion is not None
+        states = self.motion.step(self.control_dt)
+        for arm, st in states.items():
+            self.world.command_palm(arm, Pose(st.position, st.orientation), st.twist())
+        if self.motion.done():
+            return self.succeed("palms at the pre-grasp poses")
+        return self.running(f"approaching: {self.motion.remaining():.3f} m to go")
+
+    def terminate(self, new_status: Status) -> None:
+        """Preempted: stop the arms."""
+        if status_is_halt(new_status) and self._world is not None:
+            self._world.hold_palms()

@@ -1,0 +1,90 @@
+"""What every robot leaf shares: the world port and skill library from ``setup()``."""
+
+from __future__ import annotations
+
+from typing import Any, ClassVar
+
+import py_trees
+from py_trees.common import Status
+from py_trees.ports import BehaviourWithPorts, NoDataAvailable
+
+from planner.port import WorldPort
+from skills.library import SkillLibrary
+
+#: Control period used when ``setup()`` is not given one, s.
+DEFAULT_CONTROL_DT = 1.0 / 60.0
+
+
+class WorldLeaf(BehaviourWithPorts):
+    """A leaf that talks to the world through :class:`~planner.port.WorldPort`.
+
+    ``__init__`` only configures, so a tree builds and renders offline; ``setup(world=...,
+    library=..., control_dt=...)`` connects it. A leaf used before ``setup`` fails with an
+    explanation rather than an exception.
+    """
+
+    NODE_TYPE: ClassVar[str] = "Action"
+
+    def __init__(self, name: str, **kwargs: Any) -> None:
+        super().__init__(name=name, **kwargs)
+        self._world: WorldPort | None = None
+        self._library: SkillLibrary | None = None
+        self.control_dt = DEFAULT_CONTROL_DT
+
+    def setup(self, **kwargs: Any) -> None:
+        """Receive the world port (``world``), the skill library (``library``), ``control_dt``."""
+        world = kwargs.get("world")
+        if world is not None:
+            self._world = world
+        library = kwargs.get("library")
+        if library is not None:
+            self._library = library
+        self.control_dt = float(kwargs.get("control_dt", self.control_dt))
+
+    @property
+    def world(self) -> WorldPort:
+        """The world port given to ``setup``."""
+        if self._world is None:
+            raise RuntimeError(f"{self.name}: expected setup(world=...) before ticking")
+        return self._world
+
+    @property
+    def library(self) -> SkillLibrary:
+        """The skill library given to ``setup``."""
+        if self._library is None:
+            raise RuntimeError(f"{self.name}: expected setup(library=...) before ticking")
+        return self._library
+
+    def optional_input(self, port: str) -> Any:
+        """An optional input's value, or None when nothing is wired or written to it."""
+        try:
+            return self.get_input(port)
+        except NoDataAvailable:
+            return None
+
+    def fail(self, message: str) -> Status:
+        """Return FAILURE with ``message`` as the explanation."""
+        self.feedback_message = message
+        self.logger.debug(f"{self.name}: {message}")
+        return Status.FAILURE
+
+    def running(self, message: str) -> Status:
+        """Return RUNNING with a progress message."""
+        self.feedback_message = message
+        return Status.RUNNING
+
+    def succeed(self, message: str) -> Status:
+        """Return SUCCESS with a message."""
+        self.feedback_message = message
+        return Status.SUCCESS
+
+    def connected(self) -> str | None:
+        """Why the leaf cannot run, or None when it has a world."""
+        if self._world is None:
+            return "not set up: expected setup(world=...)"
+        return None
+
+
+def status_is_halt(new_status: Status) -> bool:
+    """A parent preempted the leaf (``terminate(INVALID)``)."""
+    return new_status == py_trees.common.Status.INVALID

@@ -1,0 +1,161 @@
+"""Condition leaves: IsHeld, AtGoal, PathClear. They answer in one tick, never RUNNING."""
+
+from __future__ import annotations
+
+from typing import ClassVar
+
+import numpy as np
+from py_trees.common import Status
+from py_trees.ports import PortInformation
+
+from affordances import SemanticAction
+from planner.composition import goal_error, transport_composition
+from planner.leaves.base import WorldLeaf
+from planner.leaves.grasp import squeeze_force
+from skills.composer import DualArmState
+from skills.dual_arm import ARMS
+
+
+class IsHeld(WorldLeaf):
+    """Both palms press on the object and it has not slipped from where the grasp holds it."""
+
+    NODE_TYPE: ClassVar[str] = "Condition"
+    INPUT_PORTS = {
+        "object": PortInformation(str, description="the object that should be held"),
+        "min_force_n": PortInformation(
+            float, required=False, default_value=2.0, description="least contact force per palm, N"
+        ),
+        "max_slip_m": PortInformation(
+            float,
+            required=False,
+            default_value=0.02,
+            description="largest offset from the grasp's reference, m",
+        ),
+        "from_state": PortInformation(
+            DualArmState, required=False, description="the reference state of the grasp"
+        ),
+    }
+    OUTPUT_PORTS: dict[str, PortInformation] = {}
+
+    def update(self) -> Status:
+        """SUCCESS if held, FAILURE with the forces or the slip otherwise."""
+        if (why := self.connected()) is not None:
+            return self.fail(why)
+        name = self.get_input("object")
+        forces = [self.world.contact_force(arm, name) for arm in ARMS]
+        least = float(self.get_input("min_force_n"))
+        if min(forces) < least:
+            return self.fail(
+                f"not held: contact forces {forces[0]:.1f} N, {forces[1]:.1f} N "
+                f"(need {least:g} N each)"
+            )
+        reference: DualArmState | None = self.optional_input("from_state")
+        if reference is not None:
+            slip = float(
+                np.linalg.norm(self.world.object_pose(name).position - reference.object.position)
+            )
+            if slip > float(self.get_input("max_slip_m")):
+                return self.fail(f"slipped {slip * 1000:.1f} mm from the grasp")
+        return self.succeed(f"held: {forces[0]:.1f} N, {forces[1]:.1f} N")
+
+
+class AtGoal(WorldLeaf):
+    """The object is within tolerance of a move's goal pose."""
+
+    NODE_TYPE: ClassVar[str] = "Condition"
+    INPUT_PORTS = {
+        "object": PortInformation(str, description="the object"),
+        "move": PortInformation(int, description="index of the task's move, from 0"),
+        "tolerance_m": PortInformation(
+            float, required=False, default_value=0.02, description="position tolerance, m"
+        ),
+        "tolerance_deg": PortInformation(
+            float, required=False, default_value=10.0, description="orientation tolerance, degrees"
+        ),
+    }
+    OUTPUT_PORTS: dict[str, PortInformation] = {}
+
+    def update(self) -> Status:
+        """SUCCESS within tolerance; FAILURE naming the errors otherwise."""
+        if (why := self.connected()) is not None:
+            return self.fail(why)
+        name = self.get_input("object")
+        index = int(self.get_input("move"))
+        moves = self.world.task_moves(name)
+        if not 0 <= index < len(moves):
+            return self.fail(f"move {index}: expected an index below {len(moves)}")
+        err_m, err_rad = goal_error(self.world, name, moves[index].goal)
+        deg = float(np.degrees(err_rad))
+        text = f"{err_m * 1000:.1f} mm and {deg:.1f} deg from goal {index}"
+        tol_m, tol_deg = (
+            float(self.get_input("tolerance_m")),
+            float(self.get_input("tolerance_deg")),
+        )
+        if err_m <= tol_m and deg <= tol_deg:
+            return self.succeed(text)
+        return self.fail(text)
+
+
+class PathClear(WorldLeaf):
+    """The predicted rollout of a move's composition keeps clear of the obstacles (FCL)."""
+
+    NODE_TYPE: ClassVar[str] = "Condition"
+    INPUT_PORTS = {
+        "object": PortInformation(str, description="the held object"),
+        "move": PortInformation(int, description="index of the task's move, from 0"),
+        "plan": PortInformation(SemanticAction, description="skills and weights to compose"),
+        "from_state": PortInformation(DualArmState, description="state the move starts from"),
+        "avoid_gain": PortInformation(
+            float,
+            required=False,
+            default_value=1.0,
+            description="multiplies the avoidance skills' weights",
+        ),
+        "margin_m": PortInformation(
+            float, required=False, default_value=0.0, description="clearance required, m"
+        ),
+    }
+    OUTPUT_PORTS: dict[str, PortInformation] = {}
+
+    def update(self) -> Status:
+        """Roll the composition out open loop and check it; SUCCESS if clear."""
+        if (why := self.connected()) is not None:
+            return self.fail(why)
+        world = self.world
+        name = self.get_input("object")
+        index = int(self.get_input("move"))
+        moves = world.task_moves(name)
+        if not 0 <= index < len(moves):
+            return self.fail(f"move {index}: expected an index below {len(moves)}")
+        world.set_active_obstacles(moves[index].obstacles)
+        plan: SemanticAction = self.get_input("plan")
+        depth = squeeze_force(plan, 15.0) / world.palm_stiffness()
+        composer = transport_composition(
+            plan,
+            self.library,
+            world,
+            name,
+            moves[index],
+            self.get_input("from_state"),
+            depth,
+            avoid_gain=float(self.get_input("avoid_gain")),
+        )
+        n = int(np.ceil((composer.target.tau + 0.5) / self.control_dt))
+        obj_p, obj_q, palm_p, palm_q = [], [], [], []
+        for _ in range(n):
+            cmd = composer.step(self.control_dt)
+            obj_p.append(composer.state.object.position)
+            obj_q.append(composer.state.object.orientation)
+            palm_p.append(cmd.positions)
+            palm_q.append(cmd.orientations)
+        check = world.check_trajectory(
+            name,
+            np.array(obj_p),
+            np.array(obj_q),
+            np.array(palm_p),
+            np.array(palm_q),
+            float(self.get_input("margin_m")),
+        )
+        if check.clear:
+            return self.succeed(f"clear by {check.min_distance_m * 1000:.0f} mm over {n} steps")
+        return self.fail(f"predicted collision at step {check.first_collision}: {check.detail}")

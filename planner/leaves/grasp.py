@@ -1,0 +1,94 @@
+"""Grasp: close both palms on the object's faces, then squeeze until the force is reached."""
+
+from __future__ import annotations
+
+from py_trees.common import Status
+from py_trees.ports import PortInformation
+
+from affordances import SemanticAction
+from planner.composition import (
+    hold_terms,
+    lateral_geometry,
+    measured_dual_state,
+    static_composition,
+)
+from planner.leaves.base import WorldLeaf, status_is_halt
+from planner.port import Pose
+from skills.composer import DualArmComposer, DualArmState
+from skills.dual_arm import ARMS
+from skills.labels import Action
+
+
+def squeeze_force(plan: SemanticAction | None, default: float) -> float:
+    """The plan's squeeze force for the hold skill, else ``default``, N."""
+    if plan is not None:
+        sel = plan.skill(Action.HOLD_LATERAL)
+        if sel is not None:
+            value = sel.params.get("squeeze_force_n")
+            if isinstance(value, int | float):
+                return max(float(value), default)
+    return default
+
+
+class Grasp(WorldLeaf):
+    """Lateral contact, then squeeze: grasp maintenance pulls the palms onto the faces."""
+
+    INPUT_PORTS = {
+        "object": PortInformation(str, description="object to grasp"),
+        "force_n": PortInformation(
+            float,
+            required=False,
+            default_value=15.0,
+            description="squeeze force per palm to reach, N",
+        ),
+        "plan": PortInformation(
+            SemanticAction,
+            required=False,
+            description="the plan; its hold skill may ask for more force",
+        ),
+        "close_s": PortInformation(
+            float, required=False, default_value=1.0, description="time scale of closing, s"
+        ),
+    }
+    OUTPUT_PORTS = {
+        "state": PortInformation(DualArmState, description="full state handed to the next skill"),
+    }
+
+    def initialise(self) -> None:
+        """Start the relative composition from the palms' measured poses."""
+        self.composer: DualArmComposer | None = None
+        if self.connected() is not None:
+            return
+        world = self.world
+        name = self.get_input("object")
+        self.force = squeeze_force(self.optional_input("plan"), float(self.get_input("force_n")))
+        depth = self.force / world.palm_stiffness()
+        relative = hold_terms(
+            self.optional_input("plan"), self.library, lateral_geometry(world, name), depth
+        )
+        self.composer = static_composition(
+            measured_dual_state(world, name), relative, float(self.get_input("close_s"))
+        )
+        self.started = world.time()
+
+    def update(self) -> Status:
+        """RUNNING while closing; SUCCESS once both palms press with the force."""
+        if (why := self.connected()) is not None:
+            return self.fail(why)
+        assert self.composer is not None
+        world = self.world
+        name = self.get_input("object")
+        cmd = self.composer.step(self.control_dt)
+        for i, arm in enumerate(ARMS):
+            world.command_palm(arm, Pose(cmd.positions[i], cmd.orientations[i]), cmd.twists[i])
+        forces = [world.contact_force(arm, name) for arm in ARMS]
+        settled = world.time() - self.started > 0.5
+        if settled and min(forces) >= 0.8 * self.force:
+            self._set_output("state", self.composer.state)
+            return self.succeed(f"squeezing {forces[0]:.1f} N and {forces[1]:.1f} N")
+        return self.running(f"closing: {forces[0]:.1f} N, {forces[1]:.1f} N of {self.force:.1f}")
+
+    def terminate(self, new_status: Status) -> None:
+        """Preempted: stop the arms."""
+        if status_is_halt(new_status) and self._world is not None:
+            self._world.hold_palms()

@@ -1,0 +1,128 @@
+"""Transport: the simultaneous composition the reasoner selected, for one move of the task."""
+
+from __future__ import annotations
+
+import numpy as np
+from py_trees.common import Status
+from py_trees.ports import PortInformation
+
+from affordances import SemanticAction
+from planner.composition import goal_error, refresh_link_points, transport_composition
+from planner.leaves.base import WorldLeaf, status_is_halt
+from planner.leaves.grasp import squeeze_force
+from planner.port import Move, Pose
+from skills.composer import DualArmComposer, DualArmState
+from skills.dual_arm import ARMS
+
+
+class Transport(WorldLeaf):
+    """Carry the held object to move ``move``'s goal, composing the plan's weighted skills.
+
+    Absolute: the learnt pick-and-place (and rotation) forcing terms, obstacle steering and
+    link-level potential-field avoidance, on one transformation system towards the goal.
+    Relative: grasp maintenance on each palm, squeezing. Starts from the handed-over full
+    state and hands its own on. Fails, explaining why, if the grip is lost on the way.
+    """
+
+    INPUT_PORTS = {
+        "object": PortInformation(str, description="the held object"),
+        "move": PortInformation(int, description="index of the task's move, from 0"),
+        "plan": PortInformation(SemanticAction, description="skills and weights to compose"),
+        "from_state": PortInformation(DualArmState, description="handed-over full state"),
+        "force_n": PortInformation(
+            float, required=False, default_value=15.0, description="squeeze force per palm, N"
+        ),
+        "min_force_n": PortInformation(
+            float,
+            required=False,
+            default_value=2.0,
+            description="contact force below which the grip is lost, N",
+        ),
+        "avoid_gain": PortInformation(
+            float,
+            required=False,
+            default_value=1.0,
+            description="multiplies the avoidance skills' weights",
+        ),
+        "settle_s": PortInformation(
+            float,
+            required=False,
+            default_value=1.0,
+            description="time allowed after tau to settle, s",
+        ),
+    }
+    OUTPUT_PORTS = {
+        "to_state": PortInformation(DualArmState, description="full state at the end"),
+    }
+
+    def initialise(self) -> None:
+        """Activate the move's obstacles and compose its skills from the handed-over state."""
+        self.composer: DualArmComposer | None = None
+        self.problem: str | None = None
+        if (why := self.connected()) is not None:
+            self.problem = why
+            return
+        world = self.world
+        name = self.get_input("object")
+        moves = world.task_moves(name)
+        index = int(self.get_input("move"))
+        if not 0 <= index < len(moves):
+            self.problem = f"move {index}: expected an index below {len(moves)}"
+            return
+        self.move: Move = moves[index]
+        world.set_active_obstacles(self.move.obstacles)
+        plan: SemanticAction = self.get_input("plan")
+        depth = squeeze_force(plan, float(self.get_input("force_n"))) / world.palm_stiffness()
+        self.composer = transport_composition(
+            plan,
+            self.library,
+            world,
+            name,
+            self.move,
+            self.get_input("from_state"),
+            depth,
+            avoid_gain=float(self.get_input("avoid_gain")),
+        )
+        self.started = world.time()
+        self.weak_ticks = 0
+
+    def update(self) -> Status:
+        """One composition step; SUCCESS at the goal and still; FAILURE if the grip is lost."""
+        if self.problem is not None:
+            return self.fail(self.problem)
+        assert self.composer is not None
+        world = self.world
+        name = self.get_input("object")
+        refresh_link_points(self.composer, world)
+        cmd = self.composer.step(self.control_dt)
+        for i, arm in enumerate(ARMS):
+            world.command_palm(arm, Pose(cmd.positions[i], cmd.orientations[i]), cmd.twists[i])
+        forces = [world.contact_force(arm, name) for arm in ARMS]
+        if min(forces) < float(self.get_input("min_force_n")):
+            self.weak_ticks += 1
+            if self.weak_ticks * self.control_dt > 0.1:
+                return self.fail(
+                    f"grip lost: contact forces {forces[0]:.1f} N and {forces[1]:.1f} N"
+                )
+        else:
+            self.weak_ticks = 0
+        elapsed = world.time() - self.started
+        tau = self.composer.target.tau
+        obj = self.composer.state.object
+        near = np.linalg.norm(obj.position - self.move.goal.position) < 2e-3
+        still = np.linalg.norm(obj.velocity) < 5e-3
+        if elapsed >= tau and near and still:
+            self._set_output("to_state", self.composer.state)
+            err_m, err_rad = goal_error(world, name, self.move.goal)
+            return self.succeed(
+                f"placed {err_m * 1000:.1f} mm, {np.degrees(err_rad):.1f} deg from the goal"
+            )
+        if elapsed > tau + float(self.get_input("settle_s")) and still:
+            self._set_output("to_state", self.composer.state)
+            return self.succeed("reference settled short of the goal")
+        return self.running(f"move {self.get_input('move')}: {elapsed:.1f} of {tau:.1f} s")
+
+    def terminate(self, new_status: Status) -> None:
+        """Preempted: stop the arms."""
+        if status_is_halt(new_status) and self._world is not None:
+            self._world.hold_palms()

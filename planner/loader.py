@@ -1,0 +1,128 @@
+"""Load behaviour trees from BehaviorTree.CPP v4 style XML: the one wrapper around py_trees' parser.
+
+py_trees' XML parser (:mod:`py_trees.parsers.behaviour_tree_xml`) is experimental, so nothing
+else in the project calls it. This module:
+
+1. reads the file with line numbers, inlines ``<include path=...>`` and translates BT.CPP
+   spellings (``Fallback``, ``ReactiveSequence``, ``RetryUntilSuccessful num_attempts=``,
+   ``Timeout msec=``, ``ForceSuccess``, ``Parallel success_count=``, ``<Action ID=...>``),
+2. checks it (:mod:`planner.validate`) so that mistakes come back as :class:`TreeFileError`
+   naming file, line, node and expectation,
+3. hands the translated XML to py_trees' parser with ``Timeout`` bound to
+   :class:`~planner.decorators.SimTimeout` (simulated time).
+
+Example::
+
+    root = load_tree("trees/pick_place.xml")
+    tree = py_trees.trees.BehaviourTree(root)
+    tree.setup(world=world, clock=lambda: world.time)
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import tempfile
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import py_trees
+from py_trees.parsers.behaviour_tree_xml import parse_behaviour_tree_xml
+
+from planner.validate import (
+    Registry,
+    TreeDocument,
+    TreeFileError,
+    TreeProblem,
+    check_tree_document,
+    describe,
+    effective_registry,
+    read_tree_document,
+    read_tree_document_string,
+)
+
+__all__ = ["TreeFileError", "load_tree", "load_tree_string"]
+
+
+def load_tree(
+    path: str | os.PathLike[str],
+    registry: Registry | None = None,
+    *,
+    main_tree_id: str | None = None,
+) -> py_trees.behaviour.Behaviour:
+    """Build the main tree of an XML file and return its root behaviour.
+
+    Parameters
+    ----------
+    path : path-like
+        BehaviorTree.CPP v4 style XML (``<root BTCPP_format="4" main_tree_to_execute=...>``).
+    registry : mapping tag -> class or functools.partial, optional
+        Leaf classes by tag. Default: every imported ports-enabled behaviour (py_trees' global
+        ports registry). ``Timeout`` is :class:`~planner.decorators.SimTimeout` unless given.
+    main_tree_id : str, optional
+        The ``<BehaviorTree ID>`` to build instead of ``main_tree_to_execute``.
+
+    Returns
+    -------
+    py_trees.behaviour.Behaviour
+        The root; ports are wired, ``setup()`` has not been called.
+
+    Raises
+    ------
+    TreeFileError
+        For anything wrong with the file; ``str()`` lists ``file:line: <Tag name="..">: what
+        was expected`` one per line (XML syntax errors give ``file:line:col``).
+    """
+    return _load(read_tree_document(path, registry, main_tree_id), registry)
+
+
+def load_tree_string(
+    text: str,
+    source: str = "<string>",
+    registry: Registry | None = None,
+    *,
+    main_tree_id: str | None = None,
+) -> py_trees.behaviour.Behaviour:
+    """Build a tree from XML text; ``source`` labels it in messages (see :func:`load_tree`)."""
+    return _load(read_tree_document_string(text, source, registry, main_tree_id), registry)
+
+
+def _load(doc: TreeDocument, registry: Registry | None) -> py_trees.behaviour.Behaviour:
+    problems = check_tree_document(doc, registry)
+    if problems:
+        raise TreeFileError(problems)
+    assert doc.main_tree_id is not None  # a document without one has a problem above
+    text = ET.tostring(doc.root, encoding="unicode")
+    # The parser reads files only; the translated document is self-contained (includes inlined).
+    handle, tmp = tempfile.mkstemp(suffix=".xml", prefix="duet_tree_")
+    try:
+        with os.fdopen(handle, "w", encoding="utf-8") as out:
+            out.write(text)
+        return parse_behaviour_tree_xml(
+            tmp, main_tree_id=doc.main_tree_id, node_registry=effective_registry(registry)
+        )
+    except Exception as exc:  # the parser and leaf constructors may raise anything
+        raise TreeFileError([_build_problem(doc, exc)]) from exc
+    finally:
+        Path(tmp).unlink(missing_ok=True)
+
+
+def _build_problem(doc: TreeDocument, exc: Exception) -> TreeProblem:
+    """Attribute a build failure to the element it names, when exactly one fits."""
+    message = str(exc).replace("\n", " ") or type(exc).__name__
+    quoted = set(re.findall(r"'([^']+)'", message))
+    candidates = [
+        elem
+        for bt in doc.root.findall("BehaviorTree")
+        for elem in bt.iter()
+        if elem.tag in quoted or elem.attrib.get("name") in quoted
+    ]
+    if len(candidates) == 1:
+        elem = candidates[0]
+        return TreeProblem(
+            getattr(elem, "sourcefile", doc.file),
+            getattr(elem, "sourceline", None),
+            describe(elem),
+            f"cannot build: {message}",
+        )
+    return TreeProblem(doc.file, None, "", f"cannot build tree '{doc.main_tree_id}': {message}")

@@ -1,0 +1,139 @@
+"""Describe our leaves as a Groot2 ``TreeNodesModel`` so trees can be authored in Groot2.
+
+The document lists, for every registered ports-enabled leaf, its kind (``Action`` or
+``Condition``, from the class attribute ``NODE_TYPE``), its ports with type, default and
+description, and the first line of its docstring::
+
+    <root BTCPP_format="4">
+      <TreeNodesModel>
+        <Action ID="Grasp">
+          <input_port name="force_n" type="float" default="15.0">squeeze per palm, N</input_port>
+          <output_port name="holding" type="bool"/>
+          <MetadataFields>
+            <Metadata description="Squeeze the object between the palms."/>
+          </MetadataFields>
+        </Action>
+      </TreeNodesModel>
+    </root>
+"""
+
+from __future__ import annotations
+
+import enum
+import inspect
+import xml.etree.ElementTree as ET
+from collections.abc import Iterable
+from typing import Any
+
+import py_trees
+from py_trees.ports import PortInformation, PortsMixin, get_ports_registry
+
+from planner.validate import Registry, registry_class, type_name
+
+__all__ = ["leaf_kind", "nodes_model_xml", "summary_line"]
+
+NODE_KINDS = ("Action", "Condition")
+
+
+def leaf_kind(cls: type) -> str:
+    """Return the Groot2 element for a ports-enabled class.
+
+    ``Decorator`` and ``Control`` for py_trees decorators and composites, otherwise the class's
+    ``NODE_TYPE`` (``Action`` or ``Condition``; ``Action`` when absent).
+
+    Raises
+    ------
+    ValueError
+        If ``NODE_TYPE`` is something other than ``Action`` or ``Condition``.
+    """
+    if issubclass(cls, py_trees.decorators.Decorator):
+        return "Decorator"
+    if issubclass(cls, py_trees.composites.Composite):
+        return "Control"
+    kind = getattr(cls, "NODE_TYPE", "Action")
+    if kind not in NODE_KINDS:
+        raise ValueError(
+            f"{cls.__module__}.{cls.__qualname__}.NODE_TYPE: expected one of "
+            f"{', '.join(NODE_KINDS)}, got {kind!r}"
+        )
+    return str(kind)
+
+
+def summary_line(cls: type) -> str:
+    """First line of the class's own docstring ('' when it has none)."""
+    doc = inspect.getdoc(cls) if "__doc__" in vars(cls) and cls.__doc__ else ""
+    return doc.strip().splitlines()[0].strip() if doc else ""
+
+
+def _format_default(value: Any) -> str:
+    """A default as an XML attribute the parser converts back (lists ``;``-separated)."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, enum.Enum):
+        return value.name
+    if isinstance(value, list | tuple):
+        return ";".join(_format_default(v) for v in value)
+    return str(value)
+
+
+def _port_element(parent: ET.Element, tag: str, name: str, info: PortInformation) -> None:
+    attrib = {"name": name, "type": type_name(info.data_type)}
+    if info.has_default:
+        attrib["default"] = _format_default(info.default_value)
+    port = ET.SubElement(parent, tag, attrib)
+    if info.description:
+        port.text = info.description
+
+
+def _selected(
+    registry: Registry, include_all: bool, packages: Iterable[str]
+) -> list[tuple[str, type[PortsMixin]]]:
+    prefixes = tuple(packages)
+    chosen: list[tuple[str, type[PortsMixin]]] = []
+    for tag, entry in registry.items():
+        cls = registry_class(entry)
+        if cls is None or not issubclass(cls, PortsMixin):
+            continue
+        module = cls.__module__
+        if include_all or any(module == p or module.startswith(p + ".") for p in prefixes):
+            chosen.append((tag, cls))
+    return sorted(chosen, key=lambda item: item[0])
+
+
+def nodes_model_xml(
+    registry: Registry | None = None,
+    *,
+    include_all: bool = False,
+    packages: Iterable[str] = ("planner",),
+) -> str:
+    """Return a Groot2-compatible ``TreeNodesModel`` document, sorted by tag.
+
+    Parameters
+    ----------
+    registry : mapping tag -> class or functools.partial, optional
+        Default: py_trees' global ports registry (every imported ports-enabled behaviour).
+    include_all : bool
+        List every registered class, not only those defined in ``packages``.
+    packages : iterable of str
+        Module prefixes of the classes to list (default: this project's ``planner``).
+
+    Returns
+    -------
+    str
+        Indented XML text ending in a newline.
+    """
+    reg = get_ports_registry() if registry is None else registry
+    root = ET.Element("root", {"BTCPP_format": "4"})
+    model = ET.SubElement(root, "TreeNodesModel")
+    for tag, cls in _selected(reg, include_all, packages):
+        node = ET.SubElement(model, leaf_kind(cls), {"ID": tag})
+        for name, info in cls.input_ports().items():
+            _port_element(node, "input_port", name, info)
+        for name, info in cls.output_ports().items():
+            _port_element(node, "output_port", name, info)
+        description = summary_line(cls)
+        if description:
+            fields = ET.SubElement(node, "MetadataFields")
+            ET.SubElement(fields, "Metadata", {"description": description})
+    ET.indent(root)
+    return ET.tostring(root, encoding="unicode") + "\n"

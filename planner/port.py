@@ -1,0 +1,215 @@
+"""The world port: everything the planner's leaves may ask of, or tell, a world.
+
+The simulated world (``worlds.sim_world.SimWorld``) and the in-memory fake
+(:class:`planner.testing.FakeWorld`) both satisfy :class:`WorldPort`, so a leaf is tested
+without PyBullet and run unchanged against it. Leaves never step the world: the runner calls
+:meth:`WorldPort.advance` between ticks, so ``update()`` never blocks.
+
+Poses are (position (3,), quaternion (4,) scalar-last) pairs in the world frame; twists are
+(6,) arrays ``[vx, vy, vz, wx, wy, wz]``, world frame.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from affordances import ObjectContext, RobotCapabilities, SceneQuery
+from skills import quaternion as quat
+from skills.labels import Arm
+from skills.types import Array
+
+
+@dataclass(frozen=True)
+class Pose:
+    """A pose in the world frame.
+
+    Attributes
+    ----------
+    position : ndarray, shape (3,)
+        m.
+    orientation : ndarray, shape (4,)
+        Unit quaternion ``(x, y, z, w)``.
+    """
+
+    position: Array
+    orientation: Array
+
+    @staticmethod
+    def of(position: ArrayLike, orientation: ArrayLike = quat.IDENTITY) -> Pose:
+        """Validated pose from array-likes."""
+        p = np.array(position, dtype=float)
+        if p.shape != (3,) or not np.all(np.isfinite(p)):
+            raise ValueError(f"position: expected 3 finite numbers, got {position!r}")
+        q = quat.as_quaternions(orientation, "orientation")
+        if q.shape != (4,):
+            raise ValueError(f"orientation: expected one quaternion (4,), got shape {q.shape}")
+        return Pose(p, q)
+
+
+@dataclass(frozen=True)
+class Move:
+    """One step of a task: where the object should go and which obstacles are present.
+
+    Attributes
+    ----------
+    goal : Pose
+        Goal pose of the object's centre.
+    obstacles : tuple of str
+        Names of the obstacles present during this move.
+    """
+
+    goal: Pose
+    obstacles: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class ObstacleInfo:
+    """An obstacle the planner may reason about.
+
+    Attributes
+    ----------
+    name : str
+    position : ndarray, shape (3,)
+        Centre, m.
+    radius : float
+        Bounding-sphere radius, m.
+    """
+
+    name: str
+    position: Array
+    radius: float
+
+
+@dataclass(frozen=True)
+class PathCheck:
+    """Outcome of checking a predicted trajectory for collisions.
+
+    Attributes
+    ----------
+    clear : bool
+        No robot link, palm or the held object comes within the margin of an obstacle.
+    min_distance_m : float
+        Smallest distance found along the trajectory, m.
+    first_collision : int or None
+        Index of the first waypoint in collision.
+    detail : str
+        What came closest to what, in words.
+    """
+
+    clear: bool
+    min_distance_m: float
+    first_collision: int | None = None
+    detail: str = ""
+
+
+@runtime_checkable
+class WorldPort(Protocol):
+    """What a world offers the planner. Units SI, world frame."""
+
+    def time(self) -> float:
+        """Simulated time, s."""
+        ...
+
+    def advance(self, dt: float) -> None:
+        """Run the world for ``dt`` seconds of simulated time (called by the runner only)."""
+        ...
+
+    # -- objects and task ---------------------------------------------------------------------
+    def object_pose(self, name: str) -> Pose:
+        """Measured pose of an object's centre."""
+        ...
+
+    def object_twist(self, name: str) -> Array:
+        """Measured twist of an object's centre, (6,)."""
+        ...
+
+    def object_extents(self, name: str) -> Array:
+        """Bounding-box extents (x, y, z) of an object in its own frame, m."""
+        ...
+
+    def object_context(self, name: str) -> ObjectContext:
+        """The object's context for the affordance reasoner."""
+        ...
+
+    def robot_capabilities(self) -> RobotCapabilities:
+        """What the robot can carry and squeeze."""
+        ...
+
+    def task_moves(self, name: str) -> tuple[Move, ...]:
+        """The moves the task asks of an object, in order."""
+        ...
+
+    # -- palms ---------------------------------------------------------------------------------
+    def palm_pose(self, arm: Arm) -> Pose:
+        """Measured pose of a palm frame."""
+        ...
+
+    def palm_twist(self, arm: Arm) -> Array:
+        """Measured twist of a palm frame, (6,)."""
+        ...
+
+    def rest_palm_pose(self, arm: Arm) -> Pose:
+        """Where a palm waits when it holds nothing."""
+        ...
+
+    def palm_thickness(self) -> float:
+        """Thickness of a palm along its contact normal, m."""
+        ...
+
+    def palm_stiffness(self) -> float:
+        """Translational stiffness of the palm controller, N/m: squeeze depth = force / it."""
+        ...
+
+    def command_palm(self, arm: Arm, pose: Pose, twist: Array | None = None) -> None:
+        """Set the target pose (and feed-forward twist) the palm's controller tracks."""
+        ...
+
+    def hold_palms(self) -> None:
+        """Stop both arms: hold the last commanded poses with zero twist."""
+        ...
+
+    def contact_force(self, arm: Arm, name: str) -> float:
+        """Normal force between a palm and an object, N (0 without contact)."""
+        ...
+
+    # -- obstacles and collision -----------------------------------------------------------------
+    def set_active_obstacles(self, names: Iterable[str]) -> None:
+        """Make exactly these obstacles present."""
+        ...
+
+    def obstacles(self) -> tuple[ObstacleInfo, ...]:
+        """The obstacles present now."""
+        ...
+
+    def check_trajectory(
+        self,
+        name: str,
+        object_positions: Array,
+        object_orientations: Array,
+        palm_positions: Array,
+        palm_orientations: Array,
+        margin_m: float = 0.0,
+    ) -> PathCheck:
+        """Check a predicted trajectory of the held object and both palms (and the arms that
+        reach them) against the present obstacles.
+
+        Shapes: object (N, 3), (N, 4); palms (N, 2, 3), (N, 2, 4), left then right.
+        """
+        ...
+
+    def link_points(self) -> Array:
+        """Points on the arms' links to keep away from obstacles, (M, 3), world frame."""
+        ...
+
+    def distance_query(self, points: Array) -> tuple[Array, Array]:
+        """Distance (N,) from each point (N, 3) to the nearest obstacle, and its closest point."""
+        ...
+
+    def scene_query(self) -> SceneQuery:
+        """The collision port the affordance reasoner's scene rules use."""
+        ...

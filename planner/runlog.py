@@ -1,0 +1,255 @@
+"""A JSON-lines log of a tree run: every status change and every blackboard write.
+
+One JSON object per line, stamped with the simulated time::
+
+    {"t": 0.5, "tick": 3, "event": "status", "node": "grip", "kind": "Action",
+     "type": "Grasp", "from": "RUNNING", "to": "SUCCESS", "feedback": "holding at 15.0 N"}
+    {"t": 0.5, "tick": 3, "event": "write", "key": "/held", "client": "grip",
+     "activity": "INITIALISED", "value": true}
+
+Statuses are compared after every tick (a visitor records the order nodes were ticked in; nodes
+stopped without being ticked follow in tree order). Writes come from py_trees' blackboard
+activity stream, which is drained after every tick. The file is flushed after every tick, so
+an interrupted run keeps everything up to its last tick.
+"""
+
+from __future__ import annotations
+
+import enum
+import json
+import math
+import os
+import time
+import uuid
+from collections.abc import Callable
+from types import TracebackType
+from typing import IO, Any
+
+import numpy as np
+import py_trees
+from py_trees.blackboard import ActivityType, Blackboard
+from py_trees.common import Status
+
+from planner.render import node_kind, node_type
+
+__all__ = ["RunLog", "json_safe"]
+
+#: Blackboard activities that change a value.
+_WRITES = (ActivityType.WRITE.value, ActivityType.INITIALISED.value, ActivityType.UNSET.value)
+
+
+def json_safe(value: Any, decimals: int = 6, max_items: int = 64, max_chars: int = 200) -> Any:
+    """Summarise a value for a JSON log line.
+
+    Numbers, strings, booleans and None are kept (non-finite floats become "nan"/"inf"
+    strings); numpy arrays and scalars become lists/numbers rounded to ``decimals``; lists,
+    tuples and dicts are summarised item by item; enums by name; anything else by its
+    ``repr`` cut to ``max_chars``. Arrays and sequences longer than ``max_items`` are
+    summarised by shape, dtype, min and max instead.
+    """
+    if value is None or isinstance(value, bool | str):
+        return value if not isinstance(value, str) else _cut(value, max_chars)
+    if isinstance(value, enum.Enum):
+        return value.name
+    if isinstance(value, int | np.integer):
+        return int(value)
+    if isinstance(value, float | np.floating):
+        number = float(value)
+        if not math.isfinite(number):
+            return str(number)
+        return round(number, decimals)
+    if isinstance(value, np.bool_):
+        return bool(value)
+    if isinstance(value, np.ndarray):
+        if value.size > max_items:
+            summary: dict[str, Any] = {"shape": list(value.shape), "dtype": str(value.dtype)}
+            if np.issubdtype(value.dtype, np.number) and value.size:
+                summary["min"] = json_safe(value.min(), decimals)
+                summary["max"] = json_safe(value.max(), decimals)
+            return summary
+        if np.issubdtype(value.dtype, np.floating):
+            return json_safe(np.round(value, decimals).tolist(), decimals, max_items, max_chars)
+        return json_safe(value.tolist(), decimals, max_items, max_chars)
+    if isinstance(value, list | tuple):
+        if len(value) > max_items:
+            return {"len": len(value), "head": _cut(repr(value[:4]), max_chars)}
+        return [json_safe(v, decimals, max_items, max_chars) for v in value]
+    if isinstance(value, dict) and len(value) <= max_items:
+        return {str(k): json_safe(v, decimals, max_items, max_chars) for k, v in value.items()}
+    return _cut(repr(value), max_chars)
+
+
+def _cut(text: str, max_chars: int) -> str:
+    return text if len(text) <= max_chars else text[: max_chars - 3] + "..."
+
+
+class _VisitOrder(py_trees.visitors.VisitorBase):
+    """Records the ids of the nodes ticked this tick, in tick order."""
+
+    def __init__(self) -> None:
+        super().__init__(full=False)
+        self.order: list[uuid.UUID] = []
+
+    def initialise(self) -> None:
+        self.order = []
+
+    def run(self, behaviour: py_trees.behaviour.Behaviour) -> None:
+        self.order.append(behaviour.id)
+
+
+class RunLog:
+    """Log every status change and blackboard write of a tree to a JSON-lines file.
+
+    Parameters
+    ----------
+    path : path-like
+        Output file (overwritten). Parent directories are created.
+    clock : callable, optional
+        Returns the simulated time in s for the ``t`` stamp; default ``time.monotonic``.
+    decimals : int
+        Rounding of logged floats and arrays.
+
+    Examples
+    --------
+    >>> with RunLog("out/run.jsonl", clock=lambda: world.time) as log:  # doctest: +SKIP
+    ...     log.attach(tree)
+    ...     for _ in range(100):
+    ...         tree.tick()
+
+    Notes
+    -----
+    ``attach`` enables py_trees' global blackboard activity stream (and ``close`` disables it
+    again if this log enabled it); the stream is cleared after each tick, so other readers of
+    the stream only see the current tick.
+    """
+
+    def __init__(
+        self,
+        path: str | os.PathLike[str],
+        clock: Callable[[], float] | None = None,
+        decimals: int = 6,
+    ) -> None:
+        self.path = os.fspath(path)
+        self.clock: Callable[[], float] = clock if clock is not None else time.monotonic
+        self.decimals = decimals
+        self.tick_count = 0
+        self._statuses: dict[uuid.UUID, Status] = {}
+        self._tree: py_trees.trees.BehaviourTree | None = None
+        self._visitor = _VisitOrder()
+        self._enabled_stream = False
+        parent = os.path.dirname(self.path)
+        if parent:
+            os.makedirs(parent, exist_ok=True)
+        self._file: IO[str] | None = open(self.path, "w", encoding="utf-8", buffering=1)
+
+    # -- wiring -----------------------------------------------------------------------
+    def attach(self, tree: py_trees.trees.BehaviourTree) -> RunLog:
+        """Log ``tree``'s ticks from now on; returns self.
+
+        Raises
+        ------
+        RuntimeError
+            If this log is already attached to a tree or closed.
+        """
+        if self._file is None:
+            raise RuntimeError(f"RunLog {self.path}: closed; expected an open log")
+        if self._tree is not None:
+            raise RuntimeError(f"RunLog {self.path}: already attached to a tree")
+        self._tree = tree
+        self._statuses = {node.id: node.status for node in tree.root.iterate()}
+        if Blackboard.activity_stream is None:
+            Blackboard.enable_activity_stream(maximum_size=100_000)
+            self._enabled_stream = True
+        else:
+            Blackboard.activity_stream.clear()
+        tree.add_visitor(self._visitor)
+        tree.add_post_tick_handler(self._on_post_tick)
+        return self
+
+    def _on_post_tick(self, tree: py_trees.trees.BehaviourTree) -> None:
+        self.record_tick(tree.root)
+
+    # -- records ----------------------------------------------------------------------
+    def write(self, record: dict[str, Any]) -> None:
+        """Write one record (a JSON-safe dict) as a line; ``t`` and ``tick`` are added first."""
+        if self._file is None:
+            raise RuntimeError(f"RunLog {self.path}: closed; expected an open log")
+        line = {"t": json_safe(float(self.clock()), self.decimals), "tick": self.tick_count}
+        line.update(record)
+        self._file.write(json.dumps(line, allow_nan=False) + "\n")
+
+    def record_tick(self, root: py_trees.behaviour.Behaviour) -> None:
+        """Log the status changes and blackboard writes since the last tick, then flush.
+
+        Called by the post-tick handler :meth:`attach` installs; call it yourself after
+        ``root.tick_once()`` when ticking a bare root without a ``BehaviourTree``.
+        """
+        self.tick_count += 1
+        nodes = {node.id: node for node in root.iterate()}
+        order = [i for i in dict.fromkeys(self._visitor.order) if i in nodes]
+        order += [i for i in nodes if i not in set(order)]
+        self._visitor.order = []
+        for node_id in order:
+            node = nodes[node_id]
+            before = self._statuses.get(node_id, Status.INVALID)
+            if node.status != before:
+                self.write(
+                    {
+                        "event": "status",
+                        "node": node.name,
+                        "kind": node_kind(node),
+                        "type": node_type(node),
+                        "from": before.value,
+                        "to": node.status.value,
+                        "feedback": node.feedback_message,
+                    }
+                )
+            self._statuses[node_id] = node.status
+        self._drain_blackboard()
+        if self._file is not None:
+            self._file.flush()
+
+    def _drain_blackboard(self) -> None:
+        stream = Blackboard.activity_stream
+        if stream is None:
+            return
+        for item in stream.data:
+            if item.activity_type not in _WRITES:
+                continue
+            record: dict[str, Any] = {
+                "event": "write",
+                "key": item.key,
+                "client": item.client_name,
+                "activity": item.activity_type,
+            }
+            if item.activity_type != ActivityType.UNSET.value:
+                record["value"] = json_safe(item.current_value, self.decimals)
+            self.write(record)
+        stream.clear()
+
+    # -- lifetime ---------------------------------------------------------------------
+    def close(self) -> None:
+        """Detach from the tree, flush and close the file (idempotent)."""
+        if self._tree is not None:
+            if self._on_post_tick in self._tree.post_tick_handlers:
+                self._tree.post_tick_handlers.remove(self._on_post_tick)
+            if self._visitor in self._tree.visitors:
+                self._tree.visitors.remove(self._visitor)
+            self._tree = None
+        if self._enabled_stream:
+            Blackboard.disable_activity_stream()
+            self._enabled_stream = False
+        if self._file is not None:
+            self._file.close()
+            self._file = None
+
+    def __enter__(self) -> RunLog:
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        traceback: TracebackType | None,
+    ) -> None:
+        self.close()

@@ -1,0 +1,6 @@
+"""Test support: an in-memory world and helpers to tick one leaf (see also tests/planner)."""
+
+from planner.testing.fake_world import FakeObject, FakeWorld
+from planner.testing.harness import tick_until
+
+__all__ = ["FakeObject", "FakeWorld", "tick_until"]

@@ -1,0 +1,314 @@
+"""Every robot leaf ticked alone against the in-memory world."""
+
+from __future__ import annotations
+
+import numpy as np
+import py_trees
+from py_trees.common import Status
+
+from affordances import SemanticAction, SkillSelection
+from planner.composition import lateral_geometry
+from planner.leaves import (
+    Approach,
+    AtGoal,
+    Grasp,
+    IsHeld,
+    PathClear,
+    Release,
+    Retreat,
+    SelectSkills,
+    Transport,
+)
+from planner.port import Pose
+from planner.testing import FakeWorld, tick_until
+from planner.wiring import wire
+from skills import quaternion as quat
+from skills.dual_arm import ARMS
+from skills.labels import Action, Space
+from skills.labels import Grasp as GraspType
+from skills.library import SkillLibrary
+
+DT = 1.0 / 60.0
+
+
+def ready(
+    leaf: py_trees.behaviour.Behaviour, world: FakeWorld, library: SkillLibrary, **ports: object
+) -> py_trees.behaviour.Behaviour:
+    """Wire ports, set the leaf up against ``world``."""
+    wire(leaf, **ports)  # type: ignore[arg-type]
+    leaf.setup(world=world, library=library, control_dt=DT)
+    return leaf
+
+
+def blackboard_value(key: str) -> object:
+    return py_trees.blackboard.Blackboard.get(key)
+
+
+def select(world: FakeWorld, library: SkillLibrary) -> SemanticAction:
+    log = tick_until(
+        ready(SelectSkills("select"), world, library, object="parcel", plan="{plan}"), world, DT
+    )
+    assert log.final == Status.SUCCESS, log.feedback
+    plan = blackboard_value("/plan")
+    assert isinstance(plan, SemanticAction)
+    return plan
+
+
+def approach_and_grasp(world: FakeWorld, library: SkillLibrary) -> None:
+    assert (
+        tick_until(ready(Approach("approach"), world, library, object="parcel"), world, DT).final
+        == Status.SUCCESS
+    )
+    log = tick_until(
+        ready(Grasp("grasp"), world, library, object="parcel", plan="{plan}", state="{state}"),
+        world,
+        DT,
+    )
+    assert log.final == Status.SUCCESS, log.feedback
+
+
+def test_select_skills_chooses_the_papers_lateral_grasp(
+    fake_world: FakeWorld, library: SkillLibrary
+) -> None:
+    plan = select(fake_world, library)
+    assert plan.grasp is GraspType.TWO_PALM_LATERAL
+    assert {Action.TRANSPORT, Action.HOLD_LATERAL} <= set(plan.actions)
+
+
+def test_select_skills_fails_with_an_explanation_without_a_world(library: SkillLibrary) -> None:
+    leaf = SelectSkills("select")
+    wire(leaf, object="parcel", plan="{plan}")
+    leaf.tick_once()
+    assert leaf.status == Status.FAILURE
+    assert "expected setup(world=...)" in leaf.feedback_message
+
+
+def test_approach_ends_beside_the_faces(fake_world: FakeWorld, library: SkillLibrary) -> None:
+    log = tick_until(
+        ready(Approach("approach"), fake_world, library, object="parcel", standoff_m=0.04),
+        fake_world,
+        DT,
+    )
+    assert log.final == Status.SUCCESS
+    assert log.statuses[:-1] == (Status.RUNNING,) * (len(log.statuses) - 1)
+    g = lateral_geometry(fake_world, "parcel")
+    obj = fake_world.object_pose("parcel")
+    for arm in ARMS:
+        expect = obj.position + g.position(arm) - 0.04 * g.normal(arm)
+        assert np.linalg.norm(fake_world.palm_pose(arm).position - expect) < 3e-3
+    # It went through the set-point above: the palms rose above their end height.
+    heights = [c.pose.position[2] for c in fake_world.commands]
+    assert max(heights) > obj.position[2] + 0.05
+
+
+def test_grasp_squeezes_to_the_force_and_hands_over_a_state(
+    fake_world: FakeWorld, library: SkillLibrary
+) -> None:
+    select(fake_world, library)
+    approach_and_grasp(fake_world, library)
+    forces = [fake_world.contact_force(arm, "parcel") for arm in ARMS]
+    assert min(forces) >= 0.8 * 15.0
+    state = blackboard_value("/state")
+    assert np.allclose(state.object.position, fake_world.object_pose("parcel").position, atol=1e-3)
+
+
+def test_transport_reaches_each_goal_and_hands_over(
+    fake_world: FakeWorld, library: SkillLibrary
+) -> None:
+    select(fake_world, library)
+    approach_and_grasp(fake_world, library)
+    for move in range(3):
+        leaf = ready(
+            Transport(f"move{move}"),
+            fake_world,
+            library,
+            object="parcel",
+            move=move,
+            plan="{plan}",
+            from_state="{state}",
+            to_state="{state}",
+        )
+        log = tick_until(leaf, fake_world, DT, max_ticks=3000)
+        assert log.final == Status.SUCCESS, log.feedback
+        at_goal = ready(
+            AtGoal("at_goal"),
+            fake_world,
+            library,
+            object="parcel",
+            move=move,
+            tolerance_m=0.01,
+            tolerance_deg=2.0,
+        )
+        at_goal.tick_once()
+        assert at_goal.status == Status.SUCCESS, at_goal.feedback_message
+
+
+def test_transport_lifts_the_parcel_on_the_way(
+    fake_world: FakeWorld, library: SkillLibrary
+) -> None:
+    select(fake_world, library)
+    approach_and_grasp(fake_world, library)
+    leaf = ready(
+        Transport("move0"),
+        fake_world,
+        library,
+        object="parcel",
+        move=0,
+        plan="{plan}",
+        from_state="{state}",
+        to_state="{state}",
+    )
+    heights = []
+    for _ in range(600):
+        leaf.tick_once()
+        fake_world.advance(DT)
+        heights.append(fake_world.object_pose("parcel").position[2])
+        if leaf.status != Status.RUNNING:
+            break
+    assert max(heights) - 0.675 > 0.03
+
+
+def test_transport_fails_when_the_grip_is_lost(
+    fake_world: FakeWorld, library: SkillLibrary
+) -> None:
+    select(fake_world, library)
+    approach_and_grasp(fake_world, library)
+    leaf = ready(
+        Transport("move0"),
+        fake_world,
+        library,
+        object="parcel",
+        move=0,
+        plan="{plan}",
+        from_state="{state}",
+        to_state="{state}",
+    )
+    for _ in range(30):
+        leaf.tick_once()
+        fake_world.advance(DT)
+    fake_world.drop("parcel")
+    log = tick_until(leaf, fake_world, DT)
+    assert log.final == Status.FAILURE
+    assert "grip lost" in log.feedback
+
+
+def test_halting_a_running_transport_stops_the_arms(
+    fake_world: FakeWorld, library: SkillLibrary
+) -> None:
+    select(fake_world, library)
+    approach_and_grasp(fake_world, library)
+    leaf = ready(
+        Transport("move0"),
+        fake_world,
+        library,
+        object="parcel",
+        move=0,
+        plan="{plan}",
+        from_state="{state}",
+        to_state="{state}",
+    )
+    for _ in range(40):
+        leaf.tick_once()
+        fake_world.advance(DT)
+    assert leaf.status == Status.RUNNING
+    moving = fake_world.commands[-1].twist
+    assert np.linalg.norm(moving) > 1e-3
+    leaf.stop(Status.INVALID)  # what a parent's preemption does
+    assert fake_world.holds == 1
+    last_two = fake_world.commands[-2:]
+    assert {c.arm for c in last_two} == set(ARMS)
+    assert all(np.all(c.twist == 0.0) for c in last_two)
+
+
+def test_is_held_reads_forces_and_fails_after_a_drop(
+    fake_world: FakeWorld, library: SkillLibrary
+) -> None:
+    held = ready(IsHeld("held"), fake_world, library, object="parcel")
+    held.tick_once()
+    assert held.status == Status.FAILURE and "not held" in held.feedback_message
+    select(fake_world, library)
+    approach_and_grasp(fake_world, library)
+    fake_world.advance(DT)
+    held.tick_once()
+    assert held.status == Status.SUCCESS, held.feedback_message
+    fake_world.drop("parcel")
+    held.tick_once()
+    assert held.status == Status.FAILURE
+
+
+def test_at_goal_reports_the_errors(fake_world: FakeWorld, library: SkillLibrary) -> None:
+    leaf = ready(AtGoal("at_goal"), fake_world, library, object="parcel", move=0)
+    leaf.tick_once()
+    assert leaf.status == Status.FAILURE
+    assert "100.0 mm" in leaf.feedback_message
+    bad = ready(AtGoal("bad"), fake_world, library, object="parcel", move=7)
+    bad.tick_once()
+    assert "expected an index below 3" in bad.feedback_message
+
+
+def _plan_without_avoidance(plan: SemanticAction) -> SemanticAction:
+    keep = tuple(s for s in plan.skills if s.action in (Action.TRANSPORT, Action.HOLD_LATERAL))
+    return SemanticAction(plan.grasp, keep, plan.score, plan.because)
+
+
+def test_path_clear_sees_an_obstacle_on_the_straight_path(
+    fake_world: FakeWorld, library: SkillLibrary
+) -> None:
+    plan = select(fake_world, library)
+    approach_and_grasp(fake_world, library)
+    fake_world.advance(DT)
+    bare = _plan_without_avoidance(plan)
+    py_trees.blackboard.Blackboard.set("/bare", bare)
+    clear = ready(
+        PathClear("clear0"),
+        fake_world,
+        library,
+        object="parcel",
+        move=0,
+        plan="{bare}",
+        from_state="{state}",
+    )
+    clear.tick_once()
+    assert clear.status == Status.SUCCESS, clear.feedback_message
+    blocked = ready(
+        PathClear("clear1"),
+        fake_world,
+        library,
+        object="parcel",
+        move=1,
+        plan="{bare}",
+        from_state="{state}",
+    )
+    blocked.tick_once()
+    assert blocked.status == Status.FAILURE
+    assert "predicted collision" in blocked.feedback_message
+
+
+def test_release_then_retreat(fake_world: FakeWorld, library: SkillLibrary) -> None:
+    select(fake_world, library)
+    approach_and_grasp(fake_world, library)
+    log = tick_until(
+        ready(
+            Release("release"),
+            fake_world,
+            library,
+            object="parcel",
+            from_state="{state}",
+            to_state="{state}",
+        ),
+        fake_world,
+        DT,
+    )
+    assert log.final == Status.SUCCESS, log.feedback
+    assert max(fake_world.contact_force(a, "parcel") for a in ARMS) == 0.0
+    log = tick_until(ready(Retreat("retreat"), fake_world, library), fake_world, DT)
+    assert log.final == Status.SUCCESS, log.feedback
+    for arm in ARMS:
+        rest = fake_world.rest_palm_pose(arm)
+        assert np.linalg.norm(fake_world.palm_pose(arm).position - rest.position) < 3e-3
+
+
+def test_selection_helpers_are_typed() -> None:
+    sel = SkillSelection(Action.TRANSPORT, Space.ABSOLUTE, 1.0, {})
+    assert sel.action is Action.TRANSPORT
+    assert Pose.of([0, 0, 0], quat.IDENTITY).position.shape == (3,)

@@ -1,0 +1,106 @@
+"""nodes_model_xml: a Groot2 TreeNodesModel listing our leaves, their kind and ports."""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+from typing import ClassVar
+
+import py_trees
+import pytest
+from py_trees.common import Status
+from py_trees.ports import BehaviourWithPorts, PortInformation, get_ports_registry
+
+from planner.nodes_model import leaf_kind, nodes_model_xml
+from tests.planner import stub_leaves
+
+
+def model(**kwargs: object) -> ET.Element:
+    root = ET.fromstring(nodes_model_xml(**kwargs))  # type: ignore[arg-type]
+    assert root.tag == "root" and root.attrib == {"BTCPP_format": "4"}
+    (tree_nodes,) = list(root)
+    assert tree_nodes.tag == "TreeNodesModel"
+    return tree_nodes
+
+
+def test_lists_stub_leaves_with_kind_ports_defaults_and_descriptions() -> None:
+    nodes = {n.attrib["ID"]: n for n in model(packages=("tests.planner",))}
+    assert list(nodes) == sorted(nodes)
+    assert {"StubAt", "StubCheck", "StubCounter", "StubFlaky", "StubForever", "StubGrasp"} <= set(
+        nodes
+    )
+    grasp = nodes["StubGrasp"]
+    assert grasp.tag == "Action"
+    ports = [(p.tag, p.attrib, p.text) for p in grasp if p.tag.endswith("_port")]
+    assert ports == [
+        ("input_port", {"name": "force_n", "type": "float"}, "squeeze, N"),
+        ("input_port", {"name": "timeout_s", "type": "float", "default": "1.0"}, "s"),
+        ("output_port", {"name": "holding", "type": "bool"}, "grip closed"),
+    ]
+    (metadata,) = grasp.iter("Metadata")
+    assert metadata.attrib == {"description": "Pretend to squeeze an object; succeeds at once."}
+    assert nodes["StubCheck"].tag == "Condition"
+    assert nodes["StubForever"].tag == "Action"  # no NODE_TYPE: Action
+    (position,) = nodes["StubAt"].iter("input_port")
+    assert position.attrib["type"] == "list[float]"
+
+
+def test_default_lists_only_planner_classes() -> None:
+    ids = {n.attrib["ID"] for n in model()}
+    assert not any(i.startswith("Stub") for i in ids)
+    for tag in ids:
+        assert get_ports_registry()[tag].__module__.startswith("planner.")
+
+
+def test_include_all_lists_every_registered_class() -> None:
+    ids = {n.attrib["ID"] for n in model(include_all=True)}
+    assert set(get_ports_registry()) == ids
+
+
+def test_output_is_deterministic() -> None:
+    assert nodes_model_xml(include_all=True) == nodes_model_xml(include_all=True)
+
+
+class StubBadKind(BehaviourWithPorts, register=False):
+    """A leaf with a NODE_TYPE Groot does not know."""
+
+    NODE_TYPE: ClassVar[str] = "Sensor"
+    INPUT_PORTS: dict[str, PortInformation] = {}
+    OUTPUT_PORTS: dict[str, PortInformation] = {}
+
+    def update(self) -> Status:
+        return Status.SUCCESS
+
+
+class StubWithList(BehaviourWithPorts, register=False):
+    """Defaults of lists and booleans are written so the parser reads them back."""
+
+    INPUT_PORTS = {
+        "xs": PortInformation(data_type=list[float], default_value=[1.0, 2.5]),
+        "on": PortInformation(data_type=bool, default_value=False),
+    }
+    OUTPUT_PORTS: dict[str, PortInformation] = {}
+
+    def update(self) -> Status:
+        return Status.SUCCESS
+
+
+def test_explicit_registry_and_default_formatting() -> None:
+    nodes = model(registry={"WithList": StubWithList}, include_all=True)
+    (node,) = nodes
+    assert node.attrib == {"ID": "WithList"}
+    defaults = {p.attrib["name"]: p.attrib["default"] for p in node.iter("input_port")}
+    assert defaults == {"xs": "1.0;2.5", "on": "false"}
+
+
+def test_bad_node_type_is_explained() -> None:
+    with pytest.raises(ValueError, match=r"StubBadKind\.NODE_TYPE: expected one of Action, "
+                       r"Condition, got 'Sensor'"):  # fmt: skip
+        nodes_model_xml(registry={"Bad": StubBadKind}, include_all=True)
+
+
+def test_decorators_and_controls_are_labelled() -> None:
+    from planner.decorators import SimTimeout
+
+    assert leaf_kind(SimTimeout) == "Decorator"
+    assert leaf_kind(stub_leaves.StubCheck) == "Condition"
+    assert leaf_kind(py_trees.composites.Sequence) == "Control"

@@ -1,0 +1,134 @@
+"""RunLog: JSON lines of every status change and blackboard write, stamped with sim time."""
+
+from __future__ import annotations
+
+import enum
+import json
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import py_trees
+import pytest
+
+from planner.loader import load_tree_string
+from planner.runlog import RunLog, json_safe
+from tests.planner.stub_leaves import FakeClock
+
+TREE = """
+<root BTCPP_format="4">
+  <BehaviorTree ID="Main">
+    <Sequence name="seq">
+      <StubCounter name="count" ticks="2" count="{n}"/>
+      <StubCheck name="check" value="true"/>
+    </Sequence>
+  </BehaviorTree>
+</root>
+"""
+
+
+@pytest.fixture(autouse=True)
+def _clean_blackboard() -> Iterator[None]:
+    py_trees.blackboard.Blackboard.clear()
+    yield
+    py_trees.blackboard.Blackboard.clear()
+
+
+def read(path: Path) -> list[dict[str, Any]]:
+    return [json.loads(line) for line in path.read_text().splitlines()]
+
+
+def test_status_changes_and_writes_per_tick(tmp_path: Path) -> None:
+    import tests.planner.stub_leaves  # noqa: F401
+
+    tree = py_trees.trees.BehaviourTree(load_tree_string(TREE))
+    clock = FakeClock(dt=0.5, start=1.0)
+    path = tmp_path / "logs" / "run.jsonl"
+    with RunLog(path, clock=clock) as log:
+        log.attach(tree)
+        for _ in range(3):
+            tree.tick()
+            clock.advance()
+        flushed = read(path)  # readable before close: flushed per tick
+    records = read(path)
+    assert flushed == records
+    status = [
+        (r["tick"], r["t"], r["node"], r["kind"], r["type"], r["from"], r["to"])
+        for r in records
+        if r["event"] == "status"
+    ]
+    assert status == [
+        (1, 1.0, "seq.count", "Action", "StubCounter", "INVALID", "RUNNING"),
+        (1, 1.0, "seq", "Sequence", "Sequence", "INVALID", "RUNNING"),
+        (2, 1.5, "seq.count", "Action", "StubCounter", "RUNNING", "SUCCESS"),
+        (2, 1.5, "seq.check", "Condition", "StubCheck", "INVALID", "SUCCESS"),
+        (2, 1.5, "seq", "Sequence", "Sequence", "RUNNING", "SUCCESS"),
+        # tick 3 re-runs the sequence: count starts again (SUCCESS -> RUNNING), check is
+        # stopped by the sequence re-entering (SUCCESS -> INVALID)
+        (3, 2.0, "seq.count", "Action", "StubCounter", "SUCCESS", "RUNNING"),
+        (3, 2.0, "seq", "Sequence", "Sequence", "SUCCESS", "RUNNING"),
+        (3, 2.0, "seq.check", "Condition", "StubCheck", "SUCCESS", "INVALID"),
+    ]
+    first = records[0]
+    assert first["event"] == "status" and first["feedback"] == "tick 1"
+    writes = [
+        (r["tick"], r["key"], r["activity"], r["value"]) for r in records if r["event"] == "write"
+    ]
+    assert writes == [(1, "/n", "INITIALISED", 1), (2, "/n", "WRITE", 2), (3, "/n", "WRITE", 1)]
+    assert next(r for r in records if r["event"] == "write")["client"] == "seq.count"
+    assert py_trees.blackboard.Blackboard.activity_stream is None  # closed: stream given back
+    assert tree.post_tick_handlers == [] and tree.visitors == []
+
+
+def test_writes_between_ticks_are_logged_with_the_next_tick(tmp_path: Path) -> None:
+    tree = py_trees.trees.BehaviourTree(py_trees.behaviours.Success(name="ok"))
+    path = tmp_path / "run.jsonl"
+    with RunLog(path, clock=lambda: 3.0) as log:
+        log.attach(tree)
+        writer = py_trees.blackboard.Client(name="app")
+        writer.register_key("/goal", access=py_trees.common.Access.WRITE)
+        writer.set("/goal", np.array([0.1234567891, 2.0, 3.0]))
+        tree.tick()
+    records = read(path)
+    assert records[0] == {
+        "t": 3.0, "tick": 1, "event": "status", "node": "ok", "kind": "Action",
+        "type": "Success", "from": "INVALID", "to": "SUCCESS", "feedback": "success",
+    }  # fmt: skip
+    assert records[1] == {
+        "t": 3.0, "tick": 1, "event": "write", "key": "/goal", "client": "app",
+        "activity": "INITIALISED", "value": [0.123457, 2.0, 3.0],
+    }  # fmt: skip
+
+
+class Colour(enum.Enum):
+    RED = 1
+
+
+def test_json_safe_summaries() -> None:
+    assert json_safe(np.float64(1.23456789)) == 1.234568
+    assert json_safe(np.int64(7)) == 7 and isinstance(json_safe(np.int64(7)), int)
+    assert json_safe(float("nan")) == "nan" and json_safe(float("-inf")) == "-inf"
+    assert json_safe(np.eye(2)) == [[1.0, 0.0], [0.0, 1.0]]
+    assert json_safe(np.zeros((100, 3))) == {
+        "shape": [100, 3], "dtype": "float64", "min": 0.0, "max": 0.0,
+    }  # fmt: skip
+    assert json_safe((1, "a", None, True)) == [1, "a", None, True]
+    assert json_safe({"k": np.array([1, 2])}) == {"k": [1, 2]}
+    assert json_safe(Colour.RED) == "RED"
+    long = json_safe(object(), max_chars=20)
+    assert long.startswith("<object object") and len(long) == 20 and long.endswith("...")
+    json.dumps(json_safe({"x": np.array([np.nan])}), allow_nan=False)  # still valid JSON
+
+
+def test_closed_or_reattached_log_is_refused(tmp_path: Path) -> None:
+    tree = py_trees.trees.BehaviourTree(py_trees.behaviours.Success(name="ok"))
+    log = RunLog(tmp_path / "run.jsonl")
+    log.attach(tree)
+    with pytest.raises(RuntimeError, match="already attached"):
+        log.attach(tree)
+    log.close()
+    log.close()  # idempotent
+    with pytest.raises(RuntimeError, match="closed"):
+        log.attach(tree)
+    tree.tick()  # detached: no handler left behind

@@ -1,0 +1,215 @@
+"""validate_tree: every problem with file, line and node, without building the tree."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+import tests.planner.stub_leaves  # noqa: F401  (registers the stub leaves)
+from planner.validate import TreeProblem, tree_cli_validate, validate_tree, validate_tree_string
+
+TREES = Path(__file__).resolve().parents[1] / "data" / "trees"
+
+
+def problems_of(text: str) -> list[tuple[int | None, str]]:
+    return [(p.line, p.message) for p in validate_tree_string(text, source="t.xml")]
+
+
+def wrap(body: str, extra: str = "") -> str:
+    return (
+        '<root BTCPP_format="4" main_tree_to_execute="Main">\n'
+        f'  <BehaviorTree ID="Main">\n{body}\n  </BehaviorTree>\n{extra}</root>\n'
+    )
+
+
+@pytest.mark.parametrize(
+    "name", ["good_btcpp.xml", "good_pytrees.xml", "retry_timeout.xml", "include_main.xml"]
+)
+def test_good_trees_have_no_problems(name: str) -> None:
+    assert validate_tree(TREES / name) == []
+
+
+@pytest.mark.parametrize(
+    ("name", "expected"),
+    [
+        ("bad_unknown_tag.xml", [(5, '<StubGrsp name="typo">', "did you mean 'StubGrasp'?")]),
+        ("bad_missing_port.xml", [(4, '<StubCounter name="count">', "missing required input")]),
+        ("bad_unknown_port.xml", [(4, '<StubGrasp name="grip">', "unknown port 'forse'")]),
+        (
+            "bad_port_type.xml",
+            [
+                (4, '<StubGrasp name="grip">', "cannot convert 'strong' to float"),
+                (5, '<StubCheck name="check">', "cannot convert 'maybe' to bool"),
+                (6, '<StubCounter name="count">', "cannot convert '2.5' to int"),
+            ],
+        ),
+        (
+            "bad_unknown_subtree.xml",
+            [
+                (7, '<SubTree ID="Grap" name="g1">', "unknown subtree 'Grap'"),
+                (8, '<SubTree ID="Grip" name="g2">', "unknown port 'forse' of subtree 'Grip'"),
+            ],
+        ),
+        ("bad_syntax.xml", [(5, "", "XML syntax error: mismatched tag")]),
+        (
+            "bad_decorator.xml",
+            [
+                (4, '<Inverter name="two">', "exactly 1 child, found 2"),
+                (8, '<Timeout name="none">', "exactly 1 child, found 0"),
+            ],
+        ),
+        ("bad_main.xml", [(1, "<root>", "main tree 'Mian' not found")]),
+    ],
+)
+def test_bad_trees(name: str, expected: list[tuple[int, str, str]]) -> None:
+    problems = validate_tree(TREES / name)
+    assert [(p.line, p.node) for p in problems] == [(line, node) for line, node, _ in expected]
+    for problem, (_, _, text) in zip(problems, expected, strict=True):
+        assert text in problem.message
+        assert problem.file == str(TREES / name)
+
+
+def test_syntax_error_has_a_column_and_formats_file_line_col() -> None:
+    (problem,) = validate_tree(TREES / "bad_syntax.xml")
+    assert problem.column == 7
+    assert str(problem) == f"{TREES / 'bad_syntax.xml'}:5:7: XML syntax error: mismatched tag"
+
+
+def test_problem_format() -> None:
+    problem = TreeProblem("trees/x.xml", 12, '<Grasp name="grip">', "unknown port 'forse'")
+    assert str(problem) == "trees/x.xml:12: <Grasp name=\"grip\">: unknown port 'forse'"
+    assert str(TreeProblem("x.xml", None, "", "cannot read")) == "x.xml: cannot read"
+
+
+def test_line_is_the_start_tag_even_when_attributes_span_lines() -> None:
+    problems = validate_tree(TREES / "include_bad.xml")
+    assert [(Path(p.file).name, p.line) for p in problems] == [("include_bad_grip.xml", 4)]
+
+
+def test_ports_literals_keys_and_children() -> None:
+    text = wrap(
+        """    <Sequence name="s" memory="sometimes" colour="red">
+      <StubGrasp name="a" force_n="{force" holding="true"/>
+      <StubAt name="b" position="0.1; 0.2; x"/>
+      <StubAt name="c" position="{pos}"><StubCheck name="d" value="1"/></StubAt>
+      <StubCheck name="e.f" value="off"/>
+    </Sequence>"""
+    )
+    assert problems_of(text) == [
+        (3, "attribute 'memory': expected true or false, got 'sometimes'"),
+        (3, "unknown attribute 'colour'; expected one of memory, name"),
+        (4, "port 'force_n': malformed blackboard key '{force'; expected {name} or a literal"),
+        (4, "output port 'holding': expected a blackboard key such as {holding}, got the "
+            "literal 'true'"),
+        (5, "port 'position': cannot convert '0.1; 0.2; x' to list[float]"),
+        (6, "a leaf takes no children, found 1"),
+        (7, "name 'e.f': expected no '.' (py_trees joins parent names with '.')"),
+    ]  # fmt: skip
+
+
+def test_decorator_and_parallel_attributes() -> None:
+    text = wrap(
+        """    <Parallel name="p" success_count="2" failure_count="2">
+      <RetryUntilSuccessful name="r" num_attempts="many"><StubCheck name="a" value="1"/>
+      </RetryUntilSuccessful>
+      <Timeout name="t" msec="soon"><StubCheck name="b" value="1"/></Timeout>
+      <Retry name="r2"><StubCheck name="c" value="1"/></Retry>
+      <Repeat name="rep" num_cycles="2" speed="3"><StubCheck name="d" value="1"/></Repeat>
+    </Parallel>"""
+    )
+    got = problems_of(text)
+    assert got == [
+        (3, "failure_count=\"2\" is not supported: py_trees' Parallel fails as soon as one child "
+            "fails (failure_count=\"1\")"),
+        (3, "success_count=\"2\" is not supported; expected 1 (any child) or -1 / 4 (all "
+            "children)"),
+        (6, "attribute 'msec': expected an integer number of milliseconds, got 'soon'"),
+        (4, "attribute 'num_failures': cannot convert 'many' to int"),
+        (7, "missing required attribute 'num_failures'"),
+        (8, "unknown attribute 'speed'; expected one of num_success"),
+    ]  # fmt: skip
+
+
+def test_duplicate_names_and_subtree_cycles() -> None:
+    text = wrap(
+        """    <Sequence name="s">
+      <StubCheck name="same" value="1"/>
+      <StubCheck name="same" value="0"/>
+      <SubTree ID="Loop" name="l1"/>
+      <SubTree ID="Leaf" name="twice"/>
+      <SubTree ID="Leaf" name="twice"/>
+    </Sequence>""",
+        extra=(
+            '  <BehaviorTree ID="Loop"><SubTree ID="Loop2" name="x"/></BehaviorTree>\n'
+            '  <BehaviorTree ID="Loop2"><SubTree ID="Loop" name="y"/></BehaviorTree>\n'
+            '  <BehaviorTree ID="Leaf"><StubCheck name="leaf" value="1"/></BehaviorTree>\n'
+        ),
+    )
+    assert problems_of(text) == [
+        (5, "duplicate node name 's.same' (also at line 4); py_trees needs unique names: rename "
+            "one or name its parent"),
+        (12, "subtree cycle Loop -> Loop2 -> Loop; a tree cannot contain itself"),
+        (8, "duplicate node name 's.twice.leaf' (also at line 13); py_trees needs unique names: "
+            "rename one or name its parent"),
+    ]  # fmt: skip
+
+
+def test_unsupported_btcpp_features_are_named() -> None:
+    text = wrap(
+        """    <Sequence name="s" _skipIf="x == 1">
+      <SubTree ID="Sub" name="sub" _autoremap="true"/>
+    </Sequence>""",
+        extra='  <BehaviorTree ID="Sub"><StubCheck name="c" value="{v}"/></BehaviorTree>\n',
+    )
+    messages = [m for _, m in problems_of(text)]
+    assert any("'_skipIf'" in m and "not supported" in m for m in messages)
+    assert any("'_autoremap'" in m for m in messages)
+
+
+def test_structure_problems() -> None:
+    text = (
+        '<root main_tree_to_execute="Main">\n'
+        '  <BehaviorTree ID="Main"/>\n'
+        '  <BehaviorTree ID="Main"><StubCheck name="c" value="1"/></BehaviorTree>\n'
+        "  <Sequence/>\n"
+        "</root>\n"
+    )
+    assert problems_of(text) == [
+        (2, "expected exactly one child (the tree's root node), found 0"),
+        (3, "duplicate BehaviorTree ID 'Main' (first at line 2)"),
+        (4, "unexpected element under <root>; expected <BehaviorTree ID=...>"),
+    ]
+    assert problems_of("<tree/>")[0] == (1, "expected <root> as the document element")
+
+
+def test_cli_prints_problems_to_stderr_and_returns_2(capsys: pytest.CaptureFixture[str]) -> None:
+    assert tree_cli_validate(TREES / "bad_port_type.xml") == 2
+    out, err = capsys.readouterr()
+    lines = err.strip().splitlines()
+    assert out == ""
+    assert len(lines) == 4
+    assert lines[0].startswith(f'{TREES / "bad_port_type.xml"}:4: <StubGrasp name="grip">')
+    assert lines[-1].endswith("bad_port_type.xml: 3 problems")
+
+
+def test_cli_ok_summary(capsys: pytest.CaptureFixture[str]) -> None:
+    assert tree_cli_validate(TREES / "retry_timeout.xml") == 0
+    out, err = capsys.readouterr()
+    assert err == ""
+    assert out.strip().endswith("ok (main tree 'Main', 2 trees, 12 nodes)")
+
+
+def test_literals_passed_into_a_subtree_are_checked_against_the_leaf_port() -> None:
+    text = wrap(
+        """    <SubTree ID="Grip" name="g" force="strong"/>""",
+        extra=(
+            '  <BehaviorTree ID="Grip">\n'
+            '    <StubGrasp name="squeeze" force_n="{force}"/>\n'
+            "  </BehaviorTree>\n"
+        ),
+    )
+    assert problems_of(text) == [
+        (3, "port 'force' feeds <StubGrasp name=\"squeeze\"> port 'force_n' (line 6): cannot "
+            "convert 'strong' to float"),
+    ]  # fmt: skip

@@ -1,0 +1,333 @@
+"""The simulated world behind the planner's port: PyBullet scene, FCL mirror, safety monitor.
+
+:class:`SimWorld` satisfies :class:`planner.port.WorldPort`. Between control ticks it steps
+physics at the world file's rate and watches what a trial is judged on: contacts between any
+robot link or the parcel and an obstacle (PyBullet, every physics step), the arms touching each
+other, the smallest FCL distance to an obstacle, and the parcel falling.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+
+import numpy as np
+import pybullet as pb
+
+from affordances import ObjectContext, RobotCapabilities, SceneQuery
+from affordances.scene import GeometricSceneQuery
+from planner.port import Move, ObstacleInfo, PathCheck, Pose
+from skills import quaternion as quat
+from skills.labels import Arm
+from skills.types import Array
+from worlds.adapters import object_contexts, robot_capabilities
+from worlds.collision import CollisionWorld, arm_group
+from worlds.control import ImpedanceGains, PalmCommand
+from worlds.scene import LATERAL_PALM_QUATERNIONS, Scene, ShapeKind, ShapeSpec
+from worlds.world_file import World
+
+ARMS = (Arm.LEFT, Arm.RIGHT)
+
+
+def shape_extents(shape: ShapeSpec) -> Array:
+    """Bounding-box extents (3,) of a shape in its own frame, m."""
+    if shape.kind is ShapeKind.BOX:
+        return np.asarray(shape.size, dtype=float)
+    if shape.kind is ShapeKind.SPHERE:
+        return np.full(3, 2.0 * shape.radius)
+    if shape.kind is ShapeKind.CYLINDER:
+        return np.array([2.0 * shape.radius, 2.0 * shape.radius, shape.height])
+    return np.full(3, 2.0 * shape.bounding_radius())
+
+
+@dataclass
+class SafetyRecord:
+    """What the monitor saw over a run (the trial's success criteria).
+
+    Attributes
+    ----------
+    obstacle_contacts : dict
+        ``"<body> ~ <obstacle>"`` -> number of physics steps in contact.
+    arm_contacts : int
+        Physics steps with the two arms touching.
+    min_obstacle_distance_m : float
+        Smallest FCL distance from an arm link or the object to an active obstacle, m.
+    closest : str
+        What came closest to what.
+    dropped : bool
+        The object fell: above the table and touched by neither palm while moving down.
+    drop_time : float or None
+    """
+
+    obstacle_contacts: dict[str, int] = field(default_factory=dict)
+    arm_contacts: int = 0
+    min_obstacle_distance_m: float = math.inf
+    closest: str = ""
+    dropped: bool = False
+    drop_time: float | None = None
+
+
+class SimWorld:
+    """A world file brought to life in PyBullet, behind the planner's port.
+
+    Parameters
+    ----------
+    world : World
+        The validated world file.
+    object_name : str, optional
+        The object the monitor watches for drops (default: the first task's object).
+    gains : ImpedanceGains, optional
+        Palm impedance gains.
+    """
+
+    def __init__(
+        self, world: World, object_name: str | None = None, gains: ImpedanceGains | None = None
+    ) -> None:
+        self.world_file = world
+        self.gains = gains or ImpedanceGains()
+        self.scene = Scene.from_world(world, gains=self.gains)
+        self.collision = CollisionWorld(self.scene)
+        self.watched = object_name or (
+            world.task[0].object if world.task else world.objects[0].name
+        )
+        self.safety = SafetyRecord()
+        self._rest = self._rest_poses()
+        self.scene.place_palms({a: (p.position, p.orientation) for a, p in self._rest.items()})
+        self._commands: dict[Arm, Pose] = dict(self._rest)
+        self._contexts = {c.name: c for c in object_contexts(world)}
+        self._extents = {o.name: shape_extents(o.shape) for o in self.scene.spec.objects}
+        self._obstacle_info = {
+            o.name: ObstacleInfo(o.name, np.asarray(o.position, float), o.shape.bounding_radius())
+            for o in self.scene.spec.obstacles
+        }
+        self._substeps = max(1, round(world.sim.physics_hz / world.sim.control_hz))
+        self._rest_z = {
+            o.name: float(o.position[2]) for o in self.scene.spec.objects
+        }  # resting centre height
+        self.collision.sync()
+
+    def _rest_poses(self) -> dict[Arm, Pose]:
+        """Palms waiting above the table's near edge, outside the objects, facing inwards."""
+        table = self.world_file.table
+        near_x = table.position[0] - table.size[0] / 2.0
+        z = table.position[2] + 0.25
+        return {
+            arm: Pose.of([near_x + 0.1, side * 0.38, z], LATERAL_PALM_QUATERNIONS[arm])
+            for arm, side in ((Arm.LEFT, 1.0), (Arm.RIGHT, -1.0))
+        }
+
+    def close(self) -> None:
+        """Disconnect PyBullet."""
+        self.scene.close()
+
+    def __enter__(self) -> SimWorld:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    # -- time --------------------------------------------------------------------------------
+    def time(self) -> float:
+        """Simulated time, s."""
+        return self.scene.time
+
+    def advance(self, dt: float) -> None:
+        """Step physics for ``dt`` (whole physics steps), watching contacts every step."""
+        steps = max(1, round(dt / self.scene.physics_dt))
+        for _ in range(steps):
+            self.scene.step(1)
+            self._watch_contacts()
+        self.collision.sync()
+        self._watch_distances()
+        self._watch_drop()
+
+    def _watch_contacts(self) -> None:
+        c = self.scene.client
+        bodies = {
+            f"{a.value}_arm": self.scene.robot_ids[self.scene.robot.arms[a].body] for a in ARMS
+        }
+        bodies.update(self.scene.object_ids)
+        for name in self.scene.active_obstacles:
+            obstacle = self.scene.obstacle_ids[name]
+            for label, body in bodies.items():
+                if pb.getContactPoints(bodyA=body, bodyB=obstacle, physicsClientId=c):
+                    key = f"{label} ~ {name}"
+                    self.safety.obstacle_contacts[key] = (
+                        self.safety.obstacle_contacts.get(key, 0) + 1
+                    )
+        left, right = (bodies["left_arm"], bodies["right_arm"])
+        if left != right and pb.getContactPoints(bodyA=left, bodyB=right, physicsClientId=c):
+            self.safety.arm_contacts += 1
+
+    def _watch_distances(self) -> None:
+        if not self.scene.active_obstacles:
+            return
+        for group in (arm_group(Arm.LEFT), arm_group(Arm.RIGHT), *self.scene.object_ids):
+            prox = self.collision.distance(group, "obstacles")
+            if prox.distance < self.safety.min_obstacle_distance_m:
+                self.safety.min_obstacle_distance_m = prox.distance
+                self.safety.closest = f"{prox.element_a} ~ {prox.element_b}"
+
+    def _watch_drop(self) -> None:
+        name = self.watched
+        pos, _ = self.scene.object_pose(name)
+        vel, _ = self.scene.object_velocity(name)
+        lifted = pos[2] > self._rest_z[name] + 0.01
+        touched = any(self.scene.palm_contact_force(a, name) > 0.5 for a in ARMS)
+        if lifted and not touched and vel[2] < -0.2 and not self.safety.dropped:
+            self.safety.dropped = True
+            self.safety.drop_time = self.time()
+
+    # -- objects and task --------------------------------------------------------------------
+    def object_pose(self, name: str) -> Pose:
+        """Measured pose of an object's centre."""
+        p, q = self.scene.object_pose(name)
+        return Pose(p, q)
+
+    def object_twist(self, name: str) -> Array:
+        """Measured twist of an object's centre, (6,)."""
+        v, w = self.scene.object_velocity(name)
+        return np.concatenate((v, w))
+
+    def object_extents(self, name: str) -> Array:
+        """Bounding-box extents (3,), m."""
+        return self._extents[name].copy()
+
+    def object_context(self, name: str) -> ObjectContext:
+        """The object's affordance context (from the world file)."""
+        return self._contexts[name]
+
+    def robot_capabilities(self) -> RobotCapabilities:
+        """The world's robot for the reasoner."""
+        return robot_capabilities(self.world_file)
+
+    def task_moves(self, name: str) -> tuple[Move, ...]:
+        """The world file's moves for ``name``."""
+        moves: list[Move] = []
+        for step in self.world_file.task:
+            if step.object != name:
+                continue
+            for m in step.moves:
+                moves.append(
+                    Move(Pose.of(m.goal.position, m.goal.quaternion_xyzw()), tuple(m.obstacles))
+                )
+        return tuple(moves)
+
+    # -- palms -------------------------------------------------------------------------------
+    def palm_pose(self, arm: Arm) -> Pose:
+        """Measured palm pose."""
+        st = self.scene.palm_state(arm)
+        return Pose(st.position, st.quaternion)
+
+    def palm_twist(self, arm: Arm) -> Array:
+        """Measured palm twist, (6,)."""
+        st = self.scene.palm_state(arm)
+        return np.concatenate((st.linear_velocity, st.angular_velocity))
+
+    def rest_palm_pose(self, arm: Arm) -> Pose:
+        """Where the palm started and returns to."""
+        return self._rest[arm]
+
+    def palm_thickness(self) -> float:
+        """m."""
+        return float(self.world_file.robot.palm_size[2])
+
+    def palm_stiffness(self) -> float:
+        """The impedance controller's translational stiffness, N/m."""
+        return float(self.gains.stiffness_linear)
+
+    def command_palm(self, arm: Arm, pose: Pose, twist: Array | None = None) -> None:
+        """Track ``pose`` with feed-forward ``twist`` (impedance control)."""
+        tw = np.zeros(6) if twist is None else np.asarray(twist, dtype=float)
+        self._commands[arm] = pose
+        self.scene.set_palm_command(
+            arm,
+            PalmCommand(
+                np.asarray(pose.position, dtype=np.float64),
+                np.asarray(pose.orientation, dtype=np.float64),
+                np.asarray(tw[:3], dtype=np.float64),
+                np.asarray(tw[3:], dtype=np.float64),
+            ),
+        )
+
+    def hold_palms(self) -> None:
+        """Hold the last commanded poses with zero twist."""
+        for arm in ARMS:
+            self.command_palm(arm, self._commands[arm], np.zeros(6))
+
+    def contact_force(self, arm: Arm, name: str) -> float:
+        """Palm-object normal force, N."""
+        return self.scene.palm_contact_force(arm, name)
+
+    # -- obstacles and collision -------------------------------------------------------------
+    def set_active_obstacles(self, names: Iterable[str]) -> None:
+        """Exactly these obstacles are present (placed between moves, while nothing touches)."""
+        self.scene.set_active_obstacles(names)
+        self.collision.sync()
+
+    def obstacles(self) -> tuple[ObstacleInfo, ...]:
+        """The active obstacles."""
+        return tuple(self._obstacle_info[n] for n in sorted(self.scene.active_obstacles))
+
+    def check_trajectory(
+        self,
+        name: str,
+        object_positions: Array,
+        object_orientations: Array,
+        palm_positions: Array,
+        palm_orientations: Array,
+        margin_m: float = 0.0,
+    ) -> PathCheck:
+        """FCL check of predicted palm and held-object poses against the active obstacles."""
+        check = self.collision.check_trajectory(
+            palm_positions,
+            palm_orientations,
+            name,
+            object_positions,
+            object_orientations,
+            margin_m,
+        )
+        pts = np.concatenate((object_positions, palm_positions.reshape(-1, 3)))
+        d, _ = self.collision.query(pts)
+        first = None if check.collision_free else int(check.first_collision)
+        return PathCheck(
+            check.collision_free,
+            float(d.min()) if d.size else math.inf,
+            first,
+            "clear" if first is None else f"palm or object within {margin_m:g} m at step {first}",
+        )
+
+    def link_points(self) -> Array:
+        """For each arm link, its point closest to an active obstacle, (M, 3) (none if none)."""
+        pts = []
+        for arm in ARMS:
+            ld = self.collision.link_distances(arm)
+            ok = np.isfinite(ld.distances)
+            pts.append(ld.link_points[ok])
+        return np.concatenate(pts) if pts else np.zeros((0, 3))
+
+    def distance_query(self, points: Array) -> tuple[Array, Array]:
+        """Distance (N,) from points (N, 3) to the nearest active obstacle, closest points."""
+        return self.collision.query(points)
+
+    def scene_query(self) -> SceneQuery:
+        """Arms as shoulder-to-palm segments for the reasoner's scene rules."""
+        shoulders = {}
+        for arm in ARMS:
+            spec = self.scene.robot.arms[arm]
+            body = self.scene.robot.bodies[spec.body]
+            base = np.asarray(body.base2world_position, dtype=float)
+            shoulders[arm] = tuple((base + np.array([0.0, 0.0, 0.36])).tolist())
+        return GeometricSceneQuery(shoulders=shoulders)
+
+    # -- reporting ---------------------------------------------------------------------------
+    def palm_quaternion(self, arm: Arm) -> Array:
+        """Measured palm orientation (4,)."""
+        return self.scene.palm_state(arm).quaternion
+
+    def object_tilt_deg(self, name: str) -> float:
+        """Angle between the object's z axis and the world's, degrees."""
+        _, q = self.scene.object_pose(name)
+        z = quat.rotate(q, np.array([0.0, 0.0, 1.0]))
+        return float(np.degrees(np.arccos(np.clip(z[2], -1.0, 1.0))))
