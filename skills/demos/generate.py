@@ -42,7 +42,9 @@ TEACHER_SQUEEZE_M = 0.012
 TEACHER_PALM_STIFFNESS_N_PER_M = 1000.0
 
 
-def pick_place(rng: np.random.Generator, n: int = 300, duration: float = 2.5) -> tuple[Array, ...]:
+def pick_place(
+    rng: np.random.Generator, n: int = 300, duration: float = 2.5
+) -> tuple[Array, Array, Array]:
     """Lift, carry 0.3 m along -y, lower; orientation held level."""
     t = np.linspace(0.0, duration, n)
     u = t / duration
@@ -58,7 +60,7 @@ def pick_place(rng: np.random.Generator, n: int = 300, duration: float = 2.5) ->
     return t, positions, orientations
 
 
-def rotate_z(rng: np.random.Generator) -> tuple[Array, ...]:
+def rotate_z(rng: np.random.Generator) -> tuple[Array, Array, Array]:
     """A 90 degree turn about z, held at the parcel's carrying height."""
     return rotation_demo(np.pi / 2, 0.0, (0.6, 0.0, 0.78), 2.0, 300, 0.005, rng)
 
