@@ -85,10 +85,37 @@ def _demo_command(args: argparse.Namespace) -> int:
 
 
 def _validate_command(args: argparse.Namespace) -> int:
-    """Check a world file (YAML or JSON)."""
+    """Check a world file (YAML or JSON) or a behaviour tree (XML)."""
+    if args.file.lower().endswith(".xml"):
+        import planner.leaves  # noqa: F401  (registers the leaves the tree may use)
+        from planner.validate import tree_cli_validate
+
+        return tree_cli_validate(args.file)
     from worlds.world_file import world_cli_validate
 
     return world_cli_validate(args.file)
+
+
+def _nodes_command(args: argparse.Namespace) -> int:
+    """Print (or write) a Groot2 TreeNodesModel of the registered leaves."""
+    import planner.leaves  # noqa: F401
+    from planner.nodes_model import nodes_model_xml
+
+    text = nodes_model_xml()
+    if args.out:
+        Path(args.out).write_text(text, encoding="utf-8")
+        print(f"wrote {args.out}")
+    else:
+        print(text)
+    return EXIT_OK
+
+
+def _render_tree_command(args: argparse.Namespace) -> int:
+    """Render a tree file as ascii, dot or svg."""
+    import planner.leaves  # noqa: F401
+    from planner.render import render_cli
+
+    return render_cli(args.tree, args.format, args.out)
 
 
 def _schema_command(args: argparse.Namespace) -> int:
@@ -239,6 +266,61 @@ def _teach_command(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _run_command(args: argparse.Namespace) -> int:
+    """Run a world's task in PyBullet, show progress, judge it and write what it shows."""
+    from planner.loader import TreeFileError
+    from skills.library import LibraryFileError
+    from worlds.episode import run_episode
+
+    world = _load_world_or_exit(args.world)
+    if args.seed is not None:
+        world = world.model_copy(update={"sim": world.sim.model_copy(update={"seed": args.seed})})
+    if args.gui:
+        print(
+            "--gui: this run uses PyBullet in DIRECT mode (no display here); "
+            "the animation shows the run",
+            file=sys.stderr,
+        )
+    out = Path(args.out)
+
+    def progress(t: float, leaf: str, feedback: str) -> None:
+        print(f"[{t:7.2f} s] {leaf.split('.')[-1]:<18} {feedback}", file=sys.stderr, flush=True)
+
+    try:
+        report = run_episode(
+            world,
+            Path(args.tree) if args.tree else None,
+            out=out,
+            animation=not args.no_animation,
+            progress=progress,
+        )
+    except (TreeFileError, LibraryFileError) as err:
+        print(err, file=sys.stderr)
+        return EXIT_BAD_INPUT
+    s = report.summary()
+    verdict = "SUCCESS" if report.success else f"FAILURE ({report.failure})"
+    print(f"{world.name}: {verdict}")
+    for i, (e, d) in enumerate(
+        zip(report.placement_error_m, report.placement_error_deg, strict=True)
+    ):
+        placed = "not placed" if e is None else f"{e * 1000:.1f} mm, {d:.1f} deg"
+        print(f"  move {i + 1}: {placed}")
+    dist = s["min_obstacle_distance_m"]
+    print(
+        f"  closest approach to an obstacle: "
+        f"{'no obstacle' if dist is None else f'{dist * 1000:.1f} mm'}"
+    )
+    print(
+        f"  simulated {report.sim_time_s:.1f} s in {report.wall_time_s:.1f} s wall "
+        f"({report.sim_time_s / max(report.wall_time_s, 1e-9):.1f}x real time)"
+    )
+    for key, path in report.outputs.items():
+        print(f"  {key}: {path}")
+    if args.json:
+        print(json.dumps(s))
+    return EXIT_OK if report.success else EXIT_FAILURE
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser with one sub-command per job."""
     parser = argparse.ArgumentParser(prog="app.py", description=__doc__.splitlines()[0])
@@ -247,9 +329,17 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--out", default="out", help="output folder (default: out)")
     demo.add_argument("--json", action="store_true", help="print a JSON summary as the last line")
     demo.set_defaults(handler=_demo_command)
-    validate = sub.add_parser("validate", help="check a world file; exit 2 if it is bad")
-    validate.add_argument("file", help="world file (.yaml, .yml or .json)")
+    validate = sub.add_parser("validate", help="check a world file or a tree; exit 2 if bad")
+    validate.add_argument("file", help="world file (.yaml, .yml, .json) or tree (.xml)")
     validate.set_defaults(handler=_validate_command)
+    nodes = sub.add_parser("nodes", help="export a Groot2 TreeNodesModel of our leaves")
+    nodes.add_argument("--out", help="write to this file instead of printing")
+    nodes.set_defaults(handler=_nodes_command)
+    render = sub.add_parser("render-tree", help="draw a tree file")
+    render.add_argument("tree", help="tree XML")
+    render.add_argument("--format", choices=["ascii", "dot", "svg"], default="ascii")
+    render.add_argument("--out", help="write to this file instead of printing")
+    render.set_defaults(handler=_render_tree_command)
     schema = sub.add_parser("schema", help="print the world-file JSON Schema (for editors)")
     schema.set_defaults(handler=_schema_command)
     aff = sub.add_parser("affordances", help="rank semantic actions for each object of a world")
@@ -264,6 +354,17 @@ def build_parser() -> argparse.ArgumentParser:
     aff.add_argument("--no-default-rules", action="store_true", help="use only the --rules files")
     aff.add_argument("--json", action="store_true", help="print a JSON summary as the last line")
     aff.set_defaults(handler=_affordances_command)
+    run = sub.add_parser("run", help="run a world's task in PyBullet and judge it")
+    run.add_argument("world", help="world file")
+    run.add_argument(
+        "--tree", help="behaviour tree XML (default: planner/trees/pick_and_place.xml)"
+    )
+    run.add_argument("--seed", type=int, help="override the world's seed")
+    run.add_argument("--out", default="out", help="output folder (default: out)")
+    run.add_argument("--gui", action="store_true", help="show PyBullet's window (needs a display)")
+    run.add_argument("--no-animation", action="store_true", help="skip the GIF (faster)")
+    run.add_argument("--json", action="store_true", help="print a JSON summary as the last line")
+    run.set_defaults(handler=_run_command)
     skills = sub.add_parser("skills", help="list a skill library")
     skills.add_argument("--library", help="library folder (default: learnt from skills/demos)")
     skills.add_argument("--json", action="store_true", help="print JSON")

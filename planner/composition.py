@@ -21,16 +21,25 @@ from skills import quaternion as quat
 from skills.composer import DualArmComposer, DualArmState, relative_from_world
 from skills.coupling import CouplingTerm
 from skills.couplings.grasp import GraspMaintenance
+from skills.couplings.limits import WorkspaceRepulsion
 from skills.couplings.potential import PotentialFieldAvoidance
 from skills.couplings.steering import ObstacleSteering
 from skills.dual_arm import ARMS, GraspGeometry
 from skills.labels import Action, Arm, Space
 from skills.library import SkillLibrary
-from skills.pose_dmp import LearntForcing, PoseState
+from skills.pose_dmp import LearntForcing, PoseState, Saturated
 from skills.skill import Skill, SkillKind
 
 #: Shortest move duration, s (the demonstrations last about 2 s).
 MIN_TAU_S = 2.0
+#: Share of the grip's spare force left to avoidance: the learnt motion and the attractor
+#: accelerate the object too, and a box slips in two palms before friction is exhausted.
+GRIP_MARGIN = 4.0
+#: Avoidance fades out below this phase (about 65 % of tau): the attractor finishes the move.
+AVOID_FADE_PHASE = 0.05
+#: Angular acceleration avoidance may ask of a two-palm grip, rad/s^2: turning the object
+#: turns the palms, whose orientation springs are soft, and tilted palms lose their flat contact.
+MAX_AVOID_ANGULAR = 1.0
 
 
 @dataclass(frozen=True)
@@ -49,6 +58,43 @@ class TransportSettings:
     lift_m: float = 0.12
 
 
+def grip_acceleration_limit(world: WorldPort, name: str, squeeze_depth: float) -> float:
+    """Acceleration (m/s^2) avoidance may add: the grip's spare, over ``GRIP_MARGIN``.
+
+    Two palms squeezing with ``F = K * depth`` carry ``2 mu F`` by friction; what exceeds the
+    weight ``m g`` can accelerate the object. ``mu`` is the product of the object's and the
+    palms' friction, as Bullet combines them.
+    """
+    ctx = world.object_context(name)
+    robot = world.robot_capabilities()
+    force = world.palm_stiffness() * squeeze_depth
+    mu = ctx.friction * robot.palm_friction
+    spare = 2.0 * mu * force - ctx.mass_kg * 9.81
+    return max(spare / ctx.mass_kg / GRIP_MARGIN, 0.5)
+
+
+def saturate_avoidance(
+    terms: list[tuple[CouplingTerm, float]], max_linear: float
+) -> list[tuple[CouplingTerm, float]]:
+    """Group the avoidance terms, and the workspace limits, each under one saturation.
+
+    Both grow without bound near what they avoid; the grip bounds what the object can follow,
+    and a barrier stiffer than the control rate can integrate would only make it chatter. The
+    limits get their own group so that avoidance cannot cancel the table's floor. Learnt
+    skills stay as they are.
+    """
+    avoid_types = (ObstacleSteering, PotentialFieldAvoidance)
+    avoid = [(t, w) for t, w in terms if isinstance(t, avoid_types)]
+    limits = [(t, w) for t, w in terms if isinstance(t, WorkspaceRepulsion)]
+    rest = [(t, w) for t, w in terms if not isinstance(t, (*avoid_types, WorkspaceRepulsion))]
+    out = list(rest)
+    if avoid:
+        out.append((Saturated(avoid, max_linear, MAX_AVOID_ANGULAR, AVOID_FADE_PHASE), 1.0))
+    if limits:
+        out.append((Saturated(limits, max_linear, MAX_AVOID_ANGULAR), 1.0))
+    return out
+
+
 def lateral_geometry(world: WorldPort, name: str) -> GraspGeometry:
     """The two-palm lateral grasp geometry of an object's box, palms flat on its +-y faces."""
     extents = world.object_extents(name)
@@ -64,13 +110,21 @@ def move_duration(start: np.ndarray, goal: np.ndarray, settings: TransportSettin
     return max(MIN_TAU_S, 1.875 * path / settings.max_speed)
 
 
-def scale_avoidance(plan: SemanticAction, gain: float) -> SemanticAction:
-    """The plan with its avoidance skills' weights multiplied by ``gain``."""
-    if gain == 1.0:
+def reweight(
+    plan: SemanticAction, avoid_gain: float = 1.0, transport_weight: float = 1.0
+) -> SemanticAction:
+    """The plan with its avoidance weights times ``avoid_gain`` and its transport weight times
+    ``transport_weight`` (a lower carry: the learnt lift shrinks with the forcing's weight)."""
+    if avoid_gain == 1.0 and transport_weight == 1.0:
         return plan
     avoid = (Action.AVOID_OBSTACLE, Action.AVOID_LINKS)
     skills = tuple(
-        replace(s, weight=s.weight * gain) if s.action in avoid else s for s in plan.skills
+        replace(s, weight=s.weight * avoid_gain)
+        if s.action in avoid
+        else replace(s, weight=s.weight * transport_weight)
+        if s.action is Action.TRANSPORT
+        else s
+        for s in plan.skills
     )
     return replace(plan, skills=skills)
 
@@ -105,11 +159,13 @@ def absolute_terms(
         Arm-link points in the object frame, for link-level avoidance.
     """
     terms: list[tuple[CouplingTerm, float]] = []
-    radius = float(np.linalg.norm(world.object_extents(name)) / 2.0)
+    # The centre-based steering sees the object as a sphere; the smallest half-extent keeps it
+    # from treating a flat box as a ball (its faces are covered by the potential field).
+    radius = float(np.min(world.object_extents(name)) / 2.0)
     for sel in plan.skills:
         if sel.space is not Space.ABSOLUTE or sel.weight == 0.0:
             continue
-        if sel.action in (Action.APPROACH, Action.RETREAT, Action.LIMIT_REPULSION):
+        if sel.action in (Action.APPROACH, Action.RETREAT):
             continue
         skill = _skill_for(library, sel)
         if skill.kind is SkillKind.LEARNT_DMP:
@@ -135,6 +191,23 @@ def absolute_terms(
                 influence=float(skill.params["influence"]),
             )
             terms.append((field_term, sel.weight))
+        elif skill.kind is SkillKind.WORKSPACE_REPULSION:
+            lower, upper = world.workspace_bounds(name)
+            margin = float(skill.params["margin"])
+            # The bound sits a margin below the resting height: the push starts where the
+            # object rests on the table (so placing on it is free) and grows without bound
+            # below it, where the palms would slide down the object's faces.
+            terms.append(
+                (
+                    WorkspaceRepulsion(
+                        lower - np.array([0.0, 0.0, margin]),
+                        upper,
+                        margin=margin,
+                        gain=float(skill.params["gain"]),
+                    ),
+                    sel.weight,
+                )
+            )
     return terms
 
 
@@ -171,6 +244,18 @@ def hold_terms(
         ]
         for arm in ARMS
     }
+
+
+def held_geometry(state: DualArmState, nominal: GraspGeometry) -> GraspGeometry:
+    """The grip as it is: the palms' poses in {O} from a handed-over state, nominal normals."""
+    return GraspGeometry(
+        state.left.position.copy(),
+        state.left.orientation.copy(),
+        state.right.position.copy(),
+        state.right.orientation.copy(),
+        nominal.left_normal,
+        nominal.right_normal,
+    )
 
 
 def opening_terms(
@@ -228,42 +313,66 @@ def transport_composition(
     squeeze_depth: float,
     settings: TransportSettings | None = None,
     avoid_gain: float = 1.0,
+    transport_weight: float = 1.0,
 ) -> DualArmComposer:
     """The simultaneous composition of one move, starting from the handed-over state.
 
-    ``avoid_gain`` multiplies the weights of obstacle steering and link-level avoidance (a
-    more cautious composition when a predicted path is not clear).
+    ``avoid_gain`` multiplies the weights of obstacle steering and link-level avoidance;
+    ``transport_weight`` multiplies the learnt pick-and-place's (a lower carry). A tree tries
+    such variants when a predicted path is not clear.
     """
     s = settings or TransportSettings()
     sel = plan.skill(Action.TRANSPORT)
     if sel is not None:
         s = TransportSettings(_param(sel, "max_speed", s.max_speed), s.lift_m)
     tau = move_duration(state.object.position, move.goal.position, s)
-    geometry = lateral_geometry(world, name)
-    points = link_points_in_object(world, state.object)
-    absolute = absolute_terms(scale_avoidance(plan, avoid_gain), library, world, name, points)
-    relative = hold_terms(plan, library, geometry, squeeze_depth)
+    geometry = held_geometry(state, lateral_geometry(world, name))
+    points = link_points_in_object(world, state.object, name)
+    terms = absolute_terms(
+        reweight(plan, avoid_gain, transport_weight), library, world, name, points
+    )
+    absolute = saturate_avoidance(terms, grip_acceleration_limit(world, name, squeeze_depth))
+    # The handed-over palm poses are the squeezed grip already: hold them as they are.
+    del squeeze_depth
+    relative = hold_terms(plan, library, geometry, 0.0)
     return DualArmComposer.start(
         state, move.goal.position, move.goal.orientation, tau, absolute=absolute, relative=relative
     )
 
 
-def link_points_in_object(world: WorldPort, obj: PoseState) -> np.ndarray:
-    """The world's arm-link points expressed in the object frame, (M, 3)."""
+def box_points(extents: np.ndarray) -> np.ndarray:
+    """Corners, edge midpoints and face centres of a box centred at the origin, (26, 3)."""
+    half = np.asarray(extents, dtype=float) / 2.0
+    grid = np.array(np.meshgrid([-1, 0, 1], [-1, 0, 1], [-1, 0, 1], indexing="ij"))
+    signs = grid.reshape(3, -1).T
+    signs = signs[np.any(signs != 0, axis=1)]
+    return signs * half
+
+
+def link_points_in_object(world: WorldPort, obj: PoseState, name: str | None = None) -> np.ndarray:
+    """Points to keep away from obstacles, in the object frame, (M, 3).
+
+    The arms' link points from the world and, when ``name`` is given, the held object's own
+    surface points: avoidance in the object-arm space, not at the object's centre alone.
+    """
     pts = world.link_points()
     inv = quat.conjugate(obj.orientation)
-    return quat.rotate(inv, pts - obj.position)
+    links = quat.rotate(inv, pts - obj.position) if len(pts) else np.zeros((0, 3))
+    if name is None:
+        return links
+    return np.concatenate((box_points(world.object_extents(name)), links))
 
 
-def refresh_link_points(composer: DualArmComposer, world: WorldPort) -> None:
+def refresh_link_points(composer: DualArmComposer, world: WorldPort, name: str) -> None:
     """Move link-level avoidance onto the arms' current link points (they bend as they move)."""
-    points = None
-    for i, weighted in enumerate(composer.absolute):
-        term: Any = weighted.term
-        if isinstance(term, PotentialFieldAvoidance):
-            if points is None:
-                points = link_points_in_object(world, composer.state.object)
-            composer.absolute[i] = type(weighted)(term.with_points(points), weighted.weight)
+    for weighted in composer.absolute:
+        group: Any = weighted.term
+        if not isinstance(group, Saturated):
+            continue
+        for inner in list(group.terms):
+            if isinstance(inner.term, PotentialFieldAvoidance):
+                points = link_points_in_object(world, composer.state.object, name)
+                group.replace_term(inner.term, inner.term.with_points(points))
 
 
 def goal_error(world: WorldPort, name: str, goal: Pose) -> tuple[float, float]:

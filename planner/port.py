@@ -132,6 +132,11 @@ class WorldPort(Protocol):
         """Bounding-box extents (x, y, z) of an object in its own frame, m."""
         ...
 
+    def workspace_bounds(self, name: str) -> tuple[Array, Array]:
+        """Box (lower (3,), upper (3,)) the object's centre must stay in: above the table top
+        by half its height, inside the table's footprint, below the robot's reach, m."""
+        ...
+
     def object_context(self, name: str) -> ObjectContext:
         """The object's context for the affordance reasoner."""
         ...

@@ -73,7 +73,7 @@ def run_tree(
     max_sim_time: float,
     blackboard: Mapping[str, Any] | None = None,
     on_tick: Callable[[py_trees.trees.BehaviourTree], None] | None = None,
-    post_tick_handlers: tuple[Callable[[py_trees.trees.BehaviourTree], None], ...] = (),
+    attach: tuple[Callable[[py_trees.trees.BehaviourTree], Any], ...] = (),
 ) -> RunResult:
     """Set up ``root`` with the world and tick it until it finishes or time runs out.
 
@@ -90,13 +90,14 @@ def run_tree(
         Initial blackboard values, absolute keys.
     on_tick : callable, optional
         Called after every tick (progress display).
-    post_tick_handlers : tuple of callables
-        Added to the tree (e.g. a run log).
+    attach : tuple of callables
+        Each is given the tree before setup (e.g. ``RunLog.attach``, or a function adding a
+        post-tick handler).
     """
     seed_blackboard(blackboard or {})
     tree = py_trees.trees.BehaviourTree(root)
-    for handler in post_tick_handlers:
-        tree.add_post_tick_handler(handler)
+    for hook in attach:
+        hook(tree)
     tree.setup(world=world, library=library, control_dt=control_dt, clock=world.time)
     start_sim, start_wall = world.time(), time.perf_counter()
     ticks = 0

@@ -26,7 +26,7 @@ from numpy.typing import ArrayLike
 from skills import quaternion as quat
 from skills.coupling import CouplingTerm
 from skills.dmp import DMPParams
-from skills.dual_arm import ARMS, compose_twists, palm_poses
+from skills.dual_arm import ARMS
 from skills.labels import Arm
 from skills.pose_dmp import (
     PoseModel,
@@ -188,16 +188,39 @@ class DualArmComposer:
 
 
 def commands_for(state: DualArmState) -> PalmCommands:
-    """Palm world poses and eq. (5) twists for a dual-arm state."""
+    """Palm world poses and eq. (5) twists for a dual-arm state.
+
+    The same algebra as :func:`skills.dual_arm.palm_poses` and
+    :func:`skills.dual_arm.compose_twists` with one absolute and one relative twist, written
+    with one rotation matrix and a few 2 x 3 products: it runs every control tick.
+    """
     obj = state.object
+    x, y, z, w = obj.orientation.tolist()
+    rot = quat.matrix_scalar((x, y, z, w))
     rel_p = np.stack((state.left.position, state.right.position))
-    rel_q = np.stack((state.left.orientation, state.right.orientation))
-    positions, orientations = palm_poses(obj.position, obj.orientation, rel_p, rel_q)
-    r = positions - obj.position
-    object_twist = obj.twist()
-    rel_twists = np.stack((state.left.twist(), state.right.twist()))[None]
-    twists = compose_twists(object_twist[None], [1.0], r, rel_twists, [1.0], obj.orientation)
-    return PalmCommands(positions, orientations, twists, object_twist)
+    lever = rel_p @ rot.T  # object centre to each palm, world frame
+    positions = obj.position + lever
+    orientations = np.array(
+        [
+            quat.multiply_scalar((x, y, z, w), _quat_floats(state.left.orientation)),
+            quat.multiply_scalar((x, y, z, w), _quat_floats(state.right.orientation)),
+        ]
+    )
+    v = obj.velocity
+    om = obj.angular_velocity
+    wx, wy, wz = om.tolist()
+    skew_w = np.array(((0.0, -wz, wy), (wz, 0.0, -wx), (-wy, wx, 0.0)))
+    twists = np.empty((2, 6))
+    rel_lin = np.stack((state.left.velocity, state.right.velocity))
+    rel_ang = np.stack((state.left.angular_velocity, state.right.angular_velocity))
+    twists[:, :3] = v + lever @ skew_w.T + rel_lin @ rot.T  # G^T y_o' + R y_C'
+    twists[:, 3:] = om + rel_ang @ rot.T
+    return PalmCommands(positions, orientations, twists, np.concatenate((v, om)))
+
+
+def _quat_floats(q: Array) -> quat.Quat:
+    a, b, c, d = q.tolist()
+    return (a, b, c, d)
 
 
 def grasped_state(

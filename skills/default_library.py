@@ -10,6 +10,7 @@ pick_and_place     absolute    RBF forcing by ridge regression, horizontal rotat
 rotate_z           absolute    RBF forcing by ridge regression                        CSV
 avoid_obstacle     absolute    steering gains by least squares (Rai et al. 2014)      CSV
 avoid_links        absolute    Park et al. 2008 dynamic potential, set by hand        --
+workspace_limits   absolute    Gams et al. 2009 repulsion from the table top, by hand --
 hold_lateral       relative    spring-damper and squeeze fitted to a held palm        CSV
 =================  ==========  =====================================================  ========
 """
@@ -22,6 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from skills.couplings.steering_fit import AvoidanceDemo, fit_obstacle_steering
+from skills.demonstration import Demonstration
 from skills.demos.io import DemoFile, columns, read_demo_csv
 from skills.labels import Action, AffordanceElement, Space
 from skills.library import SkillLibrary
@@ -35,6 +37,8 @@ BUILT_AT = "2026-11-22T00:00:00+00:00"
 
 #: Link-level avoidance (Park et al. 2008): lambda (m^2/s), beta, influence distance (m).
 LINK_FIELD = {"gain": 0.4, "beta": 2.0, "influence": 0.25}
+#: Workspace repulsion (Gams et al. 2009): k (m^2/s^2) and the margin where it starts (m).
+WORKSPACE = {"gain": 0.05, "margin": 0.03}
 
 
 @dataclass(frozen=True)
@@ -160,9 +164,14 @@ def build_default_library(demos_dir: Path = DEMOS_DIR) -> SkillLibrary:
     )
     avoid = read_demo_csv(demos_dir / "avoid_obstacle.csv")
     obstacle = columns(avoid, ["ox", "oy", "oz", "radius"])[0]
-    fit = fit_obstacle_steering(
-        AvoidanceDemo.create(avoid.demonstration, obstacle[:3], obstacle[3])
+    # The coupling is what the teacher did beyond its own unobstructed reach: learn that reach
+    # as a DMP and fit the steering to the difference (Rai et al. 2014).
+    demo = avoid.demonstration
+    base_demo = Demonstration.create(
+        demo.t, columns(avoid, ["bx", "by", "bz"]), demo.orientations, name=f"{demo.name} (base)"
     )
+    base = fit_pose(base_demo)
+    fit = fit_obstacle_steering(AvoidanceDemo.create(demo, obstacle[:3], obstacle[3]), model=base)
     lib.add(
         Skill(
             "avoid_obstacle",
@@ -199,6 +208,24 @@ def build_default_library(demos_dir: Path = DEMOS_DIR) -> SkillLibrary:
                 BUILT_AT,
                 "Park et al. 2008 dynamic potential over arm-link points, distances "
                 "from FCL; parameters set by hand",
+                {},
+            ),
+        )
+    )
+    lib.add(
+        Skill(
+            "workspace_limits",
+            Action.LIMIT_REPULSION,
+            Space.ABSOLUTE,
+            SkillKind.WORKSPACE_REPULSION,
+            (AffordanceElement.ON_SURFACE,),
+            dict(WORKSPACE),
+            {},
+            Provenance(
+                (),
+                BUILT_AT,
+                "Gams et al. 2009 repulsion from the workspace's faces (the table top "
+                "below all): k (1/d - 1/margin); parameters set by hand",
                 {},
             ),
         )

@@ -315,6 +315,71 @@ class LearntForcing:
         return f[:3], f[3:]
 
 
+class Saturated:
+    """The weighted sum of several coupling terms, its norms limited.
+
+    A held object can only follow accelerations its grip transmits: friction bounds the
+    force the palms can add. Avoidance terms that grow without bound near an obstacle (a
+    ``1/p^2`` potential) are summed here and scaled down as a whole when the sum exceeds the
+    limits, keeping its direction.
+
+    Parameters
+    ----------
+    terms : sequence of (CouplingTerm, weight)
+    max_linear : float
+        m/s^2.
+    max_angular : float
+        rad/s^2.
+    fade_phase : float
+        Below this phase the sum fades as ``(s / fade_phase)^2``, to zero by a phase about
+        a fifth of it (0: never fades).
+    """
+
+    def __init__(
+        self,
+        terms: Sequence[tuple[CouplingTerm, float]],
+        max_linear: float,
+        max_angular: float,
+        fade_phase: float = 0.0,
+    ) -> None:
+        if not (max_linear > 0 and max_angular > 0):
+            raise ValueError(
+                f"max_linear, max_angular: expected positive limits, got {max_linear}, "
+                f"{max_angular}"
+            )
+        if not 0.0 <= fade_phase < 1.0:
+            raise ValueError(f"fade_phase: expected a phase in [0, 1), got {fade_phase}")
+        self.terms = [Weighted(t, float(w)) for t, w in terms]
+        self.max_linear = float(max_linear)
+        self.max_angular = float(max_angular)
+        self.fade_phase = float(fade_phase)
+
+    def acceleration(self, state: PoseState, target: PoseTarget) -> tuple[Array, Array]:
+        """The limited sum (linear m/s^2, angular rad/s^2), faded out below ``fade_phase``."""
+        if self.fade_phase > 0.0 and state.phase < self.fade_phase:
+            # Like the learnt forcing, shaping terms hand the end of the motion to the
+            # attractor: near the goal they would fight it (a limit cycle next to an obstacle).
+            gate = (state.phase / self.fade_phase) ** 2
+            if gate < 0.05:
+                return np.zeros(3), np.zeros(3)
+        else:
+            gate = 1.0
+        lin, ang = sum_couplings(self.terms, state, target)
+        if gate != 1.0:
+            lin, ang = lin * gate, ang * gate
+        n_lin = float(np.sqrt(lin @ lin))
+        n_ang = float(np.sqrt(ang @ ang))
+        if n_lin > self.max_linear:
+            lin = lin * (self.max_linear / n_lin)
+        if n_ang > self.max_angular:
+            ang = ang * (self.max_angular / n_ang)
+        return lin, ang
+
+    def replace_term(self, old: CouplingTerm, new: CouplingTerm) -> None:
+        """Swap one inner term (e.g. avoidance on fresh link points), keeping its weight."""
+        self.terms = [Weighted(new, w.weight) if w.term is old else w for w in self.terms]
+
+
 @dataclass(frozen=True)
 class Weighted:
     """A coupling term scaled by a composition weight (the paper's ``w_j`` / ``w_k``)."""
@@ -325,6 +390,8 @@ class Weighted:
     def acceleration(self, state: PoseState, target: PoseTarget) -> tuple[Array, Array]:
         """``weight`` times the term's accelerations."""
         lin, ang = self.term.acceleration(state, target)
+        if self.weight == 1.0:
+            return lin, ang
         return self.weight * lin, self.weight * ang
 
 
@@ -433,28 +500,8 @@ def pose_step(
         The next state; its accelerations are the ones applied over this step.
     """
     lin, ang = _accelerations(state, model, target, couplings)
-    y0, y1, y2 = state.position.tolist()
-    v0, v1, v2 = state.velocity.tolist()
-    w0, w1, w2 = state.angular_velocity.tolist()
-    v0 += lin[0] * dt
-    v1 += lin[1] * dt
-    v2 += lin[2] * dt
-    w0 += ang[0] * dt
-    w1 += ang[1] * dt
-    w2 += ang[2] * dt
-    q = quat.integrate_scalar(_quat_tuple(state.orientation), (w0, w1, w2), dt)
-    # One allocation for the whole state; the fields are views into it.
-    buf = np.array(
-        (y0 + v0 * dt, y1 + v1 * dt, y2 + v2 * dt, v0, v1, v2, *lin, *q, w0, w1, w2, *ang)
-    )
-    return PoseState(
-        buf[0:3],
-        buf[3:6],
-        buf[6:9],
-        buf[9:13],
-        buf[13:16],
-        buf[16:19],
-        phase_step(state.phase, dt, target.tau, model.params.alpha_s),
+    return _integrate(
+        state, lin, ang, dt, phase_step(state.phase, dt, target.tau, model.params.alpha_s)
     )
 
 
@@ -470,18 +517,36 @@ def coupled_step(
     Relative-space skills such as grasp maintenance carry their own reference; this integrates
     their summed accelerations with the same scheme as :func:`pose_step`.
     """
-    lin, ang = sum_couplings(couplings, state, target)
-    vel = state.velocity + lin * dt
-    omega = state.angular_velocity + ang * dt
-    return PoseState(
-        state.position + vel * dt,
-        vel,
-        lin,
-        quat.integrate(state.orientation, omega, dt),
-        omega,
-        ang,
-        phase_step(state.phase, dt, target.tau, alpha_s),
+    lin = [0.0, 0.0, 0.0]
+    ang = [0.0, 0.0, 0.0]
+    for c in couplings:
+        c_lin, c_ang = c.acceleration(state, target)
+        cl, ca = c_lin.tolist(), c_ang.tolist()
+        for i in range(3):
+            lin[i] += cl[i]
+            ang[i] += ca[i]
+    return _integrate(state, lin, ang, dt, phase_step(state.phase, dt, target.tau, alpha_s))
+
+
+def _integrate(
+    state: PoseState, lin: list[float], ang: list[float], dt: float, phase: float
+) -> PoseState:
+    """Semi-implicit Euler and the exponential map, in floats, into one new state."""
+    y0, y1, y2 = state.position.tolist()
+    v0, v1, v2 = state.velocity.tolist()
+    w0, w1, w2 = state.angular_velocity.tolist()
+    v0 += lin[0] * dt
+    v1 += lin[1] * dt
+    v2 += lin[2] * dt
+    w0 += ang[0] * dt
+    w1 += ang[1] * dt
+    w2 += ang[2] * dt
+    q = quat.integrate_scalar(_quat_tuple(state.orientation), (w0, w1, w2), dt)
+    # One allocation for the whole state; the fields are views into it.
+    buf = np.array(
+        (y0 + v0 * dt, y1 + v1 * dt, y2 + v2 * dt, v0, v1, v2, *lin, *q, w0, w1, w2, *ang)
     )
+    return PoseState(buf[0:3], buf[3:6], buf[6:9], buf[9:13], buf[13:16], buf[16:19], phase)
 
 
 @dataclass(frozen=True)

@@ -262,3 +262,27 @@ def integrate_scalar(q: Quat, omega: Vec3, dt: float) -> Quat:
         aw * bz + ax * by - ay * bx + az * bw,
         aw * bw - ax * bx - ay * by - az * bz,
     )
+
+
+def matrix_scalar(q: Quat) -> Array:
+    """Rotation matrix (3, 3) of one quaternion given as floats (one small allocation)."""
+    x, y, z, w = q
+    return np.array(
+        (
+            (1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)),
+            (2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)),
+            (2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)),
+        )
+    )
+
+
+def multiply_scalar(a: Quat, b: Quat) -> Quat:
+    """Hamilton product ``a * b`` of two quaternions given as floats."""
+    ax, ay, az, aw = a
+    bx, by, bz, bw = b
+    return (
+        aw * bx + ax * bw + ay * bz - az * by,
+        aw * by - ax * bz + ay * bw + az * bx,
+        aw * bz + ax * by - ay * bx + az * bw,
+        aw * bw - ax * bx - ay * by - az * bz,
+    )

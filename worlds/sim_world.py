@@ -28,6 +28,8 @@ from worlds.scene import LATERAL_PALM_QUATERNIONS, Scene, ShapeKind, ShapeSpec
 from worlds.world_file import World
 
 ARMS = (Arm.LEFT, Arm.RIGHT)
+#: Highest an object's centre may be carried above the table top, m.
+MAX_LIFT_M = 0.30
 
 
 def shape_extents(shape: ShapeSpec) -> Array:
@@ -193,6 +195,21 @@ class SimWorld:
     def object_extents(self, name: str) -> Array:
         """Bounding-box extents (3,), m."""
         return self._extents[name].copy()
+
+    def workspace_bounds(self, name: str) -> tuple[Array, Array]:
+        """Centre bounds: over the table top by half the object's height, over its footprint,
+        at most ``MAX_LIFT_M`` above the table (higher lifts bring the forearms up to the
+        obstacles the object avoids)."""
+        t = self.world_file.table
+        half = self._extents[name] / 2.0
+        top = t.position[2]
+        lower = np.array(
+            [t.position[0] - t.size[0] / 2.0, t.position[1] - t.size[1] / 2.0, top + half[2]]
+        )
+        upper = np.array(
+            [t.position[0] + t.size[0] / 2.0, t.position[1] + t.size[1] / 2.0, top + MAX_LIFT_M]
+        )
+        return lower, upper
 
     def object_context(self, name: str) -> ObjectContext:
         """The object's affordance context (from the world file)."""

@@ -111,6 +111,12 @@ class PathClear(WorldLeaf):
             default_value=1.0,
             description="multiplies the avoidance skills' weights",
         ),
+        "transport_weight": PortInformation(
+            float,
+            required=False,
+            default_value=1.0,
+            description="multiplies the pick-and-place skill's weight (a lower carry)",
+        ),
         "margin_m": PortInformation(
             float, required=False, default_value=0.0, description="clearance required, m"
         ),
@@ -139,6 +145,7 @@ class PathClear(WorldLeaf):
             self.get_input("from_state"),
             depth,
             avoid_gain=float(self.get_input("avoid_gain")),
+            transport_weight=float(self.get_input("transport_weight")),
         )
         n = int(np.ceil((composer.target.tau + 0.5) / self.control_dt))
         obj_p, obj_q, palm_p, palm_q = [], [], [], []
@@ -158,4 +165,9 @@ class PathClear(WorldLeaf):
         )
         if check.clear:
             return self.succeed(f"clear by {check.min_distance_m * 1000:.0f} mm over {n} steps")
-        return self.fail(f"predicted collision at step {check.first_collision}: {check.detail}")
+        k = check.first_collision or 0
+        where = np.round(obj_p[k], 3).tolist()
+        return self.fail(
+            f"predicted collision at step {k} (object at {where}, "
+            f"palms at {np.round(palm_p[k], 3).tolist()}): {check.detail}"
+        )

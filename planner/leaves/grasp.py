@@ -14,9 +14,31 @@ from planner.composition import (
 )
 from planner.leaves.base import WorldLeaf, status_is_halt
 from planner.port import Pose
-from skills.composer import DualArmComposer, DualArmState
+from skills.composer import DualArmComposer, DualArmState, relative_from_world
 from skills.dual_arm import ARMS
 from skills.labels import Action
+from skills.pose_dmp import PoseState
+
+
+def anchored(composer: DualArmComposer, measured: Pose) -> DualArmState:
+    """The grasp's state with {O} moved onto the measured object, palm references unchanged.
+
+    Closing can nudge the object; from here on the object's frame must be where it really
+    is, so that transports put the object (not an idealised grip) on the goal. The palms'
+    world references stay as they are, so the commands do not jump.
+    """
+    cmd = composer.commands()
+    rel = [
+        relative_from_world(
+            measured.position, measured.orientation, cmd.positions[i], cmd.orientations[i]
+        )
+        for i in range(2)
+    ]
+    return DualArmState(
+        PoseState.at_rest(measured.position, measured.orientation),
+        PoseState.at_rest(*rel[0]),
+        PoseState.at_rest(*rel[1]),
+    )
 
 
 def squeeze_force(plan: SemanticAction | None, default: float) -> float:
@@ -84,7 +106,7 @@ class Grasp(WorldLeaf):
         forces = [world.contact_force(arm, name) for arm in ARMS]
         settled = world.time() - self.started > 0.5
         if settled and min(forces) >= 0.8 * self.force:
-            self._set_output("state", self.composer.state)
+            self._set_output("state", anchored(self.composer, world.object_pose(name)))
             return self.succeed(f"squeezing {forces[0]:.1f} N and {forces[1]:.1f} N")
         return self.running(f"closing: {forces[0]:.1f} N, {forces[1]:.1f} N of {self.force:.1f}")
 

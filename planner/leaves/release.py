@@ -6,7 +6,12 @@ import numpy as np
 from py_trees.common import Status
 from py_trees.ports import PortInformation
 
-from planner.composition import lateral_geometry, opening_terms, static_composition
+from planner.composition import (
+    held_geometry,
+    lateral_geometry,
+    opening_terms,
+    static_composition,
+)
 from planner.leaves.base import WorldLeaf, status_is_halt
 from planner.leaves.palm_motion import ViaPointMotion, measured_state
 from planner.port import Pose
@@ -40,12 +45,12 @@ class Release(WorldLeaf):
         if self.connected() is not None:
             return
         name = self.get_input("object")
+        state = self.get_input("from_state")
         relative = opening_terms(
-            lateral_geometry(self.world, name), float(self.get_input("opening_m"))
+            held_geometry(state, lateral_geometry(self.world, name)),
+            float(self.get_input("opening_m")),
         )
-        self.composer = static_composition(
-            self.get_input("from_state"), relative, float(self.get_input("open_s"))
-        )
+        self.composer = static_composition(state, relative, float(self.get_input("open_s")))
         self.started = self.world.time()
 
     def update(self) -> Status:

@@ -44,6 +44,12 @@ class Transport(WorldLeaf):
             default_value=1.0,
             description="multiplies the avoidance skills' weights",
         ),
+        "transport_weight": PortInformation(
+            float,
+            required=False,
+            default_value=1.0,
+            description="multiplies the pick-and-place skill's weight (a lower carry)",
+        ),
         "settle_s": PortInformation(
             float,
             required=False,
@@ -82,6 +88,7 @@ class Transport(WorldLeaf):
             self.get_input("from_state"),
             depth,
             avoid_gain=float(self.get_input("avoid_gain")),
+            transport_weight=float(self.get_input("transport_weight")),
         )
         self.started = world.time()
         self.weak_ticks = 0
@@ -93,7 +100,7 @@ class Transport(WorldLeaf):
         assert self.composer is not None
         world = self.world
         name = self.get_input("object")
-        refresh_link_points(self.composer, world)
+        refresh_link_points(self.composer, world, name)
         cmd = self.composer.step(self.control_dt)
         for i, arm in enumerate(ARMS):
             world.command_palm(arm, Pose(cmd.positions[i], cmd.orientations[i]), cmd.twists[i])
@@ -118,8 +125,12 @@ class Transport(WorldLeaf):
                 f"placed {err_m * 1000:.1f} mm, {np.degrees(err_rad):.1f} deg from the goal"
             )
         if elapsed > tau + float(self.get_input("settle_s")) and still:
-            self._set_output("to_state", self.composer.state)
-            return self.succeed("reference settled short of the goal")
+            err_m, err_rad = goal_error(world, name, self.move.goal)
+            if err_m <= 0.01:
+                self._set_output("to_state", self.composer.state)
+                return self.succeed(
+                    f"settled {err_m * 1000:.1f} mm, {np.degrees(err_rad):.1f} deg from the goal"
+                )
         return self.running(f"move {self.get_input('move')}: {elapsed:.1f} of {tau:.1f} s")
 
     def terminate(self, new_status: Status) -> None:

@@ -196,6 +196,14 @@ class FakeWorld:
         """Box extents (3,), m."""
         return self._objects[name].extents.copy()
 
+    def workspace_bounds(self, name: str) -> tuple[Array, Array]:
+        """Above the table by half the object's height; a generous box otherwise."""
+        half = self._objects[name].extents[2] / 2.0
+        return (
+            np.array([0.3, -0.5, self.table_height + half]),
+            np.array([1.0, 0.5, self.table_height + 0.5]),
+        )
+
     def object_context(self, name: str) -> ObjectContext:
         """Affordance context of a box object with the present obstacles and task goals."""
         obj = self._objects[name]

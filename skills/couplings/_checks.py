@@ -51,3 +51,13 @@ def unit_vector(value: ArrayLike, name: str) -> Array:
     arr /= n
     arr.setflags(write=False)
     return arr
+
+
+def assign(obj: object, **values: object) -> None:
+    """Set attributes on a frozen dataclass from its hand-written ``__init__``.
+
+    The coupling classes take ``array_like`` arguments but hold validated arrays, so each
+    writes its ``__init__`` (typed for callers) and validates in ``__post_init__``.
+    """
+    for name, value in values.items():
+        object.__setattr__(obj, name, value)

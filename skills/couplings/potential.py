@@ -36,9 +36,12 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from numpy.typing import ArrayLike
 
-from skills.couplings._checks import ZERO3, positive, vector
+from skills.couplings._checks import ZERO3, assign, positive
 from skills.pose_dmp import PoseState, PoseTarget
 from skills.types import Array
+
+_ZERO = np.array(0.0)
+_TINY = np.array(1e-300)
 
 #: ``query(points (N, 3)) -> (distances (N,), closest_points (N, 3))``, world frame, m.
 DistanceQuery = Callable[[Array], tuple[Array, Array]]
@@ -54,7 +57,7 @@ def potential(
     influence: float = math.inf,
     min_distance: float = 1e-3,
 ) -> Array:
-    """The dynamic potential ``U`` per point (for checks and plots), shape (N,), 1/s.
+    """The dynamic potential ``U`` per point (for checks and plots), shape (N,), m^2/s^2.
 
     Parameters
     ----------
@@ -127,15 +130,21 @@ def _coefficients(
     which is the docstring's gradient regrouped (``v.n = -q / |r|``, ``|v| C / |r| = q / |r|^2``)
     so that every operation is one call on N values: this runs every control tick.
     """
+    # 0-d array constants: numpy converts a Python float on every call, which costs more
+    # than the arithmetic on a few points.
     q = -vr
-    c = np.maximum(q, 0.0)
-    c /= np.maximum(np.sqrt(rr * vv), 1e-300)
+    c = np.maximum(q, _ZERO)
+    c /= np.maximum(np.sqrt(rr * vv), _TINY)
     ip = np.reciprocal(np.maximum(distances, min_distance))
-    g = np.maximum(ip - 1.0 / influence, 0.0) if math.isfinite(influence) else ip
+    if math.isfinite(influence):
+        g = np.maximum(ip - 1.0 / influence, _ZERO)
+        c *= g > _ZERO  # U = 0 beyond the influence: so is its gradient's 1/p^2 part
+    else:
+        g = ip
     if beta == 2.0:
         h = c * ip
     elif beta == 1.0:  # C^0 = 1 would leak into receding points, where U is flat
-        h = np.where(q > 0.0, ip, 0.0)
+        h = np.where(c > _ZERO, ip, _ZERO)
     else:
         h = c ** (beta - 1.0) * ip
     alpha = beta * g
@@ -143,7 +152,7 @@ def _coefficients(
     alpha *= h
     kappa *= h
     kappa *= q
-    kappa /= np.maximum(rr, 1e-300)
+    kappa /= np.maximum(rr, _TINY)
     return alpha, kappa
 
 
@@ -163,7 +172,7 @@ def _matrix(q: Array) -> tuple[float, ...]:
     )
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, init=False)
 class PotentialFieldAvoidance:
     """Pushes the object away when any of its attached points approaches an obstacle.
 
@@ -188,23 +197,38 @@ class PotentialFieldAvoidance:
 
     query: DistanceQuery
     points_object: Array
-    gain: float = 0.05
-    beta: float = 2.0
-    influence: float = 0.3
-    min_distance: float = 1e-3
-    gyration_radius: float | None = None
+    gain: float
+    beta: float
+    influence: float
+    min_distance: float
+    gyration_radius: float | None
     _inv_rho2: float = field(init=False, repr=False)
-    _points_t: Array = field(init=False, repr=False)
+    _points_h: Array = field(init=False, repr=False)
+
+    def __init__(
+        self,
+        query: DistanceQuery,
+        points_object: ArrayLike,
+        gain: float = 0.05,
+        beta: float = 2.0,
+        influence: float = 0.3,
+        min_distance: float = 1e-3,
+        gyration_radius: float | None = None,
+    ) -> None:
+        assign(
+            self,
+            query=query,
+            points_object=points_object,
+            gain=gain,
+            beta=beta,
+            influence=influence,
+            min_distance=min_distance,
+            gyration_radius=gyration_radius,
+        )
+        self.__post_init__()
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
-        pts = vector(
-            np.reshape(np.asarray(self.points_object, dtype=float), (-1, 3)),
-            (-1, 3),
-            "points_object",
-        )
-        set_(self, "points_object", pts)
-        set_(self, "_points_t", np.ascontiguousarray(pts.T))
         set_(self, "gain", positive(self.gain, "gain"))
         beta = float(self.beta)
         if not (math.isfinite(beta) and beta >= 1.0):
@@ -217,19 +241,44 @@ class PotentialFieldAvoidance:
             )
         set_(self, "influence", influence)
         set_(self, "min_distance", positive(self.min_distance, "min_distance"))
-        if self.gyration_radius is None:
-            rho2 = float(np.mean(np.einsum("nk,nk->n", pts, pts))) if pts.shape[0] else 0.0
-        else:
-            rho2 = positive(self.gyration_radius, "gyration_radius") ** 2
-        set_(self, "_inv_rho2", 1.0 / rho2 if rho2 > 1e-12 else 0.0)
+        if self.gyration_radius is not None:
+            set_(self, "gyration_radius", positive(self.gyration_radius, "gyration_radius"))
         if not callable(self.query):
             raise ValueError(
                 f"query: expected a callable points -> (distances, closest), got {self.query!r}"
             )
+        self._set_points(self.points_object)
+
+    def _set_points(self, points_object: ArrayLike) -> None:
+        # The per-tick part of construction (arm-link points move every control tick), kept
+        # to a few numpy calls: numpy's reductions cost more than the maths on 8 points.
+        pts = np.array(points_object, dtype=float)
+        if pts.ndim != 2 or pts.shape[1] != 3:
+            if pts.size != 0:
+                raise ValueError(f"points_object: expected shape (N, 3), got {pts.shape}")
+            pts = np.zeros((0, 3))
+        n = pts.shape[0]
+        total = sum(_dot(pts, pts).tolist())  # NaN or inf anywhere makes it non-finite
+        if not math.isfinite(total):
+            raise ValueError("points_object: expected finite values, got NaN or inf")
+        pts.setflags(write=False)
+        homogeneous = np.empty((n, 4))
+        homogeneous[:, :3] = pts
+        homogeneous[:, 3] = 1.0
+        rho2 = total / n if n else 0.0
+        if self.gyration_radius is not None:
+            rho2 = self.gyration_radius**2
+        set_ = object.__setattr__
+        set_(self, "points_object", pts)
+        set_(self, "_points_h", homogeneous)
+        set_(self, "_inv_rho2", 1.0 / rho2 if rho2 > 1e-12 else 0.0)
 
     def with_points(self, points_object: ArrayLike) -> PotentialFieldAvoidance:
-        """The same field on other points (N, 3) in the object frame, m."""
-        return replace(self, points_object=np.asarray(points_object))
+        """The same field on other points (N, 3) in the object frame, m (cheap: every tick)."""
+        out = object.__new__(PotentialFieldAvoidance)
+        out.__dict__.update(self.__dict__)  # copy.copy's reduce protocol costs 5x more
+        out._set_points(points_object)
+        return out
 
     def with_query(self, query: DistanceQuery) -> PotentialFieldAvoidance:
         """The same field against other obstacles."""
@@ -237,19 +286,60 @@ class PotentialFieldAvoidance:
 
     def world_points(self, state: PoseState) -> tuple[Array, Array, Array]:
         """Lever arms ``R r_i``, positions and velocities of the points, each (N, 3), world."""
+        both = self._world(state)
+        return both[:, :3], both[:, 7:], both[:, 4:7]
+
+    def _world(self, state: PoseState) -> Array:
+        # One product [r_i, 1] @ T gives [R r_i, 1, v + omega x R r_i, y + R r_i], (N, 10):
+        # the column of ones later turns the torque product into the force sum as well.
         m00, m01, m02, m10, m11, m12, m20, m21, m22 = _matrix(state.orientation)
         wx, wy, wz = state.angular_velocity.tolist()
-        # [R | S(omega) R] transposed: one product gives lever arms and their velocities.
-        rot_t = np.array(
+        vx, vy, vz = state.velocity.tolist()
+        px, py, pz = state.position.tolist()
+        return self._points_h @ np.array(
             (
-                (m00, m10, m20, wy * m20 - wz * m10, wz * m00 - wx * m20, wx * m10 - wy * m00),
-                (m01, m11, m21, wy * m21 - wz * m11, wz * m01 - wx * m21, wx * m11 - wy * m01),
-                (m02, m12, m22, wy * m22 - wz * m12, wz * m02 - wx * m22, wx * m12 - wy * m02),
+                m00,
+                m10,
+                m20,
+                0.0,
+                wy * m20 - wz * m10,
+                wz * m00 - wx * m20,
+                wx * m10 - wy * m00,
+                m00,
+                m10,
+                m20,
+                m01,
+                m11,
+                m21,
+                0.0,
+                wy * m21 - wz * m11,
+                wz * m01 - wx * m21,
+                wx * m11 - wy * m01,
+                m01,
+                m11,
+                m21,
+                m02,
+                m12,
+                m22,
+                0.0,
+                wy * m22 - wz * m12,
+                wz * m02 - wx * m22,
+                wx * m12 - wy * m02,
+                m02,
+                m12,
+                m22,
+                0.0,
+                0.0,
+                0.0,
+                1.0,
+                vx,
+                vy,
+                vz,
+                px,
+                py,
+                pz,
             )
-        )
-        both = self.points_object @ rot_t
-        arms = both[:, :3]
-        return arms, arms + state.position, both[:, 3:] + state.velocity
+        ).reshape(4, 10)
 
     def point_accelerations(self, state: PoseState) -> Array:
         """``-grad U`` of every point, (N, 3), world frame, m/s^2."""
@@ -275,21 +365,23 @@ class PotentialFieldAvoidance:
         """
         if self.points_object.shape[0] == 0:
             return ZERO3.copy(), ZERO3.copy()
-        arms, x, v = self.world_points(state)
-        distances, closest = self.query(x)
-        r = x - closest
+        both = self._world(state)
+        v = both[:, 4:7]
+        distances, closest = self.query(both[:, 7:])
+        r = both[:, 7:] - closest
         vr = _dot(v, r)
-        if distances.min() >= self.influence or vr.min() >= 0.0:
+        # Python's min on a few floats is cheaper than numpy's reduction machinery.
+        if min(distances.tolist()) >= self.influence or min(vr.tolist()) >= 0.0:
             return ZERO3.copy(), ZERO3.copy()  # nothing near or nothing approaching: the usual case
         alpha, kappa = _coefficients(
             _dot(r, r), vr, _dot(v, v), distances, self.beta, self.influence, self.min_distance
         )
         a = alpha[:, None] * v
         a += kappa[:, None] * r
-        m = arms.T @ a  # m[i, j] = sum_n arm_i a_j; the torque is its antisymmetric part
-        ml = m.ravel().tolist()
+        # rows 0-2: sum_n arm_i a_j (the torque is its antisymmetric part); row 3: sum_n a_j
+        m = (both[:, :4].T @ a).ravel().tolist()
         lam = self.gain
         k = lam * self._inv_rho2
-        return lam * a.sum(axis=0), np.array(
-            (k * (ml[5] - ml[7]), k * (ml[6] - ml[2]), k * (ml[1] - ml[3]))
+        return np.array((lam * m[9], lam * m[10], lam * m[11])), np.array(
+            (k * (m[5] - m[7]), k * (m[6] - m[2]), k * (m[1] - m[3]))
         )

@@ -13,20 +13,25 @@ a vector of length ``|v|``, perpendicular to ``v`` and pointing away from the ob
 
 Decisions
 ---------
-* Obstacles at ``phi >= max_angle`` (default ``pi / 2``: behind the direction of travel) are
-  ignored. An obstacle behind cannot be hit by going on; steering from it would only delay
-  the return to the goal. The step this makes at ``phi = max_angle`` is
-  ``gamma (pi/2) exp(-beta pi/2) |v|``, small for the usual ``beta`` (pass ``max_angle=pi``
-  for Hoffmann's law unchanged).
-* Heading exactly at an obstacle's centre (``phi = 0``) gives zero: the law has no preferred
-  side there, and its ``phi`` factor vanishes. Any offset breaks the tie.
+* No cutoff behind by default (``max_angle = pi``): Hoffmann's law unchanged, continuous,
+  fading as ``phi exp(-beta phi)`` once the obstacle is abeam and vanishing straight behind.
+  ``max_angle = pi / 2`` ignores obstacles behind the direction of travel instead, at the cost
+  of a step of ``gamma (pi/2) exp(-beta pi/2) exp(-k d^2) |v|`` when one comes abeam. Measured
+  on the human-like teacher of :mod:`skills.demos.avoidance` (0.6 m reach in 1 s, 6 cm sphere
+  on the line): fitted with the cutoff, the rollout's peak acceleration was 15.8 m/s^2 and its
+  jerk 6,100 m/s^3 at the step; without it, 4.0 m/s^2 and 92 m/s^3, the same clearance, and a
+  better fit (relative residual 0.38 against 0.48).
+* Heading exactly at, or exactly away from, an obstacle's centre (``sin phi < 1e-7``) gives
+  zero: ``R`` has no axis there. At ``phi = 0`` the law's ``phi`` factor vanishes too, so it
+  stays continuous (any offset breaks the tie); dead behind (``phi = pi``) Hoffmann's law is
+  itself discontinuous, and zero is the middle of its two one-sided limits.
 * Zero when the speed is below ``min_speed``.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -35,7 +40,9 @@ from skills.couplings._checks import ZERO3, non_negative, positive, vector
 from skills.pose_dmp import PoseState, PoseTarget
 from skills.types import Array
 
-_TINY = 1e-12
+#: Below this ``sin(phi)`` the obstacle is dead ahead or behind: the law has no direction (and
+#: ``|D x v|`` from ``|D|^2 |v|^2 - (D.v)^2`` is rounding noise below about 2e-8).
+_COLLINEAR = 1e-7
 
 
 def steering_accelerations(
@@ -46,7 +53,7 @@ def steering_accelerations(
     gamma: float,
     beta: float,
     k: float,
-    max_angle: float = math.pi / 2,
+    max_angle: float = math.pi,
 ) -> Array:
     """The steering law for many states at once (the pure function behind the class).
 
@@ -79,14 +86,14 @@ def steering_accelerations(
     cross = np.sqrt(np.maximum(dd * vv[:, None] - dv * dv, 0.0))
     phi = np.arctan2(cross, dv)
     clearance = np.maximum(np.sqrt(dd) - radii, 0.0)
-    w = gamma * phi * np.exp(-beta * phi - k * clearance * clearance) / np.maximum(cross, _TINY)
-    w = np.where((phi < max_angle) & (vv[:, None] > _TINY), w, 0.0)
+    w = gamma * phi * np.exp(-beta * phi - k * clearance * clearance) / np.maximum(cross, 1e-300)
+    w = np.where((phi < max_angle) & (cross > _COLLINEAR * np.sqrt(dd * vv[:, None])), w, 0.0)
     return velocities * np.sum(w * dv, axis=1)[:, None] - vv[:, None] * np.einsum(
         "nm,nmk->nk", w, d_obs
     )
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, init=False)
 class ObstacleSteering:
     """Steers the object's position around spherical obstacles (a :class:`CouplingTerm`).
 
@@ -105,7 +112,7 @@ class ObstacleSteering:
     object_radius : float
         Bounding radius of the carried object, m (>= 0); 0 steers a point.
     max_angle : float
-        Obstacles at ``phi >= max_angle`` are ignored, rad in (0, pi].
+        Obstacles at ``phi >= max_angle`` are ignored, rad in (0, pi]; pi keeps them all.
     min_speed : float
         Below this speed (m/s) the term is zero.
     """
@@ -113,41 +120,66 @@ class ObstacleSteering:
     gamma: float
     beta: float
     k: float
-    centres: Array = field(default_factory=lambda: np.zeros((0, 3)))
-    radii: Array = field(default_factory=lambda: np.zeros(0))
-    object_radius: float = 0.0
-    max_angle: float = math.pi / 2
-    min_speed: float = 1e-6
+    centres: Array
+    radii: Array
+    object_radius: float
+    max_angle: float
+    min_speed: float
     _reach: Array = field(init=False, repr=False)
 
-    def __post_init__(self) -> None:
+    def __init__(
+        self,
+        gamma: float,
+        beta: float,
+        k: float,
+        centres: ArrayLike | None = None,
+        radii: ArrayLike | None = None,
+        object_radius: float = 0.0,
+        max_angle: float = math.pi,
+        min_speed: float = 1e-6,
+    ) -> None:
         set_ = object.__setattr__
-        set_(self, "gamma", positive(self.gamma, "gamma"))
-        set_(self, "beta", positive(self.beta, "beta"))
-        set_(self, "k", non_negative(self.k, "k"))
-        set_(self, "object_radius", non_negative(self.object_radius, "object_radius"))
-        set_(self, "min_speed", non_negative(self.min_speed, "min_speed"))
-        angle = float(self.max_angle)
+        set_(self, "gamma", positive(gamma, "gamma"))
+        set_(self, "beta", positive(beta, "beta"))
+        set_(self, "k", non_negative(k, "k"))
+        set_(self, "object_radius", non_negative(object_radius, "object_radius"))
+        set_(self, "min_speed", non_negative(min_speed, "min_speed"))
+        angle = float(max_angle)
         if not 0.0 < angle <= math.pi:
-            raise ValueError(f"max_angle: expected a value in (0, pi] rad, got {self.max_angle!r}")
+            raise ValueError(f"max_angle: expected a value in (0, pi] rad, got {max_angle!r}")
         set_(self, "max_angle", angle)
-        centres = vector(np.reshape(self.centres, (-1, 3)), (-1, 3), "centres")
-        radii = vector(np.reshape(self.radii, (-1,)), (-1,), "radii")
-        if radii.shape[0] != centres.shape[0]:
+        c = vector(
+            np.reshape(np.asarray(() if centres is None else centres, float), (-1, 3)),
+            (-1, 3),
+            "centres",
+        )
+        r = vector(
+            np.reshape(np.asarray(() if radii is None else radii, float), (-1,)), (-1,), "radii"
+        )
+        if r.shape[0] != c.shape[0]:
             raise ValueError(
-                f"radii: expected one radius per centre ({centres.shape[0]}), got {radii.shape[0]}"
+                f"radii: expected one radius per centre ({c.shape[0]}), got {r.shape[0]}"
             )
-        if np.any(radii < 0.0):
-            raise ValueError(f"radii: expected values >= 0 m, got {radii.tolist()}")
-        set_(self, "centres", centres)
-        set_(self, "radii", radii)
-        reach = radii + self.object_radius
+        if np.any(r < 0.0):
+            raise ValueError(f"radii: expected values >= 0 m, got {r.tolist()}")
+        set_(self, "centres", c)
+        set_(self, "radii", r)
+        reach = r + self.object_radius
         reach.setflags(write=False)
         set_(self, "_reach", reach)
 
     def with_obstacles(self, centres: ArrayLike, radii: ArrayLike) -> ObstacleSteering:
         """The same law for another set of obstacles (centres (M, 3) m, radii (M,) m)."""
-        return replace(self, centres=np.asarray(centres), radii=np.asarray(radii))
+        return ObstacleSteering(
+            self.gamma,
+            self.beta,
+            self.k,
+            centres,
+            radii,
+            self.object_radius,
+            self.max_angle,
+            self.min_speed,
+        )
 
     def acceleration(self, state: PoseState, target: PoseTarget) -> tuple[Array, Array]:
         """Steering acceleration of the position, m/s^2; the angular part is zero.
@@ -179,8 +211,8 @@ class ObstacleSteering:
         clearance = np.maximum(np.sqrt(dd) - self._reach, 0.0)
         w = np.exp(-self.beta * phi - self.k * clearance * clearance)
         w *= phi
-        w /= np.maximum(cross, _TINY)
-        w[phi >= self.max_angle] = 0.0
+        w /= np.maximum(cross, 1e-300)
+        w[(phi >= self.max_angle) | (cross <= _COLLINEAR * np.sqrt(dd * vv))] = 0.0
         w *= self.gamma
         return v * float(w @ dv) - vv * (w @ d_obs), ZERO3.copy()
 
@@ -194,15 +226,10 @@ class ObstacleSteering:
         dd = dx * dx + dy * dy + dz * dz
         cross = math.sqrt(max(dd * vv - dv * dv, 0.0))
         phi = math.atan2(cross, dv)
-        if phi >= self.max_angle:
+        if phi >= self.max_angle or cross <= _COLLINEAR * math.sqrt(dd * vv):
             return ZERO3.copy()
         clearance = max(math.sqrt(dd) - float(self._reach[0]), 0.0)
-        w = (
-            self.gamma
-            * phi
-            * math.exp(-self.beta * phi - self.k * clearance * clearance)
-            / max(cross, _TINY)
-        )
+        w = self.gamma * phi * math.exp(-self.beta * phi - self.k * clearance * clearance) / cross
         a = w * dv
         b = w * vv
         return np.array((a * vx - b * dx, a * vy - b * dy, a * vz - b * dz))

@@ -136,7 +136,7 @@ def fit_obstacle_steering(
     model: PoseModel | None = None,
     params: DMPParams | None = None,
     object_radius: float = 0.0,
-    max_angle: float = math.pi / 2,
+    max_angle: float = math.pi,
 ) -> SteeringFit:
     """Fit ``gamma, beta, k`` of the steering law to demonstrated avoidance.
 

@@ -7,7 +7,8 @@ files byte for byte. The teachers are synthetic and human-like (see ``README.md`
    carry inside a lift-and-lower profile, with a hand's tremor fading out at both ends.
 2. ``rotate_z.csv``: a 90 degree turn about the vertical (:mod:`skills.demos.rotation`).
 3. ``avoid_obstacle.csv``: a reach bent around a sphere through a via-point
-   (:mod:`skills.demos.avoidance`); columns ``ox, oy, oz, radius`` give the obstacle.
+   (:mod:`skills.demos.avoidance`); columns ``ox, oy, oz, radius`` give the obstacle and
+   ``bx, by, bz`` the same teacher's unobstructed reach, sampled at the same times.
 4. ``grasp_maintenance.csv``: a palm's pose in the object frame while the teacher holds the
    parcel's face and the palm is pushed off and pulls back (a spring-damper the fit recovers);
    column ``force`` is the contact force the teacher's palm sensor read.
@@ -22,7 +23,7 @@ import numpy as np
 
 from skills import quaternion as quat
 from skills.demos._smooth import min_jerk, tremor
-from skills.demos.avoidance import avoidance_demo
+from skills.demos.avoidance import avoidance_demo, straight_demo
 from skills.demos.io import write_demo_csv
 from skills.demos.rotation import rotation_demo
 from skills.dual_arm import GraspGeometry
@@ -65,12 +66,17 @@ def rotate_z(rng: np.random.Generator) -> tuple[Array, Array, Array]:
     return rotation_demo(np.pi / 2, 0.0, (0.6, 0.0, 0.78), 2.0, 300, 0.005, rng)
 
 
-def avoid(rng: np.random.Generator) -> tuple[tuple[Array, ...], Array, float]:
-    """A carry whose straight line passes through a sphere; the teacher goes over it."""
+def avoid(rng: np.random.Generator) -> tuple[tuple[Array, ...], Array, Array, float]:
+    """A reach whose straight line passes through a sphere; the teacher goes over it.
+
+    Returns the avoiding demonstration, the same teacher's unobstructed reach (the base motion
+    the avoidance is learnt against), the obstacle's centre and radius.
+    """
     start, goal = np.array([0.55, 0.15, 0.70]), np.array([0.55, -0.15, 0.70])
     centre, radius = np.array([0.55, 0.0, 0.70]), 0.06
     demo = avoidance_demo(start, goal, centre, radius, 0.06, None, 2.5, 300, 5e-4, rng)
-    return demo, centre, radius
+    _, base, _ = straight_demo(start, goal, 2.5, 300, 5e-4, rng)
+    return demo, base, centre, radius
 
 
 def grasp_maintenance(
@@ -110,7 +116,7 @@ def write_all(out: Path = HERE, seed: int = DEFAULT_SEED) -> list[Path]:
     rng = np.random.default_rng(seed)
     paths = [write_demo_csv(out / "pick_place.csv", *pick_place(rng))]
     paths.append(write_demo_csv(out / "rotate_z.csv", *rotate_z(rng)))
-    (t, p, q), centre, radius = avoid(rng)
+    (t, p, q), base, centre, radius = avoid(rng)
     n = t.shape[0]
     paths.append(
         write_demo_csv(
@@ -123,6 +129,9 @@ def write_all(out: Path = HERE, seed: int = DEFAULT_SEED) -> list[Path]:
                 "oy": np.full(n, centre[1]),
                 "oz": np.full(n, centre[2]),
                 "radius": np.full(n, radius),
+                "bx": base[:, 0],
+                "by": base[:, 1],
+                "bz": base[:, 2],
             },
         )
     )

@@ -1,0 +1,127 @@
+"""Composition benchmark: one dual-arm composition step, and learning the default skills.
+
+The step composes two absolute skills (the learnt pick-and-place and rotation), obstacle
+steering, potential-field avoidance over 8 link points and grasp maintenance on both palms,
+and yields both palms' poses and twists (the paper's eq. 5). With ``--json`` the last line is
+``{"step_us": ..., "fit_ms": ...}``; medians of repeats. Target: step <= 50 us with numpy.
+For scale, movement_primitives' dual-arm step with pose coupling takes 1.5-1.7 ms.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from collections.abc import Callable
+
+import numpy as np
+
+from skills import quaternion as quat
+from skills.composer import DualArmComposer, grasped_state
+from skills.couplings.grasp import GraspMaintenance
+from skills.couplings.potential import PotentialFieldAvoidance
+from skills.couplings.steering import ObstacleSteering
+from skills.default_library import build_default_library
+from skills.dual_arm import ARMS, GraspGeometry
+from skills.labels import Action
+from skills.pose_dmp import LearntForcing
+
+OBSTACLE = np.array([0.62, -0.08, 0.82])
+RADIUS = 0.04
+
+
+def sphere_query(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Distance from points (N, 3) to one sphere, and the closest surface points."""
+    diff = points - OBSTACLE
+    norm = np.sqrt(np.einsum("ij,ij->i", diff, diff))
+    return norm - RADIUS, OBSTACLE + diff * (RADIUS / np.maximum(norm, 1e-12))[:, None]
+
+
+def median_time(fn: Callable[[], object], repeats: int, inner: int) -> float:
+    """Median seconds per call over ``repeats`` batches of ``inner`` calls."""
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        for _ in range(inner):
+            fn()
+        times.append((time.perf_counter() - t0) / inner)
+    return float(np.median(times))
+
+
+def composer() -> DualArmComposer:
+    lib = build_default_library()
+    g = GraspGeometry.lateral(0.30, 0.02)
+    state = grasped_state(
+        [0.65, 0.0, 0.675],
+        quat.IDENTITY,
+        (g.left_position, g.left_orientation),
+        (g.right_position, g.right_orientation),
+    )
+    steer = lib.first(Action.AVOID_OBSTACLE).params
+    links = np.array(
+        [
+            [-0.3, 0.25, 0.2],
+            [-0.2, 0.2, 0.15],
+            [-0.1, 0.18, 0.1],
+            [0.0, 0.16, 0.05],
+            [-0.3, -0.25, 0.2],
+            [-0.2, -0.2, 0.15],
+            [-0.1, -0.18, 0.1],
+            [0.0, -0.16, 0.05],
+        ]
+    )
+    absolute = [
+        (LearntForcing(lib.first(Action.TRANSPORT).pose_model()), 1.0),
+        (LearntForcing(lib.first(Action.ROTATE_Z).pose_model()), 1.0),
+        (
+            ObstacleSteering(
+                float(steer["gamma"]), float(steer["beta"]), float(steer["k"]), object_radius=0.1
+            ).with_obstacles(OBSTACLE[None], [RADIUS]),
+            1.0,
+        ),
+        (PotentialFieldAvoidance(sphere_query, links, gain=0.4), 1.0),
+    ]
+    relative = {
+        arm: [
+            (
+                GraspMaintenance(
+                    g.position(arm), g.orientation(arm), 0.015, inward_normal_object=g.normal(arm)
+                ),
+                1.0,
+            )
+        ]
+        for arm in ARMS
+    }
+    goal_q = quat.from_axis_angle([0.0, 0.0, 1.0], 0.4)
+    c = DualArmComposer.start(state, [0.6, -0.15, 0.675], goal_q, 2.5, absolute, relative)
+    for _ in range(40):  # mid-move, moving towards the obstacle
+        c.step(1.0 / 60.0)
+    return c
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--json", action="store_true", help="print a JSON summary last")
+    args = parser.parse_args()
+    fit_s = median_time(build_default_library, repeats=5, inner=1)
+    c = composer()
+    state = c.state
+    dt = 1.0 / 60.0
+
+    def step() -> None:
+        c.step(dt, state)  # closed loop from the same measured state each time
+
+    step_s = median_time(step, repeats=15, inner=300)
+    figures = {"step_us": round(step_s * 1e6, 1), "fit_ms": round(fit_s * 1e3, 1)}
+    print(
+        f"composition step (2 learnt skills, steering, 8-point field, grasp x2, eq. 5): "
+        f"{figures['step_us']} us (target <= 50)"
+    )
+    print(f"learning the 5 default skills from their demonstrations: {figures['fit_ms']} ms")
+    if args.json:
+        print(json.dumps(figures))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

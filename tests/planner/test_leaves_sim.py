@@ -1,0 +1,63 @@
+"""Robot leaves ticked alone against PyBullet (DIRECT): contact-only grasp, hold, release."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import pytest
+from py_trees.common import Status
+
+from planner.leaves import Approach, AtGoal, Grasp, IsHeld, Release, SelectSkills, Transport
+from planner.testing.harness import TickLog
+from skills.dual_arm import ARMS
+from worlds.sim_world import SimWorld
+
+pytestmark = pytest.mark.sim
+Tick = Callable[..., TickLog]
+
+
+def grasp(sim_world: SimWorld, tick_leaf: Tick) -> None:
+    assert tick_leaf(SelectSkills("select"), sim_world, object="parcel", plan="{plan}").final == (
+        Status.SUCCESS
+    )
+    log = tick_leaf(Approach("approach"), sim_world, object="parcel")
+    assert log.final == Status.SUCCESS, log.feedback
+    log = tick_leaf(Grasp("grasp"), sim_world, object="parcel", plan="{plan}", state="{state}")
+    assert log.final == Status.SUCCESS, log.feedback
+
+
+def test_grasp_squeezes_by_contact_alone(sim_world: SimWorld, tick_leaf: Tick) -> None:
+    grasp(sim_world, tick_leaf)
+    forces = [sim_world.contact_force(arm, "parcel") for arm in ARMS]
+    assert all(8.0 < f < 60.0 for f in forces), forces
+    held = tick_leaf(IsHeld("held"), sim_world, object="parcel")
+    assert held.final == Status.SUCCESS, held.feedback
+
+
+def test_transport_without_obstacles_places_the_parcel(
+    sim_world: SimWorld, tick_leaf: Tick
+) -> None:
+    grasp(sim_world, tick_leaf)
+    log = tick_leaf(
+        Transport("move0"),
+        sim_world,
+        max_ticks=1200,
+        object="parcel",
+        move=0,
+        plan="{plan}",
+        from_state="{state}",
+        to_state="{state}",
+    )
+    assert log.final == Status.SUCCESS, log.feedback
+    at_goal = tick_leaf(AtGoal("at_goal"), sim_world, object="parcel", move=0)
+    assert at_goal.final == Status.SUCCESS, at_goal.feedback
+    assert not sim_world.safety.dropped
+
+
+def test_release_opens_the_palms(sim_world: SimWorld, tick_leaf: Tick) -> None:
+    grasp(sim_world, tick_leaf)
+    log = tick_leaf(
+        Release("release"), sim_world, object="parcel", from_state="{state}", to_state="{state}"
+    )
+    assert log.final == Status.SUCCESS, log.feedback
+    assert max(sim_world.contact_force(arm, "parcel") for arm in ARMS) < 0.5

@@ -1,0 +1,174 @@
+"""Dynamic potential field (Park et al. 2008) on points attached to the object."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+
+from skills import quaternion as quat
+from skills.coupling import CouplingTerm
+from skills.couplings import PotentialFieldAvoidance
+from skills.couplings.potential import point_accelerations, potential
+from skills.pose_dmp import PoseModel, PoseState
+from skills.types import Array
+
+#: Coupling terms here ignore the DMP's target; any valid one will do.
+TARGET = PoseModel.still().target(np.zeros(3), quat.IDENTITY, np.ones(3), quat.IDENTITY, 1.0)
+
+OBSTACLE = np.array([0.5, 0.0, 0.0])
+RADIUS = 0.05
+
+
+def sphere(points: Array) -> tuple[Array, Array]:
+    """Distances and closest points on a sphere: the shape of an FCL query."""
+    d = points - OBSTACLE
+    n = np.linalg.norm(d, axis=1)
+    return n - RADIUS, OBSTACLE + RADIUS * d / n[:, None]
+
+
+def state(
+    position: object, velocity: object, yaw: float = 0.0, omega: object = (0, 0, 0)
+) -> PoseState:
+    z = np.zeros(3)
+    return PoseState(
+        np.asarray(position, dtype=float),
+        np.asarray(velocity, dtype=float),
+        z,
+        quat.from_axis_angle(np.array([0.0, 0.0, 1.0]), yaw),
+        np.asarray(omega, dtype=float),
+        z,
+    )
+
+
+def one_point(**kwargs: float) -> PotentialFieldAvoidance:
+    return PotentialFieldAvoidance(sphere, np.zeros((1, 3)), **kwargs)
+
+
+def test_is_a_coupling_term() -> None:
+    assert isinstance(one_point(), CouplingTerm)
+
+
+def test_head_on_pushes_opposite_to_the_velocity_with_lambda_v_over_p_squared() -> None:
+    field = one_point(gain=0.05, influence=math.inf)
+    lin, ang = field.acceleration(state([0.25, 0, 0], [0.4, 0, 0]), TARGET)
+    p = 0.25 - RADIUS
+    assert_allclose(lin, [-0.05 * 0.4 / p**2, 0.0, 0.0], rtol=1e-12)
+    assert_allclose(ang, 0.0)  # a point at the origin has no lever arm
+
+
+def test_zero_when_moving_away_sideways_still_or_beyond_the_influence() -> None:
+    field = one_point(gain=0.05, influence=0.3)
+    for s in (
+        state([0.25, 0, 0], [-0.4, 0, 0]),  # away
+        state([0.25, 0, 0], [0, 0.4, 0]),  # tangential: theta = pi/2
+        state([0.25, 0, 0], [0, 0, 0]),  # still
+        state([0.1, 0, 0], [0.4, 0, 0]),  # approaching but 0.35 m from the surface
+    ):
+        lin, ang = field.acceleration(s, TARGET)
+        assert_allclose(lin, 0.0, atol=0.0)
+        assert_allclose(ang, 0.0, atol=0.0)
+
+
+def test_approaching_at_an_angle_is_pushed_away_and_turned_aside() -> None:
+    field = one_point(gain=0.05, influence=0.3)
+    lin, _ = field.acceleration(state([0.3, 0.1, 0], [0.4, -0.1, 0]), TARGET)
+    away = np.array([0.3, 0.1, 0]) - OBSTACLE
+    assert lin @ away > 0.0
+    assert lin[1] > 0.0  # the obstacle is at -y of the path: turn to +y
+
+
+@pytest.mark.parametrize("beta", [1.0, 2.0, 3.5])
+@pytest.mark.parametrize("influence", [math.inf, 0.8])
+def test_gradient_matches_finite_differences(beta: float, influence: float) -> None:
+    rng = np.random.default_rng(7)
+    centre = np.zeros((1, 3))  # a point obstacle: the closest point does not move
+    for _ in range(20):
+        x = rng.normal(size=(1, 3)) * 0.3
+        v = -x * rng.uniform(0.5, 2.0) + rng.normal(size=(1, 3)) * 0.2
+        if float(np.sum(v * x)) >= -1e-3:
+            continue
+
+        def u(y: Array, v: Array = v) -> float:
+            d = np.linalg.norm(y - centre, axis=1)
+            return float(potential(y, v, centre, d, 0.05, beta, influence)[0])
+
+        h = 1e-6
+        fd = np.array([(u(x + h * e) - u(x - h * e)) / (2 * h) for e in np.eye(3)])
+        a = point_accelerations(x, v, centre, np.linalg.norm(x, axis=1), 0.05, beta, influence)
+        assert_allclose(a[0], -fd, rtol=1e-6, atol=1e-9 * np.abs(fd).max())
+
+
+def test_rigid_points_move_with_the_object_pose_and_twist() -> None:
+    offsets = np.array([[0.1, 0.0, 0.0], [0.0, 0.2, 0.0]])
+    field = PotentialFieldAvoidance(sphere, offsets)
+    s = state([1.0, 2.0, 3.0], [0.1, 0.0, 0.0], yaw=math.pi / 2, omega=[0.0, 0.0, 2.0])
+    arms, x, v = field.world_points(s)
+    assert_allclose(arms, [[0.0, 0.1, 0.0], [-0.2, 0.0, 0.0]], atol=1e-15)
+    assert_allclose(x, arms + [1.0, 2.0, 3.0])
+    assert_allclose(v, [[0.1 - 0.2, 0.0, 0.0], [0.1, -0.4, 0.0]], atol=1e-15)  # v + w x r
+
+
+def test_a_forearm_point_near_the_obstacle_pushes_and_turns_the_whole_system() -> None:
+    # The object is far from the obstacle; a point 0.3 m to its +x side is not.
+    offsets = np.array([[0.3, 0.0, 0.0], [-0.3, 0.0, 0.0]])
+    field = PotentialFieldAvoidance(sphere, offsets, gain=0.05, influence=0.3)
+    s = state([0.0, 0.1, 0.0], [0.0, -0.4, 0.0])
+    lin, ang = field.acceleration(s, TARGET)
+    x = np.array([0.3, 0.1, 0.0])
+    a = point_accelerations(x[None], np.array([[0, -0.4, 0]]), *_closest(x), 0.05, 2.0, 0.3)[0]
+    assert_allclose(lin, a, rtol=1e-12)  # only the near point contributes
+    rho2 = 0.3**2
+    assert_allclose(ang, np.cross([0.3, 0.0, 0.0], a) / rho2, rtol=1e-12)
+    n = (x - OBSTACLE) / np.linalg.norm(x - OBSTACLE)
+    assert lin @ n > 0.0  # pushed away from the obstacle
+
+    def approach(v: Array) -> float:  # -cos(theta)
+        return float(-(v @ n) / np.linalg.norm(v))
+
+    v = np.array([0.0, -0.4, 0.0])
+    assert approach(v + 1e-3 * lin) < approach(v)  # and turned away from it
+
+
+def _closest(x: Array) -> tuple[Array, Array]:
+    d, c = sphere(x[None])
+    return c, d
+
+
+def test_with_points_and_with_query_replace_what_they_say() -> None:
+    field = one_point()
+    moved = field.with_points([[0.0, 0.0, 0.0], [0.1, 0.0, 0.0]])
+    assert moved.points_object.shape == (2, 3)
+    assert moved.gain == field.gain
+    empty = field.with_points(np.zeros((0, 3)))
+    assert_allclose(empty.acceleration(state([0.25, 0, 0], [0.4, 0, 0]), TARGET)[0], 0.0)
+    far = field.with_query(lambda p: (np.full(len(p), 10.0), p + 10.0))
+    assert_allclose(far.acceleration(state([0.25, 0, 0], [0.4, 0, 0]), TARGET)[0], 0.0)
+
+
+def test_contact_stays_finite() -> None:
+    lin, _ = one_point(min_distance=1e-3).acceleration(
+        state([0.5 - RADIUS, 0, 0], [0.4, 0, 0]), TARGET
+    )
+    assert np.all(np.isfinite(lin))
+
+
+def test_bad_parameters_name_the_field() -> None:
+    with pytest.raises(ValueError, match="gain"):
+        one_point(gain=0.0)
+    with pytest.raises(ValueError, match="beta: expected a finite number >= 1"):
+        one_point(beta=0.5)
+    with pytest.raises(ValueError, match="influence"):
+        one_point(influence=-1.0)
+    with pytest.raises(ValueError, match="min_distance"):
+        one_point(min_distance=0.0)
+    with pytest.raises(ValueError, match=r"points_object: expected shape \(N, 3\), got \(1, 2\)"):
+        one_point().with_points([[1.0, 2.0]])
+    with pytest.raises(ValueError, match="gyration_radius"):
+        one_point(gyration_radius=-0.1)
+    with pytest.raises(ValueError, match="points_object: expected finite"):
+        PotentialFieldAvoidance(sphere, [[0.0, np.inf, 0.0]])
+    with pytest.raises(ValueError, match="query: expected a callable"):
+        PotentialFieldAvoidance(None, np.zeros((1, 3)))  # type: ignore[arg-type]
