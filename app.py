@@ -271,16 +271,11 @@ def _run_command(args: argparse.Namespace) -> int:
     from planner.loader import TreeFileError
     from skills.library import LibraryFileError
     from worlds.episode import run_episode
+    from worlds.scene import NoDisplayError
 
     world = _load_world_or_exit(args.world)
     if args.seed is not None:
         world = world.model_copy(update={"sim": world.sim.model_copy(update={"seed": args.seed})})
-    if args.gui:
-        print(
-            "--gui: this run uses PyBullet in DIRECT mode (no display here); "
-            "the animation shows the run",
-            file=sys.stderr,
-        )
     out = Path(args.out)
 
     def progress(t: float, leaf: str, feedback: str) -> None:
@@ -293,8 +288,9 @@ def _run_command(args: argparse.Namespace) -> int:
             out=out,
             animation=not args.no_animation,
             progress=progress,
+            gui=args.gui,
         )
-    except (TreeFileError, LibraryFileError) as err:
+    except (TreeFileError, LibraryFileError, NoDisplayError) as err:
         print(err, file=sys.stderr)
         return EXIT_BAD_INPUT
     s = report.summary()

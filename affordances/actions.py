@@ -99,8 +99,10 @@ class SkillSelection:
 
 
 def sort_skills(skills: tuple[SkillSelection, ...]) -> tuple[SkillSelection, ...]:
-    """Order skills as :class:`~skills.labels.Action` lists them (absolute before relative)."""
-    return tuple(sorted(skills, key=lambda s: _ACTION_ORDER[s.action]))
+    """Absolute skills before relative ones, each in :class:`~skills.labels.Action`'s order."""
+    return tuple(
+        sorted(skills, key=lambda s: (s.space is not Space.ABSOLUTE, _ACTION_ORDER[s.action]))
+    )
 
 
 @dataclass(frozen=True)

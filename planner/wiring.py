@@ -12,7 +12,7 @@ from typing import Any
 from py_trees.ports import CONST_PREFIX, DOT_REPLACEMENT, PortsMixin
 
 
-def wire(behaviour: PortsMixin, namespace: str = "/", **ports: Any) -> PortsMixin:
+def wire(behaviour: PortsMixin, namespace: str = "/", /, **ports: Any) -> PortsMixin:
     """Set up ``behaviour``'s ports; returns it for chaining.
 
     Raises

@@ -10,9 +10,11 @@ thin stateful :class:`PoseDMP`.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from functools import cached_property
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -41,9 +43,10 @@ from skills.scaling import Scaling
 from skills.types import Array
 
 
-@dataclass(frozen=True)
-class PoseState:
+class PoseState(NamedTuple):
     """Full state of a pose DMP, the unit of handover between skills.
+
+    Immutable (a named tuple: it is created every control step, and cheaply).
 
     Attributes
     ----------
@@ -83,7 +86,7 @@ class PoseState:
 
     def with_phase(self, s: float) -> PoseState:
         """The same pose and motion at another phase (a fresh skill starts at ``s = 1``)."""
-        return replace(self, phase=float(s))
+        return self._replace(phase=float(s))
 
 
 @dataclass(frozen=True)
@@ -499,9 +502,73 @@ def pose_step(
     PoseState
         The next state; its accelerations are the ones applied over this step.
     """
-    lin, ang = _accelerations(state, model, target, couplings)
-    return _integrate(
-        state, lin, ang, dt, phase_step(state.phase, dt, target.tau, model.params.alpha_s)
+    # One function, floats after the basis product: this runs every control step, and on a
+    # 3-vector numpy's per-call overhead costs more than the arithmetic.
+    p = model.params
+    tau = target.tau
+    s = state.phase
+    raw = (model.position.forcing.basis.activations_at(s) @ target.effective_weights).tolist()
+    inv_tau2 = 1.0 / (tau * tau)
+    k = s * inv_tau2 / max(raw[6], 1e-300)
+    kp = p.alpha * p.beta * inv_tau2
+    kd = p.alpha / tau
+    y0, y1, y2 = state.position.tolist()
+    v0, v1, v2 = state.velocity.tolist()
+    w0, w1, w2 = state.angular_velocity.tolist()
+    qx, qy, qz, qw = state.orientation.tolist()
+    g0, g1, g2 = target.goal_position.tolist()
+    e0, e1, e2 = quat.rotation_error_scalar(target.goal_tuple, (qx, qy, qz, qw))
+    a0 = kp * (g0 - y0) - kd * v0 + k * raw[0]
+    a1 = kp * (g1 - y1) - kd * v1 + k * raw[1]
+    a2 = kp * (g2 - y2) - kd * v2 + k * raw[2]
+    b0 = kp * e0 - kd * w0 + k * raw[3]
+    b1 = kp * e1 - kd * w1 + k * raw[4]
+    b2 = kp * e2 - kd * w2 + k * raw[5]
+    for c in couplings:
+        c_lin, c_ang = c.acceleration(state, target)
+        l0, l1, l2 = c_lin.tolist()
+        r0, r1, r2 = c_ang.tolist()
+        a0 += l0
+        a1 += l1
+        a2 += l2
+        b0 += r0
+        b1 += r1
+        b2 += r2
+    v0 += a0 * dt
+    v1 += a1 * dt
+    v2 += a2 * dt
+    w0 += b0 * dt
+    w1 += b1 * dt
+    w2 += b2 * dt
+    q = quat.integrate_scalar((qx, qy, qz, qw), (w0, w1, w2), dt)
+    buf = np.array(
+        (
+            y0 + v0 * dt,
+            y1 + v1 * dt,
+            y2 + v2 * dt,
+            v0,
+            v1,
+            v2,
+            a0,
+            a1,
+            a2,
+            *q,
+            w0,
+            w1,
+            w2,
+            b0,
+            b1,
+            b2,
+        )
+    )
+    return PoseState(
+        buf[0:3],
+        buf[3:6],
+        buf[6:9],
+        buf[9:13],
+        buf[13:16],
+        buf[16:19],
+        s * math.exp(-p.alpha_s * dt / tau),
     )
 
 

@@ -170,6 +170,7 @@ def run_episode(
     out: Path | None = None,
     animation: bool = True,
     progress: Callable[[float, str, str], None] | None = None,
+    gui: bool = False,
 ) -> EpisodeReport:
     """Run the world's task once and judge it.
 
@@ -187,6 +188,8 @@ def run_episode(
         Capture frames with the CPU renderer (slower).
     progress : callable (sim_time, leaf_name, feedback), optional
         Called when the running leaf changes.
+    gui : bool
+        Show PyBullet's window (needs a display; :class:`worlds.scene.NoDisplayError`).
 
     Raises
     ------
@@ -200,7 +203,7 @@ def run_episode(
     lib = library if library is not None else load_library(world)
     name = world.task[0].object
     n_moves = sum(len(s.moves) for s in world.task if s.object == name)
-    with SimWorld(world, name) as sim:
+    with SimWorld(world, name, gui=gui) as sim:
         recorder = _Recorder(sim, name, n_moves)
         hooks: list[Callable[[py_trees.trees.BehaviourTree], Any]] = [
             lambda tree: tree.add_post_tick_handler(recorder)

@@ -12,6 +12,8 @@ on or off per move by parking them far below the floor.
 
 from __future__ import annotations
 
+import os
+import sys
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from enum import StrEnum
@@ -440,6 +442,28 @@ def _shape_ids(client: int, shape: ShapeSpec, rgba: Sequence[float]) -> tuple[in
     return col, vis
 
 
+class NoDisplayError(RuntimeError):
+    """PyBullet's window was asked for where there is no display."""
+
+
+def connect(gui: bool) -> int:
+    """A PyBullet client: DIRECT by default, a window (GUI) when asked and a display exists.
+
+    Raises
+    ------
+    NoDisplayError
+        If ``gui`` is asked for and no display is available (``DISPLAY`` unset or refused).
+    """
+    if not gui:
+        return int(pb.connect(pb.DIRECT))
+    if not os.environ.get("DISPLAY") and sys.platform.startswith("linux"):
+        raise NoDisplayError("--gui: expected a display (DISPLAY is not set); run without --gui")
+    client = int(pb.connect(pb.GUI))
+    if client < 0:
+        raise NoDisplayError("--gui: PyBullet could not open a window on this display")
+    return client
+
+
 class Scene:
     """A running PyBullet scene with two impedance-controlled palms.
 
@@ -454,6 +478,8 @@ class Scene:
         :mod:`worlds.control`) at most; 1 is the exact law; default physics_hz / RELINEARISE_HZ.
     relinearise_tolerance : float
         Re-linearise sooner once a joint has moved this far, rad (0: only by the clock).
+    gui : bool
+        Open PyBullet's window (needs a display); DIRECT otherwise.
     """
 
     def __init__(
@@ -462,13 +488,14 @@ class Scene:
         gains: ImpedanceGains | None = None,
         refresh_every: int | None = None,
         relinearise_tolerance: float = RELINEARISE_TOLERANCE,
+        gui: bool = False,
     ) -> None:
         self.spec = spec if spec is not None else SceneSpec()
         if refresh_every is None:
             refresh_every = max(1, round(self.spec.physics_hz / RELINEARISE_HZ))
         self.rng = np.random.default_rng(self.spec.seed)
         self.physics_dt = 1.0 / self.spec.physics_hz
-        self.client = pb.connect(pb.DIRECT)
+        self.client = connect(gui)
         try:
             self._build(gains, refresh_every, relinearise_tolerance)
         except Exception:
@@ -483,6 +510,7 @@ class Scene:
         gains: ImpedanceGains | None = None,
         refresh_every: int | None = None,
         relinearise_tolerance: float = RELINEARISE_TOLERANCE,
+        gui: bool = False,
     ) -> Scene:
         """Build the scene of a validated world (:class:`worlds.world_file.World`)."""
         return cls(
@@ -490,6 +518,7 @@ class Scene:
             gains=gains,
             refresh_every=refresh_every,
             relinearise_tolerance=relinearise_tolerance,
+            gui=gui,
         )
 
     def _build(

@@ -84,11 +84,15 @@ class SimWorld:
     """
 
     def __init__(
-        self, world: World, object_name: str | None = None, gains: ImpedanceGains | None = None
+        self,
+        world: World,
+        object_name: str | None = None,
+        gains: ImpedanceGains | None = None,
+        gui: bool = False,
     ) -> None:
         self.world_file = world
         self.gains = gains or ImpedanceGains()
-        self.scene = Scene.from_world(world, gains=self.gains)
+        self.scene = Scene.from_world(world, gains=self.gains, gui=gui)
         self.collision = CollisionWorld(self.scene)
         self.watched = object_name or (
             world.task[0].object if world.task else world.objects[0].name

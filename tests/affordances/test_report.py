@@ -19,8 +19,9 @@ def test_json_shape_and_key_order() -> None:
     assert list(top) == ["grasp", "skills", "score", "because"]
     assert top["grasp"] == "two_palm_lateral"
     assert top["score"] == 3.0
-    assert [s["action"] for s in top["skills"]] == ["transport", "rotate_z", "hold_lateral"]
-    hold = top["skills"][2]
+    actions = [s["action"] for s in top["skills"]]
+    assert actions == ["transport", "rotate_z", "limit_repulsion", "hold_lateral"]
+    hold = top["skills"][actions.index("hold_lateral")]
     assert list(hold) == ["action", "space", "weight", "params"]
     assert hold["space"] == "relative"
     assert hold["params"] == {

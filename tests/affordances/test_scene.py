@@ -120,7 +120,8 @@ class _RecordingScene:
 @pytest.mark.parametrize(
     ("path_gap", "link_gap", "expected"),
     [
-        (0.01, 1.0, {Action.AVOID_OBSTACLE}),
+        # Near the path, the object's own surface joins link-level avoidance (default rule).
+        (0.01, 1.0, {Action.AVOID_OBSTACLE, Action.AVOID_LINKS}),
         (1.0, 0.01, {Action.AVOID_LINKS}),
         (1.0, 1.0, set()),
         (-0.1, -0.1, {Action.AVOID_OBSTACLE, Action.AVOID_LINKS}),

@@ -97,9 +97,12 @@ def test_default_world_obstacles_sit_where_documented(default_world: World) -> N
     assert isinstance(on_path.shape, SphereShape)
     start, goal = np.array(moves[0].goal.position), np.array(moves[1].goal.position)
     assert_allclose(on_path.position[:2], ((start + goal) / 2)[:2])
-    assert_allclose(on_path.position[2], goal[2] + 0.05)
+    # Its bottom clears the resting parcel's top (centre + 0.075) by 5 cm.
+    assert isinstance(on_path.shape, SphereShape)
+    assert_allclose(on_path.position[2] - on_path.shape.radius, goal[2] + 0.075 + 0.05)
     start, goal = np.array(moves[1].goal.position), np.array(moves[2].goal.position)
-    assert_allclose(ahead.position[0] - (start + goal)[0] / 2, 0.12)
+    # 0.14 m ahead of the carry: 4 cm in front of the parcel's front face (x + 0.10).
+    assert_allclose(ahead.position[0] - (start + goal)[0] / 2, 0.14)
 
 
 def test_pose_quaternion_is_scalar_last_extrinsic_xyz_in_degrees() -> None:

@@ -1,0 +1,54 @@
+"""The whole pick-and-place tree against the in-memory world: success, and a regrasp on drop."""
+
+from __future__ import annotations
+
+import py_trees
+from py_trees.common import Status
+
+from planner.factories import pick_and_place
+from planner.runner import run_tree
+from planner.testing import FakeWorld
+from skills.library import SkillLibrary
+
+DT = 1.0 / 60.0
+
+
+def statuses_of(root: py_trees.behaviour.Behaviour, kind: str) -> list[Status]:
+    return [n.status for n in root.iterate() if type(n).__name__ == kind]
+
+
+def test_the_tree_does_the_three_moves(fake_world: FakeWorld, library: SkillLibrary) -> None:
+    root = pick_and_place()
+    result = run_tree(root, fake_world, library, DT, 120.0, {"/object": "parcel"})
+    assert result.status == Status.SUCCESS, result.reason
+    assert statuses_of(root, "AtGoal") == [Status.SUCCESS] * 3
+    assert fake_world.contact_force(fake_world_arm(), "parcel") == 0.0  # released
+
+
+def fake_world_arm() -> object:
+    from skills.labels import Arm
+
+    return Arm.LEFT
+
+
+def test_a_drop_during_a_move_leads_to_a_regrasp(
+    fake_world: FakeWorld, library: SkillLibrary
+) -> None:
+    root = pick_and_place()
+    events: list[str] = []
+
+    def slip(tree: py_trees.trees.BehaviourTree) -> None:
+        running = [n for n in tree.root.iterate() if n.status == Status.RUNNING]
+        carrying = [n for n in running if type(n).__name__ == "Transport"]
+        approaching = [n for n in running if type(n).__name__ == "Approach"]
+        if not events and carrying and int(carrying[0].get_input("move")) == 1:
+            fake_world.drop("parcel")  # the grip fails mid-carry ...
+            events.append("dropped")
+        elif events == ["dropped"] and approaching:
+            fake_world.restore_grip("parcel")  # ... and the hands can grip again
+            events.append("regrasping")
+
+    result = run_tree(root, fake_world, library, DT, 200.0, {"/object": "parcel"}, on_tick=slip)
+    assert events == ["dropped", "regrasping"]
+    assert result.status == Status.SUCCESS, result.reason
+    assert statuses_of(root, "AtGoal") == [Status.SUCCESS] * 3
