@@ -16,7 +16,7 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 run: $(STAMP)
-	$(BIN)/python app.py demo --out out
+	$(BIN)/python app.py run worlds/parcel_pick_place.yaml --out out
 
 lint: $(STAMP)
 	$(BIN)/ruff check .

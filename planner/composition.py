@@ -39,7 +39,7 @@ GRIP_MARGIN = 4.0
 AVOID_FADE_PHASE = 0.05
 #: Angular acceleration avoidance may ask of a two-palm grip, rad/s^2: turning the object
 #: turns the palms, whose orientation springs are soft, and tilted palms lose their flat contact.
-MAX_AVOID_ANGULAR = 1.0
+MAX_AVOID_ANGULAR = 0.2
 
 
 @dataclass(frozen=True)

@@ -30,7 +30,9 @@ OBJECT, PLAN, STATE = "{object}", "{plan}", "{state}"
 
 #: The compositions a move tries, in order: (name, transport weight, avoidance gain).
 COMPOSITIONS: tuple[tuple[str, float, float], ...] = (
+    ("as_demonstrated", 1.0, 0.0),
     ("low_carry", 0.25, 0.0),
+    ("flat_carry", 0.1, 0.0),
     ("as_planned", 1.0, 1.0),
     ("low_careful", 0.25, 1.0),
 )

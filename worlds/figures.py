@@ -66,6 +66,16 @@ def trajectory_figure(
     import matplotlib.pyplot as plt
     from matplotlib.patches import Circle
 
+    # One frame for every panel, around all the paths, goals and obstacles, so moves compare.
+    pts = [demo_positions[:1]]
+    for tr in traces:
+        pts += [tr.path.reshape(-1, 3), tr.start[None], tr.goal[None]]
+        pts += [demonstration_for(demo_positions, tr.start, tr.goal)]
+        pts += [np.atleast_2d(ob.position) + ob.radius * np.eye(3) for ob in tr.obstacles]
+        pts += [np.atleast_2d(ob.position) - ob.radius * np.eye(3) for ob in tr.obstacles]
+    allp = np.concatenate([p for p in pts if len(p)])
+    lo, hi = allp.min(axis=0) - 0.04, allp.max(axis=0) + 0.04
+    limits = list(zip(lo, hi, strict=True))
     fig, axes = plt.subplots(
         2, max(1, len(traces)), figsize=(4.2 * max(1, len(traces)), 7.5), squeeze=False
     )
@@ -82,6 +92,8 @@ def trajectory_figure(
                 )
             ax.plot(*tr.start[[i, j]], "ko", ms=4)
             ax.plot(*tr.goal[[i, j]], "k+", ms=10, mew=2)
+            ax.set_xlim(*limits[i])
+            ax.set_ylim(*limits[j])
             ax.set_aspect("equal")
             ax.invert_xaxis()
             ax.set_xlabel("y (m)")

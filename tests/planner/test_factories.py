@@ -36,6 +36,6 @@ def test_factory_builds_the_xml_tree() -> None:
 def test_factory_leaves_read_the_same_ports() -> None:
     root = pick_and_place()
     transports = [n for n in root.iterate() if type(n).__name__ == "Transport"]
-    assert len(transports) == 3 * 4  # 3 moves x (3 compositions + the careful fallback)
+    assert len(transports) == 3 * 6  # 3 moves x (5 compositions + the careful fallback)
     weights = sorted({float(t.get_input("transport_weight")) for t in transports})
-    assert weights == [0.25, 1.0]
+    assert weights == [0.1, 0.25, 1.0]
