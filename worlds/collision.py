@@ -291,6 +291,44 @@ class CollisionWorld:
         """Names of all groups."""
         return tuple(dict.fromkeys(e.group for e in self._elements))
 
+    def check_attached_links(
+        self,
+        palm_positions: ArrayLike,
+        palm_quaternions: ArrayLike,
+        distal_links: int = 4,
+        margin: float = 0.0,
+    ) -> NDArray[np.bool_]:
+        """Check each arm's last ``distal_links`` links carried along predicted palm poses.
+
+        Without inverse kinematics for every waypoint, the forearm and wrist are taken to move
+        rigidly with the palm: each keeps the pose in the palm's frame it has now (after
+        :meth:`sync`). Over one carry that holds for the links nearest the palm, the ones that
+        hit obstacles beside the object; a bounding-sphere test screens before FCL.
+
+        Parameters
+        ----------
+        palm_positions : array_like
+            (N, 2, 3) left and right palm positions, world frame, m.
+        palm_quaternions : array_like
+            (N, 2, 4) left and right palm orientations, scalar-last.
+        distal_links : int
+            How many links before the palm to carry (the iiwa's forearm and wrist are 4).
+        margin : float
+            Clearance below which a waypoint counts as colliding, m.
+
+        Returns
+        -------
+        ndarray
+            (N,) True where a carried link is within ``margin`` of an active obstacle.
+        """
+        return _attached_check(
+            self,
+            np.asarray(palm_positions, dtype=float),
+            np.asarray(palm_quaternions, dtype=float),
+            distal_links,
+            margin,
+        )
+
     def arm_links(self, arm: Arm) -> tuple[str, ...]:
         """Element names of an arm, base to palm."""
         group = arm_group(arm)
@@ -595,6 +633,52 @@ class CollisionWorld:
                 collides[w] = bool(hit)
         hits = np.flatnonzero(collides)
         return TrajectoryCheck(collides, int(hits[0]) if len(hits) else -1)
+
+
+def _attached_check(
+    world: CollisionWorld,
+    palm_positions: FloatArray,
+    palm_quaternions: FloatArray,
+    distal_links: int,
+    margin: float,
+) -> NDArray[np.bool_]:
+    """See :meth:`CollisionWorld.check_attached_links`."""
+    n = palm_positions.shape[0]
+    collides = np.zeros(n, dtype=bool)
+    if not world._active or n == 0:
+        return collides
+    obstacles = [world._elements[r] for r in world._active]
+    o_centre = np.array([o.centre for o in obstacles])
+    o_radius = np.array([o.radius for o in obstacles])
+    palm_r = quaternions_to_matrices(palm_quaternions)  # (N, 2, 3, 3)
+    for a, arm in enumerate((Arm.LEFT, Arm.RIGHT)):
+        rows = world._rows(arm_group(arm))
+        palm = world._elements[world._palm_rows[arm]]
+        p_now = np.asarray(palm.obj.getTranslation(), dtype=float)
+        r_now = np.asarray(palm.obj.getRotation(), dtype=float)
+        links = [r for r in rows if r != world._palm_rows[arm]][-distal_links:]
+        for row in links:
+            element = world._elements[row]
+            # The link in the palm's frame now; carried rigidly along the palm's predicted poses.
+            lp = r_now.T @ (np.asarray(element.obj.getTranslation(), dtype=float) - p_now)
+            lr = r_now.T @ np.asarray(element.obj.getRotation(), dtype=float)
+            rot = palm_r[:, a] @ lr  # (N, 3, 3)
+            pos = np.einsum("nij,j->ni", palm_r[:, a], lp) + palm_positions[:, a]
+            centres = np.einsum("nij,j->ni", rot, element.centre_local) + pos
+            gaps = np.linalg.norm(centres[:, None] - o_centre, axis=-1) - element.radius - o_radius
+            probe = fcl.CollisionObject(element.geometry, fcl.Transform())
+            for w, o in np.argwhere(gaps <= margin):
+                if collides[w]:
+                    continue
+                probe.setTransform(fcl.Transform(rot[w], pos[w]))
+                if margin > 0.0:
+                    hit = fcl.distance(probe, obstacles[o].obj, fcl.DistanceRequest()) < margin
+                else:
+                    hit = fcl.collide(
+                        probe, obstacles[o].obj, fcl.CollisionRequest(), fcl.CollisionResult()
+                    )
+                collides[w] = bool(hit)
+    return collides
 
 
 __all__ = [

@@ -28,6 +28,8 @@ from worlds.scene import LATERAL_PALM_QUATERNIONS, Scene, ShapeKind, ShapeSpec
 from worlds.world_file import World
 
 ARMS = (Arm.LEFT, Arm.RIGHT)
+#: Extra clearance asked of predicted forearm poses (carried rigidly with the palms), m.
+FOREARM_MARGIN_M = 0.03
 #: Highest an object's centre may be carried above the table top, m.
 MAX_LIFT_M = 0.30
 
@@ -300,7 +302,9 @@ class SimWorld:
         palm_orientations: Array,
         margin_m: float = 0.0,
     ) -> PathCheck:
-        """FCL check of predicted palm and held-object poses against the active obstacles."""
+        """FCL check of predicted palm and held-object poses, and of the forearms carried with
+        the palms (:meth:`worlds.collision.CollisionWorld.check_attached_links`), against the
+        active obstacles."""
         check = self.collision.check_trajectory(
             palm_positions,
             palm_orientations,
@@ -309,15 +313,20 @@ class SimWorld:
             object_orientations,
             margin_m,
         )
+        # The forearms are predicted by carrying them rigidly with the palms, which misses the
+        # elbow's swing: they get extra clearance so that a doubtful path is not trusted.
+        arms = self.collision.check_attached_links(
+            palm_positions, palm_orientations, 4, margin_m + FOREARM_MARGIN_M
+        )
         pts = np.concatenate((object_positions, palm_positions.reshape(-1, 3)))
         d, _ = self.collision.query(pts)
-        first = None if check.collision_free else int(check.first_collision)
-        return PathCheck(
-            check.collision_free,
-            float(d.min()) if d.size else math.inf,
-            first,
-            "clear" if first is None else f"palm or object within {margin_m:g} m at step {first}",
-        )
+        hits = np.flatnonzero(check.collides | arms)
+        first = int(hits[0]) if hits.size else None
+        what = "clear"
+        if first is not None:
+            what = "a forearm" if arms[first] and not check.collides[first] else "palm or object"
+            what += f" within {margin_m:g} m at step {first}"
+        return PathCheck(first is None, float(d.min()) if d.size else math.inf, first, what)
 
     def link_points(self) -> Array:
         """For each arm link, its point closest to an active obstacle, (M, 3) (none if none)."""
