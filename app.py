@@ -319,14 +319,15 @@ def _run_command(args: argparse.Namespace) -> int:
 
 def _trials_command(args: argparse.Namespace) -> int:
     """The paper's experiment: N trials of three moves with new obstacles, judged, resumable."""
-    from worlds.trials import reason_of, run_campaign, summarise
+    from worlds.trials import read_results, reason_of, run_campaign, summarise
 
     world = _load_world_or_exit(args.world)
     if args.n < 1 or args.workers < 1:
         print("--n, --workers: expected positive whole numbers", file=sys.stderr)
         return EXIT_BAD_INPUT
     out = Path(args.out)
-    tally = {"ok": 0}
+    earlier = read_results(out / "results.jsonl").values()
+    tally = {"ok": sum(1 for r in earlier if r.get("seed") == args.seed and r.get("success"))}
 
     def progress(rec: dict[str, Any], finished: int, total: int) -> None:
         tally["ok"] += int(bool(rec.get("success")))

@@ -20,6 +20,7 @@ import py_trees
 from py_trees.common import Status
 
 import planner.leaves  # noqa: F401  (registers the leaves for the XML loader)
+from planner.factories import pick_and_place
 from planner.leaves import Transport
 from planner.loader import load_tree
 from planner.render import render_tree
@@ -178,7 +179,8 @@ def run_episode(
     ----------
     world : World
     tree_path : Path, optional
-        Behaviour tree XML; default ``planner/trees/pick_and_place.xml``.
+        Behaviour tree XML; default: :func:`planner.factories.pick_and_place` with the task's
+        number of moves (``planner/trees/pick_and_place.xml`` for three).
     library : SkillLibrary, optional
         Default: the world's.
     out : Path, optional
@@ -196,13 +198,14 @@ def run_episode(
     planner.loader.TreeFileError, skills.library.LibraryFileError
         On bad input files (the caller turns them into exit code 2).
     """
-    tree_file = tree_path or DEFAULT_TREE
-    # The loader writes constant port values to the blackboard: clear it first, not after.
-    py_trees.blackboard.Blackboard.clear()
-    root = load_tree(tree_file)
-    lib = library if library is not None else load_library(world)
     name = world.task[0].object
     n_moves = sum(len(s.moves) for s in world.task if s.object == name)
+    # The loader writes constant port values to the blackboard: clear it first, not after.
+    py_trees.blackboard.Blackboard.clear()
+    # Without a tree file, the paper's tree is built in code for this task's number of moves
+    # (for three it is planner/trees/pick_and_place.xml, node for node).
+    root = load_tree(tree_path) if tree_path is not None else pick_and_place(n_moves)
+    lib = library if library is not None else load_library(world)
     with SimWorld(world, name, gui=gui) as sim:
         recorder = _Recorder(sim, name, n_moves)
         hooks: list[Callable[[py_trees.trees.BehaviourTree], Any]] = [

@@ -137,11 +137,13 @@ class Animation:
         self.period = period
         self.frames: list[np.ndarray] = []
         self._next = 0.0
+        # From the table's far side, a little to the robot's left: both arms and the object.
+        look_at = [float(target[0]), float(target[1]), float(target[2]) + 0.12]
         self.view = pb.computeViewMatrixFromYawPitchRoll(
-            cameraTargetPosition=list(target),
-            distance=1.6,
-            yaw=230.0,
-            pitch=-28.0,
+            cameraTargetPosition=look_at,
+            distance=1.9,
+            yaw=110.0,
+            pitch=-24.0,
             roll=0.0,
             upAxisIndex=2,
         )

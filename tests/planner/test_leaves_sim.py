@@ -4,10 +4,21 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+import numpy as np
 import pytest
 from py_trees.common import Status
 
-from planner.leaves import Approach, AtGoal, Grasp, IsHeld, Release, SelectSkills, Transport
+from planner.leaves import (
+    Approach,
+    AtGoal,
+    Grasp,
+    IsHeld,
+    PathClear,
+    Release,
+    Retreat,
+    SelectSkills,
+    Transport,
+)
 from planner.testing.harness import TickLog
 from skills.dual_arm import ARMS
 from worlds.sim_world import SimWorld
@@ -61,3 +72,46 @@ def test_release_opens_the_palms(sim_world: SimWorld, tick_leaf: Tick) -> None:
     )
     assert log.final == Status.SUCCESS, log.feedback
     assert max(sim_world.contact_force(arm, "parcel") for arm in ARMS) < 0.5
+
+
+def test_retreat_returns_the_palms_to_rest(sim_world: SimWorld, tick_leaf: Tick) -> None:
+    grasp(sim_world, tick_leaf)
+    tick_leaf(
+        Release("release"), sim_world, object="parcel", from_state="{state}", to_state="{state}"
+    )
+    log = tick_leaf(Retreat("retreat"), sim_world)
+    assert log.final == Status.SUCCESS, log.feedback
+    for arm in ARMS:
+        rest = sim_world.rest_palm_pose(arm).position
+        assert np.linalg.norm(sim_world.palm_pose(arm).position - rest) < 0.02
+
+
+def test_path_clear_checks_the_predicted_carry_with_fcl(
+    sim_world: SimWorld, tick_leaf: Tick
+) -> None:
+    grasp(sim_world, tick_leaf)
+    # Move 2 of the default world has a sphere above its straight path: the learnt lift,
+    # without avoidance, would hit it; the low carry passes under.
+    lifted = tick_leaf(
+        PathClear("as_demonstrated"),
+        sim_world,
+        object="parcel",
+        move=1,
+        plan="{plan}",
+        from_state="{state}",
+        avoid_gain=0.0,
+        margin_m=0.01,
+    )
+    assert lifted.final == Status.FAILURE and "predicted collision" in lifted.feedback
+    low = tick_leaf(
+        PathClear("low"),
+        sim_world,
+        object="parcel",
+        move=1,
+        plan="{plan}",
+        from_state="{state}",
+        avoid_gain=0.0,
+        transport_weight=0.25,
+        margin_m=0.01,
+    )
+    assert low.final == Status.SUCCESS, low.feedback
