@@ -30,7 +30,7 @@ def phase_step(s: float, dt: float, tau: float, alpha_s: float = DEFAULT_ALPHA_S
     return s * math.exp(-alpha_s * dt / tau)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class RBFBasis:
     """Gaussian basis ``psi_i(s) = exp(-h_i (s - c_i)^2)`` over the phase.
 
@@ -56,8 +56,17 @@ class RBFBasis:
         return np.stack((-h, 2.0 * h * c, -h * c * c))
 
     def activations_at(self, s: float) -> Array:
-        """Unnormalised ``psi(s)``, shape (K,), for one phase value (the per-step path)."""
-        return np.exp(np.array((s * s, s, 1.0)) @ self.exponent_table)
+        """Unnormalised ``psi(s)``, shape (K,), for one phase value (the per-step path).
+
+        The last phase's activations are kept: in one composition step the shared basis is
+        read at the same phase by every learnt skill. Treat the result as read-only.
+        """
+        cache = self.__dict__.get("_last")
+        if cache is not None and cache[0] == s:
+            return cache[1]
+        psi = np.exp(np.array((s * s, s, 1.0)) @ self.exponent_table)
+        self.__dict__["_last"] = (s, psi)
+        return psi
 
     @property
     def size(self) -> int:

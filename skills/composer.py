@@ -191,31 +191,44 @@ def commands_for(state: DualArmState) -> PalmCommands:
     """Palm world poses and eq. (5) twists for a dual-arm state.
 
     The same algebra as :func:`skills.dual_arm.palm_poses` and
-    :func:`skills.dual_arm.compose_twists` with one absolute and one relative twist, written
-    with one rotation matrix and a few 2 x 3 products: it runs every control tick.
+    :func:`skills.dual_arm.compose_twists` (one absolute and one relative twist), in floats:
+    it runs every control tick, on 3-vectors, where numpy's per-call cost dominates.
     """
     obj = state.object
-    x, y, z, w = obj.orientation.tolist()
-    rot = quat.matrix_scalar((x, y, z, w))
-    rel_p = np.stack((state.left.position, state.right.position))
-    lever = rel_p @ rot.T  # object centre to each palm, world frame
-    positions = obj.position + lever
-    orientations = np.array(
-        [
-            quat.multiply_scalar((x, y, z, w), _quat_floats(state.left.orientation)),
-            quat.multiply_scalar((x, y, z, w), _quat_floats(state.right.orientation)),
-        ]
+    px, py, pz = obj.position.tolist()
+    vx, vy, vz = obj.velocity.tolist()
+    wx, wy, wz = obj.angular_velocity.tolist()
+    q = _quat_floats(obj.orientation)
+    x, y, z, w = q
+    r00, r01, r02 = 1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)
+    r10, r11, r12 = 2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)
+    r20, r21, r22 = 2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)
+    positions, orientations, twists = [], [], []
+    for palm in (state.left, state.right):
+        a0, a1, a2 = palm.position.tolist()
+        l0 = r00 * a0 + r01 * a1 + r02 * a2  # lever arm: object centre to palm, world frame
+        l1 = r10 * a0 + r11 * a1 + r12 * a2
+        l2 = r20 * a0 + r21 * a1 + r22 * a2
+        b0, b1, b2 = palm.velocity.tolist()
+        c0, c1, c2 = palm.angular_velocity.tolist()
+        positions.append((px + l0, py + l1, pz + l2))
+        orientations.append(quat.multiply_scalar(q, _quat_floats(palm.orientation)))
+        twists.append(
+            (
+                vx + wy * l2 - wz * l1 + r00 * b0 + r01 * b1 + r02 * b2,  # G^T y_o' + R y_C'
+                vy + wz * l0 - wx * l2 + r10 * b0 + r11 * b1 + r12 * b2,
+                vz + wx * l1 - wy * l0 + r20 * b0 + r21 * b1 + r22 * b2,
+                wx + r00 * c0 + r01 * c1 + r02 * c2,
+                wy + r10 * c0 + r11 * c1 + r12 * c2,
+                wz + r20 * c0 + r21 * c1 + r22 * c2,
+            )
+        )
+    return PalmCommands(
+        np.array(positions),
+        np.array(orientations),
+        np.array(twists),
+        np.array((vx, vy, vz, wx, wy, wz)),
     )
-    v = obj.velocity
-    om = obj.angular_velocity
-    wx, wy, wz = om.tolist()
-    skew_w = np.array(((0.0, -wz, wy), (wz, 0.0, -wx), (-wy, wx, 0.0)))
-    twists = np.empty((2, 6))
-    rel_lin = np.stack((state.left.velocity, state.right.velocity))
-    rel_ang = np.stack((state.left.angular_velocity, state.right.angular_velocity))
-    twists[:, :3] = v + lever @ skew_w.T + rel_lin @ rot.T  # G^T y_o' + R y_C'
-    twists[:, 3:] = om + rel_ang @ rot.T
-    return PalmCommands(positions, orientations, twists, np.concatenate((v, om)))
 
 
 def _quat_floats(q: Array) -> quat.Quat:
