@@ -1,7 +1,7 @@
 """The robot's leaves. Importing this package registers them for the XML loader."""
 
 from planner.leaves.approach import Approach
-from planner.leaves.base import WorldLeaf
+from planner.leaves.base import MotionLeaf, WorldLeaf
 from planner.leaves.conditions import AtGoal, IsHeld, PathClear
 from planner.leaves.grasp import Grasp
 from planner.leaves.release import Release, Retreat
@@ -13,6 +13,7 @@ __all__ = [
     "AtGoal",
     "Grasp",
     "IsHeld",
+    "MotionLeaf",
     "PathClear",
     "Release",
     "Retreat",

@@ -7,7 +7,7 @@ from py_trees.common import Status
 from py_trees.ports import PortInformation
 
 from planner.composition import lateral_geometry
-from planner.leaves.base import WorldLeaf, status_is_halt
+from planner.leaves.base import MotionLeaf
 from planner.leaves.palm_motion import ViaPointMotion, measured_state
 from planner.port import Pose
 from skills import quaternion as quat
@@ -37,7 +37,7 @@ def pregrasp_poses(
     return out
 
 
-class Approach(WorldLeaf):
+class Approach(MotionLeaf):
     """Move both palms to ``standoff`` m outside the object's faces via set-points above."""
 
     INPUT_PORTS = {
@@ -93,8 +93,3 @@ class Approach(WorldLeaf):
         if self.motion.done():
             return self.succeed("palms at the pre-grasp poses")
         return self.running(f"approaching: {self.motion.remaining():.3f} m to go")
-
-    def terminate(self, new_status: Status) -> None:
-        """Preempted: stop the arms."""
-        if status_is_halt(new_status) and self._world is not None:
-            self._world.hold_palms()

@@ -6,7 +6,7 @@ from typing import Any, ClassVar
 
 import py_trees
 from py_trees.common import Status
-from py_trees.ports import BehaviourWithPorts, NoDataAvailable
+from py_trees.ports import BehaviourWithPorts, NoDataAvailable, PortInformation
 
 from planner.port import WorldPort
 from skills.library import SkillLibrary
@@ -88,3 +88,35 @@ class WorldLeaf(BehaviourWithPorts):
 def status_is_halt(new_status: Status) -> bool:
     """A parent preempted the leaf (``terminate(INVALID)``)."""
     return new_status == py_trees.common.Status.INVALID
+
+
+def composition_ports() -> dict[str, PortInformation]:
+    """The ports that choose a transport composition, shared by Transport and PathClear."""
+    return {
+        "avoid_gain": PortInformation(
+            float,
+            required=False,
+            default_value=1.0,
+            description="multiplies the avoidance skills' weights",
+        ),
+        "transport_weight": PortInformation(
+            float,
+            required=False,
+            default_value=1.0,
+            description="multiplies the pick-and-place skill's weight (a lower carry)",
+        ),
+    }
+
+
+class MotionLeaf(WorldLeaf):
+    """A leaf that moves the arms: halting it (a parent's preemption) stops them.
+
+    ``terminate(INVALID)`` commands both palms to hold their last targets with zero twist, so
+    a Timeout, a Selector switching branch or the runner's time limit never leaves the arms
+    moving on their own.
+    """
+
+    def terminate(self, new_status: Status) -> None:
+        """Preempted: stop the arms."""
+        if status_is_halt(new_status) and self._world is not None:
+            self._world.hold_palms()

@@ -10,7 +10,7 @@ from py_trees.ports import PortInformation
 
 from affordances import SemanticAction
 from planner.composition import goal_error, transport_composition
-from planner.leaves.base import WorldLeaf
+from planner.leaves.base import WorldLeaf, composition_ports
 from planner.leaves.grasp import squeeze_force
 from skills.composer import DualArmState
 from skills.dual_arm import ARMS
@@ -105,18 +105,7 @@ class PathClear(WorldLeaf):
         "move": PortInformation(int, description="index of the task's move, from 0"),
         "plan": PortInformation(SemanticAction, description="skills and weights to compose"),
         "from_state": PortInformation(DualArmState, description="state the move starts from"),
-        "avoid_gain": PortInformation(
-            float,
-            required=False,
-            default_value=1.0,
-            description="multiplies the avoidance skills' weights",
-        ),
-        "transport_weight": PortInformation(
-            float,
-            required=False,
-            default_value=1.0,
-            description="multiplies the pick-and-place skill's weight (a lower carry)",
-        ),
+        **composition_ports(),
         "margin_m": PortInformation(
             float, required=False, default_value=0.0, description="clearance required, m"
         ),

@@ -12,7 +12,7 @@ from planner.composition import (
     measured_dual_state,
     static_composition,
 )
-from planner.leaves.base import WorldLeaf, status_is_halt
+from planner.leaves.base import MotionLeaf
 from planner.port import Pose
 from skills.composer import DualArmComposer, DualArmState, relative_from_world
 from skills.dual_arm import ARMS
@@ -52,7 +52,7 @@ def squeeze_force(plan: SemanticAction | None, default: float) -> float:
     return default
 
 
-class Grasp(WorldLeaf):
+class Grasp(MotionLeaf):
     """Lateral contact, then squeeze: grasp maintenance pulls the palms onto the faces."""
 
     INPUT_PORTS = {
@@ -109,8 +109,3 @@ class Grasp(WorldLeaf):
             self._set_output("state", anchored(self.composer, world.object_pose(name)))
             return self.succeed(f"squeezing {forces[0]:.1f} N and {forces[1]:.1f} N")
         return self.running(f"closing: {forces[0]:.1f} N, {forces[1]:.1f} N of {self.force:.1f}")
-
-    def terminate(self, new_status: Status) -> None:
-        """Preempted: stop the arms."""
-        if status_is_halt(new_status) and self._world is not None:
-            self._world.hold_palms()

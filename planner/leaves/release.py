@@ -12,14 +12,14 @@ from planner.composition import (
     opening_terms,
     static_composition,
 )
-from planner.leaves.base import WorldLeaf, status_is_halt
+from planner.leaves.base import MotionLeaf
 from planner.leaves.palm_motion import ViaPointMotion, measured_state
 from planner.port import Pose
 from skills.composer import DualArmComposer, DualArmState
 from skills.dual_arm import ARMS
 
 
-class Release(WorldLeaf):
+class Release(MotionLeaf):
     """Move each palm ``opening_m`` out along its contact normal (a relative skill)."""
 
     INPUT_PORTS = {
@@ -70,13 +70,8 @@ class Release(WorldLeaf):
             return self.succeed("palms open and clear of the object")
         return self.running(f"opening: {forces[0]:.1f} N, {forces[1]:.1f} N")
 
-    def terminate(self, new_status: Status) -> None:
-        """Preempted: stop the arms."""
-        if status_is_halt(new_status) and self._world is not None:
-            self._world.hold_palms()
 
-
-class Retreat(WorldLeaf):
+class Retreat(MotionLeaf):
     """Take both palms back to their rest poses, rising first."""
 
     INPUT_PORTS = {
@@ -122,8 +117,3 @@ class Retreat(WorldLeaf):
         if self.motion.done():
             return self.succeed("palms at rest")
         return self.running(f"retreating: {self.motion.remaining():.3f} m to go")
-
-    def terminate(self, new_status: Status) -> None:
-        """Preempted: stop the arms."""
-        if status_is_halt(new_status) and self._world is not None:
-            self._world.hold_palms()

@@ -8,14 +8,14 @@ from py_trees.ports import PortInformation
 
 from affordances import SemanticAction
 from planner.composition import goal_error, refresh_link_points, transport_composition
-from planner.leaves.base import WorldLeaf, status_is_halt
+from planner.leaves.base import MotionLeaf, composition_ports
 from planner.leaves.grasp import squeeze_force
 from planner.port import Move, Pose
 from skills.composer import DualArmComposer, DualArmState
 from skills.dual_arm import ARMS
 
 
-class Transport(WorldLeaf):
+class Transport(MotionLeaf):
     """Carry the held object to move ``move``'s goal, composing the plan's weighted skills.
 
     Absolute: the learnt pick-and-place (and rotation) forcing terms, obstacle steering and
@@ -38,18 +38,7 @@ class Transport(WorldLeaf):
             default_value=2.0,
             description="contact force below which the grip is lost, N",
         ),
-        "avoid_gain": PortInformation(
-            float,
-            required=False,
-            default_value=1.0,
-            description="multiplies the avoidance skills' weights",
-        ),
-        "transport_weight": PortInformation(
-            float,
-            required=False,
-            default_value=1.0,
-            description="multiplies the pick-and-place skill's weight (a lower carry)",
-        ),
+        **composition_ports(),
         "settle_s": PortInformation(
             float,
             required=False,
@@ -132,8 +121,3 @@ class Transport(WorldLeaf):
                     f"settled {err_m * 1000:.1f} mm, {np.degrees(err_rad):.1f} deg from the goal"
                 )
         return self.running(f"move {self.get_input('move')}: {elapsed:.1f} of {tau:.1f} s")
-
-    def terminate(self, new_status: Status) -> None:
-        """Preempted: stop the arms."""
-        if status_is_halt(new_status) and self._world is not None:
-            self._world.hold_palms()
