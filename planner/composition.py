@@ -37,6 +37,9 @@ MIN_TAU_S = 2.0
 GRIP_MARGIN = 4.0
 #: Avoidance fades out below this phase (about 65 % of tau): the attractor finishes the move.
 AVOID_FADE_PHASE = 0.05
+#: Linear acceleration avoidance may ask whatever the grip could take, m/s^2: a light object
+#: in a strong grip could follow more, but the arms carrying it could not track it.
+MAX_AVOID_LINEAR = 3.0
 #: Angular acceleration avoidance may ask of a two-palm grip, rad/s^2: turning the object
 #: turns the palms, whose orientation springs are soft, and tilted palms lose their flat contact.
 MAX_AVOID_ANGULAR = 0.2
@@ -70,7 +73,7 @@ def grip_acceleration_limit(world: WorldPort, name: str, squeeze_depth: float) -
     force = world.palm_stiffness() * squeeze_depth
     mu = ctx.friction * robot.palm_friction
     spare = 2.0 * mu * force - ctx.mass_kg * 9.81
-    return max(spare / ctx.mass_kg / GRIP_MARGIN, 0.5)
+    return min(max(spare / ctx.mass_kg / GRIP_MARGIN, 0.5), MAX_AVOID_LINEAR)
 
 
 def saturate_avoidance(

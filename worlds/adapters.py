@@ -23,6 +23,9 @@ from worlds.world_file import (
 # Reach of the two palms towards each other and apart, and palm friction, per robot model.
 _SPANS_M: dict[RobotModelName, tuple[float, float, float]] = {
     RobotModelName.KUKA_IIWA: (0.10, 0.60, 0.8),
+    # Shoulders 0.24 m apart, about 0.3 m from shoulder to palm: the palms meet in front of
+    # the chest and spread to about the shoulders' width plus a forearm.
+    RobotModelName.ICUB: (0.06, 0.30, 0.8),
 }
 
 

@@ -548,6 +548,7 @@ class Scene:
             )
             for body in self.robot.bodies
         )
+        self._exclude_collisions()
         for arm in (Arm.LEFT, Arm.RIGHT):
             spec = self.robot.arms[arm]
             body = self.robot_ids[spec.body]
@@ -608,6 +609,27 @@ class Scene:
             relinearise_tolerance=relinearise_tolerance,
         )
         self.controller.enable()
+
+    def _exclude_collisions(self) -> None:
+        """Switch off the robot's :attr:`RobotModel.collision_exclusions` link pairs."""
+        if not self.robot.collision_exclusions:
+            return
+        c = self.client
+        indices: list[dict[str, int]] = []
+        for body in self.robot_ids:
+            names = {"base": -1}
+            for j in range(pb.getNumJoints(body, physicsClientId=c)):
+                names[pb.getJointInfo(body, j, physicsClientId=c)[12].decode()] = j
+            indices.append(names)
+        for body_a, link_a, body_b, link_b in self.robot.collision_exclusions:
+            pb.setCollisionFilterPair(
+                self.robot_ids[body_a],
+                self.robot_ids[body_b],
+                indices[body_a][link_a],
+                indices[body_b][link_b],
+                enableCollision=0,
+                physicsClientId=c,
+            )
 
     # -- setup -------------------------------------------------------------------------------
 

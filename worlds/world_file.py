@@ -294,6 +294,7 @@ class RobotModelName(StrEnum):
     """Robot models the simulator knows. Adding a robot is one line here."""
 
     KUKA_IIWA = "kuka_iiwa"
+    ICUB = "icub"
 
 
 class ShapeType(StrEnum):

@@ -280,7 +280,7 @@ def test_kuka_model_has_two_mirrored_arms_with_palms() -> None:
 
 def test_robot_model_errors_are_explained() -> None:
     with pytest.raises(ValueError, match="expected model in"):
-        build_robot_model("icub")
+        build_robot_model("nao")
     with pytest.raises(ValueError, match="expected arm_separation > 0"):
         build_robot_model("kuka_iiwa", arm_separation=0.0)
     spec = build_robot_model("kuka_iiwa").arms[Arm.LEFT]

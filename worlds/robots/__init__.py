@@ -97,12 +97,17 @@ class RobotModel:
         Both arms, keyed by :class:`skills.labels.Arm`.
     palm2flange_position : tuple of float
         (3,) palm frame origin in the last arm link's frame, m (documentation and collision use).
+    collision_exclusions : tuple of (int, str, int, str)
+        Link pairs of different bodies that must not collide, as (body, link name, body, link
+        name); ``"base"`` names a body's base link. A robot split into several bodies (iCub)
+        uses this to keep PyBullet's no-self-collision default across the split.
     """
 
     name: str
     bodies: tuple[BodySpec, ...]
     arms: Mapping[Arm, ArmSpec] = field(default_factory=dict)
     palm2flange_position: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    collision_exclusions: tuple[tuple[int, str, int, str], ...] = ()
 
     def __post_init__(self) -> None:
         if set(self.arms) != {Arm.LEFT, Arm.RIGHT}:
@@ -122,7 +127,7 @@ def build_robot_model(model: str, **params: Any) -> RobotModel:
     Parameters
     ----------
     model : str
-        ``"kuka_iiwa"``.
+        ``"kuka_iiwa"`` or ``"icub"``.
     **params
         Passed to the model's builder (e.g. ``arm_separation``, ``mount_height``, ``palm_size``).
 
@@ -134,7 +139,11 @@ def build_robot_model(model: str, **params: Any) -> RobotModel:
         from worlds.robots.kuka import kuka_iiwa_model
 
         return kuka_iiwa_model(**params)
-    raise ValueError(f"build_robot_model: expected model in ['kuka_iiwa'], got {model!r}")
+    if model == "icub":
+        from worlds.robots.icub import icub_model
+
+        return icub_model(**params)
+    raise ValueError(f"build_robot_model: expected model in ['kuka_iiwa', 'icub'], got {model!r}")
 
 
 __all__ = ["ArmSpec", "BodySpec", "FloatArray", "RobotModel", "build_robot_model"]

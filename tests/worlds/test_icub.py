@@ -1,0 +1,193 @@
+"""The iCub model: loads, tracks palm poses, and lifts a parcel by contact alone.
+
+The parcel, table and squeeze come from ``worlds/icub_parcel_pick_place.yaml``; the palms
+follow scripted minimum-jerk targets as in :mod:`tests.worlds.test_grasp` (no constraints, no
+teleporting).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pybullet as pb
+import pytest
+from numpy.typing import NDArray
+
+from skills.labels import Arm
+from tests.worlds.test_grasp import Log, minimum_jerk, tilt_deg
+from worlds.collision import CollisionWorld
+from worlds.control import PalmCommand
+from worlds.robots.icub import ARM_JOINTS
+from worlds.scene import Scene, lateral_grasp_palm_poses
+from worlds.sim_world import default_gains
+from worlds.world_file import World, load_world
+
+pytestmark = pytest.mark.sim
+
+WORLD = Path(__file__).resolve().parents[2] / "worlds" / "icub_parcel_pick_place.yaml"
+PARCEL = "parcel"
+SQUEEZE = 0.015  # target this far inside the face, m
+ARMS = (Arm.LEFT, Arm.RIGHT)
+
+
+@pytest.fixture(scope="module")
+def world() -> World:
+    return load_world(WORLD)
+
+
+def icub_scene(world: World) -> Scene:
+    return Scene.from_world(world, gains=default_gains("icub"))
+
+
+def start(world: World) -> tuple[NDArray[np.float64], float, float]:
+    """Parcel centre (3,), half its extent along y and the palm thickness, m."""
+    parcel = world.objects[0]
+    half_span = float(parcel.shape.size[1]) / 2.0  # type: ignore[union-attr]
+    return np.asarray(parcel.pose.position, float), half_span, float(world.robot.palm_size[2])
+
+
+def test_icub_loads_with_two_seven_joint_arms_and_fixed_rest(world: World) -> None:
+    with icub_scene(world) as scene:
+        assert scene.robot.name == "icub"
+        assert len(scene.robot_ids) == 2  # the trunk with the left arm; the right arm
+        for arm, side in ((Arm.LEFT, "l"), (Arm.RIGHT, "r")):
+            spec = scene.robot.arms[arm]
+            body = scene.robot_ids[spec.body]
+            infos = [
+                pb.getJointInfo(body, j, physicsClientId=scene.client)
+                for j in range(pb.getNumJoints(body, physicsClientId=scene.client))
+            ]
+            movable = [i[1].decode() for i in infos if i[2] != pb.JOINT_FIXED]
+            assert movable == [f"{side}_{name}" for name in ARM_JOINTS]
+            names = [infos[j][1].decode() for j in spec.joint_indices]
+            assert names == [f"{side}_{name}" for name in ARM_JOINTS]
+            assert infos[spec.palm_link][12] == b"palm"
+        # The legs, torso and head do not move: they are fixed joints.
+        trunk = scene.robot_ids[0]
+        before = [pb.getLinkState(trunk, j, physicsClientId=scene.client)[4] for j in range(20)]
+        scene.step(240)
+        after = [pb.getLinkState(trunk, j, physicsClientId=scene.client)[4] for j in range(20)]
+        np.testing.assert_allclose(after, before, atol=1e-9)
+        # No link of the robot touches the table or the other body at rest.
+        for body in scene.robot_ids:
+            assert not pb.getContactPoints(
+                bodyA=body, bodyB=scene.table_id, physicsClientId=scene.client
+            )
+        assert not pb.getContactPoints(
+            bodyA=scene.robot_ids[0], bodyB=scene.robot_ids[1], physicsClientId=scene.client
+        )
+
+
+def test_forearm_collision_shapes_reach_fcl(world: World) -> None:
+    with icub_scene(world) as scene:
+        names = CollisionWorld(scene).element_names
+    for link in ("l_forearm", "l_hand", "palm"):
+        assert f"left_arm/{link}" in names
+    for link in ("r_forearm", "r_hand", "palm"):
+        assert f"right_arm/{link}" in names
+
+
+def test_palms_hold_commanded_poses_within_5_mm(world: World) -> None:
+    centre, half_span, thickness = start(world)
+    with icub_scene(world) as scene:
+        scene.place_palms(lateral_grasp_palm_poses(centre, half_span, thickness, gap=0.04))
+        # A new target 3 cm up and 2 cm forward, reached and held under impedance control.
+        target = lateral_grasp_palm_poses(
+            centre + np.array([0.02, 0.0, 0.03]), half_span, thickness, gap=0.04
+        )
+        for arm, (position, quaternion) in target.items():
+            scene.set_palm_command(arm, PalmCommand(position, quaternion))
+        scene.step(240)
+        errors = []
+        for _ in range(4):
+            scene.step(120)
+            for arm in ARMS:
+                errors.append(np.linalg.norm(scene.palm_state(arm).position - target[arm][0]))
+        assert max(errors) < 0.005, f"palm error {max(errors) * 1000:.2f} mm"
+
+
+@dataclass(frozen=True)
+class Lift:
+    before_lift: NDArray[np.float64]
+    height_after_lift: float
+    logs: tuple[Log, ...]
+    hold: Log
+
+
+def parcel_in_palms(scene: Scene) -> NDArray[np.float64]:
+    position, _ = scene.object_pose(PARCEL)
+    palms = [scene.palm_state(arm).position for arm in ARMS]
+    return position - 0.5 * (palms[0] + palms[1])
+
+
+@pytest.fixture(scope="module")
+def lift(world: World) -> Lift:
+    """Approach, squeeze, lift 6 cm, hold 3 s, carry 5 cm along +y."""
+    centre, half_span, thickness = start(world)
+
+    def segment(
+        scene: Scene,
+        c0: NDArray[np.float64],
+        c1: NDArray[np.float64],
+        g0: float,
+        g1: float,
+        squeeze: float,
+        duration: float,
+        log: Log | None = None,
+    ) -> None:
+        per_command = scene.spec.physics_hz // scene.spec.control_hz
+        steps = round(duration * scene.spec.physics_hz)
+        for k in range(0, steps, per_command):
+            s = float(minimum_jerk((k + per_command) / steps))
+            poses = lateral_grasp_palm_poses(
+                c0 + (c1 - c0) * s, half_span, thickness, g0 + (g1 - g0) * s
+            )
+            for arm, (p, q) in poses.items():
+                scene.set_palm_command(arm, PalmCommand(p, q, squeeze_offset=squeeze))
+            for _ in range(per_command):
+                scene.step()
+                if log is not None and scene.step_count % 24 == 0:
+                    log.time.append(scene.time)
+                    log.parcel_in_palms.append(parcel_in_palms(scene))
+                    log.tilt_deg.append(tilt_deg(scene))
+                    for arm in ARMS:
+                        log.force[arm].append(scene.palm_contact_force(arm, PARCEL))
+
+    with icub_scene(world) as scene:
+        scene.place_palms(lateral_grasp_palm_poses(centre, half_span, thickness, gap=0.05))
+        scene.step(48)
+        segment(scene, centre, centre, 0.05, 0.0, 0.0, 1.0)
+        segment(scene, centre, centre, 0.0, 0.0, SQUEEZE, 0.5)
+        before = parcel_in_palms(scene)
+        up = centre + np.array([0.0, 0.0, 0.06])
+        side = up + np.array([0.0, 0.05, 0.0])
+        lifting, hold, carry = Log(), Log(), Log()
+        segment(scene, centre, up, 0.0, 0.0, SQUEEZE, 1.5, lifting)
+        height = float(scene.object_pose(PARCEL)[0][2])
+        segment(scene, up, up, 0.0, 0.0, SQUEEZE, 3.0, hold)
+        segment(scene, up, side, 0.0, 0.0, SQUEEZE, 1.5, carry)
+        return Lift(before, height, (lifting, hold, carry), hold)
+
+
+def test_icub_lifts_the_parcel(lift: Lift, world: World) -> None:
+    centre, _, _ = start(world)
+    # 6 cm less the palms' sag under the parcel's weight.
+    np.testing.assert_allclose(lift.height_after_lift, centre[2] + 0.06, atol=0.01)
+
+
+def test_parcel_does_not_slip_or_tilt_in_icub_palms(lift: Lift) -> None:
+    offsets = np.concatenate([np.asarray(log.parcel_in_palms) for log in lift.logs])
+    slip = np.linalg.norm(offsets - lift.before_lift, axis=1)
+    assert slip.max() < 0.01, f"slip {slip.max() * 1000:.2f} mm"
+    tilts = [t for log in lift.logs for t in log.tilt_deg]
+    assert max(tilts) < 5.0, f"tilt {max(tilts):.2f} deg"
+
+
+def test_icub_squeeze_is_steady_during_hold(lift: Lift) -> None:
+    for arm in ARMS:
+        force = np.asarray(lift.hold.force[arm])
+        assert np.all((force > 5.0) & (force < 60.0)), (
+            f"{arm}: {force.min():.1f}..{force.max():.1f} N"
+        )

@@ -1,0 +1,460 @@
+"""The iCub humanoid with flat palms, fixed at its waist behind a table.
+
+The URDFs are generated at run time from the ``icub-models`` package (``iCubGazeboV2_5``):
+
+* Only links with mass are kept; the sensor, skin and DH frames (massless links on fixed joints,
+  about 170 of them) are dropped, so PyBullet loads the robot without
+  ``URDF_MERGE_FIXED_LINKS`` (which would also merge the palm box into the hand and lose the
+  palm frame the controller needs).
+* Every joint outside the two 7-DoF arms (legs, torso, neck) becomes a fixed joint: those
+  joints are not used by the task, and a fixed joint cannot sag. The torso can be given a
+  constant forward lean (``torso_pitch_deg``), baked into its fixed joint.
+* A thin palm box is added on a fixed joint on the inner face of each hand: the hand mesh's
+  convex hull (fingers curled, thumb out) is no flat contact face.
+* The robot is split into two bodies, one per arm, because the controller and the FCL mirror
+  (:mod:`worlds.collision`) drive and track each arm as the links of one body ending in a link
+  named ``palm``: body 0 is the iCub without its right arm (legs, torso, head, left arm); body 1
+  is the right arm alone on a massless mount at the chest frame, placed where the chest puts
+  it. Collisions between the right arm and the trunk are switched off
+  (:attr:`RobotModel.collision_exclusions`), as PyBullet leaves a single body's links alone;
+  the two arms still collide with each other.
+
+Frames: the iCub's root link has x backwards, y to the robot's right and z up; the robot frame
+of the world file (x forward, left arm at +y) is the root link turned by 180 degrees about z.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+import os
+import tempfile
+import warnings
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from skills.labels import Arm
+from worlds.robots import ArmSpec, BodySpec, RobotModel
+
+#: The icub-models robot the model is built from.
+ICUB_VARIANT = "iCubGazeboV2_5"
+ARM_JOINTS = (
+    "shoulder_pitch",
+    "shoulder_roll",
+    "shoulder_yaw",
+    "elbow",
+    "wrist_prosup",
+    "wrist_pitch",
+    "wrist_yaw",
+)
+#: Links of one arm, shoulder to hand, without the side prefix.
+ARM_LINKS = (
+    "shoulder_1",
+    "shoulder_2",
+    "shoulder_3",
+    "upper_arm",
+    "elbow_1",
+    "forearm",
+    "wrist_1",
+    "hand",
+)
+#: Torque limits per arm joint, N m. The URDF says 50000; these are of the order of the real
+#: iCub's motors (shoulder and elbow tens of N m, the wrist a few).
+MAX_TORQUE = (30.0, 30.0, 15.0, 15.0, 6.0, 6.0, 6.0)
+#: Inner face of the hand's collision hull along the hand frame's -y axis, m (both hands).
+HAND_INNER_FACE_Y = -0.018
+#: Palm centre along the fingers (hand x, left; -x right) and towards the thumb (hand z), m.
+#: Thumbs point up in the lateral grasp: the palm centre 1 cm below the wrist axis keeps the
+#: forearm (about 3.5 cm in radius) off the table when the parcel is held at mid-height.
+PALM_ALONG_FINGERS = 0.06
+PALM_TOWARDS_THUMB = -0.01
+#: Turn of the palm about its normal on the hand, rad. The wrist yaw axis is the palm normal,
+#: so this joint alone keeps the palm's x axis down while the forearm's slope changes (about
+#: 0.05 rad per cm of lift) in its narrow range (-0.35..0.44 rad); the turn centres it over
+#: the table workspace (at 0.05 rad the start postures sat on the lower limit).
+PALM_TWIST = -0.15
+#: Gap between the hand's hull and the palm box, m.
+PALM_CLEARANCE = 0.002
+#: Rest posture of an arm, rad: forearm forward, palm facing the robot's midline. The iCub's
+#: arm joints are mirrored, so the same values give the mirrored posture of the right arm.
+LEFT_REST = (-0.9, 0.35, 0.3, 1.2, 0.0, 0.0, 0.0)
+#: Root link frame in the robot frame: turned by pi about z (the root's x points backwards).
+_ROOT2ROBOT = Rotation.from_euler("z", math.pi)
+
+
+def icub_source() -> Path:
+    """Path of the icub-models URDF the model is built from."""
+    import icub_models
+
+    return Path(icub_models.get_model_file(ICUB_VARIANT))
+
+
+def _origin(parent: ET.Element, xyz: tuple[float, ...], rpy: tuple[float, ...] = (0, 0, 0)) -> None:
+    ET.SubElement(
+        parent,
+        "origin",
+        xyz=" ".join(f"{v:.9g}" for v in xyz),
+        rpy=" ".join(f"{v:.9g}" for v in rpy),
+    )
+
+
+def _read_origin(element: ET.Element) -> tuple[np.ndarray, Rotation]:
+    origin = element.find("origin")
+    if origin is None:
+        return np.zeros(3), Rotation.identity()
+    xyz = np.array([float(v) for v in origin.get("xyz", "0 0 0").split()])
+    rpy = [float(v) for v in origin.get("rpy", "0 0 0").split()]
+    return xyz, Rotation.from_euler("xyz", rpy)
+
+
+def _set_origin(element: ET.Element, xyz: np.ndarray, rotation: Rotation) -> None:
+    for old in element.findall("origin"):
+        element.remove(old)
+    with warnings.catch_warnings():
+        # At +-90 degrees of pitch scipy warns of gimbal lock; the angles still give the rotation.
+        warnings.simplefilter("ignore", UserWarning)
+        rpy = rotation.as_euler("xyz")
+    origin = ET.Element(
+        "origin",
+        xyz=" ".join(f"{v:.9g}" for v in xyz),
+        rpy=" ".join(f"{v:.9g}" for v in rpy),
+    )
+    element.insert(0, origin)
+
+
+def _palm_link(robot: ET.Element, side: str, palm_size: tuple[float, float, float]) -> None:
+    """Append a palm box link (named ``palm``) on a fixed joint on the inner face of a hand."""
+    palm = ET.SubElement(robot, "link", name="palm")
+    inertial = ET.SubElement(palm, "inertial")
+    _origin(inertial, (0.0, 0.0, 0.0))
+    ET.SubElement(inertial, "mass", value="0.05")
+    ET.SubElement(
+        inertial, "inertia", ixx="3e-5", ixy="0", ixz="0", iyy="2e-5", iyz="0", izz="4e-5"
+    )
+    for tag in ("visual", "collision"):
+        element = ET.SubElement(palm, tag)
+        _origin(element, (0.0, 0.0, 0.0))
+        geometry = ET.SubElement(element, "geometry")
+        ET.SubElement(geometry, "box", size=" ".join(f"{v:.6g}" for v in palm_size))
+    joint = ET.SubElement(robot, "joint", name=f"{side}_palm_joint", type="fixed")
+    ET.SubElement(joint, "parent", link=f"{side}_hand")
+    ET.SubElement(joint, "child", link="palm")
+    position, rotation = palm2hand(side, palm_size)
+    _set_origin(joint, position, rotation)
+
+
+def palm2hand(side: str, palm_size: tuple[float, float, float]) -> tuple[np.ndarray, Rotation]:
+    """Palm frame in the hand link frame: position (3,) m and rotation.
+
+    The palm's z axis (contact normal) is the hand's -y axis (out of the inner face), its y
+    axis runs along the hand's x (the fingers of the left hand; the right hand's point along -x)
+    and its x axis away from the thumb, so that in the lateral
+    grasp (palm x down) the fingers point forward and the thumbs up.
+    """
+    fingers = 1.0 if side == "l" else -1.0  # the right hand frame is the mirror, x reversed
+    y = HAND_INNER_FACE_Y - PALM_CLEARANCE - palm_size[2] / 2.0
+    position = np.array([fingers * PALM_ALONG_FINGERS, y, PALM_TOWARDS_THUMB])
+    # Columns: palm x, y, z in the hand frame; y = z x x is the hand's x for both hands.
+    matrix = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, -1.0], [-1.0, 0.0, 0.0]])
+    twist = Rotation.from_rotvec([0.0, 0.0, -fingers * PALM_TWIST])
+    return position, Rotation.from_matrix(matrix) * twist
+
+
+def _arm_link_names(side: str) -> set[str]:
+    return {f"{side}_{name}" for name in ARM_LINKS}
+
+
+def icub_urdf_texts(
+    palm_size: tuple[float, float, float],
+    palm_friction: float,
+    torso_pitch_deg: float = 0.0,
+) -> tuple[str, str, np.ndarray, Rotation]:
+    """URDF texts of the two iCub bodies and where the right-arm body sits.
+
+    Parameters
+    ----------
+    palm_size : tuple of float
+        (3,) palm box extent along the palm frame's x, y, z, m.
+    palm_friction : float
+        Lateral friction coefficient of the palms.
+    torso_pitch_deg : float
+        Constant forward lean of the torso, degrees.
+
+    Returns
+    -------
+    trunk_text, right_arm_text : str
+        Body 0 (everything but the right arm) and body 1 (the right arm on its mount).
+    mount2root_position : ndarray
+        (3,) chest frame (the right arm's mount) in the root link frame, m.
+    mount2root_rotation : Rotation
+        Its orientation.
+    """
+    source = icub_source()
+    package_root = source.parents[3]  # share/iCub/robots/<variant>/model.urdf -> share
+    robot = ET.parse(source).getroot()
+    for mesh in robot.iter("mesh"):
+        filename = mesh.get("filename", "")
+        if filename.startswith("package://"):
+            mesh.set("filename", str(package_root / filename[len("package://") :]))
+    for element in list(robot):
+        if element.tag not in ("link", "joint"):
+            robot.remove(element)
+    # Massless frames go; every kept link has a kept parent in this model.
+    kept = {_name(ln) for ln in robot.findall("link") if ln.find("inertial") is not None}
+    for link in robot.findall("link"):
+        if _name(link) not in kept:
+            robot.remove(link)
+    arm_joints = {f"{side}_{name}" for side in "lr" for name in ARM_JOINTS}
+    for joint in robot.findall("joint"):
+        if _child(joint) not in kept:
+            robot.remove(joint)
+            continue
+        for dynamics in joint.findall("dynamics"):
+            joint.remove(dynamics)
+        if _name(joint) in arm_joints or joint.get("type") == "fixed":
+            continue
+        if _name(joint) == "torso_pitch" and torso_pitch_deg:
+            axis_element = joint.find("axis")
+            axis_text = axis_element.get("xyz", "0 0 1") if axis_element is not None else "0 0 1"
+            axis = np.array([float(v) for v in axis_text.split()])
+            xyz, rotation = _read_origin(joint)
+            lean = Rotation.from_rotvec(axis * math.radians(torso_pitch_deg))
+            _set_origin(joint, xyz, rotation * lean)
+        joint.set("type", "fixed")
+        for tag in ("axis", "limit"):
+            for sub in joint.findall(tag):
+                joint.remove(sub)
+
+    # Chest frame in the root frame (the joints up to it are now fixed).
+    joint_to = {_child(j): j for j in robot.findall("joint")}
+    position, rotation = np.zeros(3), Rotation.identity()
+    link_name = "chest"
+    while link_name in joint_to:
+        joint = joint_to[link_name]
+        xyz, rot = _read_origin(joint)
+        position, rotation = xyz + rot.apply(position), rot * rotation
+        link_name = _parent(joint)
+
+    right_links = _arm_link_names("r")
+    trunk = _body_text(robot, right_links, "l", None, palm_size, palm_friction)
+    mount = ET.Element("link", name="r_arm_mount")
+    inertial = ET.SubElement(mount, "inertial")
+    _origin(inertial, (0.0, 0.0, 0.0))
+    ET.SubElement(inertial, "mass", value="0.01")
+    ET.SubElement(
+        inertial, "inertia", ixx="1e-6", ixy="0", ixz="0", iyy="1e-6", iyz="0", izz="1e-6"
+    )
+    # The right shoulder hangs off the chest; in its own body it hangs off the mount.
+    for joint in robot.findall("joint"):
+        if _child(joint) == "r_shoulder_1":
+            parent = joint.find("parent")
+            assert parent is not None
+            parent.set("link", "r_arm_mount")
+    trunk_links = {_name(ln) for ln in robot.findall("link")} - right_links
+    right = _body_text(robot, trunk_links, "r", mount, palm_size, palm_friction)
+    return trunk, right, position, rotation
+
+
+def _name(element: ET.Element) -> str:
+    return element.get("name", "")
+
+
+def _child(joint: ET.Element) -> str:
+    child = joint.find("child")
+    return child.get("link", "") if child is not None else ""
+
+
+def _parent(joint: ET.Element) -> str:
+    parent = joint.find("parent")
+    return parent.get("link", "") if parent is not None else ""
+
+
+def _body_text(
+    robot: ET.Element,
+    exclude: set[str],
+    side: str,
+    root: ET.Element | None,
+    palm_size: tuple[float, float, float],
+    palm_friction: float,
+) -> str:
+    """URDF text of the links of ``robot`` not in ``exclude`` (under ``root`` if given), with
+    a palm on the ``side`` hand."""
+    out = ET.Element("robot", name="duet_icub_trunk" if root is None else "duet_icub_right_arm")
+    if root is not None:
+        out.append(root)
+    links = [ln for ln in robot.findall("link") if _name(ln) not in exclude]
+    joints = [j for j in robot.findall("joint") if _child(j) not in exclude]
+    # PyBullet numbers links depth first, children in file order: the joints on the way from
+    # the root to the hand go last, so the arm's links are the body's last, shoulder to hand,
+    # then the palm (the FCL mirror takes the links just before the palm as the forearm).
+    parent_of = {_child(j): _parent(j) for j in joints}
+    on_path: set[str] = set()
+    link_name: str | None = f"{side}_hand"
+    while link_name is not None:
+        on_path.add(link_name)
+        link_name = parent_of.get(link_name)
+    joints.sort(key=lambda j: _child(j) in on_path)
+    out.extend(links)
+    out.extend(joints)
+    _palm_link(out, side, palm_size)
+    palm = out.find("link[@name='palm']")
+    assert palm is not None
+    contact = ET.SubElement(palm, "contact")
+    ET.SubElement(contact, "lateral_friction", value=f"{palm_friction:.6g}")
+    return ET.tostring(out, encoding="unicode")
+
+
+def _write(text: str, stem: str, cache_dir: Path | None) -> Path:
+    digest = hashlib.sha1(text.encode()).hexdigest()[:12]
+    folder = cache_dir if cache_dir is not None else Path(tempfile.gettempdir()) / "duet_robots"
+    folder.mkdir(parents=True, exist_ok=True)
+    path = folder / f"{stem}_{digest}.urdf"
+    if not path.exists():
+        # Write then rename: parallel workers may race on the same file.
+        fd, tmp = tempfile.mkstemp(dir=folder, suffix=".urdf")
+        with os.fdopen(fd, "w") as f:
+            f.write(text)
+        os.replace(tmp, path)
+    return path
+
+
+def icub_model(
+    base_position: tuple[float, float, float] = (0.0, 0.0, 0.0),
+    base_rpy_deg: tuple[float, float, float] = (0.0, 0.0, 0.0),
+    arm_separation: float | None = None,
+    mount_height: float = 0.6,
+    palm_size: tuple[float, float, float] = (0.05, 0.06, 0.01),
+    palm_friction: float = 1.0,
+    cache_dir: Path | None = None,
+    torso_pitch_deg: float = 0.0,
+) -> RobotModel:
+    """The iCub fixed at its root link (the waist), facing the robot frame's +x.
+
+    Parameters
+    ----------
+    base_position : tuple of float
+        (3,) robot frame origin in the world (floor level, under the waist), m.
+    base_rpy_deg : tuple of float
+        (3,) robot frame roll, pitch, yaw in the world, degrees.
+    arm_separation : float, optional
+        Not a free parameter for iCub (the shoulders are 0.24 m apart); accepted so that world
+        files keep one robot schema.
+    mount_height : float
+        Height of the root link (waist) above the robot frame origin, m.
+    palm_size : tuple of float
+        (3,) palm box extent, m.
+    palm_friction : float
+        Palm lateral friction coefficient.
+    cache_dir : Path, optional
+        Where the generated URDFs go.
+    torso_pitch_deg : float
+        Constant forward lean of the torso, degrees.
+
+    Returns
+    -------
+    RobotModel
+    """
+    del arm_separation
+    if mount_height <= 0.0:
+        raise ValueError(f"icub_model: expected mount_height > 0, got {mount_height}")
+    if min(palm_size) <= 0.0:
+        raise ValueError(f"icub_model: expected positive palm_size, got {palm_size}")
+    palm_size = (float(palm_size[0]), float(palm_size[1]), float(palm_size[2]))
+    trunk_text, right_text, mount2root_p, mount2root_r = icub_urdf_texts(
+        palm_size, palm_friction, torso_pitch_deg
+    )
+    trunk_urdf = _write(trunk_text, "icub_trunk", cache_dir)
+    right_urdf = _write(right_text, "icub_right_arm", cache_dir)
+    robot2world = Rotation.from_euler("xyz", np.radians(base_rpy_deg))
+    root2world = robot2world * _ROOT2ROBOT
+    root_position = np.asarray(base_position, float) + robot2world.apply([0, 0, mount_height])
+    mount_position = root_position + root2world.apply(mount2root_p)
+    mount2world = root2world * mount2root_r
+
+    def quat(rotation: Rotation) -> tuple[float, float, float, float]:
+        x, y, z, w = (float(v) for v in rotation.as_quat())
+        return (x, y, z, w)
+
+    def vec(v: np.ndarray) -> tuple[float, float, float]:
+        return (float(v[0]), float(v[1]), float(v[2]))
+
+    bodies = (
+        BodySpec(trunk_urdf, vec(root_position), quat(root2world)),
+        BodySpec(right_urdf, vec(mount_position), quat(mount2world)),
+    )
+    trunk_links, trunk_joints = _link_and_joint_order(trunk_text)
+    right_links, right_joints = _link_and_joint_order(right_text)
+    limits = _joint_limits(trunk_text) | _joint_limits(right_text)
+    arms = {}
+    for arm, index, side, joints, links in (
+        (Arm.LEFT, 0, "l", trunk_joints, trunk_links),
+        (Arm.RIGHT, 1, "r", right_joints, right_links),
+    ):
+        names = [f"{side}_{n}" for n in ARM_JOINTS]
+        lower = tuple(limits[n][0] for n in names)
+        upper = tuple(limits[n][1] for n in names)
+        rest = tuple(
+            float(np.clip(q, lo, hi)) for q, lo, hi in zip(LEFT_REST, lower, upper, strict=True)
+        )
+        arms[arm] = ArmSpec(
+            body=index,
+            joint_indices=tuple(joints.index(n) for n in names),
+            palm_link=links.index("palm"),
+            rest_posture=rest,
+            lower=lower,
+            upper=upper,
+            max_torque=MAX_TORQUE,
+            palm_size=palm_size,
+        )
+    trunk_only = sorted(
+        {*trunk_links, "base"} - _arm_link_names("l") - {"palm"}  # everything but the left arm
+    )
+    exclusions = tuple((1, r, 0, t) for r in ("base", *right_links) for t in trunk_only)
+    position, _ = palm2hand("l", palm_size)
+    return RobotModel(
+        name="icub",
+        bodies=bodies,
+        arms=arms,
+        palm2flange_position=vec(position),
+        collision_exclusions=exclusions,
+    )
+
+
+def _link_and_joint_order(text: str) -> tuple[list[str], list[str]]:
+    """PyBullet's link and joint names by index: joint i has child link i (depth first, in
+    file order; checked against PyBullet in tests/worlds/test_icub.py)."""
+    robot = ET.fromstring(text)
+    children: dict[str, list[ET.Element]] = {}
+    for joint in robot.findall("joint"):
+        children.setdefault(_parent(joint), []).append(joint)
+    child_links = {_child(j) for j in robot.findall("joint")}
+    root = next(_name(ln) for ln in robot.findall("link") if _name(ln) not in child_links)
+    links: list[str] = []
+    joints: list[str] = []
+
+    def visit(link: str) -> None:
+        for joint in children.get(link, []):
+            links.append(_child(joint))
+            joints.append(_name(joint))
+            visit(_child(joint))
+
+    visit(root)
+    return links, joints
+
+
+def _joint_limits(text: str) -> dict[str, tuple[float, float]]:
+    limits = {}
+    for joint in ET.fromstring(text).findall("joint"):
+        limit = joint.find("limit")
+        if limit is not None:
+            limits[joint.get("name", "")] = (
+                float(limit.get("lower", 0)),
+                float(limit.get("upper", 0)),
+            )
+    return limits
+
+
+__all__ = ["icub_model", "icub_source", "icub_urdf_texts", "palm2hand"]
