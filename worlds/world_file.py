@@ -44,6 +44,8 @@ from pydantic import (
 )
 from pydantic.fields import FieldInfo
 
+from affordances.context import Fragility, ObjectState  # one vocabulary for both layers
+
 __all__ = [
     "DEFAULT_SKILL_LIBRARY",
     "WORLD_FILE_VERSION",
@@ -304,25 +306,6 @@ class ShapeType(StrEnum):
     CYLINDER = "cylinder"
     SPHERE = "sphere"
     MESH = "mesh"
-
-
-class Fragility(StrEnum):
-    """How carefully an object must be handled."""
-
-    ROBUST = "robust"
-    NORMAL = "normal"
-    FRAGILE = "fragile"
-
-
-class ObjectState(StrEnum):
-    """Semantic state flags of an object, used by the affordance layer."""
-
-    OPEN = "open"
-    CLOSED = "closed"
-    FULL = "full"
-    EMPTY = "empty"
-    HOT = "hot"
-    CONTAINS_ITEMS = "contains_items"
 
 
 _EXCLUSIVE_STATES = ((ObjectState.OPEN, ObjectState.CLOSED), (ObjectState.FULL, ObjectState.EMPTY))
