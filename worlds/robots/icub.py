@@ -25,10 +25,7 @@ of the world file (x forward, left arm at +y) is the root link turned by 180 deg
 
 from __future__ import annotations
 
-import hashlib
 import math
-import os
-import tempfile
 import warnings
 import xml.etree.ElementTree as ET
 from pathlib import Path
@@ -38,6 +35,7 @@ from scipy.spatial.transform import Rotation
 
 from skills.labels import Arm
 from worlds.robots import ArmSpec, BodySpec, RobotModel
+from worlds.robots.cache import cached_urdf
 
 #: The icub-models robot the model is built from.
 ICUB_VARIANT = "iCubGazeboV2_5"
@@ -307,20 +305,6 @@ def _body_text(
     return ET.tostring(out, encoding="unicode")
 
 
-def _write(text: str, stem: str, cache_dir: Path | None) -> Path:
-    digest = hashlib.sha1(text.encode()).hexdigest()[:12]
-    folder = cache_dir if cache_dir is not None else Path(tempfile.gettempdir()) / "duet_robots"
-    folder.mkdir(parents=True, exist_ok=True)
-    path = folder / f"{stem}_{digest}.urdf"
-    if not path.exists():
-        # Write then rename: parallel workers may race on the same file.
-        fd, tmp = tempfile.mkstemp(dir=folder, suffix=".urdf")
-        with os.fdopen(fd, "w") as f:
-            f.write(text)
-        os.replace(tmp, path)
-    return path
-
-
 def icub_model(
     base_position: tuple[float, float, float] = (0.0, 0.0, 0.0),
     base_rpy_deg: tuple[float, float, float] = (0.0, 0.0, 0.0),
@@ -366,8 +350,8 @@ def icub_model(
     trunk_text, right_text, mount2root_p, mount2root_r = icub_urdf_texts(
         palm_size, palm_friction, torso_pitch_deg
     )
-    trunk_urdf = _write(trunk_text, "icub_trunk", cache_dir)
-    right_urdf = _write(right_text, "icub_right_arm", cache_dir)
+    trunk_urdf = cached_urdf(trunk_text, "icub_trunk", cache_dir)
+    right_urdf = cached_urdf(right_text, "icub_right_arm", cache_dir)
     robot2world = Rotation.from_euler("xyz", np.radians(base_rpy_deg))
     root2world = robot2world * _ROOT2ROBOT
     root_position = np.asarray(base_position, float) + robot2world.apply([0, 0, mount_height])

@@ -9,10 +9,7 @@ wrist axis and the wrist housing clears the table.
 
 from __future__ import annotations
 
-import hashlib
 import math
-import os
-import tempfile
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -20,6 +17,7 @@ import pybullet_data
 
 from skills.labels import Arm
 from worlds.robots import ArmSpec, BodySpec, RobotModel
+from worlds.robots.cache import cached_urdf
 
 N_JOINTS = 7
 #: Flange face along the last link's z axis, m (link_7 mesh extent).
@@ -157,17 +155,7 @@ def write_kuka_palm_urdf(
     Path
     """
     text = kuka_palm_urdf_text(palm_size, mount_height, palm_friction, mount_pitch_deg)
-    digest = hashlib.sha1(text.encode()).hexdigest()[:12]
-    folder = cache_dir if cache_dir is not None else Path(tempfile.gettempdir()) / "duet_robots"
-    folder.mkdir(parents=True, exist_ok=True)
-    path = folder / f"kuka_iiwa_palm_{digest}.urdf"
-    if not path.exists():
-        # Write then rename: parallel test workers may race on the same file.
-        fd, tmp = tempfile.mkstemp(dir=folder, suffix=".urdf")
-        with os.fdopen(fd, "w") as f:
-            f.write(text)
-        os.replace(tmp, path)
-    return path
+    return cached_urdf(text, "kuka_iiwa_palm", cache_dir)
 
 
 def kuka_iiwa_model(
