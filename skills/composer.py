@@ -198,7 +198,7 @@ def commands_for(state: DualArmState) -> PalmCommands:
     px, py, pz = obj.position.tolist()
     vx, vy, vz = obj.velocity.tolist()
     wx, wy, wz = obj.angular_velocity.tolist()
-    q = _quat_floats(obj.orientation)
+    q = quat.as_tuple(obj.orientation)
     x, y, z, w = q
     r00, r01, r02 = 1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)
     r10, r11, r12 = 2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)
@@ -212,7 +212,7 @@ def commands_for(state: DualArmState) -> PalmCommands:
         b0, b1, b2 = palm.velocity.tolist()
         c0, c1, c2 = palm.angular_velocity.tolist()
         positions.append((px + l0, py + l1, pz + l2))
-        orientations.append(quat.multiply_scalar(q, _quat_floats(palm.orientation)))
+        orientations.append(quat.multiply_scalar(q, quat.as_tuple(palm.orientation)))
         twists.append(
             (
                 vx + wy * l2 - wz * l1 + r00 * b0 + r01 * b1 + r02 * b2,  # G^T y_o' + R y_C'
@@ -229,11 +229,6 @@ def commands_for(state: DualArmState) -> PalmCommands:
         np.array(twists),
         np.array((vx, vy, vz, wx, wy, wz)),
     )
-
-
-def _quat_floats(q: Array) -> quat.Quat:
-    a, b, c, d = q.tolist()
-    return (a, b, c, d)
 
 
 def grasped_state(

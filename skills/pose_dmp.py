@@ -270,19 +270,6 @@ def fit_pose(
     return PoseModel(pos, ori)
 
 
-def forcing_accelerations(model: PoseModel, target: PoseTarget, s: float) -> tuple[Array, Array]:
-    """Learnt forcing as accelerations ``f / tau^2`` at phase ``s``: (linear, angular), (3,) each.
-
-    The RBF forcing term is itself a coupling term (the paper's skill encoding); this is it
-    in acceleration units, shared by :func:`pose_step` and :class:`LearntForcing`.
-    """
-    basis = model.position.forcing.basis
-    psi = np.exp(-basis.widths * (s - basis.centres) ** 2)
-    # One product for all six dimensions: position and orientation share the phase.
-    f = (psi @ model.stacked_weights) * (s / (max(psi.sum(), 1e-300) * target.tau * target.tau))
-    return target.position_matrix @ f[:3], target.orientation_matrix @ f[3:]
-
-
 class LearntForcing:
     """The learnt RBF forcing term of ``model`` as a :class:`CouplingTerm`.
 
@@ -448,7 +435,7 @@ def _accelerations(
     v0, v1, v2 = state.velocity.tolist()
     w0, w1, w2 = state.angular_velocity.tolist()
     g0, g1, g2 = target.goal_position.tolist()
-    e0, e1, e2 = quat.rotation_error_scalar(target.goal_tuple, _quat_tuple(state.orientation))
+    e0, e1, e2 = quat.rotation_error_scalar(target.goal_tuple, quat.as_tuple(state.orientation))
     lin = [
         kp * (g0 - y0) - kd * v0 + k * raw[0],
         kp * (g1 - y1) - kd * v1 + k * raw[1],
@@ -467,11 +454,6 @@ def _accelerations(
             lin[i] += cl[i]
             ang[i] += ca[i]
     return lin, ang
-
-
-def _quat_tuple(q: Array) -> quat.Quat:
-    x, y, z, w = q.tolist()
-    return (x, y, z, w)
 
 
 def pose_step(
@@ -608,7 +590,7 @@ def _integrate(
     w0 += ang[0] * dt
     w1 += ang[1] * dt
     w2 += ang[2] * dt
-    q = quat.integrate_scalar(_quat_tuple(state.orientation), (w0, w1, w2), dt)
+    q = quat.integrate_scalar(quat.as_tuple(state.orientation), (w0, w1, w2), dt)
     # One allocation for the whole state; the fields are views into it.
     buf = np.array(
         (y0 + v0 * dt, y1 + v1 * dt, y2 + v2 * dt, v0, v1, v2, *lin, *q, w0, w1, w2, *ang)

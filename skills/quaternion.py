@@ -232,6 +232,12 @@ Quat = tuple[float, float, float, float]
 Vec3 = tuple[float, float, float]
 
 
+def as_tuple(q: Array) -> Quat:
+    """One quaternion (4,) as a float tuple, for the scalar functions below."""
+    x, y, z, w = q.tolist()
+    return (x, y, z, w)
+
+
 def rotation_error_scalar(goal: Quat, q: Quat) -> Vec3:
     """:func:`rotation_error` for one pair of quaternions given as float tuples."""
     gx, gy, gz, gw = goal

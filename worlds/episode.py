@@ -34,7 +34,6 @@ from worlds.figures import Animation, MoveTrace, trajectory_figure
 from worlds.sim_world import SimWorld
 from worlds.world_file import World
 
-DEFAULT_TREE = Path(__file__).resolve().parents[1] / "planner" / "trees" / "pick_and_place.xml"
 PLACE_TOLERANCE_M = 0.02
 PLACE_TOLERANCE_DEG = 10.0
 

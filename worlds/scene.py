@@ -15,7 +15,7 @@ from __future__ import annotations
 import os
 import sys
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from enum import StrEnum
 from pathlib import Path
 from typing import Any
@@ -604,7 +604,9 @@ class Scene:
             self.robot_ids,
             self.physics_dt,
             client=c,
-            gains=gains,
+            gains=gains
+            if gains is not None
+            else replace(ImpedanceGains(), **self.robot.gain_overrides),
             refresh_every=refresh_every,
             relinearise_tolerance=relinearise_tolerance,
         )

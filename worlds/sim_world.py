@@ -32,41 +32,6 @@ ARMS = (Arm.LEFT, Arm.RIGHT)
 FOREARM_MARGIN_M = 0.03
 #: Highest an object's centre may be carried above the table top, m.
 MAX_LIFT_M = 0.30
-#: Rest palm poses per robot model: (inset from the table's near edge along x, distance from
-#: the robot's midplane along y, height above the table top), m. The iCub's arms reach about
-#: 0.3 m from shoulders 0.24 m apart, so its palms wait closer in and lower.
-_REST_PALMS: dict[str, tuple[float, float, float]] = {
-    "kuka_iiwa": (0.10, 0.38, 0.25),
-    "icub": (0.08, 0.14, 0.10),
-}
-
-
-def _moving_links(model: str) -> dict[Arm, frozenset[str]]:
-    """Per arm, the link names that move with it, where its body holds other links too."""
-    if model != "icub":
-        return {}
-    from worlds.robots.icub import ARM_LINKS
-
-    return {
-        arm: frozenset({f"{side}_{name}" for name in ARM_LINKS} | {"palm"})
-        for arm, side in ((Arm.LEFT, "l"), (Arm.RIGHT, "r"))
-    }
-
-
-def default_gains(model: str) -> ImpedanceGains:
-    """Palm impedance gains for a robot model (world file ``robot.model``).
-
-    The controller makes its damping implicit with ``G = M (M - dt C)^-1``, which also scales
-    the static spring torque by less than one where the inertia is small. On the light iCub
-    arm the KUKA gains squeeze 79 % of ``stiffness * offset`` (11.8 N for 15 N asked); less
-    damping brings it to about 89 % (13.4 N), above the grasp's 80 % threshold, and stays
-    stable (tests/worlds/test_icub.py).
-    """
-    if model == "icub":
-        return ImpedanceGains(
-            damping_linear=30.0, damping_angular=0.5, joint_damping=0.05, damping_null=0.2
-        )
-    return ImpedanceGains()
 
 
 def shape_extents(shape: ShapeSpec) -> Array:
@@ -128,14 +93,13 @@ class SimWorld:
         gui: bool = False,
     ) -> None:
         self.world_file = world
-        self.gains = gains or default_gains(str(world.robot.model))
-        self.scene = Scene.from_world(world, gains=self.gains, gui=gui)
+        self.scene = Scene.from_world(world, gains=gains, gui=gui)
+        self.gains = self.scene.controller.gains(Arm.LEFT)
         self.collision = CollisionWorld(self.scene)
         self.watched = object_name or (
             world.task[0].object if world.task else world.objects[0].name
         )
         self.safety = SafetyRecord()
-        self._moving_links = _moving_links(self.scene.robot.name)
         self._rest = self._rest_poses()
         self.scene.place_palms({a: (p.position, p.orientation) for a, p in self._rest.items()})
         self._commands: dict[Arm, Pose] = dict(self._rest)
@@ -155,9 +119,7 @@ class SimWorld:
         """Palms waiting above the table's near edge, outside the objects, facing inwards."""
         table = self.world_file.table
         near_x = table.position[0] - table.size[0] / 2.0
-        inset, half_width, height = _REST_PALMS.get(
-            str(self.world_file.robot.model), _REST_PALMS["kuka_iiwa"]
-        )
+        inset, half_width, height = self.scene.robot.rest_palms
         z = table.position[2] + height
         return {
             arm: Pose.of([near_x + inset, side * half_width, z], LATERAL_PALM_QUATERNIONS[arm])
@@ -373,7 +335,7 @@ class SimWorld:
         for arm in ARMS:
             ld = self.collision.link_distances(arm)
             ok = np.isfinite(ld.distances)
-            moving = self._moving_links.get(arm)
+            moving = self.scene.robot.arm_link_names.get(arm)
             if moving is not None:
                 # A body that carries more than the arm (iCub's trunk with the left arm): its
                 # fixed links cannot get out of the way, so they are left out of avoidance.
@@ -390,7 +352,7 @@ class SimWorld:
         shoulders = {}
         for arm in ARMS:
             spec = self.scene.robot.arms[arm]
-            if self.scene.robot.name == "icub":
+            if self.scene.robot.shoulder_at_first_joint:
                 # The first arm joint's link (the shoulder) of each arm's body.
                 body_id = self.scene.robot_ids[spec.body]
                 link = pb.getLinkState(

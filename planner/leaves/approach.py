@@ -3,12 +3,10 @@
 from __future__ import annotations
 
 import numpy as np
-from py_trees.common import Status
 from py_trees.ports import PortInformation
 
 from planner.composition import lateral_geometry
-from planner.leaves.base import MotionLeaf
-from planner.leaves.palm_motion import ViaPointMotion, measured_state
+from planner.leaves.palm_motion import ViaPointLeaf, ViaPointMotion, measured_state
 from planner.port import Pose
 from skills import quaternion as quat
 from skills.dual_arm import ARMS
@@ -37,7 +35,7 @@ def pregrasp_poses(
     return out
 
 
-class Approach(MotionLeaf):
+class Approach(ViaPointLeaf):
     """Move both palms to ``standoff`` m outside the object's faces via set-points above."""
 
     INPUT_PORTS = {
@@ -62,10 +60,12 @@ class Approach(MotionLeaf):
         ),
     }
     OUTPUT_PORTS: dict[str, PortInformation] = {}
+    MOVING = "approaching"
+    ARRIVED = "palms at the pre-grasp poses"
 
     def initialise(self) -> None:
         """Plan the via-point motion from where the palms are now."""
-        self.motion: ViaPointMotion | None = None
+        self.motion = None
         if self.connected() is not None:
             return
         world = self.world
@@ -81,15 +81,3 @@ class Approach(MotionLeaf):
         )
         starts = {a: measured_state(world.palm_pose(a), world.palm_twist(a)) for a in ARMS}
         self.motion = ViaPointMotion(starts, waypoints, float(self.get_input("segment_s")))
-
-    def update(self) -> Status:
-        """Command one step of the motion; SUCCESS when both palms are at their pre-grasp."""
-        if (why := self.connected()) is not None:
-            return self.fail(why)
-        assert self.motion is not None
-        states = self.motion.step(self.control_dt)
-        for arm, st in states.items():
-            self.world.command_palm(arm, Pose(st.position, st.orientation), st.twist())
-        if self.motion.done():
-            return self.succeed("palms at the pre-grasp poses")
-        return self.running(f"approaching: {self.motion.remaining():.3f} m to go")

@@ -8,9 +8,12 @@ through without stopping or jumping.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from typing import Any
 
 import numpy as np
+from py_trees.common import Status
 
+from planner.leaves.base import MotionLeaf
 from planner.port import Pose
 from skills import quaternion as quat
 from skills.labels import Arm
@@ -114,3 +117,30 @@ def measured_state(pose: Pose, twist: np.ndarray) -> PoseState:
         z.copy(),
         1.0,
     )
+
+
+class ViaPointLeaf(MotionLeaf):
+    """A leaf that moves both palms through via-points: subclasses plan ``self.motion``.
+
+    ``initialise()`` builds a :class:`ViaPointMotion`; ``update()`` (here) commands one step
+    of it per tick and succeeds when both palms are at their last pose.
+    """
+
+    #: What the feedback says while moving and when done.
+    MOVING = "moving"
+    ARRIVED = "palms at their poses"
+
+    def __init__(self, name: str, **kwargs: Any) -> None:
+        super().__init__(name=name, **kwargs)
+        self.motion: ViaPointMotion | None = None
+
+    def update(self) -> Status:
+        """Command one step of the motion; SUCCESS at the last via-point."""
+        if (why := self.connected()) is not None:
+            return self.fail(why)
+        assert self.motion is not None
+        for arm, st in self.motion.step(self.control_dt).items():
+            self.world.command_palm(arm, Pose(st.position, st.orientation), st.twist())
+        if self.motion.done():
+            return self.succeed(self.ARRIVED)
+        return self.running(f"{self.MOVING}: {self.motion.remaining():.3f} m to go")

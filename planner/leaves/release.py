@@ -13,7 +13,7 @@ from planner.composition import (
     static_composition,
 )
 from planner.leaves.base import MotionLeaf
-from planner.leaves.palm_motion import ViaPointMotion, measured_state
+from planner.leaves.palm_motion import ViaPointLeaf, ViaPointMotion, measured_state
 from planner.port import Pose
 from skills.composer import DualArmComposer, DualArmState
 from skills.dual_arm import ARMS
@@ -71,7 +71,7 @@ class Release(MotionLeaf):
         return self.running(f"opening: {forces[0]:.1f} N, {forces[1]:.1f} N")
 
 
-class Retreat(MotionLeaf):
+class Retreat(ViaPointLeaf):
     """Take both palms back to their rest poses, rising first."""
 
     INPUT_PORTS = {
@@ -89,10 +89,12 @@ class Retreat(MotionLeaf):
         ),
     }
     OUTPUT_PORTS: dict[str, PortInformation] = {}
+    MOVING = "retreating"
+    ARRIVED = "palms at rest"
 
     def initialise(self) -> None:
         """Plan rise-then-rest from where the palms are."""
-        self.motion: ViaPointMotion | None = None
+        self.motion = None
         if self.connected() is not None:
             return
         world = self.world
@@ -106,14 +108,3 @@ class Retreat(MotionLeaf):
             ]
         starts = {a: measured_state(world.palm_pose(a), world.palm_twist(a)) for a in ARMS}
         self.motion = ViaPointMotion(starts, waypoints, float(self.get_input("segment_s")))
-
-    def update(self) -> Status:
-        """Command one step; SUCCESS at rest."""
-        if (why := self.connected()) is not None:
-            return self.fail(why)
-        assert self.motion is not None
-        for arm, st in self.motion.step(self.control_dt).items():
-            self.world.command_palm(arm, Pose(st.position, st.orientation), st.twist())
-        if self.motion.done():
-            return self.succeed("palms at rest")
-        return self.running(f"retreating: {self.motion.remaining():.3f} m to go")

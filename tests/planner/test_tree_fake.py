@@ -8,6 +8,7 @@ from py_trees.common import Status
 from planner.factories import pick_and_place
 from planner.runner import run_tree
 from planner.testing import FakeWorld
+from skills.labels import Arm
 from skills.library import SkillLibrary
 
 DT = 1.0 / 60.0
@@ -22,13 +23,7 @@ def test_the_tree_does_the_three_moves(fake_world: FakeWorld, library: SkillLibr
     result = run_tree(root, fake_world, library, DT, 120.0, {"/object": "parcel"})
     assert result.status == Status.SUCCESS, result.reason
     assert statuses_of(root, "AtGoal") == [Status.SUCCESS] * 3
-    assert fake_world.contact_force(fake_world_arm(), "parcel") == 0.0  # released
-
-
-def fake_world_arm() -> object:
-    from skills.labels import Arm
-
-    return Arm.LEFT
+    assert fake_world.contact_force(Arm.LEFT, "parcel") == 0.0  # released
 
 
 def test_a_drop_during_a_move_leads_to_a_regrasp(

@@ -21,7 +21,6 @@ from worlds.collision import CollisionWorld
 from worlds.control import PalmCommand
 from worlds.robots.icub import ARM_JOINTS
 from worlds.scene import Scene, lateral_grasp_palm_poses
-from worlds.sim_world import default_gains
 from worlds.world_file import World, load_world
 
 pytestmark = pytest.mark.sim
@@ -38,7 +37,7 @@ def world() -> World:
 
 
 def icub_scene(world: World) -> Scene:
-    return Scene.from_world(world, gains=default_gains("icub"))
+    return Scene.from_world(world)  # the model's own gains (RobotModel.gain_overrides)
 
 
 def start(world: World) -> tuple[NDArray[np.float64], float, float]:

@@ -101,6 +101,18 @@ class RobotModel:
         Link pairs of different bodies that must not collide, as (body, link name, body, link
         name); ``"base"`` names a body's base link. A robot split into several bodies (iCub)
         uses this to keep PyBullet's no-self-collision default across the split.
+    rest_palms : tuple of float
+        Where the palms wait: (inset from the table's near edge along x, distance from the
+        robot's midplane along y, height above the table top), m.
+    gain_overrides : Mapping[str, float]
+        :class:`worlds.control.ImpedanceGains` fields that differ from the defaults for this
+        robot (a light arm wants less damping), applied when no gains are given.
+    arm_link_names : Mapping[Arm, frozenset of str]
+        The links that move with each arm, where the arm's body carries others too (iCub's
+        trunk); empty when each arm is a body of its own.
+    shoulder_at_first_joint : bool
+        The reasoner's arm model starts at the first arm joint's link; otherwise 0.36 m above
+        the arm's base (the iiwa's second joint).
     """
 
     name: str
@@ -108,6 +120,10 @@ class RobotModel:
     arms: Mapping[Arm, ArmSpec] = field(default_factory=dict)
     palm2flange_position: tuple[float, float, float] = (0.0, 0.0, 0.0)
     collision_exclusions: tuple[tuple[int, str, int, str], ...] = ()
+    rest_palms: tuple[float, float, float] = (0.10, 0.38, 0.25)
+    gain_overrides: Mapping[str, float] = field(default_factory=dict)
+    arm_link_names: Mapping[Arm, frozenset[str]] = field(default_factory=dict)
+    shoulder_at_first_joint: bool = False
 
     def __post_init__(self) -> None:
         if set(self.arms) != {Arm.LEFT, Arm.RIGHT}:
