@@ -362,6 +362,9 @@ def _trials_command(args: argparse.Namespace) -> int:
     print(f"  {'success':<44} {summary['successes']}")
     for reason, count in summary["failure_reasons"].items():
         print(f"  {reason[:44]:<44} {count}")
+    print(f"  {'moves placed with':<44} moves")
+    for label, count in summary["compositions"].items():
+        print(f"  {label[:44]:<44} {count}")
     dist = summary["min_obstacle_distance_m"]
     print(
         f"  trials with any obstacle contact: {summary['obstacle_contacts']}; closest approach "

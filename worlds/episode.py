@@ -55,6 +55,9 @@ class EpisodeReport:
     wall_time_s: float
     failure: str = ""
     outputs: dict[str, str] = field(default_factory=dict)
+    #: Per move, the composition that placed the object: ``{"transport_weight": w,
+    #: "avoid_gain": g}`` of the Transport leaf that succeeded, or None if none did.
+    compositions: list[dict[str, float] | None] = field(default_factory=list)
 
     def summary(self) -> dict[str, Any]:
         """Plain JSON-safe dictionary (infinite distances as None)."""
@@ -72,6 +75,7 @@ class EpisodeReport:
             "dropped": self.dropped,
             "sim_time_s": round(self.sim_time_s, 3),
             "wall_time_s": round(self.wall_time_s, 3),
+            "compositions": self.compositions,
             "outputs": self.outputs,
         }
 
@@ -115,6 +119,7 @@ class _Recorder:
         self.obstacles: list[tuple[Any, ...]] = [() for _ in range(n_moves)]
         self.errors_m: list[float | None] = [None] * n_moves
         self.errors_deg: list[float | None] = [None] * n_moves
+        self.compositions: list[dict[str, float] | None] = [None] * n_moves
         self.current: int | None = None
         self.tip_name = ""
 
@@ -142,6 +147,9 @@ class _Recorder:
                     np.degrees(quat.angle_between(pose.orientation, goal.orientation))
                 )
                 self.paths[index].append(pose.position.copy())
+                self.compositions[index] = {
+                    port: float(node.get_input(port)) for port in ("transport_weight", "avoid_gain")
+                }
                 self.current = None
         tip = tree.tip()
         self.tip_name = tip.name if tip is not None else ""
@@ -256,6 +264,7 @@ def run_episode(
             result.sim_time,
             result.wall_time,
             failure,
+            compositions=recorder.compositions,
         )
         if out is not None:
             report.outputs["run_log"] = str(out / "run.jsonl")

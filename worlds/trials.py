@@ -1,15 +1,18 @@
 """The paper's experiment: many trials of three pick-and-place moves with new obstacles.
 
-Each trial draws, from ``numpy.random.default_rng([seed, trial])``:
+Each trial draws, from ``numpy.random.default_rng([seed, trial])`` and within the world
+file's ``trials`` section (:class:`worlds.world_file.TrialSettings`, as the workspace depends
+on the robot):
 
 - the parcel's start on the table, near the robot's centre line;
 - three goals, in the centre, right (-y) and left (+y) regions of the workspace;
 - for at least two of the three moves a sphere, either *on the line*: above the straight path
   between the move's start and goal, under the demonstrated lift, or *ahead*: in front (+x) of
   the carry at the lifted parcel's height. Every sphere clears the parcel at its move's start
-  and goal (by 2 cm at least) and stays 5 cm off the vertical line of each palm there (where
-  the forearm rises), so only the carry can meet it: a sphere the robot would have to be in at
-  the start or the goal is not a test of avoidance.
+  and goal (``clearance``), and the robot itself, posed grasping the parcel there
+  (``robot_clearance``, measured by PyBullet on the robot's own collision shapes), so only
+  the carry can meet it: a sphere the robot would have to be in at the start or the goal is
+  not a test of avoidance.
 
 Trials are judged as :func:`worlds.episode.judge` says (2 cm and 10 degrees per placement,
 never dropped, no robot link or parcel touching an obstacle, arms never touching). Results
@@ -26,22 +29,15 @@ from collections import Counter
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
+from types import TracebackType
 from typing import Any
 
 import numpy as np
 
-from worlds.world_file import _CONTEXT_BASE_DIR, World
+from worlds.world_file import _CONTEXT_BASE_DIR, Region, TrialSettings, World
 
-#: Regions of the goals, (x range, y range) of the parcel's centre, m.
-REGIONS: dict[str, tuple[tuple[float, float], tuple[float, float]]] = {
-    "centre": ((0.58, 0.68), (-0.03, 0.03)),
-    "right": ((0.55, 0.65), (-0.18, -0.12)),
-    "left": ((0.55, 0.65), (0.12, 0.18)),
-}
-START = ((0.50, 0.60), (-0.04, 0.04))
-CLEARANCE_M = 0.02
-#: Horizontal clearance of a sphere from each palm at its move's start and goal, m.
-FOREARM_CLEARANCE_M = 0.05
+#: The goal regions in the order of the moves.
+GOAL_REGIONS = ("centre", "right", "left")
 
 
 @dataclass(frozen=True)
@@ -60,36 +56,113 @@ def _box_gap(centre: np.ndarray, half: np.ndarray, point: np.ndarray) -> float:
     return float(np.linalg.norm(d))
 
 
-def draw_trial(base: World, seed: int, trial: int) -> tuple[World, list[str]]:
+class RobotClearance:
+    """Distance from a sphere to the robot grasping the object at a given centre.
+
+    The robot is posed by the same inverse-kinematics placement that starts an episode
+    (:meth:`worlds.scene.Scene.place_palms`), palms on the object's +-y faces, in a scene of
+    its own that is never stepped; PyBullet measures the distance on the robot's collision
+    shapes. Use as a context manager, or call :meth:`close`.
+    """
+
+    def __init__(self, world: World) -> None:
+        from worlds.scene import Scene
+
+        self._scene = Scene.from_world(world)
+        self._scene.set_active_obstacles(())
+        obj = world.objects[0]
+        size = getattr(obj.shape, "size", None)
+        if size is None:
+            raise ValueError(
+                f"trials: expected a box object to grasp, got a {obj.shape.type} ({obj.name!r})"
+            )
+        self._half_span = float(size[1]) / 2.0
+        self._thickness = float(world.robot.palm_size[2])
+        self._posed_at: tuple[float, ...] | None = None
+        self._ball: dict[float, int] = {}
+
+    def distance(self, object_centre: np.ndarray, centre: np.ndarray, radius: float) -> float:
+        """Gap between a sphere and the nearest robot link, m (negative: overlap)."""
+        import pybullet as pb
+
+        from worlds.scene import lateral_grasp_palm_poses
+
+        client = self._scene.client
+        key = tuple(float(v) for v in object_centre)
+        if key != self._posed_at:
+            self._scene.place_palms(
+                lateral_grasp_palm_poses(object_centre, self._half_span, self._thickness)
+            )
+            pb.performCollisionDetection(physicsClientId=client)
+            self._posed_at = key
+        if radius not in self._ball:
+            shape = pb.createCollisionShape(pb.GEOM_SPHERE, radius=radius, physicsClientId=client)
+            self._ball[radius] = pb.createMultiBody(0.0, shape, physicsClientId=client)
+        ball = self._ball[radius]
+        pb.resetBasePositionAndOrientation(ball, list(centre), [0, 0, 0, 1], physicsClientId=client)
+        gaps = [
+            point[8]
+            for body in self._scene.robot_ids
+            for point in pb.getClosestPoints(ball, body, 1.0, physicsClientId=client)
+        ]
+        return min(gaps, default=math.inf)
+
+    def close(self) -> None:
+        """Disconnect the scene."""
+        self._scene.close()
+
+    def __enter__(self) -> RobotClearance:
+        return self
+
+    def __exit__(
+        self,
+        kind: type[BaseException] | None,
+        error: BaseException | None,
+        trace: TracebackType | None,
+    ) -> None:
+        self.close()
+
+
+def _uniform(rng: np.random.Generator, bounds: tuple[float, float]) -> float:
+    return float(rng.uniform(*bounds))
+
+
+def _in_region(rng: np.random.Generator, region: Region, z: float) -> np.ndarray:
+    return np.array([_uniform(rng, region.x), _uniform(rng, region.y), z])
+
+
+def draw_trial(
+    base: World, seed: int, trial: int, robot: RobotClearance | None = None
+) -> tuple[World, list[str]]:
     """A variant of ``base`` for one trial and the kinds of obstacle per move.
 
-    The base world gives the robot, table, object and simulation settings; this draws the
-    object's start, the three goals and the obstacles.
+    The base world gives the robot, table, object, simulation settings and the trial layout
+    (``base.trials``); this draws the object's start, the three goals and the obstacles.
+    ``robot`` measures spheres against the robot (one is made for ``base`` if not given).
     """
+    if robot is None:
+        with RobotClearance(base) as own:
+            return draw_trial(base, seed, trial, own)
+    layout = base.trials
     rng = np.random.default_rng([seed, trial])
     obj = base.objects[0]
-    size = np.asarray(getattr(obj.shape, "size", (0.2, 0.3, 0.15)), dtype=float)
-    half = size / 2.0
+    half = np.asarray(getattr(obj.shape, "size", (0.2, 0.3, 0.15)), dtype=float) / 2.0
     z = base.table.position[2] + half[2]
-    start = np.array([rng.uniform(*START[0]), rng.uniform(*START[1]), z])
-    goals = [
-        np.array([rng.uniform(*REGIONS[r][0]), rng.uniform(*REGIONS[r][1]), z])
-        for r in ("centre", "right", "left")
-    ]
+    start = _in_region(rng, layout.start, z)
+    goals = [_in_region(rng, getattr(layout, region), z) for region in GOAL_REGIONS]
     with_obstacle = [True, True, True]
     with_obstacle[int(rng.integers(3))] = bool(rng.random() < 0.5)  # at least two of three
     spheres: list[Sphere | None] = []
     kinds: list[str] = []
     prev = start
     for i, goal in enumerate(goals):
-        if not with_obstacle[i]:
-            spheres.append(None)
-            kinds.append("none")
-            prev = goal
-            continue
-        sphere = _draw_sphere(rng, f"ball_{i + 1}", prev, goal, half)
+        sphere = (
+            _draw_sphere(rng, f"ball_{i + 1}", prev, goal, half, layout, robot)
+            if with_obstacle[i]
+            else None
+        )
         spheres.append(sphere)
-        kinds.append(sphere.kind)
+        kinds.append("none" if sphere is None else sphere.kind)
         prev = goal
     data = base.model_dump(mode="json")
     data["objects"][0]["pose"]["position"] = start.tolist()
@@ -127,41 +200,39 @@ def validate_like(data: dict[str, Any], source: Path | None) -> World:
 
 
 def _draw_sphere(
-    rng: np.random.Generator, name: str, start: np.ndarray, goal: np.ndarray, half: np.ndarray
+    rng: np.random.Generator,
+    name: str,
+    start: np.ndarray,
+    goal: np.ndarray,
+    half: np.ndarray,
+    layout: TrialSettings,
+    robot: RobotClearance,
 ) -> Sphere:
-    """A sphere on the line or ahead of the carry, clear of the box at start and goal."""
+    """A sphere on the line or ahead of the carry, clear of the box and the robot at start
+    and goal."""
     top = start[2] + half[2]
-    for _ in range(200):  # rejection sampling; a handful of draws suffice in practice
-        radius = float(rng.uniform(0.03, 0.05))
+    for _ in range(500):  # rejection sampling
+        radius = _uniform(rng, layout.sphere_radius)
         if rng.random() < 0.5:
             kind = "line"
             t = float(rng.uniform(0.35, 0.65))
             xy = start[:2] + t * (goal[:2] - start[:2])
-            centre = np.array([*xy, top + float(rng.uniform(0.03, 0.06)) + radius])
+            centre = np.array([*xy, top + _uniform(rng, layout.line_gap) + radius])
         else:
             kind = "ahead"
-            mid = 0.5 * (start + goal)
             front = max(start[0], goal[0]) + half[0]
             centre = np.array(
                 [
-                    front + radius + float(rng.uniform(0.0, 0.04)),
-                    mid[1],
-                    top + float(rng.uniform(-0.02, 0.06)),
+                    front + radius + _uniform(rng, layout.ahead_gap),
+                    0.5 * (start[1] + goal[1]),
+                    top + _uniform(rng, layout.ahead_height),
                 ]
             )
-        gaps = [_box_gap(p, half, centre) - radius for p in (start, goal)]
-        # Each forearm rises from its palm: keep the sphere off the palms' vertical lines at
-        # the move's start and goal, or the arm would have to be inside it there.
-        palms = [
-            p + np.array([0.0, side * (half[1] + 0.01), 0.0])
-            for p in (start, goal)
-            for side in (1.0, -1.0)
-        ]
-        off_palms = min(float(np.linalg.norm(centre[:2] - q[:2])) for q in palms) - radius
-        if min(gaps) >= CLEARANCE_M and off_palms >= FOREARM_CLEARANCE_M:
-            return Sphere(
-                name, (float(centre[0]), float(centre[1]), float(centre[2])), radius, kind
-            )
+        if min(_box_gap(p, half, centre) for p in (start, goal)) - radius < layout.clearance:
+            continue
+        if min(robot.distance(p, centre, radius) for p in (start, goal)) < (layout.robot_clearance):
+            continue
+        return Sphere(name, (float(centre[0]), float(centre[1]), float(centre[2])), radius, kind)
     raise RuntimeError(f"{name}: could not place a sphere clear of the start and goal")
 
 
@@ -272,6 +343,14 @@ def run_campaign(
     return [done[t] for t in range(n) if t in done]
 
 
+def composition_label(composition: dict[str, float]) -> str:
+    """A placed move's composition in words: the pick-and-place weight and avoidance gain."""
+    weight = composition.get("transport_weight", math.nan)
+    gain = composition.get("avoid_gain", math.nan)
+    avoid = "no avoidance" if gain == 0.0 else f"avoidance x{gain:g}"
+    return f"pick-and-place x{weight:g}, {avoid}"
+
+
 def summarise(records: Iterable[dict[str, Any]]) -> dict[str, Any]:
     """Counts of successes and failure reasons, mean times."""
     recs = list(records)
@@ -280,10 +359,14 @@ def summarise(records: Iterable[dict[str, Any]]) -> dict[str, Any]:
     sim = sum(float(r.get("sim_time_s") or 0.0) for r in recs)
     wall = sum(float(r.get("wall_time_s") or 0.0) for r in recs)
     dists = [r["min_obstacle_distance_m"] for r in recs if r.get("min_obstacle_distance_m")]
+    carried = Counter(
+        composition_label(c) for r in recs for c in r.get("compositions") or () if c is not None
+    )
     return {
         "trials": len(recs),
         "successes": successes,
         "failure_reasons": dict(sorted(reasons.items(), key=lambda kv: (-kv[1], kv[0]))),
+        "compositions": dict(sorted(carried.items(), key=lambda kv: (-kv[1], kv[0]))),
         "obstacle_contacts": sum(1 for r in recs if r.get("obstacle_contacts")),
         "min_obstacle_distance_m": min(dists) if dists else None,
         "sim_time_s": round(sim, 2),

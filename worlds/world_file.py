@@ -57,6 +57,8 @@ __all__ = [
     "ObjectState",
     "Obstacle",
     "Pose",
+    "Range",
+    "Region",
     "Robot",
     "RobotModelName",
     "Shape",
@@ -66,6 +68,7 @@ __all__ = [
     "SphereShape",
     "Table",
     "TaskStep",
+    "TrialSettings",
     "World",
     "WorldFileError",
     "WorldFileProblem",
@@ -279,6 +282,22 @@ Vector3 = Annotated[tuple[_Finite, _Finite, _Finite], BeforeValidator(_vector3)]
 
 PositiveVector3 = Annotated[tuple[_Positive, _Positive, _Positive], BeforeValidator(_vector3)]
 """Three finite numbers ``[x, y, z]``, each greater than 0."""
+
+
+def _range(value: Any) -> Any:
+    """Check for exactly 2 finite numbers ``[low, high]`` with ``low <= high``."""
+    if isinstance(value, str | bytes) or not isinstance(value, Sequence) or len(value) != 2:
+        raise _problem("a list of exactly 2 numbers [low, high]", value)
+    for i, item in enumerate(value):
+        if isinstance(item, bool) or not isinstance(item, int | float) or not math.isfinite(item):
+            raise _problem("a finite number", item, i)
+    if value[0] > value[1]:
+        raise _problem("low <= high", value)
+    return (float(value[0]), float(value[1]))
+
+
+Range = Annotated[tuple[_Finite, _Finite], BeforeValidator(_range)]
+"""Two finite numbers ``[low, high]``, low <= high: values are drawn uniformly between them."""
 
 
 class _FileModel(BaseModel):
@@ -560,6 +579,64 @@ class SkillSettings(_FileModel):
         return library
 
 
+class Region(_FileModel):
+    """A rectangle of the table where an object's centre is drawn."""
+
+    x: Range = Field(description="[low, high] of the centre's x, world frame, m")
+    y: Range = Field(description="[low, high] of the centre's y, world frame, m")
+
+
+class TrialSettings(_FileModel):
+    """How ``app.py trials`` draws the paper's experiment in this world.
+
+    The workspace depends on the robot, so the world says where the object starts, where its
+    centre, right (-y) and left (+y) goals lie, and how the obstacle spheres are drawn. The
+    defaults suit the default two-iiwa world.
+    """
+
+    start: Region = Field(
+        default=Region(x=(0.50, 0.60), y=(-0.04, 0.04)), description="the object's start"
+    )
+    centre: Region = Field(
+        default=Region(x=(0.58, 0.68), y=(-0.03, 0.03)), description="the first goal"
+    )
+    right: Region = Field(
+        default=Region(x=(0.55, 0.65), y=(-0.18, -0.12)), description="the second goal (-y)"
+    )
+    left: Region = Field(
+        default=Region(x=(0.55, 0.65), y=(0.12, 0.18)), description="the third goal (+y)"
+    )
+    sphere_radius: Range = Field(default=(0.03, 0.05), description="obstacle radius, m, > 0")
+    line_gap: Range = Field(
+        default=(0.03, 0.06),
+        description="a sphere on the line: its bottom above the object's top, m",
+    )
+    ahead_gap: Range = Field(
+        default=(0.0, 0.04),
+        description="a sphere ahead: its surface in front (+x) of the object's front face, m",
+    )
+    ahead_height: Range = Field(
+        default=(-0.02, 0.06),
+        description="a sphere ahead: its centre above the object's top, m",
+    )
+    clearance: _NonNegative = Field(
+        default=0.02,
+        description="least gap between a sphere and the object at its move's start and goal, m",
+    )
+    robot_clearance: _NonNegative = Field(
+        default=0.05,
+        description="least gap between a sphere and the robot grasping the object at its "
+        "move's start and goal, m",
+    )
+
+    @field_validator("sphere_radius")
+    @classmethod
+    def _radius_positive(cls, radius: tuple[float, float]) -> tuple[float, float]:
+        if radius[0] <= 0.0:
+            raise _problem("radii > 0", radius)
+        return radius
+
+
 class World(_FileModel):
     """A whole world file.
 
@@ -580,6 +657,7 @@ class World(_FileModel):
     task: tuple[TaskStep, ...] = Field(min_length=1, description="at least 1 step")
     sim: SimSettings = Field(default_factory=SimSettings)
     skills: SkillSettings = Field(default_factory=SkillSettings)
+    trials: TrialSettings = Field(default_factory=TrialSettings)
 
     _source: Path | None = PrivateAttr(default=None)
 

@@ -1,17 +1,18 @@
-"""The experiment's trial generator and campaign bookkeeping (no physics)."""
+"""The experiment's trial generator and campaign bookkeeping."""
 
 from __future__ import annotations
 
 import json
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from worlds.scene import lateral_grasp_palm_poses
 from worlds.trials import (
-    CLEARANCE_M,
-    FOREARM_CLEARANCE_M,
-    REGIONS,
+    GOAL_REGIONS,
+    RobotClearance,
     _box_gap,
     draw_trial,
     read_results,
@@ -20,43 +21,68 @@ from worlds.trials import (
 )
 from worlds.world_file import World, load_world
 
-DEFAULT = Path(__file__).resolve().parents[2] / "worlds" / "parcel_pick_place.yaml"
+WORLDS = Path(__file__).resolve().parents[2] / "worlds"
+
+
+@pytest.fixture(scope="module", params=["parcel_pick_place.yaml", "icub_parcel_pick_place.yaml"])
+def base(request: pytest.FixtureRequest) -> World:
+    return load_world(WORLDS / request.param)
 
 
 @pytest.fixture(scope="module")
-def base() -> World:
-    return load_world(DEFAULT)
+def robot(base: World) -> Iterator[RobotClearance]:
+    with RobotClearance(base) as clearance:
+        yield clearance
 
 
-def test_trials_are_deterministic_and_differ(base: World) -> None:
-    a, ka = draw_trial(base, 0, 3)
-    b, kb = draw_trial(base, 0, 3)
-    c, _ = draw_trial(base, 0, 4)
+def test_trials_are_deterministic_and_differ(base: World, robot: RobotClearance) -> None:
+    a, ka = draw_trial(base, 0, 3, robot)
+    b, kb = draw_trial(base, 0, 3, robot)
+    c, _ = draw_trial(base, 0, 4, robot)
     assert a.model_dump() == b.model_dump() and ka == kb
     assert a.model_dump() != c.model_dump()
 
 
-@pytest.mark.parametrize("trial", range(25))
-def test_a_trial_meets_the_papers_conditions(base: World, trial: int) -> None:
-    world, kinds = draw_trial(base, 7, trial)
+def test_a_scene_of_its_own_draws_the_same_trial(base: World, robot: RobotClearance) -> None:
+    assert draw_trial(base, 5, 1)[0].model_dump() == draw_trial(base, 5, 1, robot)[0].model_dump()
+
+
+@pytest.mark.sim
+def test_robot_clearance_knows_where_the_palms_are(base: World, robot: RobotClearance) -> None:
+    centre = np.array(base.objects[0].pose.position)
+    half_span = base.objects[0].shape.size[1] / 2.0  # type: ignore[union-attr]
+    palms = lateral_grasp_palm_poses(centre, half_span, base.robot.palm_size[2])
+    for position, _ in palms.values():
+        assert robot.distance(centre, position, 0.01) < 0.0  # a ball inside the palm
+    far = centre + np.array([0.0, 0.0, 1.5])
+    assert robot.distance(centre, far, 0.01) > 0.3
+
+
+@pytest.mark.parametrize("trial", range(12))
+def test_a_trial_meets_the_papers_conditions(
+    base: World, robot: RobotClearance, trial: int
+) -> None:
+    world, kinds = draw_trial(base, 7, trial, robot)
+    layout = base.trials
     moves = world.task[0].moves
     assert len(moves) == 3
-    for move, region in zip(moves, ("centre", "right", "left"), strict=True):
-        (x0, x1), (y0, y1) = REGIONS[region]
+    for move, name in zip(moves, GOAL_REGIONS, strict=True):
+        region = getattr(layout, name)
+        (x0, x1), (y0, y1) = region.x, region.y
         assert x0 <= move.goal.position[0] <= x1 and y0 <= move.goal.position[1] <= y1
     assert sum(k != "none" for k in kinds) >= 2  # obstacles on at least two of three moves
-    half = np.array([0.10, 0.15, 0.075])
+    half = np.array(base.objects[0].shape.size) / 2.0  # type: ignore[union-attr]
     start = np.array(world.objects[0].pose.position)
     for move in moves:
         goal = np.array(move.goal.position)
         for name in move.obstacles:
             ob = world.obstacle_named(name)
             centre, r = np.array(ob.position), ob.shape.radius  # type: ignore[union-attr]
+            lo, hi = layout.sphere_radius
+            assert lo <= r <= hi
             for p in (start, goal):
-                assert _box_gap(p, half, centre) - r >= CLEARANCE_M - 1e-12
-                for side in (1.0, -1.0):
-                    palm = p[:2] + [0.0, side * (half[1] + 0.01)]
-                    assert np.linalg.norm(centre[:2] - palm) - r >= FOREARM_CLEARANCE_M - 1e-12
+                assert _box_gap(p, half, centre) - r >= layout.clearance - 1e-12
+                assert robot.distance(p, centre, r) >= layout.robot_clearance - 1e-12
         start = goal
 
 
@@ -71,6 +97,11 @@ def test_results_resume_and_summarise(tmp_path: Path) -> None:
             "sim_time_s": 20.0,
             "wall_time_s": 5.0,
             "min_obstacle_distance_m": 0.02,
+            "compositions": [
+                {"transport_weight": 1.0, "avoid_gain": 0.0},
+                {"transport_weight": 0.25, "avoid_gain": 0.0},
+                {"transport_weight": 1.0, "avoid_gain": 0.0},
+            ],
         },
         {
             "trial": 1,
@@ -88,4 +119,8 @@ def test_results_resume_and_summarise(tmp_path: Path) -> None:
     assert s["trials"] == 2 and s["successes"] == 1
     assert s["failure_reasons"] == {"obstacle contact: parcel/right_arm": 1}
     assert s["realtime_factor"] == 3.0
+    assert s["compositions"] == {
+        "pick-and-place x1, no avoidance": 2,
+        "pick-and-place x0.25, no avoidance": 1,
+    }
     assert reason_of("move 2 placed 3.1 cm, 1.0 deg from its goal") == "move 2"

@@ -313,6 +313,18 @@ def test_every_problem_is_listed_one_per_line(default_data: dict[str, Any], tmp_
         (lambda d: d.update({3: "x"}), r"expected text keys, got key 3"),
         (lambda d: d.update(name=""), r"name: expected non-empty text"),
         (
+            lambda d: d["trials"]["right"].update(y=[-0.12, -0.18]),
+            r"trials\.right\.y: expected low <= high, got \[-0\.12, -0\.18\]",
+        ),
+        (
+            lambda d: d["trials"].update(sphere_radius=[0.0, 0.05]),
+            r"trials\.sphere_radius: expected radii > 0",
+        ),
+        (
+            lambda d: d["trials"].update(line_gap=0.05),
+            r"trials\.line_gap: expected a list of exactly 2 numbers \[low, high\], got 0\.05",
+        ),
+        (
             lambda d: d["table"].update(position=[10**400, 0, 0.6]),
             r"table\.position\[0\]: expected a finite number, got 1000",
         ),

@@ -410,11 +410,17 @@ def icub_model(
         # the inertia is small: on the light iCub arm the default gains squeeze 79 % of
         # stiffness * offset (11.8 N for 15 N asked); less damping brings it to about 89 %
         # (13.4 N), above the grasp's 80 % threshold, and stays stable (tests/worlds/test_icub.py).
+        # The wrists' ranges are narrow (yaw -20..25 deg): the default joint-limit band
+        # (8.6 deg at 200 N m/rad, beyond the wrist motors) took a third of them and held the
+        # palms 25-30 mm off a parcel lifted 6 cm and moved 4 cm aside; a 1.7 deg band at
+        # 50 N m/rad tracks those poses within 6 mm (bench/reach_map.py).
         gain_overrides={
             "damping_linear": 30.0,
             "damping_angular": 0.5,
             "joint_damping": 0.05,
             "damping_null": 0.2,
+            "limit_margin": 0.03,
+            "limit_stiffness": 50.0,
         },
         arm_link_names={
             arm: frozenset(_arm_link_names(side) | {"palm"})

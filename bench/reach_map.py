@@ -1,0 +1,75 @@
+"""Two-palm reach map: how well a world's robot holds the lateral grasp over a grid of centres.
+
+For each object centre of a grid (x, y at a few heights above the table), the palms are
+placed on the object's +-y faces by the episode's own start-posture solve
+(:meth:`worlds.scene.Scene.place_palms`), then held for 0.5 s by the impedance controller
+(the model's gains); the figure is the larger palm position error, mm. It shows where a
+world's trial regions (its ``trials`` section) can lie. With ``--json`` the last line is
+``{"grid": [[x, y, z, error_mm], ...]}``.
+
+    python bench/reach_map.py worlds/icub_parcel_pick_place.yaml
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+import numpy as np
+
+from skills.labels import Arm
+from worlds.scene import Scene, lateral_grasp_palm_poses
+from worlds.world_file import World, load_world
+
+
+def palm_error(world: World, centre: np.ndarray, hold_s: float = 0.5) -> float:
+    """Larger palm position error (m) after holding the grasp at ``centre`` for ``hold_s``."""
+    obj = world.objects[0]
+    half_span = float(obj.shape.size[1]) / 2.0  # type: ignore[union-attr]
+    with Scene.from_world(world) as scene:
+        scene.set_active_obstacles(())
+        poses = lateral_grasp_palm_poses(centre, half_span, float(world.robot.palm_size[2]))
+        scene.place_palms(poses)
+        scene.step(round(hold_s * scene.spec.physics_hz))
+        return max(
+            float(np.linalg.norm(scene.palm_state(arm).position - poses[arm][0]))
+            for arm in (Arm.LEFT, Arm.RIGHT)
+        )
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("world", type=Path, help="world file")
+    parser.add_argument("--dx", type=float, default=0.04, help="grid step along x, m")
+    parser.add_argument("--dy", type=float, default=0.04, help="grid step along y, m")
+    parser.add_argument("--nx", type=int, default=3, help="grid points each side along x")
+    parser.add_argument("--ny", type=int, default=3, help="grid points each side along y")
+    parser.add_argument(
+        "--lifts", type=float, nargs="+", default=[0.0, 0.06, 0.12], help="heights above rest, m"
+    )
+    parser.add_argument("--json", action="store_true", help="print a JSON summary last")
+    args = parser.parse_args()
+    world = load_world(args.world)
+    rest = np.asarray(world.objects[0].pose.position, dtype=float)
+    xs = rest[0] + args.dx * np.arange(-args.nx, args.nx + 1)
+    ys = args.dy * np.arange(-args.ny, args.ny + 1)
+    grid: list[list[float]] = []
+    for lift in args.lifts:
+        z = rest[2] + lift
+        print(f"palm error, mm, with the object's centre at z = {z:.3f} m (lifted {lift:.2f})")
+        print("   x \\ y " + " ".join(f"{y:7.2f}" for y in ys))
+        for x in xs:
+            row = []
+            for y in ys:
+                error = palm_error(world, np.array([x, y, z]))
+                grid.append([round(float(x), 4), round(float(y), 4), round(z, 4), error * 1e3])
+                row.append(f"{error * 1e3:7.1f}")
+            print(f"{x:8.2f} " + " ".join(row), flush=True)
+    if args.json:
+        print(json.dumps({"grid": grid}))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
