@@ -325,9 +325,24 @@ def _trials_command(args: argparse.Namespace) -> int:
     if args.n < 1 or args.workers < 1:
         print("--n, --workers: expected positive whole numbers", file=sys.stderr)
         return EXIT_BAD_INPUT
+    tree = Path(args.tree) if args.tree else None
+    if tree is not None:
+        import planner.leaves  # noqa: F401  (registers the leaves the tree may use)
+        from planner.loader import TreeFileError, load_tree
+
+        try:
+            load_tree(tree)  # a bad tree is one message now, not one per trial
+        except TreeFileError as err:
+            print(err, file=sys.stderr)
+            return EXIT_BAD_INPUT
     out = Path(args.out)
-    earlier = read_results(out / "results.jsonl").values()
-    tally = {"ok": sum(1 for r in earlier if r.get("seed") == args.seed and r.get("success"))}
+    tree_name = str(tree.resolve()) if tree is not None else ""
+    earlier = [
+        r
+        for r in read_results(out / "results.jsonl").values()
+        if r.get("seed") == args.seed and r.get("tree", "") == tree_name
+    ]
+    tally = {"ok": sum(1 for r in earlier if r.get("success"))}
 
     def progress(rec: dict[str, Any], finished: int, total: int) -> None:
         tally["ok"] += int(bool(rec.get("success")))
@@ -344,7 +359,7 @@ def _trials_command(args: argparse.Namespace) -> int:
         )
 
     try:
-        records = run_campaign(world, args.n, args.seed, out, args.workers, progress)
+        records = run_campaign(world, args.n, args.seed, out, args.workers, progress, tree)
     except KeyboardInterrupt:
         print(
             f"\ninterrupted: finished trials are in {out / 'results.jsonl'}; "
@@ -427,6 +442,9 @@ def build_parser() -> argparse.ArgumentParser:
     trials.add_argument("world", help="world file (robot, table, object, settings)")
     trials.add_argument("--n", type=int, default=20, help="number of trials (default: 20)")
     trials.add_argument("--seed", type=int, default=0, help="campaign seed (default: 0)")
+    trials.add_argument(
+        "--tree", help="behaviour tree XML every trial runs (default: the paper's tree)"
+    )
     trials.add_argument(
         "--workers",
         type=int,

@@ -9,10 +9,10 @@ on the robot):
 - for at least two of the three moves a sphere, either *on the line*: above the straight path
   between the move's start and goal, under the demonstrated lift, or *ahead*: in front (+x) of
   the carry at the lifted parcel's height. Every sphere clears the parcel at its move's start
-  and goal (``clearance``), and the robot itself, posed grasping the parcel there
-  (``robot_clearance``, measured by PyBullet on the robot's own collision shapes), so only
-  the carry can meet it: a sphere the robot would have to be in at the start or the goal is
-  not a test of avoidance.
+  and goal (``clearance``), and the robot itself, posed grasping the parcel there, at rest
+  and lifted by ``lift`` (``robot_clearance``, measured by PyBullet on the robot's own
+  collision shapes), so only the carry can meet it: a sphere the robot would have to be in
+  to pick the parcel up or put it down is not a test of avoidance.
 
 Trials are judged as :func:`worlds.episode.judge` says (2 cm and 10 degrees per placement,
 never dropped, no robot link or parcel touching an obstacle, arms never touching). Results
@@ -230,7 +230,8 @@ def _draw_sphere(
             )
         if min(_box_gap(p, half, centre) for p in (start, goal)) - radius < layout.clearance:
             continue
-        if min(robot.distance(p, centre, radius) for p in (start, goal)) < (layout.robot_clearance):
+        lifted = [p + np.array([0.0, 0.0, dz]) for p in (start, goal) for dz in (0.0, layout.lift)]
+        if min(robot.distance(p, centre, radius) for p in lifted) < layout.robot_clearance:
             continue
         return Sphere(name, (float(centre[0]), float(centre[1]), float(centre[2])), radius, kind)
     raise RuntimeError(f"{name}: could not place a sphere clear of the start and goal")
@@ -243,9 +244,10 @@ def run_trial(job: tuple[dict[str, Any], int, int]) -> dict[str, Any]:
     base_data, seed, trial = job
     source = Path(base_data["source"]) if base_data["source"] else None
     base = validate_like(base_data["world"], source)
+    tree = Path(base_data["tree"]) if base_data["tree"] else None
     try:
         world, kinds = draw_trial(base, seed, trial)
-        report = run_episode(world, out=None, animation=False)
+        report = run_episode(world, tree, out=None, animation=False)
         record = report.summary()
         record.pop("outputs", None)
         failure = record["failure"] or ""
@@ -253,7 +255,15 @@ def run_trial(job: tuple[dict[str, Any], int, int]) -> dict[str, Any]:
         record = {"success": False, "sim_time_s": 0.0, "wall_time_s": 0.0}
         kinds = []
         failure = f"error: {type(err).__name__}: {err}"
-    record.update({"trial": trial, "seed": seed, "obstacles": kinds, "failure": failure})
+    record.update(
+        {
+            "trial": trial,
+            "seed": seed,
+            "tree": base_data["tree"],
+            "obstacles": kinds,
+            "failure": failure,
+        }
+    )
     return record
 
 
@@ -289,6 +299,7 @@ def run_campaign(
     out: Path,
     workers: int = 1,
     on_result: Callable[[dict[str, Any], int, int], None] | None = None,
+    tree: Path | None = None,
 ) -> list[dict[str, Any]]:
     """Run trials ``0..n-1`` not yet in ``out/results.jsonl``; append each as it finishes.
 
@@ -305,6 +316,9 @@ def run_campaign(
         Worker processes (each runs its own PyBullet).
     on_result : callable (record, finished, total), optional
         Progress callback, in the parent process.
+    tree : Path, optional
+        Behaviour tree XML every trial runs (default: the paper's tree built in code).
+        Records remember it: a campaign resumes only the trials of the same seed and tree.
 
     Returns
     -------
@@ -313,9 +327,18 @@ def run_campaign(
     """
     out.mkdir(parents=True, exist_ok=True)
     results = out / "results.jsonl"
-    done = {t: r for t, r in read_results(results).items() if r.get("seed") == seed}
+    tree_name = str(tree.resolve()) if tree is not None else ""
+    done = {
+        t: r
+        for t, r in read_results(results).items()
+        if r.get("seed") == seed and r.get("tree", "") == tree_name
+    }
     pending = [t for t in range(n) if t not in done]
-    payload = {"world": base.model_dump(mode="json"), "source": str(base.source or "")}
+    payload = {
+        "world": base.model_dump(mode="json"),
+        "source": str(base.source or ""),
+        "tree": tree_name,
+    }
     jobs = [(payload, seed, t) for t in pending]
     finished = n - len(pending)
     with open(results, "a", encoding="utf-8") as fh:

@@ -628,6 +628,11 @@ class TrialSettings(_FileModel):
         description="least gap between a sphere and the robot grasping the object at its "
         "move's start and goal, m",
     )
+    lift: _NonNegative = Field(
+        default=0.03,
+        description="the robot_clearance holds also with the object lifted this much at the "
+        "start and the goal (a carry begins with a lift and ends with a lowering), m",
+    )
 
     @field_validator("sphere_radius")
     @classmethod

@@ -82,7 +82,8 @@ def test_a_trial_meets_the_papers_conditions(
             assert lo <= r <= hi
             for p in (start, goal):
                 assert _box_gap(p, half, centre) - r >= layout.clearance - 1e-12
-                assert robot.distance(p, centre, r) >= layout.robot_clearance - 1e-12
+                for lifted in (p, p + [0.0, 0.0, layout.lift]):
+                    assert robot.distance(lifted, centre, r) >= layout.robot_clearance - 1e-12
         start = goal
 
 

@@ -1,0 +1,66 @@
+"""The command line: exit codes and the messages bad input gets (no physics)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+import app
+
+ROOT = Path(__file__).resolve().parents[1]
+DEFAULT = str(ROOT / "worlds" / "parcel_pick_place.yaml")
+
+
+def exit_code(argv: list[str]) -> int:
+    """What ``app.py ARGV`` exits with (a command may return it or raise SystemExit)."""
+    try:
+        return app.main(argv)
+    except SystemExit as exit_info:
+        return int(exit_info.code or 0)
+
+
+def test_validate_a_good_world_and_both_trees(capsys: pytest.CaptureFixture[str]) -> None:
+    for path in (
+        DEFAULT,
+        ROOT / "worlds" / "icub_parcel_pick_place.yaml",
+        ROOT / "planner" / "trees" / "pick_and_place.xml",
+        ROOT / "planner" / "trees" / "paper_composition.xml",
+    ):
+        assert app.main(["validate", str(path)]) == app.EXIT_OK
+    assert "ok" in capsys.readouterr().out
+
+
+def test_a_bad_world_exits_2_naming_file_and_field(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    text = Path(DEFAULT).read_text(encoding="utf-8")
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(text.replace("sphere_radius: [0.03, 0.05]", "sphere_radius: [0.05, 0.03]"))
+    for command in (["validate", str(bad)], ["trials", str(bad), "--n", "1"]):
+        assert exit_code(command) == app.EXIT_BAD_INPUT
+        err = capsys.readouterr().err
+        assert f"{bad}: trials.sphere_radius: expected low <= high, got [0.05, 0.03]" in err
+
+
+def test_trials_refuse_a_bad_tree_before_running_anything(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    tree = tmp_path / "tree.xml"
+    tree.write_text("<root BTCPP_format='4'><BehaviorTree ID='T'><Nope/></BehaviorTree></root>")
+    out = tmp_path / "out"
+    code = exit_code(["trials", DEFAULT, "--tree", str(tree), "--n", "1", "--out", str(out)])
+    assert code == app.EXIT_BAD_INPUT
+    assert str(tree) in capsys.readouterr().err
+    assert not out.exists()  # nothing run, nothing written
+
+
+def test_trials_refuse_nonpositive_counts(tmp_path: Path) -> None:
+    assert exit_code(["trials", DEFAULT, "--n", "0", "--out", str(tmp_path)]) == 2
+
+
+def test_affordances_json_is_the_last_line(capsys: pytest.CaptureFixture[str]) -> None:
+    assert app.main(["affordances", DEFAULT, "--json"]) == app.EXIT_OK
+    last = capsys.readouterr().out.strip().splitlines()[-1]
+    assert isinstance(json.loads(last), dict | list)
