@@ -258,15 +258,20 @@ def _vector3(value: Any) -> Any:
             "a list of exactly 3 numbers [x, y, z]", _Shown(f"{len(value)} items {_show(value)}")
         )
     for i, item in enumerate(value):
-        if isinstance(item, bool) or not isinstance(item, int | float):
-            raise _problem("a number", item, i)
-        try:
-            finite = math.isfinite(item)
-        except OverflowError:  # an int too large for a float
-            finite = False
-        if not finite:
-            raise _problem("a finite number", item, i)
+        _check_finite(item, i)
     return tuple(float(item) for item in value)
+
+
+def _check_finite(item: Any, index: int) -> None:
+    """Raise unless ``item`` (at ``index`` of a list) is a finite int or float, not a bool."""
+    if isinstance(item, bool) or not isinstance(item, int | float):
+        raise _problem("a number", item, index)
+    try:
+        finite = math.isfinite(item)
+    except OverflowError:  # an int too large for a float
+        finite = False
+    if not finite:
+        raise _problem("a finite number", item, index)
 
 
 _Finite = Annotated[float, Field(strict=True, allow_inf_nan=False)]
@@ -289,8 +294,7 @@ def _range(value: Any) -> Any:
     if isinstance(value, str | bytes) or not isinstance(value, Sequence) or len(value) != 2:
         raise _problem("a list of exactly 2 numbers [low, high]", value)
     for i, item in enumerate(value):
-        if isinstance(item, bool) or not isinstance(item, int | float) or not math.isfinite(item):
-            raise _problem("a finite number", item, i)
+        _check_finite(item, i)
     if value[0] > value[1]:
         raise _problem("low <= high", value)
     return (float(value[0]), float(value[1]))

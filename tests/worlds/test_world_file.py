@@ -321,6 +321,10 @@ def test_every_problem_is_listed_one_per_line(default_data: dict[str, Any], tmp_
             r"trials\.sphere_radius: expected radii > 0",
         ),
         (
+            lambda d: d["trials"]["start"].update(x=[10**400, 1]),
+            r"trials\.start\.x\[0\]: expected a finite number, got 1000",
+        ),
+        (
             lambda d: d["trials"].update(line_gap=0.05),
             r"trials\.line_gap: expected a list of exactly 2 numbers \[low, high\], got 0\.05",
         ),
