@@ -68,6 +68,14 @@ class RBFBasis:
         self.__dict__["_last"] = (s, psi)
         return psi
 
+    def same_as(self, other: RBFBasis) -> bool:
+        """Whether ``other`` has the same centres and widths (the same functions)."""
+        if self is other:
+            return True
+        return np.array_equal(self.centres, other.centres) and np.array_equal(
+            self.widths, other.widths
+        )
+
     @property
     def size(self) -> int:
         """Number of basis functions ``K``."""

@@ -13,10 +13,19 @@ maintenance tracks the grasp geometry; a force-tracking variant regulates the sq
 Output: the palms' world poses (object pose composed with the palms' relative poses) and
 world twists ``G^T y_o' + R_o y_C'`` (:func:`skills.dual_arm.compose_twists`), which is what
 a Cartesian controller tracks.
+
+A step runs every control tick on 3-vectors and quaternions, where numpy's per-call cost
+exceeds the arithmetic: it reads each state once as floats, evaluates the terms as floats
+(:class:`skills.coupling.ScalarCouplingTerm`), the learnt forcing terms on one basis
+instance so that one evaluation of the basis serves them all, and allocates one array for
+the new states and one for the commands. It gives the numbers of
+:func:`skills.pose_dmp.pose_step`, :func:`skills.pose_dmp.coupled_step` and
+:func:`commands_for`: the same operations in the same order.
 """
 
 from __future__ import annotations
 
+import operator
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 
@@ -24,18 +33,26 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from skills import quaternion as quat
-from skills.coupling import CouplingTerm
+from skills.basis import RBFBasis, phase_step
+from skills.coupling import CouplingTerm, WeightedScalar, add_scalar_terms, scalar_evaluation
 from skills.dmp import DMPParams
 from skills.dual_arm import ARMS
 from skills.labels import Arm
 from skills.pose_dmp import (
+    STATE_SIZE,
+    LearntForcing,
+    PoseFloats,
     PoseModel,
     PoseState,
     PoseTarget,
+    StateValues,
     Weighted,
-    coupled_step,
+    attractor_floats,
+    integrate_floats,
     pose_acceleration,
-    pose_step,
+    state_from,
+    state_values,
+    transformation_floats,
 )
 from skills.types import Array
 
@@ -88,15 +105,18 @@ class DualArmComposer:
     """Runs one composition of absolute and relative skills for one move.
 
     Build with :meth:`start`; call :meth:`step` every control tick, with the measured state
-    when the loop is closed.
+    when the loop is closed. The terms are fixed for the move (tuples, in mappings not to be
+    changed in place); assigning a field other than ``state`` makes the next step resolve
+    them again.
     """
 
     base: PoseModel
     target: PoseTarget
     state: DualArmState
-    absolute: list[Weighted] = field(default_factory=list)
-    relative: dict[Arm, list[Weighted]] = field(default_factory=dict)
+    absolute: tuple[Weighted, ...] = ()
+    relative: dict[Arm, tuple[Weighted, ...]] = field(default_factory=dict)
     relative_targets: dict[Arm, PoseTarget] = field(default_factory=dict)
+    _plan: _Plan | None = field(default=None, init=False, repr=False, compare=False)
 
     @staticmethod
     def start(
@@ -145,9 +165,9 @@ class DualArmComposer:
             base,
             target,
             replace(state, object=obj),
-            [Weighted(c, float(w)) for c, w in absolute],
+            tuple(Weighted(c, float(w)) for c, w in absolute),
             {
-                arm: [Weighted(c, float(w)) for c, w in (relative or {}).get(arm, ())]
+                arm: tuple(Weighted(c, float(w)) for c, w in (relative or {}).get(arm, ()))
                 for arm in ARMS
             },
             rel_targets,
@@ -168,66 +188,167 @@ class DualArmComposer:
             Close the loop on a measured state (e.g. the object's pose from the simulator).
         """
         current = measured or self.state
-        obj = pose_step(current.object, self.base, self.target, dt, self.absolute)
-        rel = {
-            arm: coupled_step(
-                current.relative(arm),
-                self.relative_targets[arm],
-                dt,
-                self.relative[arm],
-                self.base.params.alpha_s,
-            )
-            for arm in ARMS
-        }
-        self.state = DualArmState(obj, rel[Arm.LEFT], rel[Arm.RIGHT])
-        return self.commands()
+        plan = self._resolved()
+        obj, obj_phase = plan.obj(current.object, dt)
+        left, left_phase = plan.left(current.left, dt)
+        right, right_phase = plan.right(current.right, dt)
+        values = np.array((*obj, *left, *right))  # one allocation; the states are views into it
+        self.state = DualArmState(
+            state_from(values, obj_phase),
+            state_from(values, left_phase, STATE_SIZE),
+            state_from(values, right_phase, 2 * STATE_SIZE),
+        )
+        return palm_commands(obj, left, right)
 
     def commands(self) -> PalmCommands:
         """Palm poses and twists for the current state."""
         return commands_for(self.state)
 
+    def _resolved(self) -> _Plan:
+        """The plan for the current terms: resolved again only when a field was reassigned."""
+        plan = self._plan
+        config = (self.base, self.target, self.absolute, self.relative, self.relative_targets)
+        if plan is None or not all(map(operator.is_, plan.configuration, config)):
+            plan = self._plan = _Plan.of(self, config)
+        return plan
+
+
+def _scalar_terms(terms: Sequence[Weighted]) -> tuple[WeightedScalar, ...]:
+    return tuple((scalar_evaluation(w.term), w.weight) for w in terms)
+
+
+@dataclass(frozen=True, eq=False)
+class _ObjectStep:
+    """:func:`skills.pose_dmp.pose_step` of the object in floats, its terms resolved.
+
+    The base model's own forcing is skipped when it is zero (the composer's still base): it
+    would add exact zeros.
+    """
+
+    base: PoseModel
+    forced: bool
+    target: PoseTarget
+    terms: tuple[WeightedScalar, ...]
+
+    @staticmethod
+    def of(base: PoseModel, target: PoseTarget, absolute: Sequence[Weighted]) -> _ObjectStep:
+        forced = bool(np.any(target.effective_weights[:, :6]))
+        basis = base.position.forcing.basis
+        return _ObjectStep(base, forced, target, _scalar_terms(_on_basis(absolute, basis)))
+
+    def __call__(self, state: PoseState, dt: float) -> tuple[StateValues, float]:
+        """The next state's values and phase."""
+        pose = PoseFloats.of(state)
+        if self.forced:
+            acc = transformation_floats(pose, self.base, self.target)
+        else:
+            acc = attractor_floats(pose, self.base.params, self.target)
+        add_scalar_terms(acc, self.terms, pose, self.target)
+        phase = phase_step(pose.phase, dt, self.target.tau, self.base.params.alpha_s)
+        return integrate_floats(pose, acc, dt), phase
+
+
+def _on_basis(terms: Sequence[Weighted], basis: RBFBasis) -> list[Weighted]:
+    # Learnt forcing terms with the same basis functions read them from one instance, whose
+    # activations at a phase are computed once (the same values: the same numbers).
+    return [
+        Weighted(LearntForcing(w.term.model, basis), w.weight)
+        if isinstance(w.term, LearntForcing) and w.term.basis.same_as(basis)
+        else w
+        for w in terms
+    ]
+
+
+@dataclass(frozen=True, eq=False)
+class _PalmStep:
+    """:func:`skills.pose_dmp.coupled_step` of a palm in {O} in floats, its terms resolved."""
+
+    target: PoseTarget
+    terms: tuple[WeightedScalar, ...]
+    alpha_s: float
+
+    def __call__(self, state: PoseState, dt: float) -> tuple[StateValues, float]:
+        """The next state's values and phase."""
+        pose = PoseFloats.of(state)
+        acc = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
+        add_scalar_terms(acc, self.terms, pose, self.target)
+        phase = phase_step(pose.phase, dt, self.target.tau, self.alpha_s)
+        return integrate_floats(pose, acc, dt), phase
+
+
+@dataclass(frozen=True, eq=False)
+class _Plan:
+    """What a composition evaluates every tick, resolved from its terms once per move.
+
+    ``configuration`` is what it was resolved from (compared by identity each step).
+    """
+
+    configuration: tuple[object, ...]
+    obj: _ObjectStep
+    left: _PalmStep
+    right: _PalmStep
+
+    @staticmethod
+    def of(composer: DualArmComposer, configuration: tuple[object, ...]) -> _Plan:
+        alpha_s = composer.base.params.alpha_s
+        palms = [
+            _PalmStep(
+                composer.relative_targets[arm],
+                _scalar_terms(composer.relative.get(arm, ())),
+                alpha_s,
+            )
+            for arm in ARMS
+        ]
+        return _Plan(
+            configuration,
+            _ObjectStep.of(composer.base, composer.target, composer.absolute),
+            *palms,
+        )
+
 
 def commands_for(state: DualArmState) -> PalmCommands:
-    """Palm world poses and eq. (5) twists for a dual-arm state.
+    """Palm world poses and eq. (5) twists for a dual-arm state."""
+    return palm_commands(
+        state_values(state.object), state_values(state.left), state_values(state.right)
+    )
+
+
+def palm_commands(obj: StateValues, left: StateValues, right: StateValues) -> PalmCommands:
+    """Palm world poses and eq. (5) twists from the object's and palms' state values.
 
     The same algebra as :func:`skills.dual_arm.palm_poses` and
     :func:`skills.dual_arm.compose_twists` (one absolute and one relative twist), in floats:
     it runs every control tick, on 3-vectors, where numpy's per-call cost dominates.
     """
-    obj = state.object
-    px, py, pz = obj.position.tolist()
-    vx, vy, vz = obj.velocity.tolist()
-    wx, wy, wz = obj.angular_velocity.tolist()
-    q = quat.as_tuple(obj.orientation)
-    x, y, z, w = q
+    px, py, pz, vx, vy, vz = obj[0:6]
+    x, y, z, w, wx, wy, wz = obj[9:16]
+    q = (x, y, z, w)
     r00, r01, r02 = 1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)
     r10, r11, r12 = 2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)
     r20, r21, r22 = 2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)
-    positions, orientations, twists = [], [], []
-    for palm in (state.left, state.right):
-        a0, a1, a2 = palm.position.tolist()
+    positions: list[float] = []
+    orientations: list[float] = []
+    twists: list[float] = []
+    for palm in (left, right):
+        a0, a1, a2, b0, b1, b2 = palm[0:6]
+        qx, qy, qz, qw, c0, c1, c2 = palm[9:16]
         l0 = r00 * a0 + r01 * a1 + r02 * a2  # lever arm: object centre to palm, world frame
         l1 = r10 * a0 + r11 * a1 + r12 * a2
         l2 = r20 * a0 + r21 * a1 + r22 * a2
-        b0, b1, b2 = palm.velocity.tolist()
-        c0, c1, c2 = palm.angular_velocity.tolist()
-        positions.append((px + l0, py + l1, pz + l2))
-        orientations.append(quat.multiply_scalar(q, quat.as_tuple(palm.orientation)))
-        twists.append(
-            (
-                vx + wy * l2 - wz * l1 + r00 * b0 + r01 * b1 + r02 * b2,  # G^T y_o' + R y_C'
-                vy + wz * l0 - wx * l2 + r10 * b0 + r11 * b1 + r12 * b2,
-                vz + wx * l1 - wy * l0 + r20 * b0 + r21 * b1 + r22 * b2,
-                wx + r00 * c0 + r01 * c1 + r02 * c2,
-                wy + r10 * c0 + r11 * c1 + r12 * c2,
-                wz + r20 * c0 + r21 * c1 + r22 * c2,
-            )
+        positions += (px + l0, py + l1, pz + l2)
+        orientations += quat.multiply_scalar(q, (qx, qy, qz, qw))
+        twists += (
+            vx + wy * l2 - wz * l1 + r00 * b0 + r01 * b1 + r02 * b2,  # G^T y_o' + R y_C'
+            vy + wz * l0 - wx * l2 + r10 * b0 + r11 * b1 + r12 * b2,
+            vz + wx * l1 - wy * l0 + r20 * b0 + r21 * b1 + r22 * b2,
+            wx + r00 * c0 + r01 * c1 + r02 * c2,
+            wy + r10 * c0 + r11 * c1 + r12 * c2,
+            wz + r20 * c0 + r21 * c1 + r22 * c2,
         )
+    # One allocation for all four arrays; each is a view into it.
+    out = np.array((*positions, *orientations, *twists, vx, vy, vz, wx, wy, wz))
     return PalmCommands(
-        np.array(positions),
-        np.array(orientations),
-        np.array(twists),
-        np.array((vx, vy, vz, wx, wy, wz)),
+        out[0:6].reshape(2, 3), out[6:14].reshape(2, 4), out[14:26].reshape(2, 6), out[26:32]
     )
 
 

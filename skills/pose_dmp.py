@@ -10,18 +10,18 @@ thin stateful :class:`PoseDMP`.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from functools import cached_property
+from itertools import pairwise
 from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from skills import quaternion as quat
-from skills.basis import DEFAULT_ALPHA_S, phase_step
-from skills.coupling import CouplingTerm
+from skills.basis import DEFAULT_ALPHA_S, RBFBasis, phase_step
+from skills.coupling import AccelerationFloats, CouplingTerm
 from skills.demonstration import Demonstration
 from skills.dmp import (
     DMPParams,
@@ -89,6 +89,107 @@ class PoseState(NamedTuple):
         return self._replace(phase=float(s))
 
 
+#: A pose state's six arrays end to end, 19 floats: position, velocity, acceleration,
+#: orientation, angular velocity, angular acceleration (the layout of :func:`state_from`).
+StateValues = tuple[float, ...]
+STATE_SIZE = 19
+
+
+def state_values(state: PoseState) -> StateValues:
+    """``state``'s arrays end to end as floats (:data:`StateValues`)."""
+    return tuple(np.concatenate(state[:6]).tolist())
+
+
+def _field_slices(at: int) -> tuple[slice, ...]:
+    bounds = (0, 3, 6, 9, 13, 16, 19)
+    return tuple(slice(at + a, at + b) for a, b in pairwise(bounds))
+
+
+# Built once: a state is cut out of a buffer every control tick.
+_STATE_SLICES = {at: _field_slices(at) for at in (0, STATE_SIZE, 2 * STATE_SIZE)}
+
+
+def state_from(values: Array, phase: float, at: int = 0) -> PoseState:
+    """The :class:`PoseState` whose arrays are views of ``values[at:at + 19]``."""
+    y, yd, ydd, q, w, wd = _STATE_SLICES.get(at) or _field_slices(at)
+    return PoseState(values[y], values[yd], values[ydd], values[q], values[w], values[wd], phase)
+
+
+class PoseFloats(NamedTuple):
+    """A pose state's pose, twist and phase as Python floats, read once per control tick.
+
+    What the scalar paths read (:class:`skills.coupling.ScalarCouplingTerm`, the dual-arm
+    composer): on 3-vectors numpy's per-call cost exceeds the arithmetic.
+
+    Attributes
+    ----------
+    position, velocity, angular_velocity : list of 3 floats
+        m, m/s, rad/s.
+    orientation : tuple of 4 floats
+        ``(x, y, z, w)``.
+    phase : float
+    source : PoseState
+        The state they were read from (for terms that only take arrays).
+    """
+
+    position: list[float]
+    orientation: quat.Quat
+    velocity: list[float]
+    angular_velocity: list[float]
+    phase: float
+    source: PoseState
+
+    @staticmethod
+    def of(state: PoseState) -> PoseFloats:
+        """Read ``state``'s pose, twist and phase."""
+        return PoseFloats(
+            state.position.tolist(),
+            quat.as_tuple(state.orientation),
+            state.velocity.tolist(),
+            state.angular_velocity.tolist(),
+            state.phase,
+            state,
+        )
+
+
+def integrate_floats(pose: PoseFloats, acc: Sequence[float], dt: float) -> StateValues:
+    """One step of semi-implicit Euler and the exponential map, in floats.
+
+    ``v += a dt, y += v dt`` and ``omega += alpha dt, q = exp(dt/2 omega) q``, for the
+    accelerations ``acc`` (linear then angular, 6 floats); returns the new state's values,
+    whose accelerations are ``acc``.
+    """
+    y0, y1, y2 = pose.position
+    v0, v1, v2 = pose.velocity
+    w0, w1, w2 = pose.angular_velocity
+    a0, a1, a2, b0, b1, b2 = acc
+    v0 += a0 * dt
+    v1 += a1 * dt
+    v2 += a2 * dt
+    w0 += b0 * dt
+    w1 += b1 * dt
+    w2 += b2 * dt
+    q = quat.integrate_scalar(pose.orientation, (w0, w1, w2), dt)
+    return (
+        y0 + v0 * dt,
+        y1 + v1 * dt,
+        y2 + v2 * dt,
+        v0,
+        v1,
+        v2,
+        a0,
+        a1,
+        a2,
+        *q,
+        w0,
+        w1,
+        w2,
+        b0,
+        b1,
+        b2,
+    )
+
+
 @dataclass(frozen=True)
 class PoseTarget:
     """Where a pose DMP goes and how fast: start, goal, ``tau`` and the forcing scalings.
@@ -122,6 +223,12 @@ class PoseTarget:
         """Goal orientation as floats, for the scalar quaternion maths of the step."""
         x, y, z, w = self.goal_orientation.tolist()
         return (x, y, z, w)
+
+    @cached_property
+    def goal_position_tuple(self) -> quat.Vec3:
+        """Goal position as floats, for the scalar maths of the step."""
+        x, y, z = self.goal_position.tolist()
+        return (x, y, z)
 
 
 @dataclass(frozen=True)
@@ -276,14 +383,29 @@ class LearntForcing:
     Used to compose a learnt skill with others on a shared transformation system: its forcing
     is scaled for the running target's start and goal with ``model``'s own scaling, and read
     at the running phase.
+
+    Parameters
+    ----------
+    model : PoseModel
+    basis : RBFBasis, optional
+        Read the activations from this instance of the model's basis functions (same centres
+        and widths): terms on one basis at one phase then share a single evaluation per step.
     """
 
-    def __init__(self, model: PoseModel) -> None:
+    def __init__(self, model: PoseModel, basis: RBFBasis | None = None) -> None:
+        own = model.position.forcing.basis
+        if basis is not None and not basis.same_as(own):
+            raise ValueError(
+                f"basis: expected the model's basis functions ({own.size} with the same centres "
+                f"and widths), got {basis.size} that differ"
+            )
         self.model = model
+        self.basis = basis or own
         self._for: PoseTarget | None = None
         self._own: PoseTarget | None = None
 
-    def _own_target(self, target: PoseTarget) -> PoseTarget:
+    def own_target(self, target: PoseTarget) -> PoseTarget:
+        """The model's target for the running target's start, goal and ``tau`` (cached)."""
         if self._for is not target:
             self._own = self.model.target(
                 target.start_position,
@@ -298,11 +420,19 @@ class LearntForcing:
 
     def acceleration(self, state: PoseState, target: PoseTarget) -> tuple[Array, Array]:
         """(linear m/s^2, angular rad/s^2) at ``state.phase``."""
-        own = self._own_target(target)
-        basis = self.model.position.forcing.basis
-        raw = basis.activations_at(state.phase) @ own.effective_weights
-        f = raw[:6] * (state.phase / (max(float(raw[6]), 1e-300) * own.tau * own.tau))
-        return f[:3], f[3:]
+        f = self._forcing(state.phase, target)
+        return np.array(f[:3]), np.array(f[3:])
+
+    def scalar_acceleration(self, pose: PoseFloats, target: PoseTarget) -> AccelerationFloats:
+        """:meth:`acceleration` as floats."""
+        return self._forcing(pose.phase, target)
+
+    def _forcing(self, s: float, target: PoseTarget) -> AccelerationFloats:
+        # f(s) / tau^2 = s (psi @ W) / (sum(psi) tau^2), the scaled weights W from own_target.
+        own = self.own_target(target)
+        raw = (self.basis.activations_at(s) @ own.effective_weights).tolist()
+        k = s / (max(raw[6], 1e-300) * own.tau * own.tau)
+        return (raw[0] * k, raw[1] * k, raw[2] * k, raw[3] * k, raw[4] * k, raw[5] * k)
 
 
 class Saturated:
@@ -420,40 +550,71 @@ def _accelerations(
     target: PoseTarget,
     couplings: Sequence[CouplingTerm],
 ) -> tuple[list[float], list[float]]:
-    # Scalar floats after the one vector operation (the basis): numpy's per-call overhead
-    # would otherwise dominate arithmetic on 3-vectors.
-    p = model.params
+    acc = transformation_floats(PoseFloats.of(state), model, target)
+    add_couplings(acc, couplings, state, target)
+    return acc[:3], acc[3:]
+
+
+def transformation_floats(pose: PoseFloats, model: PoseModel, target: PoseTarget) -> list[float]:
+    """The transformation system's accelerations with the model's forcing, in floats.
+
+    :func:`attractor_floats` plus ``f(s) / tau^2`` (``f`` from ``target.effective_weights``),
+    linear then angular (6 floats). Floats after the one basis product: numpy's per-call
+    overhead would otherwise dominate the arithmetic on 3-vectors.
+    """
+    a0, a1, a2, b0, b1, b2 = attractor_floats(pose, model.params, target)
     tau = target.tau
-    s = state.phase
-    basis = model.position.forcing.basis
-    raw = (basis.activations_at(s) @ target.effective_weights).tolist()
-    inv_tau2 = 1.0 / (tau * tau)
-    k = s * inv_tau2 / max(raw[6], 1e-300)
-    kp = p.alpha * p.beta * inv_tau2
-    kd = p.alpha / tau
-    y0, y1, y2 = state.position.tolist()
-    v0, v1, v2 = state.velocity.tolist()
-    w0, w1, w2 = state.angular_velocity.tolist()
-    g0, g1, g2 = target.goal_position.tolist()
-    e0, e1, e2 = quat.rotation_error_scalar(target.goal_tuple, quat.as_tuple(state.orientation))
-    lin = [
-        kp * (g0 - y0) - kd * v0 + k * raw[0],
-        kp * (g1 - y1) - kd * v1 + k * raw[1],
-        kp * (g2 - y2) - kd * v2 + k * raw[2],
+    s = pose.phase
+    raw = (model.position.forcing.basis.activations_at(s) @ target.effective_weights).tolist()
+    k = s * (1.0 / (tau * tau)) / max(raw[6], 1e-300)
+    return [
+        a0 + k * raw[0],
+        a1 + k * raw[1],
+        a2 + k * raw[2],
+        b0 + k * raw[3],
+        b1 + k * raw[4],
+        b2 + k * raw[5],
     ]
-    ang = [
-        kp * e0 - kd * w0 + k * raw[3],
-        kp * e1 - kd * w1 + k * raw[4],
-        kp * e2 - kd * w2 + k * raw[5],
+
+
+def attractor_floats(pose: PoseFloats, params: DMPParams, target: PoseTarget) -> list[float]:
+    """The spring-damper towards the goal, linear then angular (6 floats).
+
+    ``alpha (beta (g - y) - tau yd) / tau^2`` for position and the same with the short-way
+    rotation error ``2 log(g conj(q))`` for orientation.
+    """
+    tau = target.tau
+    kp = params.alpha * params.beta * (1.0 / (tau * tau))
+    kd = params.alpha / tau
+    y0, y1, y2 = pose.position
+    v0, v1, v2 = pose.velocity
+    w0, w1, w2 = pose.angular_velocity
+    g0, g1, g2 = target.goal_position_tuple
+    e0, e1, e2 = quat.rotation_error_scalar(target.goal_tuple, pose.orientation)
+    return [
+        kp * (g0 - y0) - kd * v0,
+        kp * (g1 - y1) - kd * v1,
+        kp * (g2 - y2) - kd * v2,
+        kp * e0 - kd * w0,
+        kp * e1 - kd * w1,
+        kp * e2 - kd * w2,
     ]
+
+
+def add_couplings(
+    acc: list[float], couplings: Sequence[CouplingTerm], state: PoseState, target: PoseTarget
+) -> None:
+    """Add each coupling's accelerations at ``state`` to ``acc`` (6 floats), in order."""
     for c in couplings:
         c_lin, c_ang = c.acceleration(state, target)
-        cl = c_lin.tolist()
-        ca = c_ang.tolist()
-        for i in range(3):
-            lin[i] += cl[i]
-            ang[i] += ca[i]
-    return lin, ang
+        l0, l1, l2 = c_lin.tolist()
+        r0, r1, r2 = c_ang.tolist()
+        acc[0] += l0
+        acc[1] += l1
+        acc[2] += l2
+        acc[3] += r0
+        acc[4] += r1
+        acc[5] += r2
 
 
 def pose_step(
@@ -485,7 +646,8 @@ def pose_step(
         The next state; its accelerations are the ones applied over this step.
     """
     # One function, floats after the basis product: this runs every control step, and on a
-    # 3-vector numpy's per-call overhead costs more than the arithmetic.
+    # 3-vector numpy's per-call overhead costs more than the arithmetic. The same operations
+    # as transformation_floats, add_couplings and integrate_floats, inlined.
     p = model.params
     tau = target.tau
     s = state.phase
@@ -498,7 +660,7 @@ def pose_step(
     v0, v1, v2 = state.velocity.tolist()
     w0, w1, w2 = state.angular_velocity.tolist()
     qx, qy, qz, qw = state.orientation.tolist()
-    g0, g1, g2 = target.goal_position.tolist()
+    g0, g1, g2 = target.goal_position_tuple
     e0, e1, e2 = quat.rotation_error_scalar(target.goal_tuple, (qx, qy, qz, qw))
     a0 = kp * (g0 - y0) - kd * v0 + k * raw[0]
     a1 = kp * (g1 - y1) - kd * v1 + k * raw[1]
@@ -523,35 +685,10 @@ def pose_step(
     w1 += b1 * dt
     w2 += b2 * dt
     q = quat.integrate_scalar((qx, qy, qz, qw), (w0, w1, w2), dt)
-    buf = np.array(
-        (
-            y0 + v0 * dt,
-            y1 + v1 * dt,
-            y2 + v2 * dt,
-            v0,
-            v1,
-            v2,
-            a0,
-            a1,
-            a2,
-            *q,
-            w0,
-            w1,
-            w2,
-            b0,
-            b1,
-            b2,
-        )
-    )
-    return PoseState(
-        buf[0:3],
-        buf[3:6],
-        buf[6:9],
-        buf[9:13],
-        buf[13:16],
-        buf[16:19],
-        s * math.exp(-p.alpha_s * dt / tau),
-    )
+    # One allocation for the whole state; the fields are views into it.
+    y0, y1, y2 = y0 + v0 * dt, y1 + v1 * dt, y2 + v2 * dt
+    buf = np.array((y0, y1, y2, v0, v1, v2, a0, a1, a2, *q, w0, w1, w2, b0, b1, b2))
+    return state_from(buf, phase_step(s, dt, tau, p.alpha_s))
 
 
 def coupled_step(
@@ -566,36 +703,12 @@ def coupled_step(
     Relative-space skills such as grasp maintenance carry their own reference; this integrates
     their summed accelerations with the same scheme as :func:`pose_step`.
     """
-    lin = [0.0, 0.0, 0.0]
-    ang = [0.0, 0.0, 0.0]
-    for c in couplings:
-        c_lin, c_ang = c.acceleration(state, target)
-        cl, ca = c_lin.tolist(), c_ang.tolist()
-        for i in range(3):
-            lin[i] += cl[i]
-            ang[i] += ca[i]
-    return _integrate(state, lin, ang, dt, phase_step(state.phase, dt, target.tau, alpha_s))
-
-
-def _integrate(
-    state: PoseState, lin: list[float], ang: list[float], dt: float, phase: float
-) -> PoseState:
-    """Semi-implicit Euler and the exponential map, in floats, into one new state."""
-    y0, y1, y2 = state.position.tolist()
-    v0, v1, v2 = state.velocity.tolist()
-    w0, w1, w2 = state.angular_velocity.tolist()
-    v0 += lin[0] * dt
-    v1 += lin[1] * dt
-    v2 += lin[2] * dt
-    w0 += ang[0] * dt
-    w1 += ang[1] * dt
-    w2 += ang[2] * dt
-    q = quat.integrate_scalar(quat.as_tuple(state.orientation), (w0, w1, w2), dt)
-    # One allocation for the whole state; the fields are views into it.
-    buf = np.array(
-        (y0 + v0 * dt, y1 + v1 * dt, y2 + v2 * dt, v0, v1, v2, *lin, *q, w0, w1, w2, *ang)
+    acc = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
+    add_couplings(acc, couplings, state, target)
+    return state_from(
+        np.array(integrate_floats(PoseFloats.of(state), acc, dt)),
+        phase_step(state.phase, dt, target.tau, alpha_s),
     )
-    return PoseState(buf[0:3], buf[3:6], buf[6:9], buf[9:13], buf[13:16], buf[16:19], phase)
 
 
 @dataclass(frozen=True)

@@ -26,8 +26,9 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from skills import quaternion as quat
+from skills.coupling import AccelerationFloats
 from skills.couplings._checks import assign, non_negative, positive, unit_vector, vector
-from skills.pose_dmp import PoseState, PoseTarget
+from skills.pose_dmp import PoseFloats, PoseState, PoseTarget
 from skills.types import Array
 
 
@@ -154,18 +155,30 @@ class GraspMaintenance:
         angular : ndarray, shape (3,)
             rad/s^2, {O}.
         """
+        a = self.scalar_acceleration(PoseFloats.of(state), target)
+        return np.array(a[:3]), np.array(a[3:])
+
+    def scalar_acceleration(self, pose: PoseFloats, target: PoseTarget) -> AccelerationFloats:
+        """:meth:`acceleration` as floats.
+
+        ``K (p_ref - p) - D v`` and ``K_rot rotation_error(q_ref, q) - D_rot omega``.
+        """
         rx, ry, rz, qx, qy, qz, qw = self._ref
-        px, py, pz = state.position.tolist()
-        vx, vy, vz = state.velocity.tolist()
-        wx, wy, wz = state.angular_velocity.tolist()
-        x, y, z, w = state.orientation.tolist()
-        ex, ey, ez = quat.rotation_error_scalar((qx, qy, qz, qw), (x, y, z, w))
+        px, py, pz = pose.position
+        vx, vy, vz = pose.velocity
+        wx, wy, wz = pose.angular_velocity
+        ex, ey, ez = quat.rotation_error_scalar((qx, qy, qz, qw), pose.orientation)
         k, d = self.stiffness, self.damping
         kr, dr = self.rotational_stiffness, self.rotational_damping
         assert d is not None and dr is not None  # set in __post_init__
-        return np.array(
-            (k * (rx - px) - d * vx, k * (ry - py) - d * vy, k * (rz - pz) - d * vz)
-        ), np.array((kr * ex - dr * wx, kr * ey - dr * wy, kr * ez - dr * wz))
+        return (
+            k * (rx - px) - d * vx,
+            k * (ry - py) - d * vy,
+            k * (rz - pz) - d * vz,
+            kr * ex - dr * wx,
+            kr * ey - dr * wy,
+            kr * ez - dr * wz,
+        )
 
 
 @dataclass(frozen=True, eq=False, init=False)

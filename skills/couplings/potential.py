@@ -36,8 +36,10 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from numpy.typing import ArrayLike
 
+from skills import quaternion as quat
+from skills.coupling import ZERO_ACCELERATION, AccelerationFloats
 from skills.couplings._checks import ZERO3, assign, positive
-from skills.pose_dmp import PoseState, PoseTarget
+from skills.pose_dmp import PoseFloats, PoseState, PoseTarget
 from skills.types import Array
 
 _ZERO = np.array(0.0)
@@ -156,9 +158,9 @@ def _coefficients(
     return alpha, kappa
 
 
-def _matrix(q: Array) -> tuple[float, ...]:
+def _matrix(q: quat.Quat) -> tuple[float, ...]:
     # Rotation matrix entries, row-major, in float arithmetic (9 numpy calls would cost more).
-    x, y, z, w = q.tolist()
+    x, y, z, w = q
     return (
         1.0 - 2.0 * (y * y + z * z),
         2.0 * (x * y - z * w),
@@ -286,16 +288,16 @@ class PotentialFieldAvoidance:
 
     def world_points(self, state: PoseState) -> tuple[Array, Array, Array]:
         """Lever arms ``R r_i``, positions and velocities of the points, each (N, 3), world."""
-        both = self._world(state)
+        both = self._world(PoseFloats.of(state))
         return both[:, :3], both[:, 7:], both[:, 4:7]
 
-    def _world(self, state: PoseState) -> Array:
+    def _world(self, pose: PoseFloats) -> Array:
         # One product [r_i, 1] @ T gives [R r_i, 1, v + omega x R r_i, y + R r_i], (N, 10):
         # the column of ones later turns the torque product into the force sum as well.
-        m00, m01, m02, m10, m11, m12, m20, m21, m22 = _matrix(state.orientation)
-        wx, wy, wz = state.angular_velocity.tolist()
-        vx, vy, vz = state.velocity.tolist()
-        px, py, pz = state.position.tolist()
+        m00, m01, m02, m10, m11, m12, m20, m21, m22 = _matrix(pose.orientation)
+        wx, wy, wz = pose.angular_velocity
+        vx, vy, vz = pose.velocity
+        px, py, pz = pose.position
         return self._points_h @ np.array(
             (
                 m00,
@@ -365,7 +367,7 @@ class PotentialFieldAvoidance:
         """
         if self.points_object.shape[0] == 0:
             return ZERO3.copy(), ZERO3.copy()
-        both = self._world(state)
+        both = self._world(PoseFloats.of(state))
         v = both[:, 4:7]
         distances, closest = self.query(both[:, 7:])
         r = both[:, 7:] - closest
@@ -385,3 +387,53 @@ class PotentialFieldAvoidance:
         return np.array((lam * m[9], lam * m[10], lam * m[11])), np.array(
             (k * (m[5] - m[7]), k * (m[6] - m[2]), k * (m[1] - m[3]))
         )
+
+    def scalar_acceleration(self, pose: PoseFloats, target: PoseTarget) -> AccelerationFloats:
+        """:meth:`acceleration` as floats, summed one point at a time.
+
+        The world points and the distance query stay one vectorised pass; the per-point
+        coefficients and sums are floats: for the handful of link points a composition
+        carries, numpy's per-call cost over the twenty-odd operations of
+        :func:`_coefficients` exceeds the whole per-point arithmetic. Same formula: with
+        ``q = -v.r > 0``, ``C = q / (|r| |v|)``, ``h = C^(beta-1) / p``, the point's push is
+        ``alpha v + kappa r`` with ``alpha = beta h g(p)`` and
+        ``kappa = (q / |r|^2) h (beta g(p) + 1 / p)``.
+        """
+        if self.points_object.shape[0] == 0:
+            return ZERO_ACCELERATION
+        both = self._world(pose)
+        distances, closest = self.query(both[:, 7:])
+        dist = distances.tolist()
+        if min(dist) >= self.influence:
+            return ZERO_ACCELERATION  # nothing near: the usual case
+        beta, power, p_min = self.beta, self.beta - 1.0, self.min_distance
+        inv_p0 = 1.0 / self.influence  # 0 for Park et al.'s plain 1/p
+        fx = fy = fz = tx = ty = tz = 0.0
+        for (ax, ay, az, _, vx, vy, vz, x, y, z), (cx, cy, cz), d in zip(
+            both.tolist(), closest.tolist(), dist, strict=True
+        ):
+            rx, ry, rz = x - cx, y - cy, z - cz
+            q = -(vx * rx + vy * ry + vz * rz)
+            if q <= 0.0:
+                continue  # receding or sliding past: U is flat
+            ip = 1.0 / (d if d > p_min else p_min)
+            g = ip - inv_p0
+            if g <= 0.0:
+                continue  # at or beyond the influence distance
+            rr = rx * rx + ry * ry + rz * rz
+            h = ip * (q / max(math.sqrt(rr * (vx * vx + vy * vy + vz * vz)), 1e-300)) ** power
+            alpha = beta * g
+            kappa = (alpha + ip) * h * q / max(rr, 1e-300)
+            alpha *= h
+            ux = alpha * vx + kappa * rx  # this point's -grad U / lambda
+            uy = alpha * vy + kappa * ry
+            uz = alpha * vz + kappa * rz
+            fx += ux
+            fy += uy
+            fz += uz
+            tx += ay * uz - az * uy  # lever arm x push
+            ty += az * ux - ax * uz
+            tz += ax * uy - ay * ux
+        lam = self.gain
+        k = lam * self._inv_rho2
+        return (lam * fx, lam * fy, lam * fz, k * tx, k * ty, k * tz)

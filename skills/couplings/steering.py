@@ -36,8 +36,9 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike
 
+from skills.coupling import ZERO_ACCELERATION, AccelerationFloats
 from skills.couplings._checks import ZERO3, non_negative, positive, vector
-from skills.pose_dmp import PoseState, PoseTarget
+from skills.pose_dmp import PoseFloats, PoseState, PoseTarget
 from skills.types import Array
 
 #: Below this ``sin(phi)`` the obstacle is dead ahead or behind: the law has no direction (and
@@ -126,6 +127,7 @@ class ObstacleSteering:
     max_angle: float
     min_speed: float
     _reach: Array = field(init=False, repr=False)
+    _single: tuple[float, float, float, float] | None = field(init=False, repr=False)
 
     def __init__(
         self,
@@ -167,6 +169,8 @@ class ObstacleSteering:
         reach = r + self.object_radius
         reach.setflags(write=False)
         set_(self, "_reach", reach)
+        # One obstacle (the usual case) is steered in floats: its centre and reach as floats.
+        set_(self, "_single", (*c[0].tolist(), float(reach[0])) if c.shape[0] == 1 else None)
 
     def with_obstacles(self, centres: ArrayLike, radii: ArrayLike) -> ObstacleSteering:
         """The same law for another set of obstacles (centres (M, 3) m, radii (M,) m)."""
@@ -195,15 +199,24 @@ class ObstacleSteering:
         -------
         linear, angular : ndarray, shape (3,)
         """
-        v = state.velocity
-        vx, vy, vz = v.tolist()
+        a = self.scalar_acceleration(PoseFloats.of(state), target)
+        return np.array(a[:3]), ZERO3.copy()
+
+    def scalar_acceleration(self, pose: PoseFloats, target: PoseTarget) -> AccelerationFloats:
+        """:meth:`acceleration` as floats."""
+        vx, vy, vz = pose.velocity
         vv = vx * vx + vy * vy + vz * vz
-        m = self._reach.shape[0]
-        if vv <= self.min_speed * self.min_speed or m == 0:
-            return ZERO3.copy(), ZERO3.copy()
-        if m == 1:
-            return self._one_obstacle(state.position, vx, vy, vz, vv), ZERO3.copy()
-        d_obs = self.centres - state.position  # (M, 3) point to obstacle
+        if vv <= self.min_speed * self.min_speed or self._reach.shape[0] == 0:
+            return ZERO_ACCELERATION
+        if self._single is not None:
+            ax, ay, az = self._one_obstacle(self._single, pose.position, vx, vy, vz, vv)
+        else:
+            ax, ay, az = self._many_obstacles(pose.position, pose.velocity, vv).tolist()
+        return (ax, ay, az, 0.0, 0.0, 0.0)
+
+    def _many_obstacles(self, position: list[float], velocity: list[float], vv: float) -> Array:
+        v = np.array(velocity)
+        d_obs = self.centres - np.array(position)  # (M, 3) point to obstacle
         dv = d_obs @ v
         dd = np.einsum("mk,mk->m", d_obs, d_obs)
         cross = np.sqrt(np.maximum(dd * vv - dv * dv, 0.0))
@@ -214,22 +227,31 @@ class ObstacleSteering:
         w /= np.maximum(cross, 1e-300)
         w[(phi >= self.max_angle) | (cross <= _COLLINEAR * np.sqrt(dd * vv))] = 0.0
         w *= self.gamma
-        return v * float(w @ dv) - vv * (w @ d_obs), ZERO3.copy()
+        out: Array = v * float(w @ dv) - vv * (w @ d_obs)
+        return out
 
-    def _one_obstacle(self, position: Array, vx: float, vy: float, vz: float, vv: float) -> Array:
-        # One obstacle (the usual case) in float arithmetic: numpy's per-call overhead would
+    def _one_obstacle(
+        self,
+        obstacle: tuple[float, float, float, float],
+        position: list[float],
+        vx: float,
+        vy: float,
+        vz: float,
+        vv: float,
+    ) -> tuple[float, float, float]:
+        # One obstacle (centre, reach) in float arithmetic: numpy's per-call overhead would
         # cost ten times the maths on 3-vectors. Same law as the vectorised path.
-        ox, oy, oz = self.centres[0].tolist()
-        px, py, pz = position.tolist()
+        ox, oy, oz, reach = obstacle
+        px, py, pz = position
         dx, dy, dz = ox - px, oy - py, oz - pz
         dv = dx * vx + dy * vy + dz * vz
         dd = dx * dx + dy * dy + dz * dz
         cross = math.sqrt(max(dd * vv - dv * dv, 0.0))
         phi = math.atan2(cross, dv)
         if phi >= self.max_angle or cross <= _COLLINEAR * math.sqrt(dd * vv):
-            return ZERO3.copy()
-        clearance = max(math.sqrt(dd) - float(self._reach[0]), 0.0)
+            return (0.0, 0.0, 0.0)
+        clearance = max(math.sqrt(dd) - reach, 0.0)
         w = self.gamma * phi * math.exp(-self.beta * phi - self.k * clearance * clearance) / cross
         a = w * dv
         b = w * vv
-        return np.array((a * vx - b * dx, a * vy - b * dy, a * vz - b * dz))
+        return (a * vx - b * dx, a * vy - b * dy, a * vz - b * dz)

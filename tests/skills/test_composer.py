@@ -3,13 +3,34 @@
 from __future__ import annotations
 
 import numpy as np
-from numpy.testing import assert_allclose
+import pytest
+from numpy.testing import assert_allclose, assert_array_equal
 
+import skills.basis
 from skills import quaternion as quat
-from skills.composer import DualArmComposer, DualArmState, grasped_state, relative_from_world
-from skills.dual_arm import GraspGeometry
-from skills.labels import Arm
-from skills.pose_dmp import LearntForcing, PoseState, PoseTarget, fit_pose
+from skills.composer import (
+    DualArmComposer,
+    DualArmState,
+    PalmCommands,
+    commands_for,
+    grasped_state,
+    relative_from_world,
+)
+from skills.couplings import GraspMaintenance, ObstacleSteering, PotentialFieldAvoidance
+from skills.default_library import build_default_library
+from skills.dual_arm import ARMS, GraspGeometry, compose_twists, palm_poses
+from skills.labels import Action, Arm
+from skills.pose_dmp import (
+    LearntForcing,
+    PoseState,
+    PoseTarget,
+    Saturated,
+    Weighted,
+    coupled_step,
+    fit_pose,
+    pose_step,
+)
+from skills.types import Array
 from tests.skills.conftest import pick_place_demo
 
 DT = 1.0 / 60.0
@@ -93,3 +114,210 @@ def test_relative_from_world_inverts_palm_poses() -> None:
     back_p, back_q = relative_from_world(obj_p, obj_q, world_p, world_q)
     assert_allclose(back_p, rel_p, atol=1e-12)
     assert quat.angle_between(back_q, rel_q) < 1e-12
+
+
+OBSTACLE = np.array([0.62, -0.08, 0.82])
+
+
+def sphere(points: Array) -> tuple[Array, Array]:
+    """Distances and closest points on a 4 cm sphere: the shape of an FCL query."""
+    d = points - OBSTACLE
+    n = np.linalg.norm(d, axis=1)
+    return n - 0.04, OBSTACLE + 0.04 * d / n[:, None]
+
+
+def full_composition() -> DualArmComposer:
+    """Every kind of term: two learnt skills, steering, an 8-point field, a saturated group,
+    a term with arrays only, grasp maintenance on both palms; weights not all 1."""
+    lib = build_default_library()
+    g = GraspGeometry.lateral(0.30, 0.02)
+    state = grasped_state(
+        [0.65, 0.0, 0.675],
+        quat.IDENTITY,
+        (g.left_position, g.left_orientation),
+        (g.right_position, g.right_orientation),
+    )
+    steer = lib.first(Action.AVOID_OBSTACLE).params
+    steering = ObstacleSteering(
+        float(steer["gamma"]), float(steer["beta"]), float(steer["k"]), object_radius=0.1
+    ).with_obstacles(OBSTACLE[None], [0.04])
+    rng = np.random.default_rng(1)
+    links = np.array([-0.15, 0.0, 0.1]) + rng.normal(size=(8, 3)) * [0.1, 0.2, 0.05]
+    absolute = [
+        (LearntForcing(lib.first(Action.TRANSPORT).pose_model()), 1.0),
+        (LearntForcing(lib.first(Action.ROTATE_Z).pose_model()), 0.8),
+        (steering, 1.0),
+        (PotentialFieldAvoidance(sphere, links, gain=0.4), 1.2),
+        (Saturated([(PotentialFieldAvoidance(sphere, links[:3]), 1.0)], 5.0, 5.0), 1.0),
+        (Push([0.0, 0.02, 0.0], [0.0, 0.0, 0.05]), 0.5),
+    ]
+    relative = {
+        arm: [
+            (GraspMaintenance(g.position(arm), g.orientation(arm), 0.015), 1.0),
+            (Push([0.0, 0.0, 0.01], [0.0, 0.0, 0.0]), 2.0),
+        ]
+        for arm in ARMS
+    }
+    goal_q = quat.from_axis_angle([0.0, 0.0, 1.0], 0.4)
+    return DualArmComposer.start(state, [0.6, -0.15, 0.675], goal_q, 2.5, absolute, relative)
+
+
+def perturbed(pose: PoseState, rng: np.random.Generator) -> PoseState:
+    """A measured state near ``pose``: other pose and twist, same phase."""
+    return PoseState(
+        pose.position + rng.normal(size=3) * 0.01,
+        pose.velocity + rng.normal(size=3) * 0.05,
+        pose.acceleration,
+        quat.as_quaternions(pose.orientation + rng.normal(size=4) * 0.05),
+        pose.angular_velocity + rng.normal(size=3) * 0.1,
+        pose.angular_acceleration,
+        pose.phase,
+    )
+
+
+def general_step(composer: DualArmComposer, measured: DualArmState) -> DualArmState:
+    """The step the composer's floats must equal: each space by the general pose steps."""
+    alpha_s = composer.base.params.alpha_s
+    obj = pose_step(measured.object, composer.base, composer.target, DT, composer.absolute)
+    left, right = (
+        coupled_step(
+            measured.relative(arm),
+            composer.relative_targets[arm],
+            DT,
+            composer.relative[arm],
+            alpha_s,
+        )
+        for arm in ARMS
+    )
+    return DualArmState(obj, left, right)
+
+
+def test_step_equals_the_general_step_of_every_space() -> None:
+    composer = full_composition()
+    for _ in range(40):  # mid-move, moving towards the obstacle
+        composer.step(DT)
+    rng = np.random.default_rng(6)
+    for _ in range(10):
+        measured = DualArmState(
+            *(
+                perturbed(s, rng)
+                for s in (composer.state.object, composer.state.left, composer.state.right)
+            )
+        )
+        expected = general_step(composer, measured)
+        cmd = composer.step(DT, measured)
+        for got, want in zip(
+            (composer.state.object, composer.state.left, composer.state.right),
+            (expected.object, expected.left, expected.right),
+            strict=True,
+        ):
+            for a, b in zip(got, want, strict=True):
+                assert_allclose(a, b, rtol=1e-12, atol=1e-12)
+        want_cmd = commands_for(expected)
+        for field in ("positions", "orientations", "twists", "object_twist"):
+            assert_allclose(getattr(cmd, field), getattr(want_cmd, field), rtol=1e-12, atol=1e-12)
+
+
+def test_step_gives_the_very_numbers_of_the_general_step_for_exact_terms() -> None:
+    # Every term here has a scalar path with the operations of its array one, in order (the
+    # bare potential field sums its points in another order): equal to the last bit.
+    composer = full_composition()
+    composer.absolute = tuple(
+        w for w in composer.absolute if not isinstance(w.term, PotentialFieldAvoidance)
+    )
+    for _ in range(40):
+        composer.step(DT)
+    rng = np.random.default_rng(7)
+    for _ in range(5):
+        measured = DualArmState(
+            *(
+                perturbed(s, rng)
+                for s in (composer.state.object, composer.state.left, composer.state.right)
+            )
+        )
+        expected = general_step(composer, measured)
+        cmd = composer.step(DT, measured)
+        for got, want in zip(
+            (composer.state.object, composer.state.left, composer.state.right),
+            (expected.object, expected.left, expected.right),
+            strict=True,
+        ):
+            for a, b in zip(got, want, strict=True):
+                assert_array_equal(a, b)
+        want_cmd = commands_for(expected)
+        for field in ("positions", "orientations", "twists", "object_twist"):
+            assert_array_equal(getattr(cmd, field), getattr(want_cmd, field))
+
+
+class ExpCounter:
+    """numpy for :mod:`skills.basis`, counting its ``exp`` calls (one per basis evaluation)."""
+
+    def __init__(self) -> None:
+        self.calls = 0
+
+    def __getattr__(self, name: str) -> object:
+        return getattr(np, name)
+
+    def exp(self, x: Array) -> Array:
+        self.calls += 1
+        return np.exp(x)
+
+
+def test_learnt_terms_on_equal_bases_share_one_evaluation_per_step(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    composer = full_composition()  # two learnt skills, each fitted with its own basis instance
+    counter = ExpCounter()
+    monkeypatch.setattr(skills.basis, "np", counter)
+    for k in range(1, 4):
+        composer.step(DT)
+        assert counter.calls == k
+
+
+def test_commands_are_the_palm_poses_and_eq5_twists() -> None:
+    rng = np.random.default_rng(9)
+    g = GraspGeometry.lateral(0.30)
+    state = grasped_state(
+        [0.6, 0.1, 0.7],
+        quat.as_quaternions(rng.normal(size=4)),
+        (g.left_position, g.left_orientation),
+        (g.right_position, g.right_orientation),
+    )
+    state = DualArmState(*(perturbed(s, rng) for s in (state.object, state.left, state.right)))
+    cmd: PalmCommands = commands_for(state)
+    obj, palms = state.object, (state.left, state.right)
+    positions, orientations = palm_poses(
+        obj.position,
+        obj.orientation,
+        np.stack([p.position for p in palms]),
+        np.stack([p.orientation for p in palms]),
+    )
+    twists = compose_twists(
+        obj.twist()[None],
+        [1.0],
+        positions - obj.position,
+        np.stack([p.twist() for p in palms])[None],
+        [1.0],
+        obj.orientation,
+    )
+    assert_allclose(cmd.positions, positions, atol=1e-12)
+    assert_allclose(cmd.orientations, orientations, atol=1e-12)
+    assert_allclose(cmd.twists, twists, atol=1e-12)
+    assert_allclose(cmd.object_twist, obj.twist(), atol=0)
+
+
+def test_reassigned_terms_take_effect_at_the_next_step() -> None:
+    composer = DualArmComposer.start(
+        start_state(), [0.65, 0.0, 0.675], quat.IDENTITY, 2.0, [(Push([0, 0, 0.1], [0, 0, 0]), 1.0)]
+    )
+    composer.step(DT)
+    composer.absolute = (Weighted(Push([0.0, 0.3, 0.0], [0.0, 0.0, 0.2]), 1.0),)
+    measured = composer.state
+    composer.step(DT, measured)
+    expected = general_step(composer, measured)
+    assert_allclose(composer.state.object.acceleration, expected.object.acceleration, atol=1e-12)
+    assert_allclose(
+        composer.state.object.angular_acceleration,
+        expected.object.angular_acceleration,
+        atol=1e-12,
+    )

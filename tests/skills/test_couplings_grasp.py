@@ -11,7 +11,7 @@ from numpy.testing import assert_allclose
 from skills import quaternion as quat
 from skills.coupling import CouplingTerm
 from skills.couplings import ForceTrackingGrasp, GraspMaintenance
-from skills.pose_dmp import PoseModel, PoseState
+from skills.pose_dmp import PoseFloats, PoseModel, PoseState
 
 #: Coupling terms here ignore the DMP's target; any valid one will do.
 TARGET = PoseModel.still().target(np.zeros(3), quat.IDENTITY, np.ones(3), quat.IDENTITY, 1.0)
@@ -95,6 +95,27 @@ def test_force_tracking_keeps_the_tangential_spring_and_reads_a_sensor() -> None
     assert_allclose(lin, [-400.0 * 0.02, 0.0, 0.0], rtol=1e-12)
     lin, _ = grasp.acceleration(palm(CONTACT), TARGET)
     assert_allclose(lin, [0.0, 0.5, 0.0], rtol=1e-12)
+
+
+def test_scalar_path_matches_the_spring_damper_in_arrays() -> None:
+    rng = np.random.default_rng(3)
+    grasp = GraspMaintenance(CONTACT, PALM, 0.015, stiffness=300.0, rotational_stiffness=150.0)
+    ref_p, ref_q = grasp.reference_position_object, grasp.contact_orientation_object
+    for _ in range(20):
+        s = palm(
+            CONTACT + rng.normal(size=3) * 0.02,
+            rng.normal(size=3) * 0.1,
+            quat.as_quaternions(rng.normal(size=4)),
+            rng.normal(size=3),
+        )
+        expected_lin = 300.0 * (ref_p - s.position) - grasp.damping * s.velocity
+        expected_ang = 150.0 * quat.rotation_error(
+            ref_q, s.orientation
+        ) - grasp.rotational_damping * np.asarray(s.angular_velocity)
+        fast = grasp.scalar_acceleration(PoseFloats.of(s), TARGET)
+        assert_allclose(fast, [*expected_lin, *expected_ang], rtol=1e-12, atol=1e-12)
+        lin, ang = grasp.acceleration(s, TARGET)
+        assert fast == (*lin.tolist(), *ang.tolist())
 
 
 def test_bad_parameters_name_the_field() -> None:

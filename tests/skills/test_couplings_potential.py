@@ -12,7 +12,7 @@ from skills import quaternion as quat
 from skills.coupling import CouplingTerm
 from skills.couplings import PotentialFieldAvoidance
 from skills.couplings.potential import point_accelerations, potential
-from skills.pose_dmp import PoseModel, PoseState
+from skills.pose_dmp import PoseFloats, PoseModel, PoseState
 from skills.types import Array
 
 #: Coupling terms here ignore the DMP's target; any valid one will do.
@@ -172,3 +172,41 @@ def test_bad_parameters_name_the_field() -> None:
         PotentialFieldAvoidance(sphere, [[0.0, np.inf, 0.0]])
     with pytest.raises(ValueError, match="query: expected a callable"):
         PotentialFieldAvoidance(None, np.zeros((1, 3)))  # type: ignore[arg-type]
+
+
+def random_state(rng: np.random.Generator) -> PoseState:
+    """Near the obstacle, any orientation, moving and turning."""
+    z = np.zeros(3)
+    return PoseState(
+        OBSTACLE + rng.normal(size=3) * 0.15,
+        rng.normal(size=3) * 0.3,
+        z,
+        quat.as_quaternions(rng.normal(size=4)),
+        rng.normal(size=3),
+        z,
+    )
+
+
+@pytest.mark.parametrize("beta", [1.0, 2.0, 3.5])
+@pytest.mark.parametrize("influence", [math.inf, 0.3])
+def test_scalar_path_matches_the_vectorised_field(beta: float, influence: float) -> None:
+    rng = np.random.default_rng(11)
+    pushed = 0
+    for n in (1, 3, 8, 12):
+        for _ in range(12):
+            field = PotentialFieldAvoidance(
+                sphere, rng.normal(size=(n, 3)) * 0.15, 0.05, beta, influence
+            )
+            s = random_state(rng)
+            expected = np.concatenate(field.acceleration(s, TARGET))
+            fast = field.scalar_acceleration(PoseFloats.of(s), TARGET)
+            assert_allclose(fast, expected, rtol=1e-12, atol=1e-12 * np.abs(expected).max())
+            pushed += bool(np.any(expected))
+    assert pushed >= 24  # half the draws or more have a point approaching within the influence
+
+
+def test_scalar_path_is_zero_without_points_or_nearby_obstacles() -> None:
+    s = PoseFloats.of(state([0.25, 0, 0], [0.4, 0, 0]))
+    assert one_point().with_points(np.zeros((0, 3))).scalar_acceleration(s, TARGET) == (0.0,) * 6
+    far = one_point().with_query(lambda p: (np.full(len(p), 10.0), p + 10.0))
+    assert far.scalar_acceleration(s, TARGET) == (0.0,) * 6

@@ -15,7 +15,16 @@ from skills.dmp import (
     fit_position,
     position_rollout,
 )
-from skills.pose_dmp import PoseDMP, PoseState, fit_pose, pose_rollout, pose_step
+from skills.pose_dmp import (
+    LearntForcing,
+    PoseDMP,
+    PoseFloats,
+    PoseModel,
+    PoseState,
+    fit_pose,
+    pose_rollout,
+    pose_step,
+)
 from skills.quaternion_dmp import fit_orientation
 from skills.scaling import Scaling
 from tests.skills.conftest import min_jerk, pick_place_demo
@@ -250,3 +259,58 @@ def test_amplitude_scaling_mirrors_and_stretches_every_axis() -> None:
     new_y0 = np.array([0.2, -0.3, 0.8])
     moved = position_rollout(model, DMPState.at_rest(new_y0), new_y0 + scale * y[-1], dt=DT)
     assert_allclose(moved.positions, new_y0 + scale * base.positions, atol=1e-9)
+
+
+def moving_state(rng: np.random.Generator) -> PoseState:
+    """A random pose and twist mid-motion."""
+    return PoseState(
+        np.array([0.6, 0.0, 0.7]) + rng.normal(size=3) * 0.1,
+        rng.normal(size=3) * 0.2,
+        np.zeros(3),
+        quat.as_quaternions(rng.normal(size=4)),
+        rng.normal(size=3),
+        np.zeros(3),
+        float(rng.uniform(0.01, 1.0)),
+    )
+
+
+def test_learnt_forcing_is_the_model_forcing_scaled_for_the_running_target(
+    demo: Demonstration,
+) -> None:
+    model = fit_pose(demo)
+    goal_q = quat.from_axis_angle([0.0, 0.0, 1.0], 0.8)
+    target = PoseModel.still().target([0.5, -0.1, 0.7], quat.IDENTITY, [0.8, 0.2, 0.6], goal_q, 1.5)
+    forcing = LearntForcing(model)
+    own = forcing.own_target(target)
+    rng = np.random.default_rng(2)
+    for _ in range(10):
+        state = moving_state(rng)
+        s = state.phase
+        expected = np.concatenate(
+            (
+                model.position.forcing.value(s, own.position_matrix),
+                model.orientation.forcing.value(s, own.orientation_matrix),
+            )
+        ) / (1.5 * 1.5)
+        fast = forcing.scalar_acceleration(PoseFloats.of(state), target)
+        assert_allclose(fast, expected, rtol=1e-12, atol=1e-12 * np.abs(expected).max())
+        lin, ang = forcing.acceleration(state, target)
+        assert fast == (*lin.tolist(), *ang.tolist())
+
+
+def test_learnt_forcing_on_a_shared_basis_gives_the_same_numbers(demo: Demonstration) -> None:
+    model = fit_pose(demo)
+    shared = DMPParams().basis()  # another instance of the same functions
+    target = PoseModel.still().target(
+        [0.5, -0.1, 0.7], quat.IDENTITY, [0.8, 0.2, 0.6], quat.IDENTITY
+    )
+    own, on_shared = LearntForcing(model), LearntForcing(model, shared)
+    assert on_shared.basis is shared
+    rng = np.random.default_rng(8)
+    for _ in range(5):
+        state = moving_state(rng)
+        assert on_shared.scalar_acceleration(PoseFloats.of(state), target) == (
+            own.scalar_acceleration(PoseFloats.of(state), target)
+        )
+    with pytest.raises(ValueError, match="basis: expected the model's basis functions"):
+        LearntForcing(model, DMPParams(n_basis=30).basis())
