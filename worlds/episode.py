@@ -225,7 +225,12 @@ def run_episode(
             log = RunLog(out / "run.jsonl", clock=sim.time)
             hooks.append(log.attach)
             if animation:
-                anim = Animation(sim.scene.client, world.objects[0].pose.position)
+                table = world.table.size
+                anim = Animation(
+                    sim.scene.client,
+                    world.objects[0].pose.position,
+                    distance=1.6 * float(np.hypot(table[0], table[1])),
+                )
         last = [""]
 
         def on_tick(tree: py_trees.trees.BehaviourTree) -> None:

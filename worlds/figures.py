@@ -123,6 +123,9 @@ class Animation:
         Width and height, pixels.
     period : float
         Simulated seconds between frames.
+    distance : float
+        Camera distance from a point ``distance / 16`` above ``target``, m; about 1.6 times
+        the table's diagonal frames the robot and the table.
     """
 
     def __init__(
@@ -131,6 +134,7 @@ class Animation:
         target: Sequence[float],
         size: tuple[int, int] = (320, 240),
         period: float = 0.2,
+        distance: float = 1.9,
     ) -> None:
         self.client = client
         self.size = size
@@ -138,10 +142,10 @@ class Animation:
         self.frames: list[np.ndarray] = []
         self._next = 0.0
         # From the table's far side, a little to the robot's left: both arms and the object.
-        look_at = [float(target[0]), float(target[1]), float(target[2]) + 0.12]
+        look_at = [float(target[0]), float(target[1]), float(target[2]) + distance / 16.0]
         self.view = pb.computeViewMatrixFromYawPitchRoll(
             cameraTargetPosition=look_at,
-            distance=1.9,
+            distance=distance,
             yaw=110.0,
             pitch=-24.0,
             roll=0.0,
