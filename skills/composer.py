@@ -323,9 +323,7 @@ def palm_commands(obj: StateValues, left: StateValues, right: StateValues) -> Pa
     px, py, pz, vx, vy, vz = obj[0:6]
     x, y, z, w, wx, wy, wz = obj[9:16]
     q = (x, y, z, w)
-    r00, r01, r02 = 1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)
-    r10, r11, r12 = 2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)
-    r20, r21, r22 = 2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = quat.matrix_floats(q)
     positions: list[float] = []
     orientations: list[float] = []
     twists: list[float] = []

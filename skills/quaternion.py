@@ -270,15 +270,22 @@ def integrate_scalar(q: Quat, omega: Vec3, dt: float) -> Quat:
     )
 
 
-def matrix_scalar(q: Quat) -> Array:
-    """Rotation matrix (3, 3) of one quaternion given as floats (one small allocation)."""
+def matrix_floats(q: Quat) -> tuple[float, ...]:
+    """Rotation matrix entries of one quaternion given as floats, row-major (9 floats).
+
+    For per-tick code on a single rotation, where numpy's per-call cost exceeds the arithmetic.
+    """
     x, y, z, w = q
-    return np.array(
-        (
-            (1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)),
-            (2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)),
-            (2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)),
-        )
+    return (
+        1 - 2 * (y * y + z * z),
+        2 * (x * y - z * w),
+        2 * (x * z + y * w),
+        2 * (x * y + z * w),
+        1 - 2 * (x * x + z * z),
+        2 * (y * z - x * w),
+        2 * (x * z - y * w),
+        2 * (y * z + x * w),
+        1 - 2 * (x * x + y * y),
     )
 
 

@@ -158,22 +158,6 @@ def _coefficients(
     return alpha, kappa
 
 
-def _matrix(q: quat.Quat) -> tuple[float, ...]:
-    # Rotation matrix entries, row-major, in float arithmetic (9 numpy calls would cost more).
-    x, y, z, w = q
-    return (
-        1.0 - 2.0 * (y * y + z * z),
-        2.0 * (x * y - z * w),
-        2.0 * (x * z + y * w),
-        2.0 * (x * y + z * w),
-        1.0 - 2.0 * (x * x + z * z),
-        2.0 * (y * z - x * w),
-        2.0 * (x * z - y * w),
-        2.0 * (y * z + x * w),
-        1.0 - 2.0 * (x * x + y * y),
-    )
-
-
 @dataclass(frozen=True, eq=False, init=False)
 class PotentialFieldAvoidance:
     """Pushes the object away when any of its attached points approaches an obstacle.
@@ -294,7 +278,7 @@ class PotentialFieldAvoidance:
     def _world(self, pose: PoseFloats) -> Array:
         # One product [r_i, 1] @ T gives [R r_i, 1, v + omega x R r_i, y + R r_i], (N, 10):
         # the column of ones later turns the torque product into the force sum as well.
-        m00, m01, m02, m10, m11, m12, m20, m21, m22 = _matrix(pose.orientation)
+        m00, m01, m02, m10, m11, m12, m20, m21, m22 = quat.matrix_floats(pose.orientation)
         wx, wy, wz = pose.angular_velocity
         vx, vy, vz = pose.velocity
         px, py, pz = pose.position

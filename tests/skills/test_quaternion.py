@@ -56,6 +56,9 @@ def test_scalar_versions_match_vector_versions() -> None:
             quat.integrate(q[i], omega[i], 0.01),
             atol=1e-15,
         )
+        assert_allclose(
+            np.reshape(quat.matrix_floats(qi), (3, 3)), quat.to_matrix(q[i]), atol=1e-15
+        )
 
 
 def test_make_continuous_removes_sign_flips_only() -> None:
