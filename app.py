@@ -319,7 +319,7 @@ def _run_command(args: argparse.Namespace) -> int:
 
 def _trials_command(args: argparse.Namespace) -> int:
     """The paper's experiment: N trials of three moves with new obstacles, judged, resumable."""
-    from worlds.trials import read_results, reason_of, run_campaign, summarise
+    from worlds.trials import campaign_results, reason_of, run_campaign, summarise
 
     world = _load_world_or_exit(args.world)
     if args.n < 1 or args.workers < 1:
@@ -336,12 +336,7 @@ def _trials_command(args: argparse.Namespace) -> int:
             print(err, file=sys.stderr)
             return EXIT_BAD_INPUT
     out = Path(args.out)
-    tree_name = str(tree.resolve()) if tree is not None else ""
-    earlier = [
-        r
-        for r in read_results(out / "results.jsonl").values()
-        if r.get("seed") == args.seed and r.get("tree", "") == tree_name
-    ]
+    earlier = campaign_results(out / "results.jsonl", args.seed, tree).values()
     tally = {"ok": sum(1 for r in earlier if r.get("success"))}
 
     def progress(rec: dict[str, Any], finished: int, total: int) -> None:

@@ -33,7 +33,9 @@ from types import TracebackType
 from typing import Any
 
 import numpy as np
+import pybullet as pb
 
+from worlds.scene import Scene, lateral_grasp_palm_poses
 from worlds.world_file import _CONTEXT_BASE_DIR, Region, TrialSettings, World
 
 #: The goal regions in the order of the moves.
@@ -62,12 +64,14 @@ class RobotClearance:
     The robot is posed by the same inverse-kinematics placement that starts an episode
     (:meth:`worlds.scene.Scene.place_palms`), palms on the object's +-y faces, in a scene of
     its own that is never stepped; PyBullet measures the distance on the robot's collision
-    shapes. Use as a context manager, or call :meth:`close`.
+    shapes, from one small probe ball (the distance to a sphere is the distance to its centre
+    less its radius). Use as a context manager, or call :meth:`close`.
     """
 
-    def __init__(self, world: World) -> None:
-        from worlds.scene import Scene
+    #: Radius of the probe ball, m.
+    PROBE_RADIUS = 1e-3
 
+    def __init__(self, world: World) -> None:
         self._scene = Scene.from_world(world)
         self._scene.set_active_obstacles(())
         obj = world.objects[0]
@@ -79,14 +83,14 @@ class RobotClearance:
         self._half_span = float(size[1]) / 2.0
         self._thickness = float(world.robot.palm_size[2])
         self._posed_at: tuple[float, ...] | None = None
-        self._ball: dict[float, int] = {}
+        client = self._scene.client
+        shape = pb.createCollisionShape(
+            pb.GEOM_SPHERE, radius=self.PROBE_RADIUS, physicsClientId=client
+        )
+        self._probe = pb.createMultiBody(0.0, shape, physicsClientId=client)
 
     def distance(self, object_centre: np.ndarray, centre: np.ndarray, radius: float) -> float:
         """Gap between a sphere and the nearest robot link, m (negative: overlap)."""
-        import pybullet as pb
-
-        from worlds.scene import lateral_grasp_palm_poses
-
         client = self._scene.client
         key = tuple(float(v) for v in object_centre)
         if key != self._posed_at:
@@ -95,17 +99,15 @@ class RobotClearance:
             )
             pb.performCollisionDetection(physicsClientId=client)
             self._posed_at = key
-        if radius not in self._ball:
-            shape = pb.createCollisionShape(pb.GEOM_SPHERE, radius=radius, physicsClientId=client)
-            self._ball[radius] = pb.createMultiBody(0.0, shape, physicsClientId=client)
-        ball = self._ball[radius]
-        pb.resetBasePositionAndOrientation(ball, list(centre), [0, 0, 0, 1], physicsClientId=client)
+        pb.resetBasePositionAndOrientation(
+            self._probe, list(centre), [0, 0, 0, 1], physicsClientId=client
+        )
         gaps = [
             point[8]
             for body in self._scene.robot_ids
-            for point in pb.getClosestPoints(ball, body, 1.0, physicsClientId=client)
+            for point in pb.getClosestPoints(self._probe, body, 1.0, physicsClientId=client)
         ]
-        return min(gaps, default=math.inf)
+        return min(gaps, default=math.inf) - (radius - self.PROBE_RADIUS)
 
     def close(self) -> None:
         """Disconnect the scene."""
@@ -211,6 +213,8 @@ def _draw_sphere(
     """A sphere on the line or ahead of the carry, clear of the box and the robot at start
     and goal."""
     top = start[2] + half[2]
+    # The robot picks the object up at the start and puts it down at the goal.
+    grasps = [p + np.array([0.0, 0.0, dz]) for p in (start, goal) for dz in (0.0, layout.lift)]
     for _ in range(500):  # rejection sampling
         radius = _uniform(rng, layout.sphere_radius)
         if rng.random() < 0.5:
@@ -230,8 +234,7 @@ def _draw_sphere(
             )
         if min(_box_gap(p, half, centre) for p in (start, goal)) - radius < layout.clearance:
             continue
-        lifted = [p + np.array([0.0, 0.0, dz]) for p in (start, goal) for dz in (0.0, layout.lift)]
-        if min(robot.distance(p, centre, radius) for p in lifted) < layout.robot_clearance:
+        if min(robot.distance(p, centre, radius) for p in grasps) < layout.robot_clearance:
             continue
         return Sphere(name, (float(centre[0]), float(centre[1]), float(centre[2])), radius, kind)
     raise RuntimeError(f"{name}: could not place a sphere clear of the start and goal")
@@ -292,6 +295,21 @@ def read_results(path: Path) -> dict[int, dict[str, Any]]:
     return done
 
 
+def tree_key(tree: Path | None) -> str:
+    """How records name the tree their trials ran: its absolute path, "" for the default."""
+    return str(tree.resolve()) if tree is not None else ""
+
+
+def campaign_results(path: Path, seed: int, tree: Path | None) -> dict[int, dict[str, Any]]:
+    """The records in ``results.jsonl`` of one campaign: this seed, this tree."""
+    key = tree_key(tree)
+    return {
+        t: r
+        for t, r in read_results(path).items()
+        if r.get("seed") == seed and r.get("tree", "") == key
+    }
+
+
 def run_campaign(
     base: World,
     n: int,
@@ -327,17 +345,12 @@ def run_campaign(
     """
     out.mkdir(parents=True, exist_ok=True)
     results = out / "results.jsonl"
-    tree_name = str(tree.resolve()) if tree is not None else ""
-    done = {
-        t: r
-        for t, r in read_results(results).items()
-        if r.get("seed") == seed and r.get("tree", "") == tree_name
-    }
+    done = campaign_results(results, seed, tree)
     pending = [t for t in range(n) if t not in done]
     payload = {
         "world": base.model_dump(mode="json"),
         "source": str(base.source or ""),
-        "tree": tree_name,
+        "tree": tree_key(tree),
     }
     jobs = [(payload, seed, t) for t in pending]
     finished = n - len(pending)
