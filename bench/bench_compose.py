@@ -4,9 +4,15 @@ The step composes two absolute skills (the learnt pick-and-place and rotation), 
 steering, potential-field avoidance over 8 link points and grasp maintenance on both palms,
 and yields both palms' poses and twists (the paper's eq. 5), closed loop from a measured
 state. It includes the field's distance query, a numpy sphere query standing in for FCL,
-which is also timed on its own (``query_us``). With ``--json`` the last line is
-``{"step_us": ..., "query_us": ..., "fit_ms": ...}``; medians of repeats. Target: step <= 50 us
-with numpy. For scale, movement_primitives' dual-arm step with pose coupling takes 1.5-1.7 ms.
+which is also timed on its own (``query_us``).
+
+``step_us`` is the float (numpy) path; ``compiled_step_us`` the same composition compiled with
+numba (``DualArmComposer.start(..., compiled=True)``, None without numba), which must match it
+within 1e-9 (``compiled_max_diff``, the largest difference in the commands and states over
+the timed steps' inputs). ``compile_s`` is the compiled step's first call: numba compiles,
+or loads its on-disk cache. With ``--json`` the last line is the JSON of these figures and
+``fit_ms``; medians of repeats. Targets: step <= 50 us with numpy, <= 10 us compiled. For
+scale, movement_primitives' dual-arm step with pose coupling takes 1.5-1.7 ms.
 """
 
 from __future__ import annotations
@@ -19,7 +25,9 @@ from collections.abc import Callable
 import numpy as np
 
 from skills import quaternion as quat
-from skills.composer import DualArmComposer, grasped_state
+from skills.compiled import available
+from skills.composer import DualArmComposer, PalmCommands, grasped_state
+from skills.coupling import CouplingTerm
 from skills.couplings.grasp import GraspMaintenance
 from skills.couplings.potential import PotentialFieldAvoidance
 from skills.couplings.steering import ObstacleSteering
@@ -63,7 +71,7 @@ def median_time(fn: Callable[[], object], repeats: int, inner: int) -> float:
     return float(np.median(times))
 
 
-def composer() -> DualArmComposer:
+def composer(compiled: bool = False) -> DualArmComposer:
     lib = build_default_library()
     g = GraspGeometry.lateral(0.30, 0.02)
     state = grasped_state(
@@ -73,7 +81,7 @@ def composer() -> DualArmComposer:
         (g.right_position, g.right_orientation),
     )
     steer = lib.first(Action.AVOID_OBSTACLE).params
-    absolute = [
+    absolute: list[tuple[CouplingTerm, float]] = [
         (LearntForcing(lib.first(Action.TRANSPORT).pose_model()), 1.0),
         (LearntForcing(lib.first(Action.ROTATE_Z).pose_model()), 1.0),
         (
@@ -96,10 +104,27 @@ def composer() -> DualArmComposer:
         for arm in ARMS
     }
     goal_q = quat.from_axis_angle([0.0, 0.0, 1.0], 0.4)
-    c = DualArmComposer.start(state, [0.6, -0.15, 0.675], goal_q, 2.5, absolute, relative)
+    c = DualArmComposer.start(
+        state, [0.6, -0.15, 0.675], goal_q, 2.5, absolute, relative, compiled=compiled
+    )
     for _ in range(40):  # mid-move, moving towards the obstacle
         c.step(1.0 / 60.0)
     return c
+
+
+def difference(a: DualArmComposer, b: DualArmComposer, ca: PalmCommands, cb: PalmCommands) -> float:
+    """Largest absolute difference between two composers' states and commands."""
+    pairs = [
+        (x, y)
+        for sa, sb in zip(
+            (a.state.object, a.state.left, a.state.right),
+            (b.state.object, b.state.left, b.state.right),
+            strict=True,
+        )
+        for x, y in zip(sa[:6], sb[:6], strict=True)
+    ]
+    pairs += [(getattr(ca, f), getattr(cb, f)) for f in ("positions", "twists", "object_twist")]
+    return max(float(np.abs(x - y).max()) for x, y in pairs)
 
 
 def main() -> int:
@@ -117,15 +142,34 @@ def main() -> int:
     step_s = median_time(step, repeats=15, inner=300)
     points = state.object.position + quat.rotate(state.object.orientation, LINKS_OBJECT)
     query_s = median_time(lambda: sphere_query(points), repeats=15, inner=300)
-    figures = {
+    figures: dict[str, float | None] = {
         "step_us": round(step_s * 1e6, 1),
+        "compiled_step_us": None,
+        "compiled_max_diff": None,
+        "compile_s": None,
         "query_us": round(query_s * 1e6, 1),
         "fit_ms": round(fit_s * 1e3, 1),
     }
     print(
         f"composition step (2 learnt skills, steering, 8-point field, grasp x2, eq. 5): "
-        f"{figures['step_us']} us (target <= 50)"
+        f"{figures['step_us']} us with numpy (target <= 50)"
     )
+    if available():
+        t0 = time.perf_counter()
+        fast = composer(compiled=True)  # its first step compiles, or loads numba's cache
+        figures["compile_s"] = round(time.perf_counter() - t0, 2)
+        fast.state = state
+        figures["compiled_max_diff"] = difference(c, fast, c.step(dt, state), fast.step(dt, state))
+        figures["compiled_step_us"] = round(
+            median_time(lambda: fast.step(dt, state), repeats=15, inner=300) * 1e6, 1
+        )
+        print(
+            f"  compiled (numba): {figures['compiled_step_us']} us (stretch target <= 10); "
+            f"largest difference from numpy {figures['compiled_max_diff']:.1e} (<= 1e-9); "
+            f"first call {figures['compile_s']} s"
+        )
+    else:
+        print("  compiled: numba is not installed (pip install -e '.[fast]')")
     print(f"  of which the field's distance query on 8 points: {figures['query_us']} us")
     print(f"learning the 5 default skills from their demonstrations: {figures['fit_ms']} ms")
     if args.json:

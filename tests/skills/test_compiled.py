@@ -1,0 +1,201 @@
+"""The compiled composition step gives the float step's numbers within 1e-9."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+
+from skills import _kernels
+from skills import quaternion as quat
+from skills.composer import DualArmComposer, DualArmState, PalmCommands
+from skills.couplings import GraspMaintenance, ObstacleSteering, PotentialFieldAvoidance
+from skills.default_library import build_default_library
+from skills.dual_arm import ARMS, GraspGeometry
+from skills.labels import Action
+from skills.pose_dmp import PoseModel, Weighted
+from skills.types import Array
+from tests.skills.test_composer import (
+    DT,
+    OBSTACLE,
+    Push,
+    full_composition,
+    perturbed,
+    sphere,
+    start_state,
+)
+
+TOLERANCE = 1e-9
+FIELDS = ("positions", "orientations", "twists", "object_twist")
+
+needs_numba = pytest.mark.skipif(not _kernels.COMPILED, reason="numba is not installed")
+
+
+def compiled_twin(composer: DualArmComposer) -> DualArmComposer:
+    """The same composition, compiled (its own plan)."""
+    return replace(composer, compiled=True)
+
+
+def assert_same(a: DualArmComposer, b: DualArmComposer, ca: PalmCommands, cb: PalmCommands) -> None:
+    for sa, sb in zip(
+        (a.state.object, a.state.left, a.state.right),
+        (b.state.object, b.state.left, b.state.right),
+        strict=True,
+    ):
+        for x, y in zip(sa[:6], sb[:6], strict=True):
+            assert_allclose(y, x, rtol=0, atol=TOLERANCE)
+        assert sb.phase == pytest.approx(sa.phase, rel=0, abs=1e-15)
+    for name in FIELDS:
+        assert_allclose(getattr(cb, name), getattr(ca, name), rtol=0, atol=TOLERANCE)
+
+
+def run_both(composer: DualArmComposer, steps: int, seed: int | None = None) -> float:
+    """Step the float and compiled twins side by side; closed loop on perturbed states when
+    ``seed`` is given. Returns the largest absolute difference seen in the object's pose."""
+    fast = compiled_twin(composer)
+    rng = np.random.default_rng(seed) if seed is not None else None
+    worst = 0.0
+    for _ in range(steps):
+        if rng is None:
+            ca, cb = composer.step(DT), fast.step(DT)
+        else:
+            s = composer.state
+            measured = DualArmState(*(perturbed(p, rng) for p in (s.object, s.left, s.right)))
+            ca, cb = composer.step(DT, measured), fast.step(DT, measured)
+        assert_same(composer, fast, ca, cb)
+        worst = max(
+            worst, float(np.abs(composer.state.object.position - fast.state.object.position).max())
+        )
+        fast.state = composer.state  # compare steps, not the drift of two rollouts
+    return worst
+
+
+@needs_numba
+def test_a_whole_move_matches_the_float_path() -> None:
+    # Every kind of term: learnt skills (weights 1 and 0.8), steering, an 8-point field,
+    # and terms without a kernel (a saturated group, arrays-only terms on every space).
+    composer = full_composition()
+    run_both(composer, 150)
+    assert composer.state.object.phase < 0.02  # the move ran to its end
+
+
+@needs_numba
+def test_closed_loop_on_measured_states_matches_the_float_path() -> None:
+    composer = full_composition()
+    for _ in range(40):  # mid-move, moving towards the obstacle
+        composer.step(DT)
+    run_both(composer, 20, seed=3)
+
+
+@needs_numba
+def test_free_rollouts_stay_together() -> None:
+    # Not reset each step: two rollouts of a whole move stay within the tolerance.
+    composer = full_composition()
+    fast = compiled_twin(composer)
+    for _ in range(150):
+        composer.step(DT)
+        fast.step(DT)
+    for a, b in zip(composer.state.object[:6], fast.state.object[:6], strict=True):
+        assert_allclose(b, a, rtol=0, atol=TOLERANCE)
+
+
+def avoidance_only(centres: Array, radii: list[float], points: Array) -> DualArmComposer:
+    lib = build_default_library()
+    steer = lib.first(Action.AVOID_OBSTACLE).params
+    steering = ObstacleSteering(
+        float(steer["gamma"]), float(steer["beta"]), float(steer["k"]), object_radius=0.1
+    ).with_obstacles(centres, radii)
+    g = GraspGeometry.lateral(0.30)
+    absolute = [
+        (steering, 1.3),
+        (PotentialFieldAvoidance(sphere, points, gain=0.4, beta=1.5, influence=np.inf), 0.7),
+    ]
+    relative = {
+        arm: [(GraspMaintenance(g.position(arm), g.orientation(arm), 0.0), 1.0)] for arm in ARMS
+    }
+    return DualArmComposer.start(
+        start_state(), [0.75, -0.1, 0.7], quat.IDENTITY, 1.5, absolute, relative
+    )
+
+
+@needs_numba
+def test_many_obstacles_and_field_options_match() -> None:
+    # Three steering obstacles (one behind), a field with beta 1.5 and no influence limit.
+    centres = np.array([OBSTACLE, [0.62, -0.02, 0.70], [0.45, 0.0, 0.675]])
+    points = np.array([[0.05, 0.1, 0.05], [0.0, -0.1, 0.0], [0.1, 0.0, 0.1]])
+    run_both(avoidance_only(centres, [0.04, 0.03, 0.05], points), 90)
+
+
+@needs_numba
+def test_a_field_without_points_and_no_obstacles_match() -> None:
+    run_both(avoidance_only(np.zeros((0, 3)), [], np.zeros((0, 3))), 30)
+
+
+@needs_numba
+def test_a_forced_base_model_matches() -> None:
+    # The base's own forcing (a composer built on a learnt model) has its own kernel kind.
+    model = build_default_library().first(Action.TRANSPORT).pose_model()
+    s = start_state()
+    target = model.target(
+        s.object.position, s.object.orientation, [0.7, 0.1, 0.7], quat.IDENTITY, 2.0
+    )
+    still = DualArmComposer.start(s, [0.7, 0.1, 0.7], quat.IDENTITY, 2.0)
+    composer = replace(
+        still, base=model, target=target, absolute=(Weighted(Push([0, 0, 0.1], [0, 0, 0]), 1.0),)
+    )
+    assert np.any(target.effective_weights[:, :6])
+    run_both(composer, 60)
+
+
+@needs_numba
+def test_a_state_replaced_by_the_caller_is_read_afresh() -> None:
+    # The composer's own states carry the buffer they are views of; a state built from
+    # them by replace must not: the compiled step would read the old values.
+    composer = full_composition()
+    fast = compiled_twin(composer)
+    for _ in range(10):
+        fast.step(DT)
+    moved = replace(
+        fast.state, object=fast.state.object._replace(position=fast.state.object.position + 0.01)
+    )
+    assert moved._values is None
+    composer.state = fast.state
+    assert_same(composer, fast, composer.step(DT, moved), fast.step(DT, moved))
+
+
+@needs_numba
+def test_reassigned_terms_are_packed_again() -> None:
+    composer = compiled_twin(full_composition())
+    composer.step(DT)
+    composer.absolute = (Weighted(Push([0.0, 0.3, 0.0], [0.0, 0.0, 0.2]), 1.0),)
+    float_twin = replace(composer, compiled=False)
+    assert_same(float_twin, composer, float_twin.step(DT), composer.step(DT))
+
+
+@needs_numba
+def test_a_query_of_the_wrong_shape_is_named() -> None:
+    def bad(points: Array) -> tuple[Array, Array]:
+        return np.zeros(len(points)), np.zeros((len(points), 2))
+
+    field = PotentialFieldAvoidance(bad, [[0.0, 0.1, 0.0]])
+    composer = DualArmComposer.start(
+        start_state(), [0.7, 0.0, 0.7], quat.IDENTITY, 1.0, [(field, 1.0)], compiled=True
+    )
+    with pytest.raises(
+        ValueError, match=r"query: expected distances \(1,\) and closest points \(1, 3\)"
+    ):
+        composer.step(DT)
+
+
+def test_without_numba_asking_for_it_says_what_to_install(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(_kernels, "COMPILED", False)
+    with pytest.raises(RuntimeError, match=r"needs numba.*\.\[fast\]"):
+        DualArmComposer.start(start_state(), [0.7, 0.0, 0.7], quat.IDENTITY, 1.0, compiled=True)
+
+
+def test_the_float_path_is_the_default() -> None:
+    composer = DualArmComposer.start(start_state(), [0.7, 0.0, 0.7], quat.IDENTITY, 1.0)
+    assert composer.compiled is False
+    assert PoseModel.still().params == composer.base.params
