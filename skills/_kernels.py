@@ -62,7 +62,7 @@ SIZE = 92
 #: Term kinds.
 FORCING, BASE_FORCING, STEERING, POTENTIAL, GRASP = 0, 1, 2, 3, 4
 #: Block layouts after the weight: potential field header length, steering header length.
-POTENTIAL_HEADER = 7
+POTENTIAL_HEADER = 8
 STEERING_HEADER = 7
 #: As :data:`skills.couplings.steering._COLLINEAR` and :data:`skills.quaternion._SMALL`.
 COLLINEAR = 1e-7
@@ -199,10 +199,43 @@ def world_points(x: Array, b: int, data: Array, o: int) -> Array:
 
 
 @kernel
+def nearest_spheres(points: Array, data: Array, at: int, count: int) -> Array:
+    """Each point's signed distance to the nearest of ``count`` spheres ``[centre, radius]``
+    stored from ``data[at]``, and its closest point: (N, 4), as
+    :class:`skills.couplings.potential.SphereObstacles`."""
+    n = points.shape[0]
+    out = np.empty((n, 4))
+    for i in range(n):
+        best = np.inf
+        bx = by = bz = br = bn = cx = cy = cz = 0.0
+        for j in range(count):
+            c = at + 4 * j
+            dx = points[i, 0] - data[c]
+            dy = points[i, 1] - data[c + 1]
+            dz = points[i, 2] - data[c + 2]
+            norm = math.sqrt(dx * dx + dy * dy + dz * dz)
+            gap = norm - data[c + 3]
+            if gap < best:
+                best, bx, by, bz, br, bn = gap, dx, dy, dz, data[c + 3], norm
+                cx, cy, cz = data[c], data[c + 1], data[c + 2]
+        if count == 0:
+            out[i, 0] = np.inf
+            out[i, 1] = out[i, 2] = out[i, 3] = np.nan
+            continue
+        scale = br / max(bn, 1e-12)
+        out[i, 0] = best
+        out[i, 1] = cx + bx * scale
+        out[i, 2] = cy + by * scale
+        out[i, 3] = cz + bz * scale
+    return out
+
+
+@kernel
 def potential(x: Array, b: int, data: Array, o: int, a: Array) -> None:
     """The dynamic potential field: block
-    ``[w, gain, beta, influence, min_distance, 1/rho^2, N, points N x 3, distances N,
-    closest N x 3]``, the last two written by the caller's distance query this step."""
+    ``[w, gain, beta, influence, min_distance, 1/rho^2, N, M, points N x 3, ...]``: with
+    ``M = -1``, ``[distances N, closest N x 3]`` written by the caller's distance query this
+    step; else ``M`` spheres ``[centre, radius]`` queried here."""
     gain, beta, influence, p_min, inv_rho2 = (
         data[o + 1],
         data[o + 2],
@@ -211,15 +244,24 @@ def potential(x: Array, b: int, data: Array, o: int, a: Array) -> None:
         data[o + 5],
     )
     n = int(data[o + 6])
+    spheres = int(data[o + 7])
     points = o + POTENTIAL_HEADER
-    dists = points + 3 * n
-    closest = dists + n
+    after = points + 3 * n
     a[:] = 0.0
     if n == 0:
         return
-    nearest = data[dists]
+    near = np.empty((n, 4))  # distance, closest point
+    if spheres < 0:
+        for i in range(n):
+            near[i, 0] = data[after + i]
+            near[i, 1] = data[after + n + 3 * i]
+            near[i, 2] = data[after + n + 3 * i + 1]
+            near[i, 3] = data[after + n + 3 * i + 2]
+    else:
+        near = nearest_spheres(world_points(x, b, data, o), data, after, spheres)
+    nearest = near[0, 0]
     for i in range(1, n):
-        nearest = min(nearest, data[dists + i])
+        nearest = min(nearest, near[i, 0])
     if nearest >= influence:
         return
     m = rotation_matrix(x, b + 9)
@@ -237,14 +279,13 @@ def potential(x: Array, b: int, data: Array, o: int, a: Array) -> None:
         vx = vx0 + (wy * az - wz * ay)
         vy = vy0 + (wz * ax - wx * az)
         vz = vz0 + (wx * ay - wy * ax)
-        c = closest + 3 * i
-        rx = (px + ax) - data[c]
-        ry = (py + ay) - data[c + 1]
-        rz = (pz + az) - data[c + 2]
+        rx = (px + ax) - near[i, 1]
+        ry = (py + ay) - near[i, 2]
+        rz = (pz + az) - near[i, 3]
         q = -(vx * rx + vy * ry + vz * rz)
         if q <= 0.0:
             continue
-        d = data[dists + i]
+        d = near[i, 0]
         ip = 1.0 / (d if d > p_min else p_min)
         g = ip - inv_p0
         if g <= 0.0:

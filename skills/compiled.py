@@ -14,10 +14,11 @@ What runs where:
 * Any other term (limit repulsion, force-tracking grasp, a saturated sum, a user's own)
   keeps its float path, evaluated in Python at the same state before the call; its
   accelerations are added inside. Such terms cost what they cost in the float path.
-* The potential field's distance query is the caller's Python callable. Compiled code never
-  calls back into Python: the field's world points come out of one small kernel, the query
-  runs in Python, and its distances and closest points are written into the field's block
-  before the step's call.
+* The potential field's distance query: a :class:`skills.couplings.SphereObstacles` is
+  evaluated inside the kernel. Any other query is the caller's Python callable, and compiled
+  code never calls back into Python: the field's world points come out of one small kernel,
+  the query runs in Python, and its distances and closest points are written into the
+  field's block before the step's call.
 
 It needs numba (``pip install -e '.[fast]'``); :func:`available` says whether it is installed.
 """
@@ -33,7 +34,7 @@ import numpy.typing as npt
 from skills import _kernels as k
 from skills.coupling import ScalarTerm, scalar_evaluation
 from skills.couplings.grasp import GraspMaintenance
-from skills.couplings.potential import DistanceQuery, PotentialFieldAvoidance
+from skills.couplings.potential import DistanceQuery, PotentialFieldAvoidance, SphereObstacles
 from skills.couplings.steering import ObstacleSteering
 from skills.dmp import DMPParams
 from skills.labels import Arm
@@ -149,17 +150,14 @@ def _block(
     if kind is PotentialFieldAvoidance:
         assert isinstance(term, PotentialFieldAvoidance)
         n = term.points_object.shape[0]
-        return k.POTENTIAL, [
-            weight,
-            term.gain,
-            term.beta,
-            term.influence,
-            term.min_distance,
-            term._inv_rho2,
-            float(n),
-            *term.points_object.ravel().tolist(),
-            *([0.0] * (4 * n)),  # distances and closest points: written every step
-        ]
+        head = [weight, term.gain, term.beta, term.influence, term.min_distance, term._inv_rho2]
+        points = term.points_object.ravel().tolist()
+        if type(term.query) is SphereObstacles:  # queried inside the kernel
+            spheres = np.hstack((term.query.centres, term.query.radii[:, None]))
+            m = spheres.shape[0]
+            return k.POTENTIAL, [*head, float(n), float(m), *points, *spheres.ravel().tolist()]
+        # Distances and closest points: written every step from the caller's query.
+        return k.POTENTIAL, [*head, float(n), -1.0, *points, *([0.0] * (4 * n))]
     if kind is GraspMaintenance:
         assert isinstance(term, GraspMaintenance)
         return k.GRASP, [
@@ -233,7 +231,7 @@ class CompiledStep:
                     continue
                 kind, block = compiled
                 at = len(packed.values)
-                if kind == k.POTENTIAL:
+                if kind == k.POTENTIAL and block[7] < 0.0:
                     assert isinstance(w.term, PotentialFieldAvoidance)
                     queries.append(_Query(space, at, int(block[6]), w.term.query))
                 program.append((space, kind, at))

@@ -7,6 +7,7 @@ returns additive (linear m/s^2, angular rad/s^2) accelerations for a pose DMP.
 :class:`ObstacleSteering`      Hoffmann et al. 2009 steering with a distance factor
 :func:`fit_obstacle_steering`  its parameters from avoidance demonstrations (Rai et al. 2014)
 :class:`PotentialFieldAvoidance`  Park et al. 2008 dynamic potential on attached points
+:class:`SphereObstacles`       its distance query to spheres in closed form
 :class:`GraspMaintenance`      relative-space spring to the grasp geometry (Gams et al. 2014)
 :class:`ForceTrackingGrasp`    the same, tracking a normal contact force
 :class:`WorkspaceRepulsion`    box limits (after Gams et al. 2009)
@@ -16,7 +17,7 @@ returns additive (linear m/s^2, angular rad/s^2) accelerations for a pose DMP.
 
 from skills.couplings.grasp import ForceTrackingGrasp, GraspMaintenance
 from skills.couplings.limits import JointLimitRepulsion, WorkspaceRepulsion
-from skills.couplings.potential import DistanceQuery, PotentialFieldAvoidance
+from skills.couplings.potential import DistanceQuery, PotentialFieldAvoidance, SphereObstacles
 from skills.couplings.steering import ObstacleSteering, steering_accelerations
 from skills.couplings.steering_fit import (
     AvoidanceDemo,
@@ -33,6 +34,7 @@ __all__ = [
     "JointLimitRepulsion",
     "ObstacleSteering",
     "PotentialFieldAvoidance",
+    "SphereObstacles",
     "SteeringFit",
     "WorkspaceRepulsion",
     "demonstrated_coupling",

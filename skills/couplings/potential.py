@@ -38,7 +38,7 @@ from numpy.typing import ArrayLike
 
 from skills import quaternion as quat
 from skills.coupling import ZERO_ACCELERATION, AccelerationFloats
-from skills.couplings._checks import ZERO3, assign, positive
+from skills.couplings._checks import ZERO3, assign, positive, vector
 from skills.pose_dmp import PoseFloats, PoseState, PoseTarget
 from skills.types import Array
 
@@ -47,6 +47,57 @@ _TINY = np.array(1e-300)
 
 #: ``query(points (N, 3)) -> (distances (N,), closest_points (N, 3))``, world frame, m.
 DistanceQuery = Callable[[Array], tuple[Array, Array]]
+
+
+@dataclass(frozen=True, eq=False, init=False)
+class SphereObstacles:
+    """A :data:`DistanceQuery` to spheres in closed form: each point's nearest sphere.
+
+    Signed, negative inside a sphere (as :meth:`worlds.collision.CollisionWorld.query` gives
+    for spheres); with no spheres every distance is ``inf`` and every closest point NaN. The
+    compiled composition step (:mod:`skills.compiled`) evaluates it inside its kernel.
+
+    Parameters
+    ----------
+    centres : array_like, shape (M, 3)
+        World frame, m.
+    radii : array_like, shape (M,)
+        m (>= 0).
+    """
+
+    centres: Array
+    radii: Array
+
+    def __init__(self, centres: ArrayLike, radii: ArrayLike) -> None:
+        c = vector(np.reshape(np.asarray(centres, dtype=float), (-1, 3)), (-1, 3), "centres")
+        r = vector(np.reshape(np.asarray(radii, dtype=float), (-1,)), (-1,), "radii")
+        if r.shape[0] != c.shape[0]:
+            raise ValueError(
+                f"radii: expected one radius per centre ({c.shape[0]}), got {r.shape[0]}"
+            )
+        if np.any(r < 0.0):
+            raise ValueError(f"radii: expected values >= 0 m, got {r.tolist()}")
+        assign(self, centres=c, radii=r)
+
+    def __call__(self, points: Array) -> tuple[Array, Array]:
+        """Distances (N,) from ``points`` (N, 3) to the nearest sphere, and closest points."""
+        p = np.asarray(points, dtype=float).reshape(-1, 3)
+        if self.radii.shape[0] == 0:
+            return np.full(len(p), np.inf), np.full(p.shape, np.nan)
+        if self.radii.shape[0] == 1:  # the usual case, in a third of the calls
+            centre, radius = self.centres[0], self.radii[0]
+            diff1 = p - centre
+            norm1 = np.sqrt(_dot(diff1, diff1))
+            scale1 = radius / np.maximum(norm1, 1e-12)
+            return norm1 - radius, centre + diff1 * scale1[:, None]
+        diff = p[:, None, :] - self.centres  # (N, M, 3), sphere centre to point
+        norm = np.sqrt(np.einsum("nmk,nmk->nm", diff, diff))
+        gaps = norm - self.radii
+        rows = np.arange(len(p))
+        j = np.argmin(gaps, axis=1)  # the first of equals, as the kernel
+        d = diff[rows, j]
+        scale = self.radii[j] / np.maximum(norm[rows, j], 1e-12)
+        return gaps[rows, j], self.centres[j] + d * scale[:, None]
 
 
 def potential(

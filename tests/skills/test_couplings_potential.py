@@ -10,7 +10,7 @@ from numpy.testing import assert_allclose
 
 from skills import quaternion as quat
 from skills.coupling import CouplingTerm
-from skills.couplings import PotentialFieldAvoidance
+from skills.couplings import PotentialFieldAvoidance, SphereObstacles
 from skills.couplings.potential import point_accelerations, potential
 from skills.pose_dmp import PoseFloats, PoseModel, PoseState
 from skills.types import Array
@@ -210,3 +210,44 @@ def test_scalar_path_is_zero_without_points_or_nearby_obstacles() -> None:
     assert one_point().with_points(np.zeros((0, 3))).scalar_acceleration(s, TARGET) == (0.0,) * 6
     far = one_point().with_query(lambda p: (np.full(len(p), 10.0), p + 10.0))
     assert far.scalar_acceleration(s, TARGET) == (0.0,) * 6
+
+
+def test_sphere_obstacles_give_each_point_its_nearest_surface() -> None:
+    spheres = SphereObstacles([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]], [0.1, 0.3])
+    points = np.array([[0.0, 0.5, 0.0], [1.0, 0.0, 0.5], [0.6, 0.0, 0.0], [1.1, 0.0, 0.0]])
+    d, c = spheres(points)
+    # 0.4 above the first; 0.2 above the second; between them 0.5 - 0.1 = 0.4 from the first,
+    # 0.4 - 0.3 = 0.1 from the second; inside the second, 0.1 from its centre: -0.2.
+    assert_allclose(d, [0.4, 0.2, 0.1, -0.2], atol=1e-15)
+    assert_allclose(
+        c, [[0.0, 0.1, 0.0], [1.0, 0.0, 0.3], [0.7, 0.0, 0.0], [1.3, 0.0, 0.0]], atol=1e-15
+    )
+
+
+def test_sphere_obstacles_without_spheres_are_infinitely_far() -> None:
+    d, c = SphereObstacles(np.zeros((0, 3)), [])(np.ones((2, 3)))
+    assert np.all(np.isinf(d)) and np.all(np.isnan(c))
+    field = PotentialFieldAvoidance(SphereObstacles(np.zeros((0, 3)), []), [[0.1, 0.0, 0.0]])
+    lin, ang = field.acceleration(state([0.0, 0.0, 0.0], [1.0, 0.0, 0.0]), TARGET)
+    assert not np.any(lin) and not np.any(ang)
+
+
+def test_sphere_obstacles_name_bad_fields() -> None:
+    with pytest.raises(ValueError, match="radii: expected one radius per centre"):
+        SphereObstacles([[0.0, 0.0, 0.0]], [0.1, 0.2])
+    with pytest.raises(ValueError, match="radii: expected values >= 0"):
+        SphereObstacles([[0.0, 0.0, 0.0]], [-0.1])
+    with pytest.raises(ValueError, match="centres: expected finite values"):
+        SphereObstacles([[0.0, np.nan, 0.0]], [0.1])
+
+
+def test_a_field_on_sphere_obstacles_is_the_field_on_their_query() -> None:
+    pts = [[0.0, 0.1, 0.0], [0.1, -0.1, 0.05]]
+    closed = PotentialFieldAvoidance(SphereObstacles(OBSTACLE[None], [RADIUS]), pts, gain=0.1)
+    by_hand = PotentialFieldAvoidance(sphere, pts, gain=0.1)
+    s = state([0.2, 0.0, 0.0], [0.4, 0.05, 0.0], 0.3, (0.0, 0.0, 0.5))
+    for got, want in zip(
+        closed.acceleration(s, TARGET), by_hand.acceleration(s, TARGET), strict=True
+    ):
+        assert_allclose(got, want, rtol=1e-12, atol=1e-15)
+    assert np.linalg.norm(closed.acceleration(s, TARGET)[0]) > 0.0
