@@ -9,8 +9,10 @@ state. It includes the field's distance query to the obstacle, a sphere
 ``step_us`` is the float (numpy) path. ``compiled_step_us`` is the same composition compiled
 with numba (``DualArmComposer.start(..., compiled=True)``), which evaluates the sphere query
 inside its kernel; ``compiled_callback_step_us`` is the compiled step with the same query
-behind a plain Python callable, as an FCL query would be. Both must match the float path
-within 1e-9 (``compiled_max_diff``: the largest difference in the states and commands).
+behind a plain Python callable, as an FCL query would be; ``compiled_rollout_step_us`` is a
+step of an open-loop rollout of the rest of the move (150 steps) in one compiled call
+(``DualArmComposer.rollout``). All must match the float path within 1e-9
+(``compiled_max_diff``: the largest difference in the states and commands).
 ``compile_s`` is the compiled step's first call: numba compiles, or loads its on-disk cache.
 The compiled figures are None without numba. With ``--json`` the last line is the JSON of
 these figures and ``fit_ms``; medians of repeats. Targets: step <= 50 us with numpy,
@@ -153,6 +155,7 @@ def main() -> int:
         "step_us": round(step_s * 1e6, 1),
         "compiled_step_us": None,
         "compiled_callback_step_us": None,
+        "compiled_rollout_step_us": None,
         "compiled_max_diff": None,
         "compile_s": None,
         "query_us": round(query_s * 1e6, 1),
@@ -174,10 +177,27 @@ def main() -> int:
             figures[key] = round(
                 median_time(partial(twin.step, dt, state), repeats=15, inner=300) * 1e6, 1
             )
+        steps = 150  # the rest of the move, open loop, in one call
+        start = fast.state
+        want = c.rollout(steps, dt).values
+        fast.state = start
+        diffs.append(float(np.abs(fast.rollout(steps, dt).values - want).max()))
+
+        def rollout() -> None:
+            fast.state = start
+            fast.rollout(steps, dt)
+
+        figures["compiled_rollout_step_us"] = round(
+            median_time(rollout, repeats=15, inner=10) / steps * 1e6, 2
+        )
         figures["compiled_max_diff"] = max(diffs)
         print(
             f"  compiled (numba): {figures['compiled_step_us']} us (stretch target <= 10); "
             f"with the query called from Python: {figures['compiled_callback_step_us']} us"
+        )
+        print(
+            f"  compiled open-loop rollout of {steps} steps in one call: "
+            f"{figures['compiled_rollout_step_us']} us a step"
         )
         print(
             f"  largest difference from numpy {figures['compiled_max_diff']:.1e} (<= 1e-9); "

@@ -424,3 +424,20 @@ def step(
         integrate(x, STATE * sp, acc[sp], dt, out)
         out[PHASES + sp] = x[PHASES + sp] * math.exp(-spaces[sp, 11] * dt / spaces[sp, 10])
     commands(out)
+
+
+@kernel
+def rollout(
+    x: Array,
+    spaces: Array,
+    program: Array,
+    data: Array,
+    extra: Array,
+    dt: float,
+    out: Array,
+) -> None:
+    """``out.shape[0]`` steps open loop from ``x``: row ``i`` of ``out`` (N, 92) is step ``i``'s
+    ``out``. Only for terms that all have kernels (``extra`` is constant)."""
+    step(x, spaces, program, data, extra, dt, out[0])
+    for i in range(1, out.shape[0]):
+        step(out[i - 1], spaces, program, data, extra, dt, out[i])

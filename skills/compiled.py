@@ -38,7 +38,15 @@ from skills.couplings.potential import DistanceQuery, PotentialFieldAvoidance, S
 from skills.couplings.steering import ObstacleSteering
 from skills.dmp import DMPParams
 from skills.labels import Arm
-from skills.pose_dmp import LearntForcing, PoseFloats, PoseModel, PoseState, PoseTarget, Weighted
+from skills.pose_dmp import (
+    LearntForcing,
+    PoseFloats,
+    PoseModel,
+    PoseState,
+    PoseTarget,
+    Weighted,
+    state_from,
+)
 from skills.types import Array
 
 #: Where the commands start in a step's output, and its size.
@@ -246,6 +254,26 @@ class CompiledStep:
             tuple(others),
         )
 
+    def rollout(
+        self, current: Sequence[PoseState], dt: float, steps: int, values: Array | None = None
+    ) -> Array:
+        """``steps`` steps open loop: row ``i`` (of ``(steps, SIZE)``) is step ``i``'s output.
+
+        One call into compiled code when every term has a kernel and no query runs in Python;
+        else one call per step. Arguments as :meth:`__call__`.
+        """
+        out = np.empty((steps, SIZE))
+        if steps == 0:
+            return out
+        if self.queries or self.others:
+            out[0] = self(current, dt, values)
+            for i in range(1, steps):
+                out[i] = self(_states(out[i - 1]), dt, out[i - 1])
+            return out
+        x = _values(current) if values is None else values
+        k.rollout(x, self.spaces, self.program, self.data, _NOTHING, float(dt), out)
+        return out
+
     def __call__(
         self, current: Sequence[PoseState], dt: float, values: Array | None = None
     ) -> Array:
@@ -261,16 +289,12 @@ class CompiledStep:
             The buffer ``current`` is views of (its 57 values, then its 3 phases), if any:
             saves reading the 18 arrays.
         """
-        if values is None:
-            o, left, right = current
-            x = np.concatenate((*o[:6], *left[:6], *right[:6], (o.phase, left.phase, right.phase)))
-        else:
-            x = values
+        x = _values(current) if values is None else values
         data = self.data
         for q in self.queries:
             points = k.world_points(x, k.STATE * q.space, data, q.offset)
             _write_query(q, data, *q.query(points))
-        extra = np.zeros((3, 6))
+        extra = np.zeros((3, 6)) if self.others else _NOTHING
         for other in self.others:
             a = other.evaluate(PoseFloats.of(current[other.space]), other.target)
             if other.weight != 1.0:
@@ -279,6 +303,26 @@ class CompiledStep:
         out = np.empty(SIZE)
         k.step(x, self.spaces, self.program, data, extra, float(dt), out)
         return out
+
+
+#: No accelerations from terms without kernels (read-only: never written).
+_NOTHING = np.zeros((3, 6))
+_NOTHING.setflags(write=False)
+
+
+def _values(current: Sequence[PoseState]) -> Array:
+    """The three states' arrays end to end, then their phases (60 floats)."""
+    o, left, right = current
+    return np.concatenate((*o[:6], *left[:6], *right[:6], (o.phase, left.phase, right.phase)))
+
+
+def _states(values: Array) -> tuple[PoseState, PoseState, PoseState]:
+    phases = values[k.PHASES : k.PHASES + 3].tolist()
+    return (
+        state_from(values, phases[0]),
+        state_from(values, phases[1], k.STATE),
+        state_from(values, phases[2], 2 * k.STATE),
+    )
 
 
 def _write_query(q: _Query, data: Array, distances: Array, closest: Array) -> None:

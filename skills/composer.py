@@ -107,6 +107,65 @@ class PalmCommands:
     object_twist: Array
 
 
+#: The layout of one step's output (:class:`Rollout`): three states' values, their phases,
+#: then the commands (palm positions 2 x 3, orientations 2 x 4, twists 2 x 6, object twist).
+PHASES = 3 * STATE_SIZE
+COMMANDS = PHASES + 3
+ROW_SIZE = COMMANDS + 32
+
+
+@dataclass(frozen=True)
+class Rollout:
+    """An open-loop rollout of a composition: the state and commands after each step.
+
+    Attributes
+    ----------
+    values : ndarray, shape (N, 92)
+        One row per step: the object's, the left and the right palm's
+        :data:`skills.pose_dmp.StateValues` (19 floats each), their phases, then the
+        commands (palm positions 2 x 3, orientations 2 x 4, twists 2 x 6, object twist 6).
+    """
+
+    values: Array
+
+    def __len__(self) -> int:
+        return int(self.values.shape[0])
+
+    @property
+    def object_positions(self) -> Array:
+        """``object2world`` positions, (N, 3), m."""
+        return self.values[:, 0:3]
+
+    @property
+    def object_orientations(self) -> Array:
+        """``object2world`` orientations, (N, 4)."""
+        return self.values[:, 9:13]
+
+    @property
+    def palm_positions(self) -> Array:
+        """``palm2world`` positions, left then right, (N, 2, 3), m."""
+        return self.values[:, COMMANDS : COMMANDS + 6].reshape(-1, 2, 3)
+
+    @property
+    def palm_orientations(self) -> Array:
+        """``palm2world`` orientations, (N, 2, 4)."""
+        return self.values[:, COMMANDS + 6 : COMMANDS + 14].reshape(-1, 2, 4)
+
+    @property
+    def palm_twists(self) -> Array:
+        """Palm twists (linear, angular), world frame, (N, 2, 6)."""
+        return self.values[:, COMMANDS + 14 : COMMANDS + 26].reshape(-1, 2, 6)
+
+    def state(self, i: int) -> DualArmState:
+        """The full state after step ``i``."""
+        row = self.values[i]
+        return _cut(row, *row[PHASES:COMMANDS].tolist())
+
+    def commands(self, i: int) -> PalmCommands:
+        """The commands of step ``i``."""
+        return _commands(self.values[i])
+
+
 @dataclass
 class DualArmComposer:
     """Runs one composition of absolute and relative skills for one move.
@@ -214,13 +273,8 @@ class DualArmComposer:
         if plan.compiled is not None:
             states = (current.object, current.left, current.right)
             out = plan.compiled(states, dt, current._values)
-            self.state = _cut(out, *out[57:60].tolist())
-            return PalmCommands(
-                out[60:66].reshape(2, 3),
-                out[66:74].reshape(2, 4),
-                out[74:86].reshape(2, 6),
-                out[86:92],
-            )
+            self.state = _cut(out, *out[PHASES:COMMANDS].tolist())
+            return _commands(out)
         obj, obj_phase = plan.obj(current.object, dt)
         left, left_phase = plan.left(current.left, dt)
         right, right_phase = plan.right(current.right, dt)
@@ -228,6 +282,41 @@ class DualArmComposer:
         values = np.array((*obj, *left, *right, obj_phase, left_phase, right_phase))
         self.state = _cut(values, obj_phase, left_phase, right_phase)
         return palm_commands(obj, left, right)
+
+    def rollout(self, steps: int, dt: float) -> Rollout:
+        """Step ``steps`` times open loop from the current state (which ends at the last).
+
+        Compiled, and with every term compiled, the whole rollout is one call into compiled
+        code; otherwise it is :meth:`step` ``steps`` times.
+
+        Raises
+        ------
+        ValueError
+            If ``steps`` is not an integer >= 0.
+        """
+        if isinstance(steps, bool) or not isinstance(steps, int | np.integer) or steps < 0:
+            raise ValueError(f"steps: expected an integer >= 0, got {steps!r}")
+        plan = self._resolved()
+        if plan.compiled is not None:
+            s = self.state
+            states = (s.object, s.left, s.right)
+            values = plan.compiled.rollout(states, dt, int(steps), s._values)
+            if steps:
+                self.state = _cut(values[-1], *values[-1, PHASES:COMMANDS].tolist())
+            return Rollout(values)
+        values = np.empty((int(steps), ROW_SIZE))
+        for row in values:
+            cmd = self.step(dt)
+            row[:COMMANDS] = self.state._values
+            row[COMMANDS:] = np.concatenate(
+                (
+                    cmd.positions.ravel(),
+                    cmd.orientations.ravel(),
+                    cmd.twists.ravel(),
+                    cmd.object_twist,
+                )
+            )
+        return Rollout(values)
 
     def commands(self) -> PalmCommands:
         """Palm poses and twists for the current state."""
@@ -258,6 +347,17 @@ def _cut(values: Array, *phases: float) -> DualArmState:
     )
     object.__setattr__(state, "_values", values)
     return state
+
+
+def _commands(row: Array) -> PalmCommands:
+    """The commands in one step's output row (views)."""
+    c = COMMANDS
+    return PalmCommands(
+        row[c : c + 6].reshape(2, 3),
+        row[c + 6 : c + 14].reshape(2, 4),
+        row[c + 14 : c + 26].reshape(2, 6),
+        row[c + 26 : c + 32],
+    )
 
 
 def _scalar_terms(terms: Sequence[Weighted]) -> tuple[WeightedScalar, ...]:

@@ -137,19 +137,14 @@ class PathClear(WorldLeaf):
             transport_weight=float(self.get_input("transport_weight")),
         )
         n = int(np.ceil((composer.target.tau + 0.5) / self.control_dt))
-        obj_p, obj_q, palm_p, palm_q = [], [], [], []
-        for _ in range(n):
-            cmd = composer.step(self.control_dt)
-            obj_p.append(composer.state.object.position)
-            obj_q.append(composer.state.object.orientation)
-            palm_p.append(cmd.positions)
-            palm_q.append(cmd.orientations)
+        path = composer.rollout(n, self.control_dt)
+        obj_p = path.object_positions
         check = world.check_trajectory(
             name,
-            np.array(obj_p),
-            np.array(obj_q),
-            np.array(palm_p),
-            np.array(palm_q),
+            obj_p,
+            path.object_orientations,
+            path.palm_positions,
+            path.palm_orientations,
             float(self.get_input("margin_m")),
         )
         if check.clear:
@@ -158,5 +153,5 @@ class PathClear(WorldLeaf):
         where = np.round(obj_p[k], 3).tolist()
         return self.fail(
             f"predicted collision at step {k} (object at {where}, "
-            f"palms at {np.round(palm_p[k], 3).tolist()}): {check.detail}"
+            f"palms at {np.round(path.palm_positions[k], 3).tolist()}): {check.detail}"
         )

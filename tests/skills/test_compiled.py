@@ -6,11 +6,18 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from numpy.testing import assert_allclose
+from numpy.testing import assert_allclose, assert_array_equal
 
 from skills import _kernels
 from skills import quaternion as quat
-from skills.composer import DualArmComposer, DualArmState, PalmCommands
+from skills.composer import (
+    COMMANDS,
+    PHASES,
+    ROW_SIZE,
+    DualArmComposer,
+    DualArmState,
+    PalmCommands,
+)
 from skills.couplings import (
     DistanceQuery,
     GraspMaintenance,
@@ -222,3 +229,52 @@ def test_the_float_path_is_the_default() -> None:
     composer = DualArmComposer.start(start_state(), [0.7, 0.0, 0.7], quat.IDENTITY, 1.0)
     assert composer.compiled is False
     assert PoseModel.still().params == composer.base.params
+
+
+def test_a_rollout_is_the_steps_one_after_another() -> None:
+    composer = full_composition()
+    stepped = replace(composer)
+    rollout = composer.rollout(30, DT)
+    assert len(rollout) == 30
+    for i in range(30):
+        cmd = stepped.step(DT)
+        assert_array_equal(rollout.palm_positions[i], cmd.positions)
+        assert_array_equal(rollout.palm_orientations[i], cmd.orientations)
+        assert_array_equal(rollout.palm_twists[i], cmd.twists)
+        assert_array_equal(rollout.commands(i).object_twist, cmd.object_twist)
+        assert_array_equal(rollout.object_positions[i], stepped.state.object.position)
+        assert_array_equal(rollout.object_orientations[i], stepped.state.object.orientation)
+        for got, want in zip(rollout.state(i).right, stepped.state.right, strict=True):
+            assert_array_equal(got, want)
+    for got, want in zip(composer.state.object, stepped.state.object, strict=True):
+        assert_array_equal(got, want)  # the composer ends at the last state
+
+
+def test_a_rollout_of_no_steps_and_bad_counts() -> None:
+    composer = full_composition()
+    before = composer.state
+    assert len(composer.rollout(0, DT)) == 0
+    assert composer.state is before
+    for bad in (-1, 2.5, True):
+        with pytest.raises(ValueError, match="steps: expected an integer >= 0"):
+            composer.rollout(bad, DT)  # type: ignore[arg-type]
+
+
+@needs_numba
+@pytest.mark.parametrize("in_kernel", [True, False])
+def test_a_compiled_rollout_matches_the_float_rollout(in_kernel: bool) -> None:
+    # All terms with kernels and spheres queried inside: one call for the whole rollout.
+    # Otherwise (a Python query, terms without kernels) one call per step.
+    centres, radii = np.array([OBSTACLE, [0.62, -0.02, 0.70]]), [0.04, 0.03]
+    points = np.array([[0.05, 0.1, 0.05], [0.0, -0.1, 0.0], [0.1, 0.0, 0.1]])
+    query = SphereObstacles(centres, radii) if in_kernel else sphere
+    composer = avoidance_only(centres, radii, points, query)
+    fast = compiled_twin(composer)
+    want, got = composer.rollout(90, DT), fast.rollout(90, DT)
+    assert_allclose(got.values, want.values, rtol=RELATIVE, atol=TOLERANCE)
+    assert fast.state.object.phase == pytest.approx(composer.state.object.phase, abs=1e-15)
+    assert_allclose(fast.state.object.position, composer.state.object.position, atol=TOLERANCE)
+
+
+def test_the_kernels_write_the_rows_the_rollout_reads() -> None:
+    assert (_kernels.PHASES, _kernels.COMMANDS, _kernels.SIZE) == (PHASES, COMMANDS, ROW_SIZE)
