@@ -70,7 +70,9 @@ SMALL = 1e-12
 
 
 @kernel
-def rotation_error(gx: float, gy: float, gz: float, gw: float, x: Array, at: int) -> Array:
+def rotation_error(
+    gx: float, gy: float, gz: float, gw: float, x: Array, at: int
+) -> tuple[float, float, float]:
     """``2 log(g conj(q))`` the short way, q at ``x[at:at + 4]``."""
     qx, qy, qz, qw = x[at], x[at + 1], x[at + 2], x[at + 3]
     ex = -gw * qx + gx * qw - gy * qz + gz * qy
@@ -81,11 +83,7 @@ def rotation_error(gx: float, gy: float, gz: float, gw: float, x: Array, at: int
         ex, ey, ez, ew = -ex, -ey, -ez, -ew
     vn = math.sqrt(ex * ex + ey * ey + ez * ez)
     sc = 2.0 * math.atan2(vn, ew) / vn if vn > SMALL else 2.0
-    out = np.empty(3)
-    out[0] = ex * sc
-    out[1] = ey * sc
-    out[2] = ez * sc
-    return out
+    return (ex * sc, ey * sc, ez * sc)
 
 
 @kernel
@@ -116,15 +114,20 @@ def forcing(s: float, data: Array, o: int, psi: Array, base: bool, a: Array) -> 
     size = int(data[o + 1])
     tau = data[o + 2]
     weights = o + 4
-    raw = np.zeros(7)
+    r0 = r1 = r2 = r3 = r4 = r5 = r6 = 0.0
     for i in range(size):
         row = weights + 7 * i
-        for j in range(7):
-            raw[j] += psi[i] * data[row + j]
-    total = max(raw[6], 1e-300)
+        p = psi[i]
+        r0 += p * data[row]
+        r1 += p * data[row + 1]
+        r2 += p * data[row + 2]
+        r3 += p * data[row + 3]
+        r4 += p * data[row + 4]
+        r5 += p * data[row + 5]
+        r6 += p * data[row + 6]
+    total = max(r6, 1e-300)
     k = s * (1.0 / (tau * tau)) / total if base else s / (total * tau * tau)
-    for j in range(6):
-        a[j] = raw[j] * k
+    a[0], a[1], a[2], a[3], a[4], a[5] = r0 * k, r1 * k, r2 * k, r3 * k, r4 * k, r5 * k
 
 
 @kernel
@@ -167,20 +170,20 @@ def steering(x: Array, b: int, data: Array, o: int, a: Array) -> None:
 
 
 @kernel
-def rotation_matrix(x: Array, at: int) -> Array:
+def rotation_matrix(x: Array, at: int) -> tuple[float, ...]:
     """Row-major rotation matrix (9) of the quaternion at ``x[at:at + 4]``."""
     qx, qy, qz, qw = x[at], x[at + 1], x[at + 2], x[at + 3]
-    m = np.empty(9)
-    m[0] = 1 - 2 * (qy * qy + qz * qz)
-    m[1] = 2 * (qx * qy - qz * qw)
-    m[2] = 2 * (qx * qz + qy * qw)
-    m[3] = 2 * (qx * qy + qz * qw)
-    m[4] = 1 - 2 * (qx * qx + qz * qz)
-    m[5] = 2 * (qy * qz - qx * qw)
-    m[6] = 2 * (qx * qz - qy * qw)
-    m[7] = 2 * (qy * qz + qx * qw)
-    m[8] = 1 - 2 * (qx * qx + qy * qy)
-    return m
+    return (
+        1 - 2 * (qy * qy + qz * qz),
+        2 * (qx * qy - qz * qw),
+        2 * (qx * qz + qy * qw),
+        2 * (qx * qy + qz * qw),
+        1 - 2 * (qx * qx + qz * qz),
+        2 * (qy * qz - qx * qw),
+        2 * (qx * qz - qy * qw),
+        2 * (qy * qz + qx * qw),
+        1 - 2 * (qx * qx + qy * qy),
+    )
 
 
 @kernel

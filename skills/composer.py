@@ -61,6 +61,13 @@ if TYPE_CHECKING:
     from skills.compiled import CompiledStep
 
 
+#: The layout of one step's output (:class:`Rollout`): three states' values, their phases,
+#: then the commands (palm positions 2 x 3, orientations 2 x 4, twists 2 x 6, object twist).
+PHASES = 3 * STATE_SIZE
+COMMANDS = PHASES + 3
+ROW_SIZE = COMMANDS + 32
+
+
 @dataclass(frozen=True)
 class DualArmState:
     """Full state of the closed chain: the object in the world and each palm in {O}.
@@ -79,6 +86,30 @@ class DualArmState:
     #: The buffer the composer cut this state out of, when it did (its three states' values
     #: then their phases): read back whole by the compiled step. Not copied by ``replace``.
     _values: Array | None = field(default=None, init=False, repr=False, compare=False)
+
+    @staticmethod
+    def cut_from(values: Array) -> DualArmState:
+        """The state whose arrays are views of ``values`` (3 x 19 floats, then 3 phases).
+
+        The views are made on first use: a closed control loop steps from measured states
+        and reads only the commands, and eighteen views cost more than a compiled step.
+        """
+        state = object.__new__(DualArmState)
+        object.__setattr__(state, "_values", values)
+        return state
+
+    if not TYPE_CHECKING:  # typed as the dataclass's fields; only reached before first use
+
+        def __getattr__(self, name: str) -> PoseState:
+            values = self.__dict__.get("_values")
+            if values is None or name not in ("object", "left", "right"):
+                raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+            phases = values[PHASES : PHASES + 3].tolist()
+            for at, (key, phase) in enumerate(
+                zip(("object", "left", "right"), phases, strict=True)
+            ):
+                object.__setattr__(self, key, state_from(values, phase, at * STATE_SIZE))
+            return self.__dict__[name]
 
     def relative(self, arm: Arm) -> PoseState:
         """The palm's state in {O}."""
@@ -105,13 +136,6 @@ class PalmCommands:
     orientations: Array
     twists: Array
     object_twist: Array
-
-
-#: The layout of one step's output (:class:`Rollout`): three states' values, their phases,
-#: then the commands (palm positions 2 x 3, orientations 2 x 4, twists 2 x 6, object twist).
-PHASES = 3 * STATE_SIZE
-COMMANDS = PHASES + 3
-ROW_SIZE = COMMANDS + 32
 
 
 @dataclass(frozen=True)
@@ -159,7 +183,7 @@ class Rollout:
     def state(self, i: int) -> DualArmState:
         """The full state after step ``i``."""
         row = self.values[i]
-        return _cut(row, *row[PHASES:COMMANDS].tolist())
+        return DualArmState.cut_from(row)
 
     def commands(self, i: int) -> PalmCommands:
         """The commands of step ``i``."""
@@ -273,14 +297,14 @@ class DualArmComposer:
         if plan.compiled is not None:
             states = (current.object, current.left, current.right)
             out = plan.compiled(states, dt, current._values)
-            self.state = _cut(out, *out[PHASES:COMMANDS].tolist())
+            self.state = DualArmState.cut_from(out)
             return _commands(out)
         obj, obj_phase = plan.obj(current.object, dt)
         left, left_phase = plan.left(current.left, dt)
         right, right_phase = plan.right(current.right, dt)
         # One allocation; the states are views into it.
         values = np.array((*obj, *left, *right, obj_phase, left_phase, right_phase))
-        self.state = _cut(values, obj_phase, left_phase, right_phase)
+        self.state = DualArmState.cut_from(values)
         return palm_commands(obj, left, right)
 
     def rollout(self, steps: int, dt: float) -> Rollout:
@@ -302,7 +326,7 @@ class DualArmComposer:
             states = (s.object, s.left, s.right)
             values = plan.compiled.rollout(states, dt, int(steps), s._values)
             if steps:
-                self.state = _cut(values[-1], *values[-1, PHASES:COMMANDS].tolist())
+                self.state = DualArmState.cut_from(values[-1])
             return Rollout(values)
         values = np.empty((int(steps), ROW_SIZE))
         for row in values:
@@ -336,17 +360,6 @@ class DualArmComposer:
         if plan is None or not all(map(operator.is_, plan.configuration, config)):
             plan = self._plan = _Plan.of(self, config)
         return plan
-
-
-def _cut(values: Array, *phases: float) -> DualArmState:
-    """The dual-arm state whose arrays are views of ``values`` (3 x 19 floats, 3 phases)."""
-    state = DualArmState(
-        state_from(values, phases[0]),
-        state_from(values, phases[1], STATE_SIZE),
-        state_from(values, phases[2], 2 * STATE_SIZE),
-    )
-    object.__setattr__(state, "_values", values)
-    return state
 
 
 def _commands(row: Array) -> PalmCommands:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import pickle
 from dataclasses import replace
 
 import numpy as np
@@ -28,7 +29,7 @@ from skills.couplings import (
 from skills.default_library import build_default_library
 from skills.dual_arm import ARMS, GraspGeometry
 from skills.labels import Action
-from skills.pose_dmp import PoseModel, Weighted
+from skills.pose_dmp import PoseModel, PoseState, Weighted
 from skills.types import Array
 from tests.skills.test_composer import (
     DT,
@@ -278,3 +279,37 @@ def test_a_compiled_rollout_matches_the_float_rollout(in_kernel: bool) -> None:
 
 def test_the_kernels_write_the_rows_the_rollout_reads() -> None:
     assert (_kernels.PHASES, _kernels.COMMANDS, _kernels.SIZE) == (PHASES, COMMANDS, ROW_SIZE)
+
+
+def test_a_state_cut_from_a_buffer_reads_as_the_views_it_stands_for() -> None:
+    composer = full_composition()
+    composer.step(DT)
+    lazy = composer.state
+    assert "object" not in vars(lazy)  # nothing cut yet
+    values = lazy._values
+    assert values is not None
+    eager = DualArmState(
+        *(
+            PoseState(
+                values[b : b + 3],
+                values[b + 3 : b + 6],
+                values[b + 6 : b + 9],
+                values[b + 9 : b + 13],
+                values[b + 13 : b + 16],
+                values[b + 16 : b + 19],
+                float(values[PHASES + i]),
+            )
+            for i, b in enumerate((0, 19, 38))
+        )
+    )
+    for got, want in zip(
+        (lazy.object, lazy.left, lazy.right), (eager.object, eager.left, eager.right), strict=True
+    ):
+        for a, b in zip(got, want, strict=True):
+            assert_array_equal(a, b)
+    assert lazy.right.position.base is values  # views, not copies
+    assert repr(lazy) == repr(eager)
+    restored = pickle.loads(pickle.dumps(composer.step(DT) and composer.state))
+    assert_array_equal(restored.left.velocity, composer.state.left.velocity)
+    with pytest.raises(AttributeError, match="has no attribute 'middle'"):
+        lazy.middle  # type: ignore[attr-defined]  # noqa: B018
