@@ -28,7 +28,7 @@ from __future__ import annotations
 import operator
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -116,9 +116,11 @@ class DualArmState:
         return self.left if arm is Arm.LEFT else self.right
 
 
-@dataclass(frozen=True)
-class PalmCommands:
+class PalmCommands(NamedTuple):
     """What the controller should track this step.
+
+    Immutable (a named tuple, as :class:`skills.pose_dmp.PoseState`: it is created every
+    control step, and cheaply).
 
     Attributes
     ----------
