@@ -27,10 +27,12 @@ from skills.couplings import (
     SphereObstacles,
 )
 from skills.default_library import build_default_library
+from skills.dmp import DMPParams
 from skills.dual_arm import ARMS, GraspGeometry
 from skills.labels import Action
-from skills.pose_dmp import PoseModel, PoseState, Weighted
+from skills.pose_dmp import LearntForcing, PoseModel, PoseState, Weighted, fit_pose
 from skills.types import Array
+from tests.skills.conftest import pick_place_demo
 from tests.skills.test_composer import (
     DT,
     OBSTACLE,
@@ -313,3 +315,17 @@ def test_a_state_cut_from_a_buffer_reads_as_the_views_it_stands_for() -> None:
     assert_array_equal(restored.left.velocity, composer.state.left.velocity)
     with pytest.raises(AttributeError, match="has no attribute 'middle'"):
         lazy.middle  # type: ignore[attr-defined]  # noqa: B018
+
+
+@needs_numba
+def test_other_gains_and_bases_of_two_sizes_match() -> None:
+    # A forced base on 20 basis functions with its own gains, a learnt term on 50: the
+    # kernel keeps one activation buffer for the larger and one table per basis.
+    params = DMPParams(alpha=30.0, alpha_s=3.0, n_basis=20)
+    base = fit_pose(pick_place_demo(), params)
+    s = start_state()
+    goal = ([0.7, 0.1, 0.7], quat.from_axis_angle([0.0, 0.0, 1.0], 0.3))
+    learnt = build_default_library().first(Action.TRANSPORT).pose_model()
+    still = DualArmComposer.start(s, *goal, 2.0, [(LearntForcing(learnt), 0.5)], params=params)
+    target = base.target(s.object.position, s.object.orientation, *goal, 2.0)
+    run_both(replace(still, base=base, target=target), 100)
