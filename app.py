@@ -19,6 +19,10 @@ import numpy as np
 EXIT_OK = 0
 EXIT_FAILURE = 1
 EXIT_BAD_INPUT = 2
+COMPILED_HELP = (
+    "compose compiled (numba, the fast extra), as the world file's sim.compiled: within 1e-9 "
+    "of the numpy path"
+)
 
 
 def _demo_command(args: argparse.Namespace) -> int:
@@ -134,6 +138,24 @@ def _load_world_or_exit(path: str) -> Any:
     except WorldFileError as err:
         print(err, file=sys.stderr)
         raise SystemExit(EXIT_BAD_INPUT) from None
+
+
+def _with_compiled_or_exit(world: Any, path: str, flag: bool) -> Any:
+    """The world composing compiled when ``--compiled`` or its ``sim.compiled`` asks; exit 2
+    when numba, which that needs, is not installed."""
+    from skills.compiled import available
+
+    if flag:
+        world = world.model_copy(update={"sim": world.sim.model_copy(update={"compiled": True})})
+    if world.sim.compiled and not available():
+        where = "--compiled" if flag else f"{path}: sim.compiled"
+        print(
+            f"{where}: the compiled composition step needs numba, which is not installed; "
+            "install it with pip install -e '.[fast]'",
+            file=sys.stderr,
+        )
+        raise SystemExit(EXIT_BAD_INPUT)
+    return world
 
 
 def _affordances_command(args: argparse.Namespace) -> int:
@@ -273,7 +295,7 @@ def _run_command(args: argparse.Namespace) -> int:
     from worlds.episode import run_episode
     from worlds.scene import NoDisplayError
 
-    world = _load_world_or_exit(args.world)
+    world = _with_compiled_or_exit(_load_world_or_exit(args.world), args.world, args.compiled)
     if args.seed is not None:
         world = world.model_copy(update={"sim": world.sim.model_copy(update={"seed": args.seed})})
     out = Path(args.out)
@@ -321,7 +343,7 @@ def _trials_command(args: argparse.Namespace) -> int:
     """The paper's experiment: N trials of three moves with new obstacles, judged, resumable."""
     from worlds.trials import campaign_results, reason_of, run_campaign, summarise
 
-    world = _load_world_or_exit(args.world)
+    world = _with_compiled_or_exit(_load_world_or_exit(args.world), args.world, args.compiled)
     if args.n < 1 or args.workers < 1:
         print("--n, --workers: expected positive whole numbers", file=sys.stderr)
         return EXIT_BAD_INPUT
@@ -336,7 +358,7 @@ def _trials_command(args: argparse.Namespace) -> int:
             print(err, file=sys.stderr)
             return EXIT_BAD_INPUT
     out = Path(args.out)
-    earlier = campaign_results(out / "results.jsonl", args.seed, tree).values()
+    earlier = campaign_results(out / "results.jsonl", args.seed, tree, world.sim.compiled).values()
     tally = {"ok": sum(1 for r in earlier if r.get("success"))}
 
     def progress(rec: dict[str, Any], finished: int, total: int) -> None:
@@ -432,6 +454,7 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--gui", action="store_true", help="show PyBullet's window (needs a display)")
     run.add_argument("--no-animation", action="store_true", help="skip the GIF (faster)")
     run.add_argument("--json", action="store_true", help="print a JSON summary as the last line")
+    run.add_argument("--compiled", action="store_true", help=COMPILED_HELP)
     run.set_defaults(handler=_run_command)
     trials = sub.add_parser("trials", help="the paper's experiment: many randomised trials")
     trials.add_argument("world", help="world file (robot, table, object, settings)")
@@ -448,6 +471,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     trials.add_argument("--out", default="out/trials", help="folder of results.jsonl")
     trials.add_argument("--json", action="store_true", help="print a JSON summary as the last line")
+    trials.add_argument("--compiled", action="store_true", help=COMPILED_HELP)
     trials.set_defaults(handler=_trials_command)
     skills = sub.add_parser("skills", help="list a skill library")
     skills.add_argument("--library", help="library folder (default: learnt from skills/demos)")

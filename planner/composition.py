@@ -299,11 +299,17 @@ def measured_dual_state(world: WorldPort, name: str) -> DualArmState:
 
 
 def static_composition(
-    state: DualArmState, relative: Mapping[Arm, list[tuple[CouplingTerm, float]]], tau: float
+    state: DualArmState,
+    relative: Mapping[Arm, list[tuple[CouplingTerm, float]]],
+    tau: float,
+    compiled: bool = False,
 ) -> DualArmComposer:
-    """Relative skills only: the object's pose is held where it is."""
+    """Relative skills only: the object's pose is held where it is (``compiled``: see
+    :meth:`skills.composer.DualArmComposer.start`)."""
     obj = state.object
-    return DualArmComposer.start(state, obj.position, obj.orientation, tau, relative=relative)
+    return DualArmComposer.start(
+        state, obj.position, obj.orientation, tau, relative=relative, compiled=compiled
+    )
 
 
 def transport_composition(
@@ -317,12 +323,14 @@ def transport_composition(
     settings: TransportSettings | None = None,
     avoid_gain: float = 1.0,
     transport_weight: float = 1.0,
+    compiled: bool = False,
 ) -> DualArmComposer:
     """The simultaneous composition of one move, starting from the handed-over state.
 
     ``avoid_gain`` multiplies the weights of obstacle steering and link-level avoidance;
     ``transport_weight`` multiplies the learnt pick-and-place's (a lower carry). A tree tries
-    such variants when a predicted path is not clear.
+    such variants when a predicted path is not clear. ``compiled``: see
+    :meth:`skills.composer.DualArmComposer.start`.
     """
     s = settings or TransportSettings()
     sel = plan.skill(Action.TRANSPORT)
@@ -339,7 +347,13 @@ def transport_composition(
     del squeeze_depth
     relative = hold_terms(plan, library, geometry, 0.0)
     return DualArmComposer.start(
-        state, move.goal.position, move.goal.orientation, tau, absolute=absolute, relative=relative
+        state,
+        move.goal.position,
+        move.goal.orientation,
+        tau,
+        absolute=absolute,
+        relative=relative,
+        compiled=compiled,
     )
 
 

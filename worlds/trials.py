@@ -263,6 +263,7 @@ def run_trial(job: tuple[dict[str, Any], int, int]) -> dict[str, Any]:
             "trial": trial,
             "seed": seed,
             "tree": base_data["tree"],
+            "compiled": base.sim.compiled,
             "obstacles": kinds,
             "failure": failure,
         }
@@ -281,18 +282,20 @@ def reason_of(failure: str) -> str:
     return failure.split(":")[0].split(" placed")[0]
 
 
-def read_results(path: Path) -> dict[int, dict[str, Any]]:
-    """Records already in ``results.jsonl`` by trial number (a torn last line is ignored)."""
-    done: dict[int, dict[str, Any]] = {}
+def read_results(path: Path) -> list[dict[str, Any]]:
+    """The records in ``results.jsonl``, in order (a torn last line is ignored); each has an
+    integer ``trial``."""
+    records: list[dict[str, Any]] = []
     if not path.exists():
-        return done
+        return records
     for line in path.read_text(encoding="utf-8").splitlines():
         try:
             rec = json.loads(line)
-            done[int(rec["trial"])] = rec
+            rec["trial"] = int(rec["trial"])
         except (json.JSONDecodeError, KeyError, TypeError, ValueError):
             continue
-    return done
+        records.append(rec)
+    return records
 
 
 def tree_key(tree: Path | None) -> str:
@@ -300,13 +303,18 @@ def tree_key(tree: Path | None) -> str:
     return str(tree.resolve()) if tree is not None else ""
 
 
-def campaign_results(path: Path, seed: int, tree: Path | None) -> dict[int, dict[str, Any]]:
-    """The records in ``results.jsonl`` of one campaign: this seed, this tree."""
+def campaign_results(
+    path: Path, seed: int, tree: Path | None, compiled: bool = False
+) -> dict[int, dict[str, Any]]:
+    """The records in ``results.jsonl`` of one campaign: this seed, this tree, composed
+    compiled or not (the same within 1e-9, but not to the bit)."""
     key = tree_key(tree)
     return {
-        t: r
-        for t, r in read_results(path).items()
-        if r.get("seed") == seed and r.get("tree", "") == key
+        r["trial"]: r  # a trial run twice (an interrupted write) counts once, the last
+        for r in read_results(path)
+        if r.get("seed") == seed
+        and r.get("tree", "") == key
+        and bool(r.get("compiled", False)) == compiled
     }
 
 
@@ -345,7 +353,7 @@ def run_campaign(
     """
     out.mkdir(parents=True, exist_ok=True)
     results = out / "results.jsonl"
-    done = campaign_results(results, seed, tree)
+    done = campaign_results(results, seed, tree, base.sim.compiled)
     pending = [t for t in range(n) if t not in done]
     payload = {
         "world": base.model_dump(mode="json"),

@@ -135,6 +135,7 @@ class PathClear(WorldLeaf):
             depth,
             avoid_gain=float(self.get_input("avoid_gain")),
             transport_weight=float(self.get_input("transport_weight")),
+            compiled=self.compiled,
         )
         n = int(np.ceil((composer.target.tau + 0.5) / self.control_dt))
         path = composer.rollout(n, self.control_dt)

@@ -89,7 +89,10 @@ class Grasp(MotionLeaf):
             self.optional_input("plan"), self.library, lateral_geometry(world, name), depth
         )
         self.composer = static_composition(
-            measured_dual_state(world, name), relative, float(self.get_input("close_s"))
+            measured_dual_state(world, name),
+            relative,
+            float(self.get_input("close_s")),
+            self.compiled,
         )
         self.started = world.time()
 

@@ -78,6 +78,7 @@ class Transport(MotionLeaf):
             depth,
             avoid_gain=float(self.get_input("avoid_gain")),
             transport_weight=float(self.get_input("transport_weight")),
+            compiled=self.compiled,
         )
         self.started = world.time()
         self.weak_ticks = 0

@@ -14,6 +14,7 @@ from worlds.trials import (
     GOAL_REGIONS,
     RobotClearance,
     _box_gap,
+    campaign_results,
     draw_trial,
     read_results,
     reason_of,
@@ -115,8 +116,8 @@ def test_results_resume_and_summarise(tmp_path: Path) -> None:
     ]
     path.write_text("\n".join(json.dumps(r) for r in rows) + '\n{"trial": 2, "se')  # torn line
     done = read_results(path)
-    assert sorted(done) == [0, 1]
-    s = summarise(done.values())
+    assert [r["trial"] for r in done] == [0, 1]
+    s = summarise(done)
     assert s["trials"] == 2 and s["successes"] == 1
     assert s["failure_reasons"] == {"obstacle contact: parcel/right_arm": 1}
     assert s["realtime_factor"] == 3.0
@@ -125,3 +126,18 @@ def test_results_resume_and_summarise(tmp_path: Path) -> None:
         "pick-and-place x0.25, no avoidance": 1,
     }
     assert reason_of("move 2 placed 3.1 cm, 1.0 deg from its goal") == "move 2"
+
+
+def test_a_campaign_owns_the_records_of_its_seed_tree_and_compilation(tmp_path: Path) -> None:
+    results = tmp_path / "results.jsonl"
+    records = [
+        {"trial": 0, "seed": 0, "tree": "", "success": True},  # before records said
+        {"trial": 1, "seed": 0, "tree": "", "compiled": False, "success": True},
+        {"trial": 0, "seed": 0, "tree": "", "compiled": True, "success": False},
+        {"trial": 2, "seed": 1, "tree": "", "compiled": True, "success": True},
+    ]
+    results.write_text("".join(json.dumps(r) + "\n" for r in records), encoding="utf-8")
+    assert sorted(campaign_results(results, 0, None)) == [0, 1]
+    assert campaign_results(results, 0, None)[0]["success"] is True
+    assert list(campaign_results(results, 0, None, compiled=True)) == [0]
+    assert list(campaign_results(results, 1, None, compiled=True)) == [2]
