@@ -295,8 +295,12 @@ class CompiledStep:
             points = k.world_points(x, k.STATE * q.space, data, q.offset)
             _write_query(q, data, *q.query(points))
         extra = np.zeros((3, 6)) if self.others else _NOTHING
+        poses: dict[int, PoseFloats] = {}  # each space's state read once
         for other in self.others:
-            a = other.evaluate(PoseFloats.of(current[other.space]), other.target)
+            pose = poses.get(other.space)
+            if pose is None:
+                pose = poses[other.space] = PoseFloats.of(current[other.space])
+            a = other.evaluate(pose, other.target)
             if other.weight != 1.0:
                 a = tuple(other.weight * v for v in a)  # type: ignore[assignment]
             extra[other.space] += a
