@@ -20,7 +20,12 @@ exceeds the arithmetic: it reads each state once as floats, evaluates the terms 
 instance so that one evaluation of the basis serves them all, and allocates one array for
 the new states and one for the commands. It gives the numbers of
 :func:`skills.pose_dmp.pose_step`, :func:`skills.pose_dmp.coupled_step` and
-:func:`commands_for`: the same operations in the same order.
+:func:`commands_for`: the same operations in the same order. The new state's arrays are
+views cut out of that array on first use (:meth:`DualArmState.cut_from`).
+
+Started with ``compiled=True`` the step runs compiled instead (:mod:`skills.compiled`,
+numba), within 1e-9 of these numbers. :meth:`DualArmComposer.rollout` steps open loop into
+one array, in one compiled call when every term has a kernel.
 """
 
 from __future__ import annotations
