@@ -309,9 +309,9 @@ class CompiledStep:
         return out
 
 
-#: No accelerations from terms without kernels (read-only: never written).
+#: No accelerations from terms without kernels. Never written, but writable: a read-only
+#: array is another type to numba, and would compile every kernel a second time.
 _NOTHING = np.zeros((3, 6))
-_NOTHING.setflags(write=False)
 
 
 def _values(current: Sequence[PoseState]) -> Array:
