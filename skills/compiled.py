@@ -255,7 +255,11 @@ class CompiledStep:
         )
 
     def rollout(
-        self, current: Sequence[PoseState], dt: float, steps: int, values: Array | None = None
+        self,
+        current: Sequence[PoseState] | None,
+        dt: float,
+        steps: int,
+        values: Array | None = None,
     ) -> Array:
         """``steps`` steps open loop: row ``i`` (of ``(steps, SIZE)``) is step ``i``'s output.
 
@@ -268,28 +272,28 @@ class CompiledStep:
         if self.queries or self.others:
             out[0] = self(current, dt, values)
             for i in range(1, steps):
-                out[i] = self(_states(out[i - 1]), dt, out[i - 1])
+                out[i] = self(None, dt, out[i - 1])
             return out
-        x = _values(current) if values is None else values
+        x = _read(current, values)
         k.rollout(x, self.spaces, self.program, self.data, _NOTHING, float(dt), out)
         return out
 
     def __call__(
-        self, current: Sequence[PoseState], dt: float, values: Array | None = None
+        self, current: Sequence[PoseState] | None, dt: float, values: Array | None = None
     ) -> Array:
         """The next state and the commands (:data:`SIZE` floats) from the current states.
 
         Parameters
         ----------
-        current : sequence of 3 PoseState
-            The object's state and the palms' states in {O}.
+        current : sequence of 3 PoseState, or None
+            The object's state and the palms' states in {O}; None when ``values`` holds them.
         dt : float
             Control period, s.
         values : ndarray, optional
             The buffer ``current`` is views of (its 57 values, then its 3 phases), if any:
-            saves reading the 18 arrays.
+            saves reading the 18 arrays, and making them when no term needs them.
         """
-        x = _values(current) if values is None else values
+        x = _read(current, values)
         data = self.data
         for q in self.queries:
             points = k.world_points(x, k.STATE * q.space, data, q.offset)
@@ -299,6 +303,8 @@ class CompiledStep:
         for other in self.others:
             pose = poses.get(other.space)
             if pose is None:
+                if current is None:
+                    current = _states(x)
                 pose = poses[other.space] = PoseFloats.of(current[other.space])
             a = other.evaluate(pose, other.target)
             if other.weight != 1.0:
@@ -314,8 +320,12 @@ class CompiledStep:
 _NOTHING = np.zeros((3, 6))
 
 
-def _values(current: Sequence[PoseState]) -> Array:
-    """The three states' arrays end to end, then their phases (60 floats)."""
+def _read(current: Sequence[PoseState] | None, values: Array | None) -> Array:
+    """``values``, else the three states' arrays end to end, then their phases (60 floats)."""
+    if values is not None:
+        return values
+    if current is None:
+        raise ValueError("current: expected the three states when values are not given")
     o, left, right = current
     return np.concatenate((*o[:6], *left[:6], *right[:6], (o.phase, left.phase, right.phase)))
 

@@ -302,8 +302,9 @@ class DualArmComposer:
         current = measured or self.state
         plan = self._resolved()
         if plan.compiled is not None:
-            states = (current.object, current.left, current.right)
-            out = plan.compiled(states, dt, current._values)
+            values = current._values  # a state the composer cut: its fields may not be yet
+            states = None if values is not None else (current.object, current.left, current.right)
+            out = plan.compiled(states, dt, values)
             self.state = DualArmState.cut_from(out)
             return _commands(out)
         obj, obj_phase = plan.obj(current.object, dt)
@@ -330,7 +331,7 @@ class DualArmComposer:
         plan = self._resolved()
         if plan.compiled is not None:
             s = self.state
-            states = (s.object, s.left, s.right)
+            states = None if s._values is not None else (s.object, s.left, s.right)
             values = plan.compiled.rollout(states, dt, int(steps), s._values)
             if steps:
                 self.state = DualArmState.cut_from(values[-1])

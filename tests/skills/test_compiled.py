@@ -329,3 +329,18 @@ def test_other_gains_and_bases_of_two_sizes_match() -> None:
     still = DualArmComposer.start(s, *goal, 2.0, [(LearntForcing(learnt), 0.5)], params=params)
     target = base.target(s.object.position, s.object.orientation, *goal, 2.0)
     run_both(replace(still, base=base, target=target), 100)
+
+
+@needs_numba
+def test_stepping_on_from_its_own_states_never_cuts_them() -> None:
+    # A compiled step reads a state the composer cut straight from its buffer; terms without
+    # kernels (here a saturated group and arrays-only terms) get the state as views of it.
+    fast = compiled_twin(full_composition())
+    twin = full_composition()
+    fast.step(DT)
+    twin.step(DT)
+    for _ in range(5):
+        before = fast.state  # cut by the last step
+        cmd = fast.step(DT)
+        assert "object" not in vars(before)
+        assert_allclose(cmd.twists, twin.step(DT).twists, rtol=RELATIVE, atol=TOLERANCE)
