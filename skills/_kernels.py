@@ -2,8 +2,9 @@
 
 Plain functions on float arrays, compiled by numba when it is installed (the ``fast`` extra)
 and left as Python otherwise (:data:`COMPILED` says which; the Python form is only a
-reference, far slower than the float path). Each mirrors a float path of the numpy composer
-operation for operation: :func:`skills.pose_dmp.attractor_floats`,
+reference, far slower than the float path). Each computes the formulas of a float path of the
+numpy composer, mostly operation for operation (steering sums its obstacles, and the field its
+points, in another order): :func:`skills.pose_dmp.attractor_floats`,
 :meth:`skills.pose_dmp.LearntForcing.scalar_acceleration`,
 :meth:`skills.couplings.steering.ObstacleSteering.scalar_acceleration`,
 :meth:`skills.couplings.potential.PotentialFieldAvoidance.scalar_acceleration`,
@@ -61,7 +62,8 @@ COMMANDS = 60
 SIZE = 92
 #: Term kinds.
 FORCING, BASE_FORCING, STEERING, POTENTIAL, GRASP = 0, 1, 2, 3, 4
-#: Block layouts after the weight: potential field header length, steering header length.
+#: Where the points of a potential-field block, and the obstacles of a steering block, start
+#: (after the weight and the parameters).
 POTENTIAL_HEADER = 8
 STEERING_HEADER = 7
 #: As :data:`skills.couplings.steering._COLLINEAR` and :data:`skills.quaternion._SMALL`.
