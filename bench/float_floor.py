@@ -3,7 +3,8 @@
 Every operation of one composition step of ``bench/bench_compose.py`` (two learnt skills on
 one basis evaluation, obstacle steering, the 8-point potential field with its sphere query
 inline, grasp maintenance on both palms, integration, phases, the palms' commands) written out
-by hand in one Python function, with numpy only for the basis and the output array. No
+by hand in one Python function, with numpy only for the basis and the output array and
+:mod:`skills.quaternion`'s scalar functions for the quaternion arithmetic (as the composer). No
 composer built from separate terms can do less in Python, so its time is the floor of the
 float path on this machine. The script checks that it gives the composer's numbers (to
 1e-12; it exits 1 otherwise), then times both. It reads the terms' parameters from the
@@ -22,6 +23,7 @@ from collections.abc import Callable
 import numpy as np
 from bench_compose import composer
 
+from skills import quaternion as quat
 from skills.compiled import CompiledStep
 from skills.composer import PalmCommands, _commands
 from skills.types import Array
@@ -51,19 +53,6 @@ def fused_step(st: CompiledStep) -> Callable[[Array, float], tuple[Array, PalmCo
     scx, scy, scz, sr = data[po + 8 + 3 * N : po + 12 + 3 * N].tolist()
     G = [data[o + 1 : o + 12].tolist() for o in (g1o, g2o)]
 
-    def rot_err(
-        gx: float, gy: float, gz: float, gw: float, qx: float, qy: float, qz: float, qw: float
-    ) -> tuple[float, float, float]:
-        ex = -gw * qx + gx * qw - gy * qz + gz * qy
-        ey = -gw * qy + gx * qz + gy * qw - gz * qx
-        ez = -gw * qz - gx * qy + gy * qx + gz * qw
-        ew = gw * qw + gx * qx + gy * qy + gz * qz
-        if ew < 0.0:
-            ex, ey, ez, ew = -ex, -ey, -ez, -ew
-        vn = math.sqrt(ex * ex + ey * ey + ez * ez)
-        sc = 2.0 * math.atan2(vn, ew) / vn if vn > 1e-12 else 2.0
-        return ex * sc, ey * sc, ez * sc
-
     def integ(
         x: list[float],
         b: int,
@@ -82,10 +71,6 @@ def fused_step(st: CompiledStep) -> Callable[[Array, float], tuple[Array, PalmCo
         w0 = x[b + 13] + b0 * dt
         w1 = x[b + 14] + b1 * dt
         w2 = x[b + 15] + b2 * dt
-        half = 0.5 * dt
-        rn = half * math.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
-        sn = math.sin(rn) / rn * half if rn > 1e-8 else half
-        ax, ay, az, aw = w0 * sn, w1 * sn, w2 * sn, math.cos(rn)
         bx, by, bz, bw = x[b + 9 : b + 13]
         out += (
             x[b] + v0 * dt,
@@ -97,10 +82,7 @@ def fused_step(st: CompiledStep) -> Callable[[Array, float], tuple[Array, PalmCo
             a0,
             a1,
             a2,
-            aw * bx + ax * bw + ay * bz - az * by,
-            aw * by - ax * bz + ay * bw + az * bx,
-            aw * bz + ax * by - ay * bx + az * bw,
-            aw * bw - ax * bx - ay * by - az * bz,
+            *quat.integrate_scalar((bx, by, bz, bw), (w0, w1, w2), dt),
             w0,
             w1,
             w2,
@@ -118,7 +100,7 @@ def fused_step(st: CompiledStep) -> Callable[[Array, float], tuple[Array, PalmCo
         px, py, pz, vx, vy, vz = x[0:6]
         qx, qy, qz, qw = x[9:13]
         wx, wy, wz = x[13:16]
-        e0, e1, e2 = rot_err(o[6], o[7], o[8], o[9], qx, qy, qz, qw)
+        e0, e1, e2 = quat.rotation_error_scalar((o[6], o[7], o[8], o[9]), (qx, qy, qz, qw))
         a0 = kp * (o[3] - px) - kd * vx
         a1 = kp * (o[4] - py) - kd * vy
         a2 = kp * (o[5] - pz) - kd * vz
@@ -152,15 +134,7 @@ def fused_step(st: CompiledStep) -> Callable[[Array, float], tuple[Array, PalmCo
                 a1 += aa * vy - bb * dy
                 a2 += aa * vz - bb * dz
         # potential field over 8 points, sphere query inline
-        m0 = 1 - 2 * (qy * qy + qz * qz)
-        m1 = 2 * (qx * qy - qz * qw)
-        m2 = 2 * (qx * qz + qy * qw)
-        m3 = 2 * (qx * qy + qz * qw)
-        m4 = 1 - 2 * (qx * qx + qz * qz)
-        m5 = 2 * (qy * qz - qx * qw)
-        m6 = 2 * (qx * qz - qy * qw)
-        m7 = 2 * (qy * qz + qx * qw)
-        m8 = 1 - 2 * (qx * qx + qy * qy)
+        m0, m1, m2, m3, m4, m5, m6, m7, m8 = quat.matrix_floats((qx, qy, qz, qw))
         fx = fy = fz = tx = ty = tz = 0.0
         power = pbeta - 1.0
         ip0 = 1.0 / infl
@@ -216,7 +190,8 @@ def fused_step(st: CompiledStep) -> Callable[[Array, float], tuple[Array, PalmCo
         for arm in (0, 1):
             bb_ = 19 * (arm + 1)
             gr = G[arm]
-            e0, e1, e2 = rot_err(gr[3], gr[4], gr[5], gr[6], *x[bb_ + 9 : bb_ + 13])
+            qa, qb, qc, qd = x[bb_ + 9 : bb_ + 13]
+            e0, e1, e2 = quat.rotation_error_scalar((gr[3], gr[4], gr[5], gr[6]), (qa, qb, qc, qd))
             k_, d_, kr, dr = gr[7:11]
             integ(
                 x,
@@ -239,15 +214,7 @@ def fused_step(st: CompiledStep) -> Callable[[Array, float], tuple[Array, PalmCo
         px, py, pz, vx, vy, vz = out[0:6]
         x_, y_, z_, w_ = out[9:13]
         wx, wy, wz = out[13:16]
-        m0 = 1 - 2 * (y_ * y_ + z_ * z_)
-        m1 = 2 * (x_ * y_ - z_ * w_)
-        m2 = 2 * (x_ * z_ + y_ * w_)
-        m3 = 2 * (x_ * y_ + z_ * w_)
-        m4 = 1 - 2 * (x_ * x_ + z_ * z_)
-        m5 = 2 * (y_ * z_ - x_ * w_)
-        m6 = 2 * (x_ * z_ - y_ * w_)
-        m7 = 2 * (y_ * z_ + x_ * w_)
-        m8 = 1 - 2 * (x_ * x_ + y_ * y_)
+        m0, m1, m2, m3, m4, m5, m6, m7, m8 = quat.matrix_floats((x_, y_, z_, w_))
         pos: list[float] = []
         ori: list[float] = []
         tw: list[float] = []
@@ -258,12 +225,7 @@ def fused_step(st: CompiledStep) -> Callable[[Array, float], tuple[Array, PalmCo
             l1 = m3 * c0 + m4 * c1 + m5 * c2
             l2 = m6 * c0 + m7 * c1 + m8 * c2
             pos += (px + l0, py + l1, pz + l2)
-            ori += (
-                w_ * q0 + x_ * q3 + y_ * q2 - z_ * q1,
-                w_ * q1 - x_ * q2 + y_ * q3 + z_ * q0,
-                w_ * q2 + x_ * q1 - y_ * q0 + z_ * q3,
-                w_ * q3 - x_ * q0 - y_ * q1 - z_ * q2,
-            )
+            ori += quat.multiply_scalar((x_, y_, z_, w_), (q0, q1, q2, q3))
             tw += (
                 vx + wy * l2 - wz * l1 + m0 * d0 + m1 * d1 + m2 * d2,
                 vy + wz * l0 - wx * l2 + m3 * d0 + m4 * d1 + m5 * d2,

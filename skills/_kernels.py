@@ -9,7 +9,8 @@ points, in another order): :func:`skills.pose_dmp.attractor_floats`,
 :meth:`skills.couplings.steering.ObstacleSteering.scalar_acceleration`,
 :meth:`skills.couplings.potential.PotentialFieldAvoidance.scalar_acceleration`,
 :meth:`skills.couplings.grasp.GraspMaintenance.scalar_acceleration`,
-:func:`skills.pose_dmp.integrate_floats` and :func:`skills.composer.palm_commands`.
+:func:`skills.pose_dmp.integrate_floats` and :func:`skills.composer.palm_commands`. The
+quaternion arithmetic is :mod:`skills.quaternion`'s scalar functions themselves, compiled.
 
 Layouts (see :mod:`skills.compiled` for how they are packed):
 
@@ -33,6 +34,9 @@ from typing import Any
 
 import numpy as np
 
+from skills import quaternion as quat
+from skills.composer import COMMANDS, PHASES, ROW_SIZE
+from skills.pose_dmp import STATE_SIZE
 from skills.types import Array
 
 
@@ -56,43 +60,37 @@ def kernel(fn: Callable[..., Any]) -> Callable[..., Any]:
     return compiled
 
 
-STATE = 19
-PHASES = 57
-COMMANDS = 60
-SIZE = 92
+#: The layout of a state and of a step's output row: the composer's.
+STATE = STATE_SIZE
+SIZE = ROW_SIZE
 #: Term kinds.
 FORCING, BASE_FORCING, STEERING, POTENTIAL, GRASP = 0, 1, 2, 3, 4
 #: Where the points of a potential-field block, and the obstacles of a steering block, start
 #: (after the weight and the parameters).
 POTENTIAL_HEADER = 8
 STEERING_HEADER = 7
-#: As :data:`skills.couplings.steering._COLLINEAR` and :data:`skills.quaternion._SMALL`.
+#: As :data:`skills.couplings.steering._COLLINEAR`.
 COLLINEAR = 1e-7
-SMALL = 1e-12
+
+
+# skills.quaternion's scalar functions, compiled: the kernels share their arithmetic.
+rotation_error_q = kernel(quat.rotation_error_scalar)
+matrix_q = kernel(quat.matrix_floats)
+integrate_q = kernel(quat.integrate_scalar)
+multiply_q = kernel(quat.multiply_scalar)
 
 
 @kernel
-def rotation_error(
-    gx: float, gy: float, gz: float, gw: float, x: Array, at: int
-) -> tuple[float, float, float]:
-    """``2 log(g conj(q))`` the short way, q at ``x[at:at + 4]``."""
-    qx, qy, qz, qw = x[at], x[at + 1], x[at + 2], x[at + 3]
-    ex = -gw * qx + gx * qw - gy * qz + gz * qy
-    ey = -gw * qy + gx * qz + gy * qw - gz * qx
-    ez = -gw * qz - gx * qy + gy * qx + gz * qw
-    ew = gw * qw + gx * qx + gy * qy + gz * qz
-    if ew < 0.0:
-        ex, ey, ez, ew = -ex, -ey, -ez, -ew
-    vn = math.sqrt(ex * ex + ey * ey + ez * ez)
-    sc = 2.0 * math.atan2(vn, ew) / vn if vn > SMALL else 2.0
-    return (ex * sc, ey * sc, ez * sc)
+def quaternion_at(x: Array, at: int) -> tuple[float, float, float, float]:
+    """The quaternion at ``x[at:at + 4]`` as floats."""
+    return (x[at], x[at + 1], x[at + 2], x[at + 3])
 
 
 @kernel
 def attractor(x: Array, b: int, sp: Array, acc: Array) -> None:
     """The spring-damper to the goal into ``acc`` (6), the state at ``x[b:]``."""
     kp, kd = sp[1], sp[2]
-    e = rotation_error(sp[6], sp[7], sp[8], sp[9], x, b + 9)
+    e = rotation_error_q((sp[6], sp[7], sp[8], sp[9]), quaternion_at(x, b + 9))
     for i in range(3):
         acc[i] = kp * (sp[3 + i] - x[b + i]) - kd * x[b + 3 + i]
         acc[3 + i] = kp * e[i] - kd * x[b + 13 + i]
@@ -172,27 +170,10 @@ def steering(x: Array, b: int, data: Array, o: int, a: Array) -> None:
 
 
 @kernel
-def rotation_matrix(x: Array, at: int) -> tuple[float, ...]:
-    """Row-major rotation matrix (9) of the quaternion at ``x[at:at + 4]``."""
-    qx, qy, qz, qw = x[at], x[at + 1], x[at + 2], x[at + 3]
-    return (
-        1 - 2 * (qy * qy + qz * qz),
-        2 * (qx * qy - qz * qw),
-        2 * (qx * qz + qy * qw),
-        2 * (qx * qy + qz * qw),
-        1 - 2 * (qx * qx + qz * qz),
-        2 * (qy * qz - qx * qw),
-        2 * (qx * qz - qy * qw),
-        2 * (qy * qz + qx * qw),
-        1 - 2 * (qx * qx + qy * qy),
-    )
-
-
-@kernel
 def world_points(x: Array, b: int, data: Array, o: int) -> Array:
     """A potential field's points in the world (N, 3), from its block and the state at ``b``."""
     n = int(data[o + 6])
-    m = rotation_matrix(x, b + 9)
+    m = matrix_q(quaternion_at(x, b + 9))
     out = np.empty((n, 3))
     for i in range(n):
         p = o + POTENTIAL_HEADER + 3 * i
@@ -269,7 +250,7 @@ def potential(x: Array, b: int, data: Array, o: int, a: Array) -> None:
         nearest = min(nearest, near[i, 0])
     if nearest >= influence:
         return
-    m = rotation_matrix(x, b + 9)
+    m = matrix_q(quaternion_at(x, b + 9))
     vx0, vy0, vz0 = x[b + 3], x[b + 4], x[b + 5]
     wx, wy, wz = x[b + 13], x[b + 14], x[b + 15]
     px, py, pz = x[b], x[b + 1], x[b + 2]
@@ -317,7 +298,7 @@ def potential(x: Array, b: int, data: Array, o: int, a: Array) -> None:
 @kernel
 def grasp(x: Array, b: int, data: Array, o: int, a: Array) -> None:
     """Grasp maintenance: block ``[w, ref xyz, ref xyzw, k, d, k_rot, d_rot]``."""
-    e = rotation_error(data[o + 4], data[o + 5], data[o + 6], data[o + 7], x, b + 9)
+    e = rotation_error_q(quaternion_at(data, o + 4), quaternion_at(x, b + 9))
     k, d, kr, dr = data[o + 8], data[o + 9], data[o + 10], data[o + 11]
     for i in range(3):
         a[i] = k * (data[o + 1 + i] - x[b + i]) - d * x[b + 3 + i]
@@ -334,23 +315,17 @@ def integrate(x: Array, b: int, acc: Array, dt: float, out: Array) -> None:
         out[b + 6 + i] = acc[i]
         out[b + 13 + i] = x[b + 13 + i] + acc[3 + i] * dt
         out[b + 16 + i] = acc[3 + i]
-    wx, wy, wz = out[b + 13], out[b + 14], out[b + 15]
-    half = 0.5 * dt
-    rn = half * math.sqrt(wx * wx + wy * wy + wz * wz)
-    sn = math.sin(rn) / rn * half if rn > 1e-8 else half
-    ax, ay, az, aw = wx * sn, wy * sn, wz * sn, math.cos(rn)
-    bx, by, bz, bw = x[b + 9], x[b + 10], x[b + 11], x[b + 12]
-    out[b + 9] = aw * bx + ax * bw + ay * bz - az * by
-    out[b + 10] = aw * by - ax * bz + ay * bw + az * bx
-    out[b + 11] = aw * bz + ax * by - ay * bx + az * bw
-    out[b + 12] = aw * bw - ax * bx - ay * by - az * bz
+    omega = (out[b + 13], out[b + 14], out[b + 15])
+    out[b + 9], out[b + 10], out[b + 11], out[b + 12] = integrate_q(
+        quaternion_at(x, b + 9), omega, dt
+    )
 
 
 @kernel
 def commands(out: Array) -> None:
     """Palm world poses and eq. (5) twists from the new state in ``out``, into ``out[60:]``."""
-    m = rotation_matrix(out, 9)
-    x, y, z, w = out[9], out[10], out[11], out[12]
+    m = matrix_q(quaternion_at(out, 9))
+    q_obj = quaternion_at(out, 9)
     vx, vy, vz, wx, wy, wz = out[3], out[4], out[5], out[13], out[14], out[15]
     for arm in range(2):
         b = STATE * (1 + arm)
@@ -362,12 +337,8 @@ def commands(out: Array) -> None:
         out[p] = out[0] + l0
         out[p + 1] = out[1] + l1
         out[p + 2] = out[2] + l2
-        qx, qy, qz, qw = out[b + 9], out[b + 10], out[b + 11], out[b + 12]
         q = COMMANDS + 6 + 4 * arm
-        out[q] = w * qx + x * qw + y * qz - z * qy
-        out[q + 1] = w * qy - x * qz + y * qw + z * qx
-        out[q + 2] = w * qz + x * qy - y * qx + z * qw
-        out[q + 3] = w * qw - x * qx - y * qy - z * qz
+        out[q], out[q + 1], out[q + 2], out[q + 3] = multiply_q(q_obj, quaternion_at(out, b + 9))
         b0, b1, b2 = out[b + 3], out[b + 4], out[b + 5]
         c0, c1, c2 = out[b + 13], out[b + 14], out[b + 15]
         t = COMMANDS + 14 + 6 * arm

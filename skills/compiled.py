@@ -32,6 +32,7 @@ import numpy as np
 import numpy.typing as npt
 
 from skills import _kernels as k
+from skills.composer import DualArmState
 from skills.coupling import ScalarTerm, scalar_evaluation
 from skills.couplings.grasp import GraspMaintenance
 from skills.couplings.potential import DistanceQuery, PotentialFieldAvoidance, SphereObstacles
@@ -45,12 +46,10 @@ from skills.pose_dmp import (
     PoseState,
     PoseTarget,
     Weighted,
-    state_from,
 )
 from skills.types import Array
 
-#: Where the commands start in a step's output, and its size.
-COMMANDS = k.COMMANDS
+#: The size of a step's output (:data:`skills.composer.ROW_SIZE`).
 SIZE = k.SIZE
 
 
@@ -304,7 +303,8 @@ class CompiledStep:
             pose = poses.get(other.space)
             if pose is None:
                 if current is None:
-                    current = _states(x)
+                    cut = DualArmState.cut_from(x)
+                    current = (cut.object, cut.left, cut.right)
                 pose = poses[other.space] = PoseFloats.of(current[other.space])
             a = other.evaluate(pose, other.target)
             if other.weight != 1.0:
@@ -328,15 +328,6 @@ def _read(current: Sequence[PoseState] | None, values: Array | None) -> Array:
         raise ValueError("current: expected the three states when values are not given")
     o, left, right = current
     return np.concatenate((*o[:6], *left[:6], *right[:6], (o.phase, left.phase, right.phase)))
-
-
-def _states(values: Array) -> tuple[PoseState, PoseState, PoseState]:
-    phases = values[k.PHASES : k.PHASES + 3].tolist()
-    return (
-        state_from(values, phases[0]),
-        state_from(values, phases[1], k.STATE),
-        state_from(values, phases[2], 2 * k.STATE),
-    )
 
 
 def _write_query(q: _Query, data: Array, distances: Array, closest: Array) -> None:

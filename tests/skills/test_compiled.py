@@ -283,7 +283,6 @@ def test_a_compiled_rollout_matches_the_float_rollout(in_kernel: bool) -> None:
 def test_the_kernels_write_the_rows_the_rollout_reads() -> None:
     assert (_kernels.PHASES, _kernels.COMMANDS, _kernels.SIZE) == (PHASES, COMMANDS, ROW_SIZE)
     assert _kernels.COLLINEAR == steering._COLLINEAR
-    assert _kernels.SMALL == quat._SMALL
 
 
 def test_a_state_cut_from_a_buffer_reads_as_the_views_it_stands_for() -> None:
