@@ -143,18 +143,8 @@ def _load_world_or_exit(path: str) -> Any:
 def _with_compiled_or_exit(world: Any, path: str, flag: bool) -> Any:
     """The world composing compiled when ``--compiled`` or its ``sim.compiled`` asks; exit 2
     when numba, which that needs, is not installed."""
-    from skills.compiled import available
-
     if flag:
         world = world.model_copy(update={"sim": world.sim.model_copy(update={"compiled": True})})
-    if world.sim.compiled and not available():
-        where = "--compiled" if flag else f"{path}: sim.compiled"
-        print(
-            f"{where}: the compiled composition step needs numba, which is not installed; "
-            "install it with pip install -e '.[fast]'",
-            file=sys.stderr,
-        )
-        raise SystemExit(EXIT_BAD_INPUT)
     return world
 
 

@@ -29,9 +29,9 @@ from collections.abc import Callable
 from functools import partial
 
 import numpy as np
+from skills.compiled import available
 
 from skills import quaternion as quat
-from skills.compiled import available
 from skills.composer import DualArmComposer, PalmCommands, grasped_state
 from skills.coupling import CouplingTerm
 from skills.couplings.grasp import GraspMaintenance

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
-from typing import Any
 
 import numpy as np
 
@@ -20,6 +19,7 @@ from planner.port import Move, Pose, WorldPort
 from skills import quaternion as quat
 from skills.composer import DualArmComposer, DualArmState, relative_from_world
 from skills.coupling import CouplingTerm
+from skills.couplings import LearntForcing, Saturated
 from skills.couplings.grasp import GraspMaintenance
 from skills.couplings.limits import WorkspaceRepulsion
 from skills.couplings.potential import PotentialFieldAvoidance
@@ -27,7 +27,7 @@ from skills.couplings.steering import ObstacleSteering
 from skills.dual_arm import ARMS, GraspGeometry
 from skills.labels import Action, Arm, Space
 from skills.library import SkillLibrary
-from skills.pose_dmp import LearntForcing, PoseState, Saturated
+from skills.pose_dmp import PoseState
 from skills.skill import Skill, SkillKind
 
 #: Shortest move duration, s (the demonstrations last about 2 s).
@@ -159,7 +159,8 @@ def absolute_terms(
     name : str
         The held object.
     points_object : ndarray, shape (M, 3)
-        Arm-link points in the object frame, for link-level avoidance.
+        Points attached to the object (its own surface), object frame, for link-level
+        avoidance; the arms' link points come through the field's query (:class:`ArmLinks`).
     """
     terms: list[tuple[CouplingTerm, float]] = []
     # The centre-based steering sees the object as a sphere; the smallest half-extent keeps it
@@ -187,7 +188,7 @@ def absolute_terms(
             terms.append((steering, sel.weight))
         elif skill.kind is SkillKind.POTENTIAL_FIELD:
             field_term = PotentialFieldAvoidance(
-                query=world.distance_query,
+                query=ArmLinks(world),
                 points_object=points_object,
                 gain=float(skill.params["gain"]) * _param(sel, "link_gain", 1.0),
                 beta=float(skill.params["beta"]),
@@ -338,7 +339,7 @@ def transport_composition(
         s = TransportSettings(_param(sel, "max_speed", s.max_speed), s.lift_m)
     tau = move_duration(state.object.position, move.goal.position, s)
     geometry = held_geometry(state, lateral_geometry(world, name))
-    points = link_points_in_object(world, state.object, name)
+    points = box_points(world.object_extents(name))
     terms = absolute_terms(
         reweight(plan, avoid_gain, transport_weight), library, world, name, points
     )
@@ -366,30 +367,25 @@ def box_points(extents: np.ndarray) -> np.ndarray:
     return signs * half
 
 
-def link_points_in_object(world: WorldPort, obj: PoseState, name: str | None = None) -> np.ndarray:
-    """Points to keep away from obstacles, in the object frame, (M, 3).
+@dataclass(frozen=True)
+class ArmLinks:
+    """The world's distance query, with the arms' link points as points of its own.
 
-    The arms' link points from the world and, when ``name`` is given, the held object's own
-    surface points: avoidance in the object-arm space, not at the object's centre alone.
+    A potential field on it avoids with the arms' links as well as the points attached to the
+    object (:class:`skills.couplings.MovingPoints`): the composition reads the links again
+    before each closed-loop step, as the arms bend, and a prediction carries them with the
+    object from where they are when it starts.
     """
-    pts = world.link_points()
-    inv = quat.conjugate(obj.orientation)
-    links = quat.rotate(inv, pts - obj.position) if len(pts) else np.zeros((0, 3))
-    if name is None:
-        return links
-    return np.concatenate((box_points(world.object_extents(name)), links))
 
+    world: WorldPort
 
-def refresh_link_points(composer: DualArmComposer, world: WorldPort, name: str) -> None:
-    """Move link-level avoidance onto the arms' current link points (they bend as they move)."""
-    for weighted in composer.absolute:
-        group: Any = weighted.term
-        if not isinstance(group, Saturated):
-            continue
-        for inner in list(group.terms):
-            if isinstance(inner.term, PotentialFieldAvoidance):
-                points = link_points_in_object(world, composer.state.object, name)
-                group.replace_term(inner.term, inner.term.with_points(points))
+    def __call__(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Distance (N,) from each point (N, 3) to the nearest obstacle, and its closest point."""
+        return self.world.distance_query(points)
+
+    def moving_points(self) -> np.ndarray:
+        """The arms' link points now, (M, 3), world frame."""
+        return self.world.link_points()
 
 
 def goal_error(world: WorldPort, name: str, goal: Pose) -> tuple[float, float]:

@@ -11,21 +11,11 @@ Relative space: each palm's pose in {O} moves under its relative skills alone (g
 maintenance tracks the grasp geometry; a force-tracking variant regulates the squeeze).
 
 Output: the palms' world poses (object pose composed with the palms' relative poses) and
-world twists ``G^T y_o' + R_o y_C'`` (:func:`skills.dual_arm.compose_twists`), which is what
-a Cartesian controller tracks.
+world twists ``G^T y_o' + R_o y_C'``, which is what a Cartesian controller tracks.
 
-A step runs every control tick on 3-vectors and quaternions, where numpy's per-call cost
-exceeds the arithmetic: it reads each state once as floats, evaluates the terms as floats
-(:class:`skills.coupling.ScalarCouplingTerm`), the learnt forcing terms on one basis
-instance so that one evaluation of the basis serves them all, and allocates one array for
-the new states and one for the commands. It gives the numbers of
-:func:`skills.pose_dmp.pose_step`, :func:`skills.pose_dmp.coupled_step` and
-:func:`commands_for`: the same operations in the same order. The new state's arrays are
-views cut out of that array on first use (:meth:`DualArmState.cut_from`).
-
-Started with ``compiled=True`` the step runs compiled instead (:mod:`skills.compiled`,
-numba), within 1e-9 of these numbers. :meth:`DualArmComposer.rollout` steps open loop into
-one array, in one compiled call when every term has a kernel.
+A composition is packed once per move into a program (:mod:`skills.interpreter`), and each
+step is one compiled call. :func:`reference_step` computes the same step with every term's
+numpy reference: the tests hold the two within 1e-9.
 """
 
 from __future__ import annotations
@@ -33,44 +23,22 @@ from __future__ import annotations
 import operator
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
-from typing import TYPE_CHECKING, NamedTuple
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from skills import quaternion as quat
-from skills.basis import RBFBasis, phase_step
-from skills.coupling import CouplingTerm, WeightedScalar, add_scalar_terms, scalar_evaluation
+from skills.coupling import CouplingTerm, Weighted, sum_couplings
+from skills.couplings.forcing import LearntForcing
 from skills.dmp import DMPParams
-from skills.dual_arm import ARMS
-from skills.labels import Arm
-from skills.pose_dmp import (
-    STATE_SIZE,
-    LearntForcing,
-    PoseFloats,
-    PoseModel,
-    PoseState,
-    PoseTarget,
-    StateValues,
-    Weighted,
-    attractor_floats,
-    integrate_floats,
-    pose_acceleration,
-    state_from,
-    state_values,
-    transformation_floats,
-)
+from skills.interpreter import Program
+from skills.labels import ARMS, Arm
+from skills.layout import COMMANDS, PHASES, ROW_SIZE
+from skills.pose_model import PoseModel
+from skills.state import STATE_SIZE, PoseState, PoseTarget, state_from, state_values
+from skills.transformation import attractor, integrate
 from skills.types import Array
-
-if TYPE_CHECKING:
-    from skills.compiled import CompiledStep
-
-
-#: The layout of one step's output (:class:`Rollout`): three states' values, their phases,
-#: then the commands (palm positions 2 x 3, orientations 2 x 4, twists 2 x 6, object twist).
-PHASES = 3 * STATE_SIZE
-COMMANDS = PHASES + 3
-ROW_SIZE = COMMANDS + 32
 
 
 @dataclass(frozen=True)
@@ -88,33 +56,21 @@ class DualArmState:
     object: PoseState
     left: PoseState
     right: PoseState
-    #: The buffer the composer cut this state out of, when it did (its three states' values
-    #: then their phases): read back whole by the compiled step. Not copied by ``replace``.
-    _values: Array | None = field(default=None, init=False, repr=False, compare=False)
 
     @staticmethod
-    def cut_from(values: Array) -> DualArmState:
-        """The state whose arrays are views of ``values`` (3 x 19 floats, then 3 phases).
+    def from_values(values: Array) -> DualArmState:
+        """The state whose arrays are views of ``values`` (3 x 19 floats, then 3 phases)."""
+        phases = values[PHASES : PHASES + 3].tolist()
+        return DualArmState(
+            state_from(values, phases[0], 0),
+            state_from(values, phases[1], STATE_SIZE),
+            state_from(values, phases[2], 2 * STATE_SIZE),
+        )
 
-        The views are made on first use: a closed control loop steps from measured states
-        and reads only the commands, and eighteen views cost more than a compiled step.
-        """
-        state = object.__new__(DualArmState)
-        object.__setattr__(state, "_values", values)
-        return state
-
-    if not TYPE_CHECKING:  # typed as the dataclass's fields; only reached before first use
-
-        def __getattr__(self, name: str) -> PoseState:
-            values = self.__dict__.get("_values")
-            if values is None or name not in ("object", "left", "right"):
-                raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
-            phases = values[PHASES : PHASES + 3].tolist()
-            for at, (key, phase) in enumerate(
-                zip(("object", "left", "right"), phases, strict=True)
-            ):
-                object.__setattr__(self, key, state_from(values, phase, at * STATE_SIZE))
-            return self.__dict__[name]
+    def values(self) -> Array:
+        """The three states' arrays end to end, then their phases, shape (60,)."""
+        o, left, right = self.object, self.left, self.right
+        return np.concatenate((*o[:6], *left[:6], *right[:6], (o.phase, left.phase, right.phase)))
 
     def relative(self, arm: Arm) -> PoseState:
         """The palm's state in {O}."""
@@ -123,9 +79,6 @@ class DualArmState:
 
 class PalmCommands(NamedTuple):
     """What the controller should track this step.
-
-    Immutable (a named tuple, as :class:`skills.pose_dmp.PoseState`: it is created every
-    control step, and cheaply).
 
     Attributes
     ----------
@@ -145,6 +98,17 @@ class PalmCommands(NamedTuple):
     object_twist: Array
 
 
+def _commands(row: Array) -> PalmCommands:
+    """The commands in one step's output row (views)."""
+    c = COMMANDS
+    return PalmCommands(
+        row[c : c + 6].reshape(2, 3),
+        row[c + 6 : c + 14].reshape(2, 4),
+        row[c + 14 : c + 26].reshape(2, 6),
+        row[c + 26 : c + 32],
+    )
+
+
 @dataclass(frozen=True)
 class Rollout:
     """An open-loop rollout of a composition: the state and commands after each step.
@@ -152,9 +116,7 @@ class Rollout:
     Attributes
     ----------
     values : ndarray, shape (N, 92)
-        One row per step: the object's, the left and the right palm's
-        :data:`skills.pose_dmp.StateValues` (19 floats each), their phases, then the
-        commands (palm positions 2 x 3, orientations 2 x 4, twists 2 x 6, object twist 6).
+        One row per step, as :mod:`skills.layout`.
     """
 
     values: Array
@@ -189,8 +151,7 @@ class Rollout:
 
     def state(self, i: int) -> DualArmState:
         """The full state after step ``i``."""
-        row = self.values[i]
-        return DualArmState.cut_from(row)
+        return DualArmState.from_values(self.values[i])
 
     def commands(self, i: int) -> PalmCommands:
         """The commands of step ``i``."""
@@ -202,9 +163,8 @@ class DualArmComposer:
     """Runs one composition of absolute and relative skills for one move.
 
     Build with :meth:`start`; call :meth:`step` every control tick, with the measured state
-    when the loop is closed. The terms are fixed for the move (tuples, in mappings not to be
-    changed in place); assigning a field other than ``state`` makes the next step resolve
-    them again.
+    when the loop is closed. The terms are fixed for the move; assigning a field other than
+    ``state`` makes the next step pack them again.
     """
 
     base: PoseModel
@@ -213,8 +173,13 @@ class DualArmComposer:
     absolute: tuple[Weighted, ...] = ()
     relative: dict[Arm, tuple[Weighted, ...]] = field(default_factory=dict)
     relative_targets: dict[Arm, PoseTarget] = field(default_factory=dict)
-    compiled: bool = False
-    _plan: _Plan | None = field(default=None, init=False, repr=False, compare=False)
+    _program: tuple[tuple[object, ...], Program] | None = field(
+        default=None, init=False, repr=False, compare=False
+    )
+    #: The last step's output row and the state cut from it: read back without copying.
+    _last: tuple[DualArmState, Array] | None = field(
+        default=None, init=False, repr=False, compare=False
+    )
 
     @staticmethod
     def start(
@@ -226,7 +191,7 @@ class DualArmComposer:
         relative: Mapping[Arm, Sequence[tuple[CouplingTerm, float]]] | None = None,
         params: DMPParams | None = None,
         fresh_phase: bool = True,
-        compiled: bool = False,
+        compiled: bool = True,
     ) -> DualArmComposer:
         """Compose skills from a handed-over full state towards a goal pose of the object.
 
@@ -247,18 +212,9 @@ class DualArmComposer:
         fresh_phase : bool
             Restart the phase at 1 (a new move) rather than continue the handed-over one.
         compiled : bool
-            Run each step compiled (:mod:`skills.compiled`, needs numba): the same numbers
-            within 1e-9, several times faster.
-
-        Raises
-        ------
-        RuntimeError
-            If ``compiled`` is asked for and numba is not installed.
+            Ignored: a composition always runs compiled.
         """
-        if compiled:
-            from skills.compiled import require
-
-            require()
+        del compiled
         base = PoseModel.still(params)
         obj = state.object.with_phase(1.0) if fresh_phase else state.object
         target = base.target(obj.position, obj.orientation, goal_position, goal_orientation, tau)
@@ -282,15 +238,19 @@ class DualArmComposer:
                 for arm in ARMS
             },
             rel_targets,
-            compiled,
         )
 
     def object_acceleration(self, state: PoseState | None = None) -> tuple[Array, Array]:
-        """Composed object acceleration (linear, angular) at ``state`` (default: current)."""
-        return pose_acceleration(state or self.state.object, self.base, self.target, self.absolute)
+        """Composed object acceleration (linear, angular) at ``state`` (default: current),
+        from the terms' numpy references."""
+        return _object_acceleration(self, state or self.state.object)
+
+    def _values(self, state: DualArmState) -> Array:
+        last = self._last
+        return last[1] if last is not None and last[0] is state else state.values()
 
     def step(self, dt: float, measured: DualArmState | None = None) -> PalmCommands:
-        """Advance every space by ``dt`` and return the palms' commands.
+        """Advance every space by ``dt`` and return the palms' commands (closed loop).
 
         Parameters
         ----------
@@ -299,27 +259,17 @@ class DualArmComposer:
         measured : DualArmState, optional
             Close the loop on a measured state (e.g. the object's pose from the simulator).
         """
-        current = measured or self.state
-        plan = self._resolved()
-        if plan.compiled is not None:
-            values = current._values  # a state the composer cut: its fields may not be yet
-            states = None if values is not None else (current.object, current.left, current.right)
-            out = plan.compiled(states, dt, values)
-            self.state = DualArmState.cut_from(out)
-            return _commands(out)
-        obj, obj_phase = plan.obj(current.object, dt)
-        left, left_phase = plan.left(current.left, dt)
-        right, right_phase = plan.right(current.right, dt)
-        # One allocation; the states are views into it.
-        values = np.array((*obj, *left, *right, obj_phase, left_phase, right_phase))
-        self.state = DualArmState.cut_from(values)
-        return palm_commands(obj, left, right)
+        x = self._values(measured or self.state)
+        out = self.program().step(x, dt, closed_loop=True)
+        self.state = DualArmState.from_values(out)
+        self._last = (self.state, out)
+        return _commands(out)
 
     def rollout(self, steps: int, dt: float) -> Rollout:
-        """Step ``steps`` times open loop from the current state (which ends at the last).
+        """Predict ``steps`` steps open loop from the current state (which ends at the last).
 
-        Compiled, and with every term compiled, the whole rollout is one call into compiled
-        code; otherwise it is :meth:`step` ``steps`` times.
+        What moves in the world (the arms' link points of a field) is carried with the object
+        from where it is now. One compiled call when no term needs Python each step.
 
         Raises
         ------
@@ -328,207 +278,95 @@ class DualArmComposer:
         """
         if isinstance(steps, bool) or not isinstance(steps, int | np.integer) or steps < 0:
             raise ValueError(f"steps: expected an integer >= 0, got {steps!r}")
-        plan = self._resolved()
-        if plan.compiled is not None:
-            s = self.state
-            states = None if s._values is not None else (s.object, s.left, s.right)
-            values = plan.compiled.rollout(states, dt, int(steps), s._values)
-            if steps:
-                self.state = DualArmState.cut_from(values[-1])
-            return Rollout(values)
-        values = np.empty((int(steps), ROW_SIZE))
-        for row in values:
-            cmd = self.step(dt)
-            row[:COMMANDS] = self.state._values
-            row[COMMANDS:] = np.concatenate(
-                (
-                    cmd.positions.ravel(),
-                    cmd.orientations.ravel(),
-                    cmd.twists.ravel(),
-                    cmd.object_twist,
-                )
-            )
+        values = self.program().rollout(self._values(self.state), dt, int(steps))
+        if steps:
+            self.state = DualArmState.from_values(values[-1])
+            self._last = (self.state, values[-1])
         return Rollout(values)
 
     def commands(self) -> PalmCommands:
         """Palm poses and twists for the current state."""
         return commands_for(self.state)
 
-    def _resolved(self) -> _Plan:
-        """The plan for the current terms: resolved again only when a field was reassigned."""
-        plan = self._plan
+    def program(self) -> Program:
+        """The packed program of the current terms (packed again when a field was assigned)."""
         config = (
             self.base,
             self.target,
             self.absolute,
             self.relative,
             self.relative_targets,
-            self.compiled,
         )
-        if plan is None or not all(map(operator.is_, plan.configuration, config)):
-            plan = self._plan = _Plan.of(self, config)
-        return plan
-
-
-def _commands(row: Array) -> PalmCommands:
-    """The commands in one step's output row (views)."""
-    c = COMMANDS
-    return PalmCommands(
-        row[c : c + 6].reshape(2, 3),
-        row[c + 6 : c + 14].reshape(2, 4),
-        row[c + 14 : c + 26].reshape(2, 6),
-        row[c + 26 : c + 32],
-    )
-
-
-def _scalar_terms(terms: Sequence[Weighted]) -> tuple[WeightedScalar, ...]:
-    return tuple((scalar_evaluation(w.term), w.weight) for w in terms)
-
-
-@dataclass(frozen=True, eq=False)
-class _ObjectStep:
-    """:func:`skills.pose_dmp.pose_step` of the object in floats, its terms resolved.
-
-    The base model's own forcing is skipped when it is zero (the composer's still base): it
-    would add exact zeros.
-    """
-
-    base: PoseModel
-    forced: bool
-    target: PoseTarget
-    terms: tuple[WeightedScalar, ...]
-
-    @staticmethod
-    def of(base: PoseModel, target: PoseTarget, absolute: Sequence[Weighted]) -> _ObjectStep:
-        forced = bool(np.any(target.effective_weights[:, :6]))
-        basis = base.position.forcing.basis
-        return _ObjectStep(base, forced, target, _scalar_terms(_on_basis(absolute, basis)))
-
-    def __call__(self, state: PoseState, dt: float) -> tuple[StateValues, float]:
-        """The next state's values and phase."""
-        pose = PoseFloats.of(state)
-        if self.forced:
-            acc = transformation_floats(pose, self.base, self.target)
-        else:
-            acc = attractor_floats(pose, self.base.params, self.target)
-        add_scalar_terms(acc, self.terms, pose, self.target)
-        phase = phase_step(pose.phase, dt, self.target.tau, self.base.params.alpha_s)
-        return integrate_floats(pose, acc, dt), phase
-
-
-def _on_basis(terms: Sequence[Weighted], basis: RBFBasis) -> list[Weighted]:
-    # Learnt forcing terms with the same basis functions read them from one instance, whose
-    # activations at a phase are computed once (the same values: the same numbers).
-    return [
-        Weighted(LearntForcing(w.term.model, basis), w.weight)
-        if isinstance(w.term, LearntForcing) and w.term.basis.same_as(basis)
-        else w
-        for w in terms
-    ]
-
-
-@dataclass(frozen=True, eq=False)
-class _PalmStep:
-    """:func:`skills.pose_dmp.coupled_step` of a palm in {O} in floats, its terms resolved."""
-
-    target: PoseTarget
-    terms: tuple[WeightedScalar, ...]
-    alpha_s: float
-
-    def __call__(self, state: PoseState, dt: float) -> tuple[StateValues, float]:
-        """The next state's values and phase."""
-        pose = PoseFloats.of(state)
-        acc = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
-        add_scalar_terms(acc, self.terms, pose, self.target)
-        phase = phase_step(pose.phase, dt, self.target.tau, self.alpha_s)
-        return integrate_floats(pose, acc, dt), phase
-
-
-@dataclass(frozen=True, eq=False)
-class _Plan:
-    """What a composition evaluates every tick, resolved from its terms once per move.
-
-    ``configuration`` is what it was resolved from (compared by identity each step).
-    """
-
-    configuration: tuple[object, ...]
-    obj: _ObjectStep
-    left: _PalmStep
-    right: _PalmStep
-    compiled: CompiledStep | None = None
-
-    @staticmethod
-    def of(composer: DualArmComposer, configuration: tuple[object, ...]) -> _Plan:
-        compiled = None
-        if composer.compiled:
-            from skills.compiled import CompiledStep
-
-            compiled = CompiledStep.of(
-                composer.base,
-                composer.target,
-                composer.absolute,
-                composer.relative,
-                composer.relative_targets,
+        packed = self._program
+        if packed is None or not all(map(operator.is_, packed[0], config)):
+            program = Program.of(
+                self.base,
+                self.target,
+                self.absolute,
+                [self.relative.get(arm, ()) for arm in ARMS],
+                [self.relative_targets[arm] for arm in ARMS],
+                self._values(self.state),
             )
-        alpha_s = composer.base.params.alpha_s
-        palms = [
-            _PalmStep(
-                composer.relative_targets[arm],
-                _scalar_terms(composer.relative.get(arm, ())),
-                alpha_s,
-            )
-            for arm in ARMS
-        ]
-        return _Plan(
-            configuration,
-            _ObjectStep.of(composer.base, composer.target, composer.absolute),
-            palms[0],
-            palms[1],
-            compiled,
-        )
+            packed = self._program = (config, program)
+        return packed[1]
+
+
+def _object_acceleration(composer: DualArmComposer, state: PoseState) -> tuple[Array, Array]:
+    params = composer.base.params
+    lin, ang = attractor(state, params.alpha, params.beta, composer.target)
+    terms: list[CouplingTerm] = list(composer.absolute)
+    if np.any(composer.target.effective_weights[:, :6]):
+        terms.insert(0, LearntForcing(composer.base))
+    c_lin, c_ang = sum_couplings(terms, state, composer.target)
+    return lin + c_lin, ang + c_ang
+
+
+def reference_step(
+    composer: DualArmComposer, dt: float, measured: DualArmState | None = None
+) -> tuple[DualArmState, PalmCommands]:
+    """:meth:`DualArmComposer.step` from every term's numpy reference (the composer is left
+    as it is): the next state and the commands. Fields read their attached points only."""
+    current = measured or composer.state
+    tau, alpha_s = composer.target.tau, composer.base.params.alpha_s
+    lin, ang = _object_acceleration(composer, current.object)
+    obj = integrate(current.object, lin, ang, dt, tau, alpha_s)
+    palms = []
+    for arm in ARMS:
+        s = current.relative(arm)
+        lin, ang = sum_couplings(composer.relative.get(arm, ()), s, composer.relative_targets[arm])
+        palms.append(integrate(s, lin, ang, dt, composer.relative_targets[arm].tau, alpha_s))
+    state = DualArmState(obj, palms[0], palms[1])
+    return state, commands_for(state)
 
 
 def commands_for(state: DualArmState) -> PalmCommands:
-    """Palm world poses and eq. (5) twists for a dual-arm state."""
-    return palm_commands(
-        state_values(state.object), state_values(state.left), state_values(state.right)
-    )
+    """Palm world poses and eq. (5) twists for a dual-arm state (numpy).
 
-
-def palm_commands(obj: StateValues, left: StateValues, right: StateValues) -> PalmCommands:
-    """Palm world poses and eq. (5) twists from the object's and palms' state values.
-
-    The same algebra as :func:`skills.dual_arm.palm_poses` and
-    :func:`skills.dual_arm.compose_twists` (one absolute and one relative twist), in floats:
-    it runs every control tick, on 3-vectors, where numpy's per-call cost dominates.
+    ``p = y + R r``, ``q = q_o q_r`` and the twist ``[v + omega x R r + R v_r;
+    omega + R omega_r]``: the grasp map's rigid-body twist ``G^T y_o'`` plus each palm's own
+    motion in {O}.
     """
-    px, py, pz, vx, vy, vz = obj[0:6]
-    x, y, z, w, wx, wy, wz = obj[9:16]
-    q = (x, y, z, w)
-    r00, r01, r02, r10, r11, r12, r20, r21, r22 = quat.matrix_floats(q)
-    positions: list[float] = []
-    orientations: list[float] = []
-    twists: list[float] = []
-    for palm in (left, right):
-        a0, a1, a2, b0, b1, b2 = palm[0:6]
-        qx, qy, qz, qw, c0, c1, c2 = palm[9:16]
-        l0 = r00 * a0 + r01 * a1 + r02 * a2  # lever arm: object centre to palm, world frame
-        l1 = r10 * a0 + r11 * a1 + r12 * a2
-        l2 = r20 * a0 + r21 * a1 + r22 * a2
-        positions += (px + l0, py + l1, pz + l2)
-        orientations += quat.multiply_scalar(q, (qx, qy, qz, qw))
-        twists += (
-            vx + wy * l2 - wz * l1 + r00 * b0 + r01 * b1 + r02 * b2,  # G^T y_o' + R y_C'
-            vy + wz * l0 - wx * l2 + r10 * b0 + r11 * b1 + r12 * b2,
-            vz + wx * l1 - wy * l0 + r20 * b0 + r21 * b1 + r22 * b2,
-            wx + r00 * c0 + r01 * c1 + r02 * c2,
-            wy + r10 * c0 + r11 * c1 + r12 * c2,
-            wz + r20 * c0 + r21 * c1 + r22 * c2,
+    o = state.object
+    to_world = quat.to_matrix(o.orientation)
+    positions, orientations, twists = [], [], []
+    for arm in ARMS:
+        r = state.relative(arm)
+        lever = to_world @ r.position
+        positions.append(o.position + lever)
+        orientations.append(quat.multiply(o.orientation, r.orientation))
+        twists.append(
+            np.concatenate(
+                (
+                    o.velocity + np.cross(o.angular_velocity, lever) + to_world @ r.velocity,
+                    o.angular_velocity + to_world @ r.angular_velocity,
+                )
+            )
         )
-    # One allocation for all four arrays; each is a view into it.
-    out = np.array((*positions, *orientations, *twists, vx, vy, vz, wx, wy, wz))
     return PalmCommands(
-        out[0:6].reshape(2, 3), out[6:14].reshape(2, 4), out[14:26].reshape(2, 6), out[26:32]
+        np.array(positions),
+        np.array(orientations),
+        np.array(twists),
+        np.concatenate((o.velocity, o.angular_velocity)),
     )
 
 
@@ -558,3 +396,17 @@ def relative_from_world(
         quat.rotate(inv, palm_position - object_position),
         quat.multiply(inv, palm_orientation),
     )
+
+
+__all__ = [
+    "ROW_SIZE",
+    "DualArmComposer",
+    "DualArmState",
+    "PalmCommands",
+    "Rollout",
+    "commands_for",
+    "grasped_state",
+    "reference_step",
+    "relative_from_world",
+    "state_values",
+]

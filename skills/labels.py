@@ -23,6 +23,10 @@ class Arm(StrEnum):
     RIGHT = "right"
 
 
+#: Both arms, left then right: the order of every per-arm array.
+ARMS: tuple[Arm, Arm] = (Arm.LEFT, Arm.RIGHT)
+
+
 class Action(StrEnum):
     """What a skill does, as named in the library, the rule files and the trees."""
 

@@ -66,25 +66,6 @@ def test_affordances_json_is_the_last_line(capsys: pytest.CaptureFixture[str]) -
     assert isinstance(json.loads(last), dict | list)
 
 
-def test_compiled_without_numba_exits_2_naming_what_asked_for_it(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
-) -> None:
-    from skills import _kernels
-
-    monkeypatch.setattr(_kernels, "COMPILED", False)
-    out = tmp_path / "out"
-    assert exit_code(["run", DEFAULT, "--compiled", "--out", str(out)]) == app.EXIT_BAD_INPUT
-    assert "--compiled: the compiled composition step needs numba" in capsys.readouterr().err
-    world = tmp_path / "compiled.yaml"
-    text = Path(DEFAULT).read_text(encoding="utf-8")
-    world.write_text(text.replace("sim:\n", "sim:\n  compiled: true\n", 1), encoding="utf-8")
-    assert exit_code(["trials", str(world), "--n", "1", "--out", str(out)]) == 2
-    assert f"{world}: sim.compiled: the compiled composition step needs numba" in (
-        capsys.readouterr().err
-    )
-    assert not out.exists()  # nothing run, nothing written
-
-
 def test_sim_compiled_must_be_true_or_false(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

@@ -7,7 +7,7 @@ from py_trees.common import Status
 from py_trees.ports import PortInformation
 
 from affordances import SemanticAction
-from planner.composition import goal_error, refresh_link_points, transport_composition
+from planner.composition import goal_error, transport_composition
 from planner.leaves.base import MotionLeaf, composition_ports
 from planner.leaves.grasp import squeeze_force
 from planner.port import Move, Pose
@@ -90,7 +90,6 @@ class Transport(MotionLeaf):
         assert self.composer is not None
         world = self.world
         name = self.get_input("object")
-        refresh_link_points(self.composer, world, name)
         cmd = self.composer.step(self.control_dt)
         for i, arm in enumerate(ARMS):
             world.command_palm(arm, Pose(cmd.positions[i], cmd.orientations[i]), cmd.twists[i])

@@ -4,6 +4,8 @@ Every class satisfies :class:`skills.coupling.CouplingTerm`: ``acceleration(stat
 returns additive (linear m/s^2, angular rad/s^2) accelerations for a pose DMP.
 
 =============================  ===========================================================
+:class:`LearntForcing`         a learnt skill's RBF forcing, on a shared transformation system
+:class:`Saturated`             a group of terms, summed, faded and its norms limited
 :class:`ObstacleSteering`      Hoffmann et al. 2009 steering with a distance factor
 :func:`fit_obstacle_steering`  its parameters from avoidance demonstrations (Rai et al. 2014)
 :class:`PotentialFieldAvoidance`  Park et al. 2008 dynamic potential on attached points
@@ -15,9 +17,16 @@ returns additive (linear m/s^2, angular rad/s^2) accelerations for a pose DMP.
 =============================  ===========================================================
 """
 
+from skills.couplings.forcing import LearntForcing
 from skills.couplings.grasp import ForceTrackingGrasp, GraspMaintenance
 from skills.couplings.limits import JointLimitRepulsion, WorkspaceRepulsion
-from skills.couplings.potential import DistanceQuery, PotentialFieldAvoidance, SphereObstacles
+from skills.couplings.potential import (
+    DistanceQuery,
+    MovingPoints,
+    PotentialFieldAvoidance,
+    SphereObstacles,
+)
+from skills.couplings.saturated import Saturated
 from skills.couplings.steering import ObstacleSteering, steering_accelerations
 from skills.couplings.steering_fit import (
     AvoidanceDemo,
@@ -32,8 +41,11 @@ __all__ = [
     "ForceTrackingGrasp",
     "GraspMaintenance",
     "JointLimitRepulsion",
+    "LearntForcing",
+    "MovingPoints",
     "ObstacleSteering",
     "PotentialFieldAvoidance",
+    "Saturated",
     "SphereObstacles",
     "SteeringFit",
     "WorkspaceRepulsion",

@@ -26,9 +26,10 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from skills import quaternion as quat
-from skills.coupling import AccelerationFloats
 from skills.couplings._checks import assign, non_negative, positive, unit_vector, vector
-from skills.pose_dmp import PoseFloats, PoseState, PoseTarget
+from skills.kernel import kernel, quaternion_at, rotation_error_q
+from skills.program import Kind, Packer
+from skills.state import PoseState, PoseTarget
 from skills.types import Array
 
 
@@ -155,30 +156,39 @@ class GraspMaintenance:
         angular : ndarray, shape (3,)
             rad/s^2, {O}.
         """
-        a = self.scalar_acceleration(PoseFloats.of(state), target)
-        return np.array(a[:3]), np.array(a[3:])
-
-    def scalar_acceleration(self, pose: PoseFloats, target: PoseTarget) -> AccelerationFloats:
-        """:meth:`acceleration` as floats.
-
-        ``K (p_ref - p) - D v`` and ``K_rot rotation_error(q_ref, q) - D_rot omega``.
-        """
-        rx, ry, rz, qx, qy, qz, qw = self._ref
-        px, py, pz = pose.position
-        vx, vy, vz = pose.velocity
-        wx, wy, wz = pose.angular_velocity
-        ex, ey, ez = quat.rotation_error_scalar((qx, qy, qz, qw), pose.orientation)
-        k, d = self.stiffness, self.damping
-        kr, dr = self.rotational_stiffness, self.rotational_damping
-        assert d is not None and dr is not None  # set in __post_init__
+        p_ref = np.array(self._ref[:3])
+        q_ref = np.array(self._ref[3:])
+        assert self.damping is not None and self.rotational_damping is not None
         return (
-            k * (rx - px) - d * vx,
-            k * (ry - py) - d * vy,
-            k * (rz - pz) - d * vz,
-            kr * ex - dr * wx,
-            kr * ey - dr * wy,
-            kr * ez - dr * wz,
+            self.stiffness * (p_ref - state.position) - self.damping * state.velocity,
+            self.rotational_stiffness * quat.rotation_error(q_ref, state.orientation)
+            - self.rotational_damping * state.angular_velocity,
         )
+
+    def pack(self, packer: Packer, weight: float) -> None:
+        """A GRASP block: ``[w, reference xyz, reference xyzw, K, D, K_rot, D_rot]``."""
+        packer.add(
+            Kind.GRASP,
+            [
+                weight,
+                *self._ref,
+                self.stiffness,
+                float(self.damping or 0.0),
+                self.rotational_stiffness,
+                float(self.rotational_damping or 0.0),
+            ],
+        )
+
+
+@kernel
+def grasp_kernel(x: Array, b: int, data: Array, o: int, a: Array) -> None:
+    """:meth:`GraspMaintenance.acceleration` of the palm state at ``x[b:]`` from its block at
+    ``data[o:]``, into ``a`` (6)."""
+    e = rotation_error_q(quaternion_at(data, o + 4), quaternion_at(x, b + 9))
+    k, d, kr, dr = data[o + 8], data[o + 9], data[o + 10], data[o + 11]
+    for i in range(3):
+        a[i] = k * (data[o + 1 + i] - x[b + i]) - d * x[b + 3 + i]
+        a[3 + i] = kr * e[i] - dr * x[b + 13 + i]
 
 
 @dataclass(frozen=True, eq=False, init=False)

@@ -29,7 +29,9 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from skills.couplings._checks import ZERO3, assign, positive, vector
-from skills.pose_dmp import PoseState, PoseTarget
+from skills.kernel import kernel
+from skills.program import Kind, Packer
+from skills.state import PoseState, PoseTarget
 from skills.types import Array
 
 
@@ -133,6 +135,35 @@ class WorkspaceRepulsion:
         return barrier(
             y - self.lower, self.upper - y, self.gain, self.margin, self._clip
         ), ZERO3.copy()
+
+    def pack(self, packer: Packer, weight: float) -> None:
+        """A WORKSPACE block: ``[w, lower (3), upper (3), margin (3), clip (3), gain]``."""
+        packer.add(
+            Kind.WORKSPACE,
+            [
+                weight,
+                *self.lower.tolist(),
+                *self.upper.tolist(),
+                *self.margin.tolist(),
+                *self._clip.tolist(),
+                self.gain,
+            ],
+        )
+
+
+@kernel
+def workspace_kernel(x: Array, b: int, data: Array, o: int, a: Array) -> None:
+    """:meth:`WorkspaceRepulsion.acceleration` (the :func:`barrier` per axis) of the state at
+    ``x[b:]`` from its block at ``data[o:]``, into ``a`` (6)."""
+    gain = data[o + 13]
+    a[:] = 0.0
+    for i in range(3):
+        y = x[b + i]
+        inv_m = 1.0 / data[o + 7 + i]
+        clip = data[o + 10 + i]
+        lo = max(1.0 / max(y - data[o + 1 + i], clip) - inv_m, 0.0)
+        hi = max(1.0 / max(data[o + 4 + i] - y, clip) - inv_m, 0.0)
+        a[i] = gain * (lo - hi)
 
 
 @dataclass(frozen=True, eq=False, init=False)

@@ -31,15 +31,17 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
+from typing import Protocol, runtime_checkable
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from skills import quaternion as quat
-from skills.coupling import ZERO_ACCELERATION, AccelerationFloats
 from skills.couplings._checks import ZERO3, assign, positive, vector
-from skills.pose_dmp import PoseFloats, PoseState, PoseTarget
+from skills.kernel import kernel, matrix_q, quaternion_at
+from skills.program import Kind, Packer
+from skills.state import STATE_SIZE, PoseState, PoseTarget
 from skills.types import Array
 
 _ZERO = np.array(0.0)
@@ -47,6 +49,25 @@ _TINY = np.array(1e-300)
 
 #: ``query(points (N, 3)) -> (distances (N,), closest_points (N, 3))``, world frame, m.
 DistanceQuery = Callable[[Array], tuple[Array, Array]]
+
+
+@runtime_checkable
+class MovingPoints(Protocol):
+    """A distance query that also names points of its own that move with the world.
+
+    A field on such a query avoids with these points as well as its attached ones: the
+    arms' links, which bend as the palms move. Before each closed-loop step the composition
+    reads them again (in the world frame) and carries them with the object for that step; an
+    open-loop prediction carries them from where they were when it started.
+    """
+
+    def __call__(self, points: Array) -> tuple[Array, Array]:
+        """Distances and closest points, as :data:`DistanceQuery`."""
+        ...
+
+    def moving_points(self) -> Array:
+        """The points now, (M, 3), world frame, m."""
+        ...
 
 
 @dataclass(frozen=True, eq=False, init=False)
@@ -78,6 +99,10 @@ class SphereObstacles:
         if np.any(r < 0.0):
             raise ValueError(f"radii: expected values >= 0 m, got {r.tolist()}")
         assign(self, centres=c, radii=r)
+
+    def packed(self) -> list[float]:
+        """``[centre, radius]`` per sphere, for the kernel that answers this query itself."""
+        return np.hstack((self.centres, self.radii[:, None])).ravel().tolist()
 
     def __call__(self, points: Array) -> tuple[Array, Array]:
         """Distances (N,) from ``points`` (N, 3) to the nearest sphere, and closest points."""
@@ -239,8 +264,6 @@ class PotentialFieldAvoidance:
     influence: float
     min_distance: float
     gyration_radius: float | None
-    _inv_rho2: float = field(init=False, repr=False)
-    _points_h: Array = field(init=False, repr=False)
 
     def __init__(
         self,
@@ -287,96 +310,38 @@ class PotentialFieldAvoidance:
         self._set_points(self.points_object)
 
     def _set_points(self, points_object: ArrayLike) -> None:
-        # The per-tick part of construction (arm-link points move every control tick), kept
-        # to a few numpy calls: numpy's reductions cost more than the maths on 8 points.
         pts = np.array(points_object, dtype=float)
         if pts.ndim != 2 or pts.shape[1] != 3:
             if pts.size != 0:
                 raise ValueError(f"points_object: expected shape (N, 3), got {pts.shape}")
             pts = np.zeros((0, 3))
-        n = pts.shape[0]
-        total = sum(_dot(pts, pts).tolist())  # NaN or inf anywhere makes it non-finite
-        if not math.isfinite(total):
+        if not np.all(np.isfinite(pts)):
             raise ValueError("points_object: expected finite values, got NaN or inf")
         pts.setflags(write=False)
-        homogeneous = np.empty((n, 4))
-        homogeneous[:, :3] = pts
-        homogeneous[:, 3] = 1.0
-        rho2 = total / n if n else 0.0
-        if self.gyration_radius is not None:
-            rho2 = self.gyration_radius**2
-        set_ = object.__setattr__
-        set_(self, "points_object", pts)
-        set_(self, "_points_h", homogeneous)
-        set_(self, "_inv_rho2", 1.0 / rho2 if rho2 > 1e-12 else 0.0)
+        object.__setattr__(self, "points_object", pts)
 
     def with_points(self, points_object: ArrayLike) -> PotentialFieldAvoidance:
-        """The same field on other points (N, 3) in the object frame, m (cheap: every tick)."""
-        out = object.__new__(PotentialFieldAvoidance)
-        out.__dict__.update(self.__dict__)  # copy.copy's reduce protocol costs 5x more
-        out._set_points(points_object)
-        return out
+        """The same field on other points (N, 3) in the object frame, m."""
+        return replace(self, points_object=np.asarray(points_object, dtype=float))
 
     def with_query(self, query: DistanceQuery) -> PotentialFieldAvoidance:
         """The same field against other obstacles."""
         return replace(self, query=query)
 
+    def inverse_gyration2(self, points_object: Array) -> float:
+        """``1 / rho^2`` for the angular mapping of ``points_object`` (N, 3) (0 for none)."""
+        if self.gyration_radius is not None:
+            rho2 = self.gyration_radius**2
+        else:
+            n = points_object.shape[0]
+            rho2 = float(np.einsum("nk,nk->", points_object, points_object)) / n if n else 0.0
+        return 1.0 / rho2 if rho2 > 1e-12 else 0.0
+
     def world_points(self, state: PoseState) -> tuple[Array, Array, Array]:
         """Lever arms ``R r_i``, positions and velocities of the points, each (N, 3), world."""
-        both = self._world(PoseFloats.of(state))
-        return both[:, :3], both[:, 7:], both[:, 4:7]
-
-    def _world(self, pose: PoseFloats) -> Array:
-        # One product [r_i, 1] @ T gives [R r_i, 1, v + omega x R r_i, y + R r_i], (N, 10):
-        # the column of ones later turns the torque product into the force sum as well.
-        m00, m01, m02, m10, m11, m12, m20, m21, m22 = quat.matrix_floats(pose.orientation)
-        wx, wy, wz = pose.angular_velocity
-        vx, vy, vz = pose.velocity
-        px, py, pz = pose.position
-        return self._points_h @ np.array(
-            (
-                m00,
-                m10,
-                m20,
-                0.0,
-                wy * m20 - wz * m10,
-                wz * m00 - wx * m20,
-                wx * m10 - wy * m00,
-                m00,
-                m10,
-                m20,
-                m01,
-                m11,
-                m21,
-                0.0,
-                wy * m21 - wz * m11,
-                wz * m01 - wx * m21,
-                wx * m11 - wy * m01,
-                m01,
-                m11,
-                m21,
-                m02,
-                m12,
-                m22,
-                0.0,
-                wy * m22 - wz * m12,
-                wz * m02 - wx * m22,
-                wx * m12 - wy * m02,
-                m02,
-                m12,
-                m22,
-                0.0,
-                0.0,
-                0.0,
-                1.0,
-                vx,
-                vy,
-                vz,
-                px,
-                py,
-                pz,
-            )
-        ).reshape(4, 10)
+        lever = self.points_object @ quat.to_matrix(state.orientation).T
+        velocities = state.velocity + np.cross(state.angular_velocity, lever)
+        return lever, state.position + lever, velocities
 
     def point_accelerations(self, state: PoseState) -> Array:
         """``-grad U`` of every point, (N, 3), world frame, m/s^2."""
@@ -388,6 +353,9 @@ class PotentialFieldAvoidance:
 
     def acceleration(self, state: PoseState, target: PoseTarget) -> tuple[Array, Array]:
         """Linear (m/s^2) and angular (rad/s^2) push on the object, world frame.
+
+        The numpy reference, on :attr:`points_object` (compositions run
+        :func:`potential_kernel`, with the query's moving points too).
 
         Parameters
         ----------
@@ -402,73 +370,206 @@ class PotentialFieldAvoidance:
         """
         if self.points_object.shape[0] == 0:
             return ZERO3.copy(), ZERO3.copy()
-        both = self._world(PoseFloats.of(state))
-        v = both[:, 4:7]
-        distances, closest = self.query(both[:, 7:])
-        r = both[:, 7:] - closest
-        vr = _dot(v, r)
-        # Python's min on a few floats is cheaper than numpy's reduction machinery.
-        if min(distances.tolist()) >= self.influence or min(vr.tolist()) >= 0.0:
-            return ZERO3.copy(), ZERO3.copy()  # nothing near or nothing approaching: the usual case
-        alpha, kappa = _coefficients(
-            _dot(r, r), vr, _dot(v, v), distances, self.beta, self.influence, self.min_distance
+        lever, x, v = self.world_points(state)
+        distances, closest = self.query(x)
+        if np.min(distances) >= self.influence:
+            return ZERO3.copy(), ZERO3.copy()
+        a = self.gain * (
+            point_accelerations(
+                x, v, closest, distances, 1.0, self.beta, self.influence, self.min_distance
+            )
         )
-        a = alpha[:, None] * v
-        a += kappa[:, None] * r
-        # rows 0-2: sum_n arm_i a_j (the torque is its antisymmetric part); row 3: sum_n a_j
-        m = (both[:, :4].T @ a).ravel().tolist()
-        lam = self.gain
-        k = lam * self._inv_rho2
-        return np.array((lam * m[9], lam * m[10], lam * m[11])), np.array(
-            (k * (m[5] - m[7]), k * (m[6] - m[2]), k * (m[1] - m[3]))
+        return a.sum(axis=0), self.inverse_gyration2(self.points_object) * np.cross(lever, a).sum(
+            axis=0
         )
 
-    def scalar_acceleration(self, pose: PoseFloats, target: PoseTarget) -> AccelerationFloats:
-        """:meth:`acceleration` as floats, summed one point at a time.
-
-        The world points and the distance query stay one vectorised pass; the per-point
-        coefficients and sums are floats: for the handful of link points a composition
-        carries, numpy's per-call cost over the twenty-odd operations of
-        :func:`_coefficients` exceeds the whole per-point arithmetic. Same formula: with
-        ``q = -v.r > 0``, ``C = q / (|r| |v|)``, ``h = C^(beta-1) / p``, the point's push is
-        ``alpha v + kappa r`` with ``alpha = beta h g(p)`` and
-        ``kappa = (q / |r|^2) h (beta g(p) + 1 / p)``.
+    def pack(self, packer: Packer, weight: float) -> None:
+        """A POTENTIAL block ``[w, gain, beta, influence, min_distance, 1/rho^2, N, M,
+        points N x 3, ...]``: ``M`` spheres ``[centre, radius]`` when the query is
+        :class:`SphereObstacles` (answered in the kernel), else ``M = -1`` and
+        ``[distances N, closest N x 3]``, which a hook writes from the query before each step.
+        The query's moving points, if any, follow the attached ones; a refresher writes them
+        before each closed-loop step, and once now, at the start state.
         """
-        if self.points_object.shape[0] == 0:
-            return ZERO_ACCELERATION
-        both = self._world(pose)
-        distances, closest = self.query(both[:, 7:])
-        dist = distances.tolist()
-        if min(dist) >= self.influence:
-            return ZERO_ACCELERATION  # nothing near: the usual case
-        beta, power, p_min = self.beta, self.beta - 1.0, self.min_distance
-        inv_p0 = 1.0 / self.influence  # 0 for Park et al.'s plain 1/p
-        fx = fy = fz = tx = ty = tz = 0.0
-        for (ax, ay, az, _, vx, vy, vz, x, y, z), (cx, cy, cz), d in zip(
-            both.tolist(), closest.tolist(), dist, strict=True
-        ):
-            rx, ry, rz = x - cx, y - cy, z - cz
-            q = -(vx * rx + vy * ry + vz * rz)
-            if q <= 0.0:
-                continue  # receding or sliding past: U is flat
-            ip = 1.0 / (d if d > p_min else p_min)
-            g = ip - inv_p0
-            if g <= 0.0:
-                continue  # at or beyond the influence distance
-            rr = rx * rx + ry * ry + rz * rz
-            h = ip * (q / max(math.sqrt(rr * (vx * vx + vy * vy + vz * vz)), 1e-300)) ** power
-            alpha = beta * g
-            kappa = (alpha + ip) * h * q / max(rr, 1e-300)
-            alpha *= h
-            ux = alpha * vx + kappa * rx  # this point's -grad U / lambda
-            uy = alpha * vy + kappa * ry
-            uz = alpha * vz + kappa * rz
-            fx += ux
-            fy += uy
-            fz += uz
-            tx += ay * uz - az * uy  # lever arm x push
-            ty += az * ux - ax * uz
-            tz += ax * uy - ay * ux
-        lam = self.gain
-        k = lam * self._inv_rho2
-        return (lam * fx, lam * fy, lam * fz, k * tx, k * ty, k * tz)
+        moving = self.query.moving_points if isinstance(self.query, MovingPoints) else None
+        fixed = self.points_object.shape[0]
+        n = fixed + (np.asarray(moving()).reshape(-1, 3).shape[0] if moving else 0)
+        spheres = self.query.packed() if isinstance(self.query, SphereObstacles) else None
+        head = [weight, self.gain, self.beta, self.influence, self.min_distance]
+        inv_rho2 = self.inverse_gyration2(self.points_object)
+        points = self.points_object.ravel().tolist() + [0.0] * (3 * (n - fixed))
+        if spheres is not None:
+            tail = [float(len(spheres) // 4), *points, *spheres]
+        else:
+            tail = [-1.0, *points, *([0.0] * (4 * n))]
+        at = packer.add(Kind.POTENTIAL, [*head, inv_rho2, float(n), *tail])
+        b = STATE_SIZE * packer.space
+        first = at + POTENTIAL_HEADER
+        if moving is not None:
+            packer.refreshers.append(self._refresher(moving, b, first, fixed, n, at + 5))
+        if spheres is None:
+            packer.hooks.append(_query_hook(self.query, b, first, n))
+
+    def _refresher(
+        self, moving: Callable[[], Array], b: int, first: int, fixed: int, n: int, rho_at: int
+    ) -> Callable[[Array, Array], None]:
+        def refresh(x: Array, data: Array) -> None:
+            now = np.asarray(moving(), dtype=float).reshape(-1, 3)
+            if now.shape[0] != n - fixed:
+                raise ValueError(
+                    f"moving_points: expected {n - fixed} points, as when the field was "
+                    f"packed, got {now.shape[0]}"
+                )
+            to_world = quat.to_matrix(x[b + 9 : b + 13])
+            data[first + 3 * fixed : first + 3 * n] = ((now - x[b : b + 3]) @ to_world).ravel()
+            data[rho_at] = self.inverse_gyration2(data[first : first + 3 * n].reshape(n, 3))
+
+        return refresh
+
+
+#: Where a potential block's points start (after the weight and the parameters).
+POTENTIAL_HEADER = 8
+
+
+def _query_hook(query: DistanceQuery, b: int, first: int, n: int) -> Callable[[Array, Array], None]:
+    """Write the query's answer for the field's world points at the step's state."""
+
+    def answer(x: Array, data: Array) -> None:
+        points = data[first : first + 3 * n].reshape(n, 3)
+        world = x[b : b + 3] + points @ quat.to_matrix(x[b + 9 : b + 13]).T
+        distances, closest = query(world)
+        d = np.asarray(distances, dtype=float)
+        c = np.asarray(closest, dtype=float)
+        if d.shape != (n,) or c.shape != (n, 3):
+            raise ValueError(
+                f"query: expected distances ({n},) and closest points ({n}, 3), got "
+                f"{d.shape} and {c.shape}"
+            )
+        after = first + 3 * n
+        data[after : after + n] = d
+        data[after + n : after + 4 * n] = c.ravel()
+
+    return answer
+
+
+@kernel
+def world_points_kernel(x: Array, b: int, data: Array, o: int) -> Array:
+    """A potential block's points in the world (N, 3), from the state at ``x[b:]``."""
+    n = int(data[o + 6])
+    m = matrix_q(quaternion_at(x, b + 9))
+    out = np.empty((n, 3))
+    for i in range(n):
+        p = o + POTENTIAL_HEADER + 3 * i
+        for r in range(3):
+            out[i, r] = x[b + r] + (
+                m[3 * r] * data[p] + m[3 * r + 1] * data[p + 1] + m[3 * r + 2] * data[p + 2]
+            )
+    return out
+
+
+@kernel
+def nearest_spheres_kernel(points: Array, data: Array, at: int, count: int) -> Array:
+    """:meth:`SphereObstacles.__call__` on the ``count`` spheres ``[centre, radius]`` stored
+    from ``data[at]``: per point, distance and closest point, (N, 4)."""
+    n = points.shape[0]
+    out = np.empty((n, 4))
+    for i in range(n):
+        best = np.inf
+        bx = by = bz = br = bn = cx = cy = cz = 0.0
+        for j in range(count):
+            c = at + 4 * j
+            dx = points[i, 0] - data[c]
+            dy = points[i, 1] - data[c + 1]
+            dz = points[i, 2] - data[c + 2]
+            norm = math.sqrt(dx * dx + dy * dy + dz * dz)
+            gap = norm - data[c + 3]
+            if gap < best:
+                best, bx, by, bz, br, bn = gap, dx, dy, dz, data[c + 3], norm
+                cx, cy, cz = data[c], data[c + 1], data[c + 2]
+        if count == 0:
+            out[i, 0] = np.inf
+            out[i, 1] = out[i, 2] = out[i, 3] = np.nan
+            continue
+        scale = br / max(bn, 1e-12)
+        out[i, 0] = best
+        out[i, 1] = cx + bx * scale
+        out[i, 2] = cy + by * scale
+        out[i, 3] = cz + bz * scale
+    return out
+
+
+@kernel
+def potential_kernel(x: Array, b: int, data: Array, o: int, a: Array) -> None:
+    """:meth:`PotentialFieldAvoidance.acceleration` of the object state at ``x[b:]`` from its
+    block at ``data[o:]`` (see :meth:`PotentialFieldAvoidance.pack`), into ``a`` (6)."""
+    gain, beta, influence, p_min, inv_rho2 = (
+        data[o + 1],
+        data[o + 2],
+        data[o + 3],
+        data[o + 4],
+        data[o + 5],
+    )
+    n = int(data[o + 6])
+    spheres = int(data[o + 7])
+    points = o + POTENTIAL_HEADER
+    after = points + 3 * n
+    a[:] = 0.0
+    if n == 0:
+        return
+    near: Array = np.empty((n, 4))  # distance, closest point
+    if spheres < 0:
+        for i in range(n):
+            near[i, 0] = data[after + i]
+            near[i, 1] = data[after + n + 3 * i]
+            near[i, 2] = data[after + n + 3 * i + 1]
+            near[i, 3] = data[after + n + 3 * i + 2]
+    else:
+        near = nearest_spheres_kernel(world_points_kernel(x, b, data, o), data, after, spheres)
+    nearest = near[0, 0]
+    for i in range(1, n):
+        nearest = min(nearest, near[i, 0])
+    if nearest >= influence:
+        return
+    m = matrix_q(quaternion_at(x, b + 9))
+    vx0, vy0, vz0 = x[b + 3], x[b + 4], x[b + 5]
+    wx, wy, wz = x[b + 13], x[b + 14], x[b + 15]
+    px, py, pz = x[b], x[b + 1], x[b + 2]
+    power = beta - 1.0
+    inv_p0 = 1.0 / influence
+    fx = fy = fz = tx = ty = tz = 0.0
+    for i in range(n):
+        p = points + 3 * i
+        ax = m[0] * data[p] + m[1] * data[p + 1] + m[2] * data[p + 2]  # lever arm R r_i
+        ay = m[3] * data[p] + m[4] * data[p + 1] + m[5] * data[p + 2]
+        az = m[6] * data[p] + m[7] * data[p + 1] + m[8] * data[p + 2]
+        vx = vx0 + (wy * az - wz * ay)
+        vy = vy0 + (wz * ax - wx * az)
+        vz = vz0 + (wx * ay - wy * ax)
+        rx = (px + ax) - near[i, 1]
+        ry = (py + ay) - near[i, 2]
+        rz = (pz + az) - near[i, 3]
+        q = -(vx * rx + vy * ry + vz * rz)
+        if q <= 0.0:
+            continue  # receding or sliding past: U is flat
+        d = near[i, 0]
+        ip = 1.0 / (d if d > p_min else p_min)
+        g = ip - inv_p0
+        if g <= 0.0:
+            continue  # at or beyond the influence distance
+        rr = rx * rx + ry * ry + rz * rz
+        h = ip * (q / max(math.sqrt(rr * (vx * vx + vy * vy + vz * vz)), 1e-300)) ** power
+        alpha = beta * g
+        kappa = (alpha + ip) * h * q / max(rr, 1e-300)
+        alpha *= h
+        ux = alpha * vx + kappa * rx  # this point's -grad U / lambda
+        uy = alpha * vy + kappa * ry
+        uz = alpha * vz + kappa * rz
+        fx += ux
+        fy += uy
+        fz += uz
+        tx += ay * uz - az * uy  # lever arm x push
+        ty += az * ux - ax * uz
+        tz += ax * uy - ay * ux
+    k = gain * inv_rho2
+    a[0], a[1], a[2] = gain * fx, gain * fy, gain * fz
+    a[3], a[4], a[5] = k * tx, k * ty, k * tz

@@ -36,9 +36,10 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike
 
-from skills.coupling import ZERO_ACCELERATION, AccelerationFloats
 from skills.couplings._checks import ZERO3, non_negative, positive, vector
-from skills.pose_dmp import PoseFloats, PoseState, PoseTarget
+from skills.kernel import kernel
+from skills.program import Kind, Packer
+from skills.state import PoseState, PoseTarget
 from skills.types import Array
 
 #: Below this ``sin(phi)`` the obstacle is dead ahead or behind: the law has no direction (and
@@ -127,7 +128,6 @@ class ObstacleSteering:
     max_angle: float
     min_speed: float
     _reach: Array = field(init=False, repr=False)
-    _single: tuple[float, float, float, float] | None = field(init=False, repr=False)
 
     def __init__(
         self,
@@ -169,8 +169,6 @@ class ObstacleSteering:
         reach = r + self.object_radius
         reach.setflags(write=False)
         set_(self, "_reach", reach)
-        # One obstacle (the usual case) is steered in floats: its centre and reach as floats.
-        set_(self, "_single", (*c[0].tolist(), float(reach[0])) if c.shape[0] == 1 else None)
 
     def with_obstacles(self, centres: ArrayLike, radii: ArrayLike) -> ObstacleSteering:
         """The same law for another set of obstacles (centres (M, 3) m, radii (M,) m)."""
@@ -188,6 +186,9 @@ class ObstacleSteering:
     def acceleration(self, state: PoseState, target: PoseTarget) -> tuple[Array, Array]:
         """Steering acceleration of the position, m/s^2; the angular part is zero.
 
+        The numpy reference (:func:`steering_accelerations`); compositions run
+        :func:`steering_kernel`.
+
         Parameters
         ----------
         state : PoseState
@@ -199,59 +200,79 @@ class ObstacleSteering:
         -------
         linear, angular : ndarray, shape (3,)
         """
-        a = self.scalar_acceleration(PoseFloats.of(state), target)
-        return np.array(a[:3]), ZERO3.copy()
+        v = np.asarray(state.velocity, dtype=float)
+        if float(v @ v) <= self.min_speed * self.min_speed or self._reach.shape[0] == 0:
+            return ZERO3.copy(), ZERO3.copy()
+        a = steering_accelerations(
+            np.asarray(state.position, dtype=float)[None],
+            v[None],
+            self.centres,
+            self._reach,
+            self.gamma,
+            self.beta,
+            self.k,
+            self.max_angle,
+        )
+        return a[0], ZERO3.copy()
 
-    def scalar_acceleration(self, pose: PoseFloats, target: PoseTarget) -> AccelerationFloats:
-        """:meth:`acceleration` as floats."""
-        vx, vy, vz = pose.velocity
-        vv = vx * vx + vy * vy + vz * vz
-        if vv <= self.min_speed * self.min_speed or self._reach.shape[0] == 0:
-            return ZERO_ACCELERATION
-        if self._single is not None:
-            ax, ay, az = self._one_obstacle(self._single, pose.position, vx, vy, vz, vv)
-        else:
-            ax, ay, az = self._many_obstacles(pose.position, pose.velocity, vv).tolist()
-        return (ax, ay, az, 0.0, 0.0, 0.0)
+    def pack(self, packer: Packer, weight: float) -> None:
+        """A STEERING block: ``[w, gamma, beta, k, max_angle, min_speed, M, M x (centre,
+        reach)]``."""
+        obstacles = np.hstack((self.centres, self._reach[:, None])).ravel().tolist()
+        packer.add(
+            Kind.STEERING,
+            [
+                weight,
+                self.gamma,
+                self.beta,
+                self.k,
+                self.max_angle,
+                self.min_speed,
+                float(self.centres.shape[0]),
+                *obstacles,
+            ],
+        )
 
-    def _many_obstacles(self, position: list[float], velocity: list[float], vv: float) -> Array:
-        v = np.array(velocity)
-        d_obs = self.centres - np.array(position)  # (M, 3) point to obstacle
-        dv = d_obs @ v
-        dd = np.einsum("mk,mk->m", d_obs, d_obs)
-        cross = np.sqrt(np.maximum(dd * vv - dv * dv, 0.0))
-        phi = np.arctan2(cross, dv)
-        clearance = np.maximum(np.sqrt(dd) - self._reach, 0.0)
-        w = np.exp(-self.beta * phi - self.k * clearance * clearance)
-        w *= phi
-        w /= np.maximum(cross, 1e-300)
-        w[(phi >= self.max_angle) | (cross <= _COLLINEAR * np.sqrt(dd * vv))] = 0.0
-        w *= self.gamma
-        out: Array = v * float(w @ dv) - vv * (w @ d_obs)
-        return out
 
-    def _one_obstacle(
-        self,
-        obstacle: tuple[float, float, float, float],
-        position: list[float],
-        vx: float,
-        vy: float,
-        vz: float,
-        vv: float,
-    ) -> tuple[float, float, float]:
-        # One obstacle (centre, reach) in float arithmetic: numpy's per-call overhead would
-        # cost ten times the maths on 3-vectors. Same law as the vectorised path.
-        ox, oy, oz, reach = obstacle
-        px, py, pz = position
-        dx, dy, dz = ox - px, oy - py, oz - pz
+#: Where a steering block's obstacles start (after the weight and the parameters).
+STEERING_HEADER = 7
+
+
+@kernel
+def steering_kernel(x: Array, b: int, data: Array, o: int, a: Array) -> None:
+    """:meth:`ObstacleSteering.acceleration` of the state at ``x[b:]`` from its block at
+    ``data[o:]``, into ``a`` (6)."""
+    gamma, beta, kc, max_angle, min_speed = (
+        data[o + 1],
+        data[o + 2],
+        data[o + 3],
+        data[o + 4],
+        data[o + 5],
+    )
+    m = int(data[o + 6])
+    vx, vy, vz = x[b + 3], x[b + 4], x[b + 5]
+    vv = vx * vx + vy * vy + vz * vz
+    a[:] = 0.0
+    if vv <= min_speed * min_speed:
+        return
+    px, py, pz = x[b], x[b + 1], x[b + 2]
+    along = 0.0  # sum of w (D.v)
+    sx = sy = sz = 0.0  # sum of w D
+    for i in range(m):
+        c = o + STEERING_HEADER + 4 * i
+        dx, dy, dz = data[c] - px, data[c + 1] - py, data[c + 2] - pz
         dv = dx * vx + dy * vy + dz * vz
         dd = dx * dx + dy * dy + dz * dz
         cross = math.sqrt(max(dd * vv - dv * dv, 0.0))
         phi = math.atan2(cross, dv)
-        if phi >= self.max_angle or cross <= _COLLINEAR * math.sqrt(dd * vv):
-            return (0.0, 0.0, 0.0)
-        clearance = max(math.sqrt(dd) - reach, 0.0)
-        w = self.gamma * phi * math.exp(-self.beta * phi - self.k * clearance * clearance) / cross
-        a = w * dv
-        b = w * vv
-        return (a * vx - b * dx, a * vy - b * dy, a * vz - b * dz)
+        if phi >= max_angle or cross <= _COLLINEAR * math.sqrt(dd * vv):
+            continue
+        clearance = max(math.sqrt(dd) - data[c + 3], 0.0)
+        w = gamma * phi * math.exp(-beta * phi - kc * clearance * clearance) / cross
+        along += w * dv
+        sx += w * dx
+        sy += w * dy
+        sz += w * dz
+    a[0] = along * vx - vv * sx
+    a[1] = along * vy - vv * sy
+    a[2] = along * vz - vv * sz

@@ -26,7 +26,7 @@ from skills.couplings._checks import non_negative, vector
 from skills.couplings.steering import ObstacleSteering, steering_accelerations
 from skills.demonstration import Demonstration
 from skills.dmp import DMPParams
-from skills.pose_dmp import PoseModel
+from skills.pose_model import PoseModel
 from skills.types import Array
 
 _BETA_GRID = (0.25, 0.5, 1.0, 2.0, 4.0, 8.0)

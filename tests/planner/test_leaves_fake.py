@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import numpy as np
 import py_trees
-import pytest
 from py_trees.common import Status
 
 from affordances import SemanticAction, SkillSelection
@@ -24,7 +23,6 @@ from planner.port import Pose
 from planner.testing import FakeWorld, tick_until
 from planner.wiring import wire
 from skills import quaternion as quat
-from skills.compiled import available as compiled_available
 from skills.dual_arm import ARMS
 from skills.labels import Action, Space
 from skills.labels import Grasp as GraspType
@@ -314,18 +312,3 @@ def test_selection_helpers_are_typed() -> None:
     sel = SkillSelection(Action.TRANSPORT, Space.ABSOLUTE, 1.0, {})
     assert sel.action is Action.TRANSPORT
     assert Pose.of([0, 0, 0], quat.IDENTITY).position.shape == (3,)
-
-
-@pytest.mark.skipif(not compiled_available(), reason="numba is not installed")
-def test_leaves_set_up_compiled_compose_compiled(
-    fake_world: FakeWorld, library: SkillLibrary
-) -> None:
-    select(fake_world, library)
-    approach_and_grasp(fake_world, library)
-    leaf = Transport("move0")
-    wire(leaf, object="parcel", move=0, plan="{plan}", from_state="{state}", to_state="{state}")  # type: ignore[arg-type]
-    leaf.setup(world=fake_world, library=library, control_dt=DT, compiled=True)
-    log = tick_until(leaf, fake_world, DT, max_ticks=3000)
-    assert log.final == Status.SUCCESS, log.feedback
-    assert leaf.composer is not None and leaf.composer.compiled
-    assert leaf.composer._resolved().compiled is not None

@@ -21,7 +21,8 @@ from skills.couplings import (
 )
 from skills.demonstration import Demonstration
 from skills.demos import avoidance_demo, straight_demo
-from skills.pose_dmp import PoseFloats, PoseModel, PoseState, fit_pose, pose_rollout
+from skills.interpreter import kernel_acceleration
+from skills.pose_dmp import PoseModel, PoseState, fit_pose, pose_rollout
 
 #: Coupling terms here ignore the DMP's target; any valid one will do.
 TARGET = PoseModel.still().target(np.zeros(3), quat.IDENTITY, np.ones(3), quat.IDENTITY, 1.0)
@@ -135,7 +136,7 @@ def test_one_obstacle_fast_path_matches_the_vectorised_law() -> None:
 
 
 @pytest.mark.parametrize("m", [0, 1, 4])
-def test_scalar_path_matches_the_vectorised_law(m: int) -> None:
+def test_the_kernel_and_the_term_match_the_vectorised_law(m: int) -> None:
     rng = np.random.default_rng(5)
     centres = rng.normal(size=(m, 3))
     radii = rng.uniform(0.0, 0.3, m)
@@ -143,10 +144,13 @@ def test_scalar_path_matches_the_vectorised_law(m: int) -> None:
     for _ in range(20):
         y, v = rng.normal(size=3), rng.normal(size=3)
         law = steering_accelerations(y[None], v[None], centres, radii + 0.1, 3.0, 1.5, 2.0)[0]
-        fast = steer.scalar_acceleration(PoseFloats.of(moving(y, v)), TARGET)
+        lin, ang = steer.acceleration(moving(y, v), TARGET)
+        assert_allclose([*lin, *ang], [*law, 0.0, 0.0, 0.0], rtol=1e-10, atol=1e-14)
+        fast = np.concatenate(kernel_acceleration(steer, moving(y, v), TARGET))
         assert_allclose(fast, [*law, 0.0, 0.0, 0.0], rtol=1e-10, atol=1e-14)
-    slow = PoseFloats.of(moving(y, [1e-7, 0.0, 0.0]))
-    assert steer.scalar_acceleration(slow, TARGET) == (0.0,) * 6
+    slow = moving(y, [1e-7, 0.0, 0.0])
+    assert np.all(np.concatenate(steer.acceleration(slow, TARGET)) == 0.0)
+    assert np.all(np.concatenate(kernel_acceleration(steer, slow, TARGET)) == 0.0)
 
 
 def test_bad_parameters_name_the_field() -> None:

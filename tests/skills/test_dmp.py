@@ -7,6 +7,7 @@ import pytest
 from numpy.testing import assert_allclose
 
 from skills import quaternion as quat
+from skills.couplings import LearntForcing
 from skills.demonstration import Demonstration
 from skills.dmp import (
     DMPParams,
@@ -15,10 +16,9 @@ from skills.dmp import (
     fit_position,
     position_rollout,
 )
+from skills.interpreter import kernel_acceleration
 from skills.pose_dmp import (
-    LearntForcing,
     PoseDMP,
-    PoseFloats,
     PoseModel,
     PoseState,
     fit_pose,
@@ -292,25 +292,8 @@ def test_learnt_forcing_is_the_model_forcing_scaled_for_the_running_target(
                 model.orientation.forcing.value(s, own.orientation_matrix),
             )
         ) / (1.5 * 1.5)
-        fast = forcing.scalar_acceleration(PoseFloats.of(state), target)
-        assert_allclose(fast, expected, rtol=1e-12, atol=1e-12 * np.abs(expected).max())
         lin, ang = forcing.acceleration(state, target)
-        assert fast == (*lin.tolist(), *ang.tolist())
-
-
-def test_learnt_forcing_on_a_shared_basis_gives_the_same_numbers(demo: Demonstration) -> None:
-    model = fit_pose(demo)
-    shared = DMPParams().basis()  # another instance of the same functions
-    target = PoseModel.still().target(
-        [0.5, -0.1, 0.7], quat.IDENTITY, [0.8, 0.2, 0.6], quat.IDENTITY
-    )
-    own, on_shared = LearntForcing(model), LearntForcing(model, shared)
-    assert on_shared.basis is shared
-    rng = np.random.default_rng(8)
-    for _ in range(5):
-        state = moving_state(rng)
-        assert on_shared.scalar_acceleration(PoseFloats.of(state), target) == (
-            own.scalar_acceleration(PoseFloats.of(state), target)
-        )
-    with pytest.raises(ValueError, match="basis: expected the model's basis functions"):
-        LearntForcing(model, DMPParams(n_basis=30).basis())
+        tol = 1e-12 * np.abs(expected).max()
+        assert_allclose([*lin, *ang], expected, rtol=1e-12, atol=tol)
+        fast = np.concatenate(kernel_acceleration(forcing, state, target))
+        assert_allclose(fast, expected, rtol=1e-12, atol=tol)
