@@ -408,7 +408,7 @@ class PotentialFieldAvoidance:
         if moving is not None:
             packer.refreshers.append(self._refresher(moving, b, first, fixed, n, at + 5))
         if spheres is None:
-            packer.hooks.append(_query_hook(self.query, b, first, n))
+            packer.hooks.append(_query_hook(self.query, b, at, n))
 
     def _refresher(
         self, moving: Callable[[], Array], b: int, first: int, fixed: int, n: int, rho_at: int
@@ -431,13 +431,12 @@ class PotentialFieldAvoidance:
 POTENTIAL_HEADER = 8
 
 
-def _query_hook(query: DistanceQuery, b: int, first: int, n: int) -> Callable[[Array, Array], None]:
+def _query_hook(query: DistanceQuery, b: int, at: int, n: int) -> Callable[[Array, Array], None]:
     """Write the query's answer for the field's world points at the step's state."""
+    after = at + POTENTIAL_HEADER + 3 * n
 
     def answer(x: Array, data: Array) -> None:
-        points = data[first : first + 3 * n].reshape(n, 3)
-        world = x[b : b + 3] + points @ quat.to_matrix(x[b + 9 : b + 13]).T
-        distances, closest = query(world)
+        distances, closest = query(world_points_kernel(x, b, data, at))
         d = np.asarray(distances, dtype=float)
         c = np.asarray(closest, dtype=float)
         if d.shape != (n,) or c.shape != (n, 3):
@@ -445,7 +444,6 @@ def _query_hook(query: DistanceQuery, b: int, first: int, n: int) -> Callable[[A
                 f"query: expected distances ({n},) and closest points ({n}, 3), got "
                 f"{d.shape} and {c.shape}"
             )
-        after = first + 3 * n
         data[after : after + n] = d
         data[after + n : after + 4 * n] = c.ravel()
 
