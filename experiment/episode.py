@@ -20,6 +20,7 @@ import py_trees
 from py_trees.common import Status
 
 import planner.leaves  # noqa: F401  (registers the leaves for the XML loader)
+from experiment.figures import Animation, MoveTrace, trajectory_figure
 from planner.factories import pick_and_place
 from planner.leaves import Transport
 from planner.loader import load_tree
@@ -30,7 +31,6 @@ from skills import quaternion as quat
 from skills.default_library import DEMOS_DIR, build_default_library
 from skills.demos.io import read_demo_csv
 from skills.library import SkillLibrary
-from worlds.figures import Animation, MoveTrace, trajectory_figure
 from worlds.sim_world import SimWorld
 from worlds.world_file import World
 

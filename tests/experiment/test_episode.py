@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from worlds.episode import run_episode
+from experiment.episode import run_episode
 from worlds.world_file import load_world
 
 pytestmark = pytest.mark.sim
