@@ -461,7 +461,8 @@ def build_parser() -> argparse.ArgumentParser:
     trials.add_argument("--n", type=int, default=20, help="number of trials (default: 20)")
     trials.add_argument("--seed", type=int, default=0, help="campaign seed (default: 0)")
     trials.add_argument(
-        "--tree", help="behaviour tree XML every trial runs (default: the paper's tree)"
+        "--tree",
+        help="behaviour tree XML every trial runs (default: planner/trees/pick_and_place.xml)",
     )
     trials.add_argument(
         "--workers",

@@ -21,7 +21,7 @@ from py_trees.common import Status
 
 import planner.leaves  # noqa: F401  (registers the leaves for the XML loader)
 from experiment.figures import Animation, MoveTrace, trajectory_figure
-from planner.factories import pick_and_place
+from planner.default_tree import default_tree
 from planner.loader import load_tree
 from planner.move_result import move_results
 from planner.render import render_tree
@@ -187,8 +187,8 @@ def run_episode(
     ----------
     world : World
     tree_path : Path, optional
-        Behaviour tree XML; default: :func:`planner.factories.pick_and_place` with the task's
-        number of moves (``planner/trees/pick_and_place.xml`` for three).
+        Behaviour tree XML; default: :func:`planner.default_tree.default_tree` for the first
+        task object's number of moves (``planner/trees/pick_and_place.xml`` for three).
     library : SkillLibrary, optional
         Default: the world's.
     out : Path, optional
@@ -210,9 +210,8 @@ def run_episode(
     n_moves = sum(len(s.moves) for s in world.task if s.object == name)
     # The loader writes constant port values to the blackboard: clear it first, not after.
     py_trees.blackboard.Blackboard.clear()
-    # Without a tree file, the paper's tree is built in code for this task's number of moves
-    # (for three it is planner/trees/pick_and_place.xml, node for node).
-    root = load_tree(tree_path) if tree_path is not None else pick_and_place(n_moves)
+    # Without a tree file, the shipped tree (its Move subtree once per move of the task).
+    root = load_tree(tree_path) if tree_path is not None else default_tree(n_moves)
     lib = library if library is not None else load_library(world)
     with SimWorld(world, name, gui=gui) as sim:
         recorder = _Recorder(sim, name, n_moves)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import py_trees
 from py_trees.common import Status
 
-from planner.factories import pick_and_place
+from planner.default_tree import default_tree
 from planner.runner import run_tree
 from planner.testing import FakeWorld
 from skills.labels import Arm
@@ -19,7 +19,7 @@ def statuses_of(root: py_trees.behaviour.Behaviour, kind: str) -> list[Status]:
 
 
 def test_the_tree_does_the_three_moves(fake_world: FakeWorld, library: SkillLibrary) -> None:
-    root = pick_and_place()
+    root = default_tree()
     result = run_tree(root, fake_world, library, DT, 120.0, {"/object": "parcel"})
     assert result.status == Status.SUCCESS, result.reason
     assert statuses_of(root, "AtGoal") == [Status.SUCCESS] * 3
@@ -29,7 +29,7 @@ def test_the_tree_does_the_three_moves(fake_world: FakeWorld, library: SkillLibr
 def test_a_drop_during_a_move_leads_to_a_regrasp(
     fake_world: FakeWorld, library: SkillLibrary
 ) -> None:
-    root = pick_and_place()
+    root = default_tree()
     events: list[str] = []
 
     def slip(tree: py_trees.trees.BehaviourTree) -> None:
