@@ -280,9 +280,9 @@ def _teach_command(args: argparse.Namespace) -> int:
 
 def _run_command(args: argparse.Namespace) -> int:
     """Run a world's task in PyBullet, show progress, judge it and write what it shows."""
+    from experiment.episode import run_episode
     from planner.loader import TreeFileError
     from skills.library import LibraryFileError
-    from worlds.episode import run_episode
     from worlds.scene import NoDisplayError
 
     world = _with_compiled_or_exit(_load_world_or_exit(args.world), args.world, args.compiled)
@@ -331,7 +331,7 @@ def _run_command(args: argparse.Namespace) -> int:
 
 def _trials_command(args: argparse.Namespace) -> int:
     """The paper's experiment: N trials of three moves with new obstacles, judged, resumable."""
-    from worlds.trials import campaign_results, reason_of, run_campaign, summarise
+    from experiment.trials import campaign_results, reason_of, run_campaign, summarise
 
     world = _with_compiled_or_exit(_load_world_or_exit(args.world), args.world, args.compiled)
     if args.n < 1 or args.workers < 1:
@@ -451,7 +451,8 @@ def build_parser() -> argparse.ArgumentParser:
     trials.add_argument("--n", type=int, default=20, help="number of trials (default: 20)")
     trials.add_argument("--seed", type=int, default=0, help="campaign seed (default: 0)")
     trials.add_argument(
-        "--tree", help="behaviour tree XML every trial runs (default: the paper's tree)"
+        "--tree",
+        help="behaviour tree XML every trial runs (default: planner/trees/pick_and_place.xml)",
     )
     trials.add_argument(
         "--workers",

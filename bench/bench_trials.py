@@ -14,7 +14,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from worlds.trials import run_campaign, summarise
+from experiment.trials import run_campaign, summarise
 from worlds.world_file import load_world
 
 DEFAULT = Path(__file__).resolve().parents[1] / "worlds" / "parcel_pick_place.yaml"

@@ -8,9 +8,12 @@ One JSON object per line, stamped with the simulated time::
      "activity": "INITIALISED", "value": true}
 
 Statuses are compared after every tick (a visitor records the order nodes were ticked in; nodes
-stopped without being ticked follow in tree order). Writes come from py_trees' blackboard
-activity stream, which is drained after every tick. The file is flushed after every tick, so
-an interrupted run keeps everything up to its last tick.
+stopped without being ticked follow in tree order). ``node`` names one node of the tree
+(:func:`node_labels`): its name, which for a tree loaded from XML is already its dotted path
+from the root, or, where several nodes share a name (a tree built in code), its path from the
+root. Writes come from py_trees' blackboard activity stream, which is drained after every
+tick. The file is flushed after every tick, so an interrupted run keeps everything up to its
+last tick.
 """
 
 from __future__ import annotations
@@ -21,6 +24,7 @@ import math
 import os
 import time
 import uuid
+from collections import Counter
 from collections.abc import Callable
 from types import TracebackType
 from typing import IO, Any
@@ -32,7 +36,7 @@ from py_trees.common import Status
 
 from planner.render import node_kind, node_type
 
-__all__ = ["RunLog", "json_safe"]
+__all__ = ["RunLog", "json_safe", "node_labels"]
 
 #: Blackboard activities that change a value.
 _WRITES = (ActivityType.WRITE.value, ActivityType.INITIALISED.value, ActivityType.UNSET.value)
@@ -77,6 +81,31 @@ def json_safe(value: Any, decimals: int = 6, max_items: int = 64, max_chars: int
     if isinstance(value, dict) and len(value) <= max_items:
         return {str(k): json_safe(v, decimals, max_items, max_chars) for k, v in value.items()}
     return _cut(repr(value), max_chars)
+
+
+def node_labels(root: py_trees.behaviour.Behaviour) -> dict[uuid.UUID, str]:
+    """One label per node of the tree under ``root``, no two alike.
+
+    A node's label is its name where no other node of the tree has that name; otherwise its
+    path from the root: the names from the root down joined by ``/``, each followed by
+    ``[i]`` (its index among same-named siblings, from 0) where siblings share it.
+    """
+    counts = Counter(node.name for node in root.iterate())
+    labels: dict[uuid.UUID, str] = {}
+
+    def walk(node: py_trees.behaviour.Behaviour, path: str) -> None:
+        labels[node.id] = node.name if counts[node.name] == 1 else path
+        shared = Counter(child.name for child in node.children)
+        seen: Counter[str] = Counter()
+        for child in node.children:
+            step = child.name
+            if shared[child.name] > 1:
+                step = f"{child.name}[{seen[child.name]}]"
+                seen[child.name] += 1
+            walk(child, f"{path}/{step}")
+
+    walk(root, root.name)
+    return labels
 
 
 def _cut(text: str, max_chars: int) -> str:
@@ -186,6 +215,7 @@ class RunLog:
         """
         self.tick_count += 1
         nodes = {node.id: node for node in root.iterate()}
+        labels = node_labels(root)
         order = [i for i in dict.fromkeys(self._visitor.order) if i in nodes]
         order += [i for i in nodes if i not in set(order)]
         self._visitor.order = []
@@ -196,7 +226,7 @@ class RunLog:
                 self.write(
                     {
                         "event": "status",
-                        "node": node.name,
+                        "node": labels[node_id],
                         "kind": node_kind(node),
                         "type": node_type(node),
                         "from": before.value,

@@ -6,6 +6,8 @@ The affordance reasoner knows nothing of world files; these functions translate.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 from affordances import ObjectContext, RobotCapabilities, make_object_context
@@ -43,7 +45,10 @@ def robot_capabilities(world: World) -> RobotCapabilities:
     )
 
 
-def _shape_and_dimensions(obj: WorldObject) -> tuple[str, tuple[float, ...]]:
+def _shape_and_dimensions(
+    obj: WorldObject, resolve: Callable[[str], Path]
+) -> tuple[str, tuple[float, ...]]:
+    """Shape name and dimensions, m; ``resolve`` turns a file's path into one to open."""
     shape = obj.shape
     if isinstance(shape, BoxShape):
         return "box", tuple(shape.size)
@@ -52,21 +57,22 @@ def _shape_and_dimensions(obj: WorldObject) -> tuple[str, tuple[float, ...]]:
     if isinstance(shape, SphereShape):
         return "sphere", (shape.radius,)
     if isinstance(shape, MeshShape):
-        return "mesh", _mesh_extents(shape)
+        return "mesh", _mesh_extents(shape, resolve)
     raise TypeError(f"unknown shape {shape!r}")
 
 
-def _mesh_extents(shape: MeshShape) -> tuple[float, ...]:
+def _mesh_extents(shape: MeshShape, resolve: Callable[[str], Path]) -> tuple[float, ...]:
     import trimesh
 
-    mesh = trimesh.load(shape.file, force="mesh")
+    # Relative to the world file's folder, as the scene loads it: not to the working directory.
+    mesh = trimesh.load(resolve(shape.file), force="mesh")
     return tuple(float(e) * shape.scale for e in mesh.extents)
 
 
 def _obstacle_plain(world: World) -> list[dict[str, Any]]:
     out: list[dict[str, Any]] = []
     for ob in world.obstacles:
-        kind, dims = _shape_and_dimensions(ob)  # type: ignore[arg-type]
+        kind, dims = _shape_and_dimensions(ob, world.resolve_path)  # type: ignore[arg-type]
         entry: dict[str, Any] = {"name": ob.name, "position": list(ob.position)}
         if kind == "sphere":
             entry["radius"] = dims[0]
@@ -83,7 +89,7 @@ def object_contexts(world: World) -> list[ObjectContext]:
     obstacles = _obstacle_plain(world)
     contexts = []
     for obj in world.objects:
-        kind, dims = _shape_and_dimensions(obj)
+        kind, dims = _shape_and_dimensions(obj, world.resolve_path)
         moves = [m for step in world.task if step.object == obj.name for m in step.moves]
         goal_yaw = math.radians(moves[0].goal.rpy_deg[2]) if moves else None
         contexts.append(

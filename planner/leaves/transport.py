@@ -10,6 +10,7 @@ from affordances import SemanticAction
 from planner.composition import goal_error, transport_composition
 from planner.leaves.base import MotionLeaf, composition_ports
 from planner.leaves.grasp import squeeze_force
+from planner.move_result import MoveResult, publish_move_result
 from planner.port import Move, Pose
 from skills.composer import DualArmComposer, DualArmState
 from skills.dual_arm import ARMS
@@ -22,6 +23,8 @@ class Transport(MotionLeaf):
     link-level potential-field avoidance, on one transformation system towards the goal.
     Relative: grasp maintenance on each palm, squeezing. Starts from the handed-over full
     state and hands its own on. Fails, explaining why, if the grip is lost on the way.
+    Publishes the move's composition and outcome as a :class:`~planner.move_result.MoveResult`
+    when it starts and when it ends.
     """
 
     INPUT_PORTS = {
@@ -82,6 +85,7 @@ class Transport(MotionLeaf):
         )
         self.started = world.time()
         self.weak_ticks = 0
+        self._publish(Status.RUNNING)
 
     def update(self) -> Status:
         """One composition step; SUCCESS at the goal and still; FAILURE if the grip is lost."""
@@ -121,3 +125,30 @@ class Transport(MotionLeaf):
                     f"settled {err_m * 1000:.1f} mm, {np.degrees(err_rad):.1f} deg from the goal"
                 )
         return self.running(f"move {self.get_input('move')}: {elapsed:.1f} of {tau:.1f} s")
+
+    def terminate(self, new_status: Status) -> None:
+        """Publish how the started move ended (:mod:`planner.move_result`); halted, stop."""
+        started = getattr(self, "composer", None) is not None
+        if started and (new_status != Status.INVALID or self.status == Status.RUNNING):
+            self._publish(new_status)
+        super().terminate(new_status)
+
+    def _publish(self, status: Status) -> None:
+        name = self.get_input("object")
+        err_m, err_rad = (
+            goal_error(self.world, name, self.move.goal)
+            if status == Status.SUCCESS
+            else (None, None)
+        )
+        publish_move_result(
+            MoveResult(
+                name,
+                int(self.get_input("move")),
+                float(self.get_input("transport_weight")),
+                float(self.get_input("avoid_gain")),
+                status,
+                err_m,
+                err_rad,
+            ),
+            self.name,
+        )

@@ -19,6 +19,7 @@ from planner.leaves import (
     SelectSkills,
     Transport,
 )
+from planner.move_result import MoveResult, move_results
 from planner.port import Pose
 from planner.testing import FakeWorld, tick_until
 from planner.wiring import wire
@@ -143,6 +144,42 @@ def test_transport_reaches_each_goal_and_hands_over(
         assert at_goal.status == Status.SUCCESS, at_goal.feedback_message
 
 
+def test_transport_publishes_its_moves_composition_and_placement(
+    fake_world: FakeWorld, library: SkillLibrary
+) -> None:
+    select(fake_world, library)
+    approach_and_grasp(fake_world, library)
+    leaf = ready(
+        Transport("move1"),
+        fake_world,
+        library,
+        object="parcel",
+        move=1,
+        plan="{plan}",
+        from_state="{state}",
+        to_state="{state}",
+        transport_weight=0.25,
+        avoid_gain=0.0,
+    )
+    assert move_results() == {}
+    leaf.tick_once()
+    running = move_results()[("parcel", 1)]
+    assert running == MoveResult("parcel", 1, 0.25, 0.0, Status.RUNNING)
+    log = tick_until(leaf, fake_world, DT, max_ticks=3000)
+    assert log.final == Status.SUCCESS, log.feedback
+    done = move_results()[("parcel", 1)]
+    assert (done.status, done.transport_weight, done.avoid_gain) == (Status.SUCCESS, 0.25, 0.0)
+    goal = fake_world.task_moves("parcel")[1].goal
+    pose = fake_world.object_pose("parcel")
+    assert done.placement_error_m == pytest.approx(np.linalg.norm(pose.position - goal.position))
+    assert done.placement_error_rad == pytest.approx(
+        quat.angle_between(pose.orientation, goal.orientation)
+    )
+    assert running.status == Status.RUNNING  # a published result is never changed after
+    leaf.stop(Status.INVALID)  # a parent resetting the finished leaf is not a new result
+    assert move_results()[("parcel", 1)] == done
+
+
 def test_transport_lifts_the_parcel_on_the_way(
     fake_world: FakeWorld, library: SkillLibrary
 ) -> None:
@@ -190,6 +227,8 @@ def test_transport_fails_when_the_grip_is_lost(
     log = tick_until(leaf, fake_world, DT)
     assert log.final == Status.FAILURE
     assert "grip lost" in log.feedback
+    failed = move_results()[("parcel", 0)]
+    assert failed.status == Status.FAILURE and failed.placement_error_m is None
 
 
 def test_halting_a_running_transport_stops_the_arms(
@@ -215,6 +254,7 @@ def test_halting_a_running_transport_stops_the_arms(
     assert np.linalg.norm(moving) > 1e-3
     leaf.stop(Status.INVALID)  # what a parent's preemption does
     assert fake_world.holds == 1
+    assert move_results()[("parcel", 0)].status == Status.INVALID  # published as halted
     last_two = fake_world.commands[-2:]
     assert {c.arm for c in last_two} == set(ARMS)
     assert all(np.all(c.twist == 0.0) for c in last_two)

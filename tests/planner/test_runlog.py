@@ -13,8 +13,8 @@ import py_trees
 import pytest
 
 from planner.loader import load_tree_string
-from planner.runlog import RunLog, json_safe
-from tests.planner.stub_leaves import FakeClock
+from planner.runlog import RunLog, json_safe, node_labels
+from tests.planner.stub_leaves import FakeClock, StubCheck
 
 TREE = """
 <root BTCPP_format="4">
@@ -132,3 +132,22 @@ def test_closed_or_reattached_log_is_refused(tmp_path: Path) -> None:
     with pytest.raises(RuntimeError, match="closed"):
         log.attach(tree)
     tree.tick()  # detached: no handler left behind
+
+
+def test_node_labels_are_names_or_paths_where_names_repeat() -> None:
+    def check(name: str) -> StubCheck:
+        return StubCheck(name)
+
+    first = py_trees.composites.Sequence("try", memory=True, children=[check("a"), check("b")])
+    second = py_trees.composites.Sequence("try", memory=True, children=[check("a"), check("c")])
+    root = py_trees.composites.Selector("root", memory=True, children=[first, second])
+    labels = node_labels(root)
+    assert [labels[n.id] for n in root.iterate()] == [
+        "root/try[0]/a",
+        "b",
+        "root/try[0]",
+        "root/try[1]/a",
+        "c",
+        "root/try[1]",
+        "root",
+    ]

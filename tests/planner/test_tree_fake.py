@@ -2,10 +2,15 @@
 
 from __future__ import annotations
 
+import json
+from itertools import pairwise
+from pathlib import Path
+
 import py_trees
 from py_trees.common import Status
 
-from planner.factories import pick_and_place
+from planner.default_tree import default_tree
+from planner.runlog import RunLog, node_labels
 from planner.runner import run_tree
 from planner.testing import FakeWorld
 from skills.labels import Arm
@@ -19,17 +24,40 @@ def statuses_of(root: py_trees.behaviour.Behaviour, kind: str) -> list[Status]:
 
 
 def test_the_tree_does_the_three_moves(fake_world: FakeWorld, library: SkillLibrary) -> None:
-    root = pick_and_place()
+    root = default_tree()
     result = run_tree(root, fake_world, library, DT, 120.0, {"/object": "parcel"})
     assert result.status == Status.SUCCESS, result.reason
     assert statuses_of(root, "AtGoal") == [Status.SUCCESS] * 3
     assert fake_world.contact_force(Arm.LEFT, "parcel") == 0.0  # released
 
 
+def test_the_run_log_names_each_node_of_the_default_run_once(
+    fake_world: FakeWorld, library: SkillLibrary, tmp_path: Path
+) -> None:
+    root = default_tree()
+    with RunLog(tmp_path / "run.jsonl", clock=fake_world.time) as log:
+        result = run_tree(
+            root, fake_world, library, DT, 120.0, {"/object": "parcel"}, attach=(log.attach,)
+        )
+    assert result.status == Status.SUCCESS, result.reason
+    labels = node_labels(root)
+    assert len(set(labels.values())) == len(labels)  # no two nodes alike
+    records = [json.loads(line) for line in (tmp_path / "run.jsonl").read_text().splitlines()]
+    changes: dict[str, list[tuple[str, str]]] = {}
+    for r in records:
+        if r["event"] == "status":
+            changes.setdefault(r["node"], []).append((r["from"], r["to"]))
+    assert set(changes) <= set(labels.values())
+    carried = {r["node"] for r in records if r.get("type") == "Transport" and r["to"] == "SUCCESS"}
+    assert len(carried) == 3  # one Transport per move, told apart
+    for node, steps in changes.items():  # one node's story: each change starts where it was
+        assert all(a[1] == b[0] for a, b in pairwise(steps)), (node, steps)
+
+
 def test_a_drop_during_a_move_leads_to_a_regrasp(
     fake_world: FakeWorld, library: SkillLibrary
 ) -> None:
-    root = pick_and_place()
+    root = default_tree()
     events: list[str] = []
 
     def slip(tree: py_trees.trees.BehaviourTree) -> None:

@@ -34,8 +34,8 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from skills.labels import Arm
-from worlds.robots import ArmSpec, BodySpec, RobotModel
 from worlds.robots.cache import cached_urdf
+from worlds.robots.model import ArmSpec, BodySpec, RobotModel
 
 #: The icub-models robot the model is built from.
 ICUB_VARIANT = "iCubGazeboV2_5"

@@ -16,8 +16,8 @@ from pathlib import Path
 import pybullet_data
 
 from skills.labels import Arm
-from worlds.robots import ArmSpec, BodySpec, RobotModel
 from worlds.robots.cache import cached_urdf
+from worlds.robots.model import ArmSpec, BodySpec, RobotModel
 
 N_JOINTS = 7
 #: Flange face along the last link's z axis, m (link_7 mesh extent).

@@ -20,17 +20,16 @@ import py_trees
 from py_trees.common import Status
 
 import planner.leaves  # noqa: F401  (registers the leaves for the XML loader)
-from planner.factories import pick_and_place
-from planner.leaves import Transport
+from experiment.figures import Animation, MoveTrace, trajectory_figure
+from planner.default_tree import default_tree
 from planner.loader import load_tree
+from planner.move_result import move_results
 from planner.render import render_tree
 from planner.runlog import RunLog
 from planner.runner import RunResult, run_tree
-from skills import quaternion as quat
 from skills.default_library import DEMOS_DIR, build_default_library
 from skills.demos.io import read_demo_csv
 from skills.library import SkillLibrary
-from worlds.figures import Animation, MoveTrace, trajectory_figure
 from worlds.sim_world import SimWorld
 from worlds.world_file import World
 
@@ -56,7 +55,8 @@ class EpisodeReport:
     failure: str = ""
     outputs: dict[str, str] = field(default_factory=dict)
     #: Per move, the composition that placed the object: ``{"transport_weight": w,
-    #: "avoid_gain": g}`` of the Transport leaf that succeeded, or None if none did.
+    #: "avoid_gain": g}`` of the Transport leaf that succeeded (its published
+    #: :class:`planner.move_result.MoveResult`), or None if none did.
     compositions: list[dict[str, float] | None] = field(default_factory=list)
 
     def summary(self) -> dict[str, Any]:
@@ -109,7 +109,13 @@ def judge(
 
 
 class _Recorder:
-    """Post-tick bookkeeping: object path per move and each move's placement error."""
+    """Post-tick bookkeeping: object path per move and each move's placement error.
+
+    It reads the moves' published results (:func:`planner.move_result.move_results`,
+    written by the Transport leaves), not the leaves: while a move's latest result is RUNNING
+    the object's position is sampled into that move's path; when it turns SUCCESS the move's
+    placement error and composition are kept.
+    """
 
     def __init__(self, sim: SimWorld, name: str, n_moves: int) -> None:
         self.sim, self.name = sim, name
@@ -125,30 +131,25 @@ class _Recorder:
 
     def __call__(self, tree: py_trees.trees.BehaviourTree) -> None:
         pose = self.sim.object_pose(self.name)
-        for node in tree.root.iterate():
-            if not isinstance(node, Transport) or node.status == Status.INVALID:
+        # In move order, as a move that ends and the next that starts share a tick.
+        for (obj, index), result in sorted(move_results().items(), key=lambda kv: kv[0][1]):
+            if obj != self.name or not 0 <= index < len(self.moves):
                 continue
-            try:
-                index = int(node.get_input("move"))
-            except Exception:  # a node not yet wired or set up: nothing to record
-                continue
-            if not 0 <= index < len(self.moves):
-                continue
-            if node.status == Status.RUNNING:
+            if result.status == Status.RUNNING:
                 if self.starts[index] is None:
                     self.starts[index] = pose.position.copy()
                     self.obstacles[index] = self.sim.obstacles()
                 self.paths[index].append(pose.position.copy())
                 self.current = index
-            elif node.status == Status.SUCCESS and self.current == index:
-                goal = self.moves[index].goal
-                self.errors_m[index] = float(np.linalg.norm(pose.position - goal.position))
-                self.errors_deg[index] = float(
-                    np.degrees(quat.angle_between(pose.orientation, goal.orientation))
-                )
+            elif result.status == Status.SUCCESS and self.current == index:
+                assert result.placement_error_m is not None
+                assert result.placement_error_rad is not None
+                self.errors_m[index] = result.placement_error_m
+                self.errors_deg[index] = float(np.degrees(result.placement_error_rad))
                 self.paths[index].append(pose.position.copy())
                 self.compositions[index] = {
-                    port: float(node.get_input(port)) for port in ("transport_weight", "avoid_gain")
+                    "transport_weight": result.transport_weight,
+                    "avoid_gain": result.avoid_gain,
                 }
                 self.current = None
         tip = tree.tip()
@@ -186,8 +187,8 @@ def run_episode(
     ----------
     world : World
     tree_path : Path, optional
-        Behaviour tree XML; default: :func:`planner.factories.pick_and_place` with the task's
-        number of moves (``planner/trees/pick_and_place.xml`` for three).
+        Behaviour tree XML; default: :func:`planner.default_tree.default_tree` for the first
+        task object's number of moves (``planner/trees/pick_and_place.xml`` for three).
     library : SkillLibrary, optional
         Default: the world's.
     out : Path, optional
@@ -209,9 +210,8 @@ def run_episode(
     n_moves = sum(len(s.moves) for s in world.task if s.object == name)
     # The loader writes constant port values to the blackboard: clear it first, not after.
     py_trees.blackboard.Blackboard.clear()
-    # Without a tree file, the paper's tree is built in code for this task's number of moves
-    # (for three it is planner/trees/pick_and_place.xml, node for node).
-    root = load_tree(tree_path) if tree_path is not None else pick_and_place(n_moves)
+    # Without a tree file, the shipped tree (its Move subtree once per move of the task).
+    root = load_tree(tree_path) if tree_path is not None else default_tree(n_moves)
     lib = library if library is not None else load_library(world)
     with SimWorld(world, name, gui=gui) as sim:
         recorder = _Recorder(sim, name, n_moves)

@@ -6,7 +6,8 @@ from pathlib import Path
 
 import pytest
 
-from worlds.episode import run_episode
+from experiment.episode import run_episode
+from tests.worlds.test_adapters import write_mesh_world
 from worlds.world_file import load_world
 
 pytestmark = pytest.mark.sim
@@ -25,3 +26,15 @@ def test_shipped_world_places_the_parcel_three_times(name: str, tmp_path: Path) 
     assert report.min_obstacle_distance_m > 0.0
     for output in ("run.jsonl", "trajectories.png", "tree.svg"):
         assert (tmp_path / output).stat().st_size > 0
+
+
+def test_a_mesh_world_runs_from_another_working_directory(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    world_file = write_mesh_world(tmp_path / "world", parcel_mesh=False)
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    monkeypatch.chdir(elsewhere)  # the mesh resolves against the world file, not this
+    report = run_episode(load_world(world_file), out=None, animation=False)
+    assert report.success, report.failure
+    assert not report.obstacle_contacts

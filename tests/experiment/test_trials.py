@@ -9,8 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from worlds.scene import lateral_grasp_palm_poses
-from worlds.trials import (
+from experiment.trials import (
     GOAL_REGIONS,
     RobotClearance,
     _box_gap,
@@ -20,6 +19,7 @@ from worlds.trials import (
     reason_of,
     summarise,
 )
+from worlds.scene import lateral_grasp_palm_poses
 from worlds.world_file import World, load_world
 
 WORLDS = Path(__file__).resolve().parents[2] / "worlds"

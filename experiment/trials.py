@@ -14,7 +14,7 @@ on the robot):
   collision shapes), so only the carry can meet it: a sphere the robot would have to be in
   to pick the parcel up or put it down is not a test of avoidance.
 
-Trials are judged as :func:`worlds.episode.judge` says (2 cm and 10 degrees per placement,
+Trials are judged as :func:`experiment.episode.judge` says (2 cm and 10 degrees per placement,
 never dropped, no robot link or parcel touching an obstacle, arms never touching). Results
 are appended to ``results.jsonl`` one line per trial as they finish, so an interrupted
 campaign resumes where it stopped.
@@ -242,7 +242,7 @@ def _draw_sphere(
 
 def run_trial(job: tuple[dict[str, Any], int, int]) -> dict[str, Any]:
     """Run one trial in this process; returns its JSON-ready record (never raises)."""
-    from worlds.episode import run_episode
+    from experiment.episode import run_episode
 
     base_data, seed, trial = job
     source = Path(base_data["source"]) if base_data["source"] else None

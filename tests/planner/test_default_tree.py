@@ -1,0 +1,50 @@
+"""The default tree is the shipped XML file, for the task's number of moves."""
+
+from __future__ import annotations
+
+import py_trees
+import pytest
+
+from planner.default_tree import PICK_AND_PLACE_XML, default_tree, pick_and_place_xml
+from planner.loader import load_tree
+
+
+def outline(root: py_trees.behaviour.Behaviour) -> list[tuple[str, str]]:
+    return [(type(n).__name__, n.name) for n in root.iterate()]
+
+
+def transports(root: py_trees.behaviour.Behaviour) -> list[py_trees.behaviour.Behaviour]:
+    return [n for n in root.iterate() if type(n).__name__ == "Transport"]
+
+
+def test_three_moves_is_the_shipped_file() -> None:
+    assert outline(default_tree()) == outline(load_tree(PICK_AND_PLACE_XML))
+
+
+def test_each_move_tries_the_files_compositions() -> None:
+    found = transports(default_tree())
+    assert len(found) == 3 * 6  # 3 moves x (5 compositions + the careful fallback)
+    assert sorted({int(t.get_input("move")) for t in found}) == [0, 1, 2]
+    weights = sorted({float(t.get_input("transport_weight")) for t in found})
+    assert weights == [0.1, 0.25, 1.0]
+    gains = sorted({float(t.get_input("avoid_gain")) for t in found})
+    assert gains == [0.0, 1.0, 2.0]
+
+
+@pytest.mark.parametrize("moves", [1, 2, 3, 5])
+def test_another_number_of_moves_repeats_the_files_move_subtree(moves: int) -> None:
+    root = default_tree(moves)
+    found = transports(root)
+    assert len(found) == moves * 6
+    assert sorted({int(t.get_input("move")) for t in found}) == list(range(moves))
+    names = [n.name for n in root.iterate()]
+    assert len(names) == len(set(names))  # every node's name is its path: unique
+    # The same nodes per move as the shipped file's first move.
+    shipped = [n for _, n in outline(default_tree()) if ".move_centre." in n]
+    first = [n.name for n in root.iterate() if ".move_centre." in n.name]
+    assert first == shipped
+
+
+def test_fewer_than_one_move_is_refused() -> None:
+    with pytest.raises(ValueError, match="expected at least 1 move, got 0"):
+        pick_and_place_xml(0)

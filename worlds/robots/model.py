@@ -1,0 +1,142 @@
+"""Robot model types: what the scene and the controller need to know about a dual-arm robot.
+
+A :class:`RobotModel` is a frozen description (URDF files, base poses, joint indices, palm links,
+rest posture, limits). Builders such as :func:`worlds.robots.kuka.kuka_iiwa_model` write it; the
+scene loads its bodies and the controller drives its arms. A robot may use one body per arm (the
+KUKA pair) or one body for both arms (a humanoid such as iCub).
+
+The types live below the builders (``kuka.py``, ``icub.py``) and the package's dispatch
+(``worlds/robots/__init__.py``), so no builder imports the package that imports it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from types import MappingProxyType
+
+import numpy as np
+from numpy.typing import NDArray
+
+from skills.labels import Arm
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class BodySpec:
+    """One fixed-base multibody to load.
+
+    Attributes
+    ----------
+    urdf_path : Path
+        URDF file; mesh paths inside must resolve from its folder.
+    base2world_position : tuple of float
+        (3,) base frame origin in the world frame, m.
+    base2world_quaternion : tuple of float
+        (4,) base frame orientation in the world frame, scalar-last (x, y, z, w).
+    """
+
+    urdf_path: Path
+    base2world_position: tuple[float, float, float]
+    base2world_quaternion: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 1.0)
+
+
+@dataclass(frozen=True)
+class ArmSpec:
+    """One arm of a robot: a chain of revolute joints ending in a flat palm link.
+
+    Attributes
+    ----------
+    body : int
+        Index into :attr:`RobotModel.bodies` of the body holding this arm.
+    joint_indices : tuple of int
+        (n,) PyBullet joint indices of the arm, base to tip.
+    palm_link : int
+        PyBullet link index of the palm; its frame sits at the palm box centre, z along the
+        outward normal of the contact face.
+    rest_posture : tuple of float
+        (n,) joint positions the null-space term pulls towards, rad.
+    lower, upper : tuple of float
+        (n,) joint position limits, rad.
+    max_torque : tuple of float
+        (n,) joint torque limits, N m.
+    palm_size : tuple of float
+        (3,) palm box extent along the palm frame's x, y, z axes, m.
+    """
+
+    body: int
+    joint_indices: tuple[int, ...]
+    palm_link: int
+    rest_posture: tuple[float, ...]
+    lower: tuple[float, ...]
+    upper: tuple[float, ...]
+    max_torque: tuple[float, ...]
+    palm_size: tuple[float, float, float]
+
+    def __post_init__(self) -> None:
+        n = len(self.joint_indices)
+        for name in ("rest_posture", "lower", "upper", "max_torque"):
+            got = len(getattr(self, name))
+            if got != n:
+                raise ValueError(f"ArmSpec: expected {name} of length {n}, got {got}")
+        if any(lo >= hi for lo, hi in zip(self.lower, self.upper, strict=True)):
+            raise ValueError(f"ArmSpec: expected lower < upper, got {self.lower} and {self.upper}")
+
+
+@dataclass(frozen=True)
+class RobotModel:
+    """A dual-arm robot: its bodies and its two arms.
+
+    Attributes
+    ----------
+    name : str
+        Model name as in world files (``"kuka_iiwa"``).
+    bodies : tuple of BodySpec
+        Bodies to load, in order; :attr:`ArmSpec.body` indexes this tuple.
+    arms : Mapping[Arm, ArmSpec]
+        Both arms, keyed by :class:`skills.labels.Arm`.
+    palm2flange_position : tuple of float
+        (3,) palm frame origin in the last arm link's frame, m (documentation and collision use).
+    collision_exclusions : tuple of (int, str, int, str)
+        Link pairs of different bodies that must not collide, as (body, link name, body, link
+        name); ``"base"`` names a body's base link. A robot split into several bodies (iCub)
+        uses this to keep PyBullet's no-self-collision default across the split.
+    rest_palms : tuple of float
+        Where the palms wait: (inset from the table's near edge along x, distance from the
+        robot's midplane along y, height above the table top), m.
+    gain_overrides : Mapping[str, float]
+        :class:`worlds.control.ImpedanceGains` fields that differ from the defaults for this
+        robot (a light arm wants less damping), applied when no gains are given.
+    arm_link_names : Mapping[Arm, frozenset of str]
+        The links that move with each arm, where the arm's body carries others too (iCub's
+        trunk); empty when each arm is a body of its own.
+    shoulder_at_first_joint : bool
+        The reasoner's arm model starts at the first arm joint's link; otherwise 0.36 m above
+        the arm's base (the iiwa's second joint).
+    """
+
+    name: str
+    bodies: tuple[BodySpec, ...]
+    arms: Mapping[Arm, ArmSpec] = field(default_factory=dict)
+    palm2flange_position: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    collision_exclusions: tuple[tuple[int, str, int, str], ...] = ()
+    rest_palms: tuple[float, float, float] = (0.10, 0.38, 0.25)
+    gain_overrides: Mapping[str, float] = field(default_factory=dict)
+    arm_link_names: Mapping[Arm, frozenset[str]] = field(default_factory=dict)
+    shoulder_at_first_joint: bool = False
+
+    def __post_init__(self) -> None:
+        if set(self.arms) != {Arm.LEFT, Arm.RIGHT}:
+            raise ValueError(f"RobotModel: expected arms LEFT and RIGHT, got {sorted(self.arms)}")
+        for arm, spec in self.arms.items():
+            if not 0 <= spec.body < len(self.bodies):
+                raise ValueError(
+                    f"RobotModel: arm {arm} refers to body {spec.body}, "
+                    f"but there are {len(self.bodies)} bodies"
+                )
+        object.__setattr__(self, "arms", MappingProxyType(dict(self.arms)))
+
+
+__all__ = ["ArmSpec", "BodySpec", "FloatArray", "RobotModel"]
