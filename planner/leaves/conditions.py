@@ -124,7 +124,7 @@ class PathClear(WorldLeaf):
             return self.fail(f"move {index}: expected an index below {len(moves)}")
         world.set_active_obstacles(moves[index].obstacles)
         plan: SemanticAction = self.get_input("plan")
-        depth = squeeze_force(plan, 15.0) / world.palm_stiffness()
+        force = squeeze_force(plan, 15.0)
         composer = transport_composition(
             plan,
             self.library,
@@ -132,7 +132,7 @@ class PathClear(WorldLeaf):
             name,
             moves[index],
             self.get_input("from_state"),
-            depth,
+            force,
             avoid_gain=float(self.get_input("avoid_gain")),
             transport_weight=float(self.get_input("transport_weight")),
             compiled=self.compiled,

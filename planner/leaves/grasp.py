@@ -84,7 +84,7 @@ class Grasp(MotionLeaf):
         world = self.world
         name = self.get_input("object")
         self.force = squeeze_force(self.optional_input("plan"), float(self.get_input("force_n")))
-        depth = self.force / world.palm_stiffness()
+        depth = world.squeeze_depth(self.force)
         relative = hold_terms(
             self.optional_input("plan"), self.library, lateral_geometry(world, name), depth
         )

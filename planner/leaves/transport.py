@@ -67,7 +67,7 @@ class Transport(MotionLeaf):
         self.move: Move = moves[index]
         world.set_active_obstacles(self.move.obstacles)
         plan: SemanticAction = self.get_input("plan")
-        depth = squeeze_force(plan, float(self.get_input("force_n"))) / world.palm_stiffness()
+        force = squeeze_force(plan, float(self.get_input("force_n")))
         self.composer = transport_composition(
             plan,
             self.library,
@@ -75,7 +75,7 @@ class Transport(MotionLeaf):
             name,
             self.move,
             self.get_input("from_state"),
-            depth,
+            force,
             avoid_gain=float(self.get_input("avoid_gain")),
             transport_weight=float(self.get_input("transport_weight")),
             compiled=self.compiled,
