@@ -21,9 +21,14 @@ class WorldLeaf(BehaviourWithPorts):
     ``__init__`` only configures, so a tree builds and renders offline; ``setup(world=...,
     library=..., control_dt=...)`` connects it. A leaf used before ``setup`` fails with an
     explanation rather than an exception.
+
+    ``WORLD_ROLES`` names the roles of the port (:mod:`planner.port`) a leaf uses; a test
+    ticks each leaf through :class:`planner.testing.RoleView`, which offers those alone.
     """
 
     NODE_TYPE: ClassVar[str] = "Action"
+    #: The port's roles the leaf asks the world for (all of them unless a leaf says fewer).
+    WORLD_ROLES: ClassVar[tuple[type, ...]] = (WorldPort,)
 
     def __init__(self, name: str, **kwargs: Any) -> None:
         super().__init__(name=name, **kwargs)

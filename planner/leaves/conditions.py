@@ -12,12 +12,15 @@ from affordances import SemanticAction
 from planner.composition import goal_error, transport_composition
 from planner.leaves.base import WorldLeaf, composition_ports
 from planner.leaves.grasp import squeeze_force
+from planner.port import ObjectSensing, ObstacleScene, PalmControl
 from skills.composer import DualArmState
 from skills.dual_arm import ARMS
 
 
 class IsHeld(WorldLeaf):
     """Both palms press on the object and it has not slipped from where the grasp holds it."""
+
+    WORLD_ROLES: ClassVar[tuple[type, ...]] = (ObjectSensing, PalmControl)
 
     NODE_TYPE: ClassVar[str] = "Condition"
     INPUT_PORTS = {
@@ -62,6 +65,8 @@ class IsHeld(WorldLeaf):
 class AtGoal(WorldLeaf):
     """The object is within tolerance of a move's goal pose."""
 
+    WORLD_ROLES: ClassVar[tuple[type, ...]] = (ObjectSensing,)
+
     NODE_TYPE: ClassVar[str] = "Condition"
     INPUT_PORTS = {
         "object": PortInformation(str, description="the object"),
@@ -98,6 +103,8 @@ class AtGoal(WorldLeaf):
 
 class PathClear(WorldLeaf):
     """The predicted rollout of a move's composition keeps clear of the obstacles (FCL)."""
+
+    WORLD_ROLES: ClassVar[tuple[type, ...]] = (ObjectSensing, PalmControl, ObstacleScene)
 
     NODE_TYPE: ClassVar[str] = "Condition"
     INPUT_PORTS = {

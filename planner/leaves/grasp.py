@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 from py_trees.common import Status
 from py_trees.ports import PortInformation
 
@@ -13,7 +15,7 @@ from planner.composition import (
     static_composition,
 )
 from planner.leaves.base import MotionLeaf
-from planner.port import Pose
+from planner.port import Clock, ObjectSensing, PalmControl, Pose
 from skills.composer import DualArmComposer, DualArmState, relative_from_world
 from skills.dual_arm import ARMS
 from skills.labels import Action
@@ -54,6 +56,8 @@ def squeeze_force(plan: SemanticAction | None, default: float) -> float:
 
 class Grasp(MotionLeaf):
     """Lateral contact, then squeeze: grasp maintenance pulls the palms onto the faces."""
+
+    WORLD_ROLES: ClassVar[tuple[type, ...]] = (Clock, ObjectSensing, PalmControl)
 
     INPUT_PORTS = {
         "object": PortInformation(str, description="object to grasp"),

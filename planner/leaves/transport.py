@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 import numpy as np
 from py_trees.common import Status
 from py_trees.ports import PortInformation
@@ -10,7 +12,7 @@ from affordances import SemanticAction
 from planner.composition import goal_error, refresh_link_points, transport_composition
 from planner.leaves.base import MotionLeaf, composition_ports
 from planner.leaves.grasp import squeeze_force
-from planner.port import Move, Pose
+from planner.port import Clock, Move, ObjectSensing, ObstacleScene, PalmControl, Pose
 from skills.composer import DualArmComposer, DualArmState
 from skills.dual_arm import ARMS
 
@@ -23,6 +25,8 @@ class Transport(MotionLeaf):
     Relative: grasp maintenance on each palm, squeezing. Starts from the handed-over full
     state and hands its own on. Fails, explaining why, if the grip is lost on the way.
     """
+
+    WORLD_ROLES: ClassVar[tuple[type, ...]] = (Clock, ObjectSensing, PalmControl, ObstacleScene)
 
     INPUT_PORTS = {
         "object": PortInformation(str, description="the held object"),
