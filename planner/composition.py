@@ -10,7 +10,7 @@ relative-only compositions that close and open the grasp.
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -352,6 +352,85 @@ def transport_composition(
         absolute=absolute,
         relative=relative,
         compiled=compiled,
+    )
+
+
+@dataclass(frozen=True, eq=False)
+class MovePlan:
+    """One move composed: what PathClear checked and hands to Transport to run.
+
+    Attributes
+    ----------
+    object : str
+        The held object.
+    index : int
+        Index of the task's move, from 0.
+    move : Move
+        The move: its goal and the obstacles present (active since it was composed).
+    squeeze_force_n : float
+        The grip's force per palm the composition was bounded by, N.
+    avoid_gain, transport_weight : float
+        The variant of the plan composed (see :func:`transport_composition`).
+    from_state : DualArmState
+        The handed-over state it was composed from.
+    composer : DualArmComposer
+        The composition as built; never stepped itself (use :meth:`fresh`).
+    start : DualArmState
+        The composer's first state (``from_state`` with the phase restarted).
+    """
+
+    object: str
+    index: int
+    move: Move
+    squeeze_force_n: float
+    avoid_gain: float
+    transport_weight: float
+    from_state: DualArmState
+    composer: DualArmComposer
+    start: DualArmState = field(init=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "start", self.composer.state)
+
+    def fresh(self) -> DualArmComposer:
+        """The composition at its first state, to roll out or run (the terms are shared)."""
+        return replace(self.composer, state=self.start)
+
+
+def compose_move(
+    plan: SemanticAction,
+    library: SkillLibrary,
+    world: WorldPort,
+    name: str,
+    index: int,
+    state: DualArmState,
+    squeeze_force_n: float,
+    avoid_gain: float = 1.0,
+    transport_weight: float = 1.0,
+    compiled: bool = False,
+) -> MovePlan:
+    """Activate move ``index``'s obstacles and compose it from ``state``.
+
+    The one place a move's obstacles are switched on: the composition asks the world for
+    the obstacles present, so they must be the move's before it is built. Arguments as
+    :func:`transport_composition`'s; ``index`` must be one of ``world.task_moves(name)``.
+    """
+    move = world.task_moves(name)[index]
+    world.set_active_obstacles(move.obstacles)
+    composer = transport_composition(
+        plan,
+        library,
+        world,
+        name,
+        move,
+        state,
+        squeeze_force_n,
+        avoid_gain=avoid_gain,
+        transport_weight=transport_weight,
+        compiled=compiled,
+    )
+    return MovePlan(
+        name, index, move, squeeze_force_n, avoid_gain, transport_weight, state, composer
     )
 
 

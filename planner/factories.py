@@ -65,6 +65,9 @@ def grasp_object(name: str = "grasp_retry") -> Behaviour:
 def carry_if_clear(name: str, move: int, transport_weight: float, avoid_gain: float) -> Behaviour:
     """Check a composition's predicted path with FCL, then carry with it."""
     ports = {"transport_weight": transport_weight, "avoid_gain": avoid_gain}
+    # The XML's {composition} is a key of its CarryIfClear alone; here one key per move and
+    # variant does the same.
+    checked = f"{{composition_{move}_{name}}}"
     clear = wire(
         PathClear("path_clear"),
         object=OBJECT,
@@ -72,6 +75,7 @@ def carry_if_clear(name: str, move: int, transport_weight: float, avoid_gain: fl
         plan=PLAN,
         from_state=STATE,
         margin_m=0.01,
+        composition=checked,
         **ports,
     )
     carry = wire(
@@ -81,6 +85,7 @@ def carry_if_clear(name: str, move: int, transport_weight: float, avoid_gain: fl
         plan=PLAN,
         from_state=STATE,
         to_state=STATE,
+        composition=checked,
         **ports,
     )
     seq = Sequence(

@@ -13,6 +13,9 @@ from skills.library import SkillLibrary
 
 #: Control period used when ``setup()`` is not given one, s.
 DEFAULT_CONTROL_DT = 1.0 / 60.0
+#: Squeeze force per palm a grasp reaches and a move is composed with, unless the plan's hold
+#: skill asks for more, N.
+SQUEEZE_FORCE_N = 15.0
 
 
 class WorldLeaf(BehaviourWithPorts):
@@ -102,6 +105,12 @@ def status_is_halt(new_status: Status) -> bool:
 def composition_ports() -> dict[str, PortInformation]:
     """The ports that choose a transport composition, shared by Transport and PathClear."""
     return {
+        "force_n": PortInformation(
+            float,
+            required=False,
+            default_value=SQUEEZE_FORCE_N,
+            description="squeeze force per palm the move is composed with, N",
+        ),
         "avoid_gain": PortInformation(
             float,
             required=False,

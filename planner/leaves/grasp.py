@@ -14,7 +14,7 @@ from planner.composition import (
     measured_dual_state,
     static_composition,
 )
-from planner.leaves.base import MotionLeaf
+from planner.leaves.base import SQUEEZE_FORCE_N, MotionLeaf
 from planner.port import Clock, ObjectSensing, PalmControl, Pose
 from skills.composer import DualArmComposer, DualArmState, relative_from_world
 from skills.dual_arm import ARMS
@@ -64,7 +64,7 @@ class Grasp(MotionLeaf):
         "force_n": PortInformation(
             float,
             required=False,
-            default_value=15.0,
+            default_value=SQUEEZE_FORCE_N,
             description="squeeze force per palm to reach, N",
         ),
         "plan": PortInformation(

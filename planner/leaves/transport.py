@@ -9,7 +9,7 @@ from py_trees.common import Status
 from py_trees.ports import PortInformation
 
 from affordances import SemanticAction
-from planner.composition import goal_error, refresh_link_points, transport_composition
+from planner.composition import MovePlan, compose_move, goal_error, refresh_link_points
 from planner.leaves.base import MotionLeaf, composition_ports
 from planner.leaves.grasp import squeeze_force
 from planner.port import Clock, Move, ObjectSensing, ObstacleScene, PalmControl, Pose
@@ -24,6 +24,10 @@ class Transport(MotionLeaf):
     link-level potential-field avoidance, on one transformation system towards the goal.
     Relative: grasp maintenance on each palm, squeezing. Starts from the handed-over full
     state and hands its own on. Fails, explaining why, if the grip is lost on the way.
+
+    Runs the composition PathClear checked when one is given (``composition``: it must be of
+    this object, move, force and variant, from this ``from_state``); composes the move itself
+    otherwise.
     """
 
     WORLD_ROLES: ClassVar[tuple[type, ...]] = (Clock, ObjectSensing, PalmControl, ObstacleScene)
@@ -33,9 +37,6 @@ class Transport(MotionLeaf):
         "move": PortInformation(int, description="index of the task's move, from 0"),
         "plan": PortInformation(SemanticAction, description="skills and weights to compose"),
         "from_state": PortInformation(DualArmState, description="handed-over full state"),
-        "force_n": PortInformation(
-            float, required=False, default_value=15.0, description="squeeze force per palm, N"
-        ),
         "min_force_n": PortInformation(
             float,
             required=False,
@@ -43,6 +44,11 @@ class Transport(MotionLeaf):
             description="contact force below which the grip is lost, N",
         ),
         **composition_ports(),
+        "composition": PortInformation(
+            MovePlan,
+            required=False,
+            description="the move as PathClear composed and checked it; else composed here",
+        ),
         "settle_s": PortInformation(
             float,
             required=False,
@@ -55,7 +61,7 @@ class Transport(MotionLeaf):
     }
 
     def initialise(self) -> None:
-        """Activate the move's obstacles and compose its skills from the handed-over state."""
+        """Run the checked composition, or activate the move's obstacles and compose it."""
         self.composer: DualArmComposer | None = None
         self.problem: str | None = None
         if (why := self.connected()) is not None:
@@ -68,22 +74,52 @@ class Transport(MotionLeaf):
         if not 0 <= index < len(moves):
             self.problem = f"move {index}: expected an index below {len(moves)}"
             return
-        self.move: Move = moves[index]
-        world.set_active_obstacles(self.move.obstacles)
         plan: SemanticAction = self.get_input("plan")
         force = squeeze_force(plan, float(self.get_input("force_n")))
-        self.composer = transport_composition(
-            plan,
-            self.library,
-            world,
-            name,
-            self.move,
-            self.get_input("from_state"),
-            force,
-            avoid_gain=float(self.get_input("avoid_gain")),
-            transport_weight=float(self.get_input("transport_weight")),
-            compiled=self.compiled,
-        )
+        state: DualArmState = self.get_input("from_state")
+        avoid_gain = float(self.get_input("avoid_gain"))
+        transport_weight = float(self.get_input("transport_weight"))
+        checked: MovePlan | None = self.optional_input("composition")
+        if checked is None:
+            checked = compose_move(
+                plan,
+                self.library,
+                world,
+                name,
+                index,
+                state,
+                force,
+                avoid_gain=avoid_gain,
+                transport_weight=transport_weight,
+                compiled=self.compiled,
+            )
+        else:
+            ours = {
+                "object": name,
+                "move": index,
+                "force_n": force,
+                "avoid_gain": avoid_gain,
+                "transport_weight": transport_weight,
+            }
+            theirs = (
+                checked.object,
+                checked.index,
+                checked.squeeze_force_n,
+                checked.avoid_gain,
+                checked.transport_weight,
+            )
+            wrong = [
+                f"{port} {value!r}, checked with {other!r}"
+                for (port, value), other in zip(ours.items(), theirs, strict=True)
+                if value != other
+            ]
+            if checked.from_state is not state:
+                wrong.append("from_state is not the state it was checked from")
+            if wrong:
+                self.problem = "not the composition of this move: " + "; ".join(wrong)
+                return
+        self.move: Move = checked.move
+        self.composer = checked.fresh()
         self.started = world.time()
         self.weak_ticks = 0
 
