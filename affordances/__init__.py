@@ -18,7 +18,13 @@ from affordances.context import (
     Shape,
     make_object_context,
 )
-from affordances.physics import combined_friction, required_squeeze_force
+from affordances.physics import (
+    combined_friction,
+    grip_friction_n,
+    palm_contact_friction,
+    required_squeeze_force,
+    spare_grip_acceleration,
+)
 from affordances.reasoner import AffordanceReasoner, needs_both_arms, reason
 from affordances.report import render_json, render_text, to_json_data
 from affordances.rules import Rule, RuleFileError, default_rules, load_rules, parse_rules, rule_set
@@ -45,14 +51,17 @@ __all__ = [
     "SkillSelection",
     "combined_friction",
     "default_rules",
+    "grip_friction_n",
     "load_rules",
     "make_object_context",
     "needs_both_arms",
+    "palm_contact_friction",
     "parse_rules",
     "reason",
     "render_json",
     "render_text",
     "required_squeeze_force",
     "rule_set",
+    "spare_grip_acceleration",
     "to_json_data",
 ]

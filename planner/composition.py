@@ -2,7 +2,7 @@
 
 The affordance reasoner names skills by label with a weight and parameters
 (:class:`affordances.SkillSelection`); the library holds the learnt skills with those labels;
-the world supplies what only it knows (obstacles, distances, palm stiffness). This module puts
+the world supplies what only it knows (obstacles, distances, gravity). This module puts
 them together into a :class:`skills.composer.DualArmComposer` for one move, and into the
 relative-only compositions that close and open the grasp.
 """
@@ -10,11 +10,11 @@ relative-only compositions that close and open the grasp.
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from affordances import SemanticAction, SkillSelection
+from affordances import SemanticAction, SkillSelection, spare_grip_acceleration
 from planner.port import Move, Pose, WorldPort
 from skills import quaternion as quat
 from skills.composer import DualArmComposer, DualArmState, relative_from_world
@@ -61,19 +61,17 @@ class TransportSettings:
     lift_m: float = 0.12
 
 
-def grip_acceleration_limit(world: WorldPort, name: str, squeeze_depth: float) -> float:
+def grip_acceleration_limit(world: WorldPort, name: str, squeeze_force_n: float) -> float:
     """Acceleration (m/s^2) avoidance may add: the grip's spare, over ``GRIP_MARGIN``.
 
-    Two palms squeezing with ``F = K * depth`` carry ``2 mu F`` by friction; what exceeds the
-    weight ``m g`` can accelerate the object. ``mu`` is the product of the object's and the
-    palms' friction, as Bullet combines them.
+    The spare is what two palms squeezing with ``squeeze_force_n`` N each can accelerate the
+    object by once they carry its weight (:func:`affordances.spare_grip_acceleration`, from the
+    object's and the robot's declared friction and the world's gravity).
     """
-    ctx = world.object_context(name)
-    robot = world.robot_capabilities()
-    force = world.palm_stiffness() * squeeze_depth
-    mu = ctx.friction * robot.palm_friction
-    spare = 2.0 * mu * force - ctx.mass_kg * 9.81
-    return min(max(spare / ctx.mass_kg / GRIP_MARGIN, 0.5), MAX_AVOID_LINEAR)
+    spare = spare_grip_acceleration(
+        world.object_context(name), world.robot_capabilities(), squeeze_force_n, world.gravity()
+    )
+    return min(max(spare / GRIP_MARGIN, 0.5), MAX_AVOID_LINEAR)
 
 
 def saturate_avoidance(
@@ -320,7 +318,7 @@ def transport_composition(
     name: str,
     move: Move,
     state: DualArmState,
-    squeeze_depth: float,
+    squeeze_force_n: float,
     settings: TransportSettings | None = None,
     avoid_gain: float = 1.0,
     transport_weight: float = 1.0,
@@ -328,6 +326,7 @@ def transport_composition(
 ) -> DualArmComposer:
     """The simultaneous composition of one move, starting from the handed-over state.
 
+    ``squeeze_force_n`` is the grip's force per palm, N, which bounds what avoidance may ask.
     ``avoid_gain`` multiplies the weights of obstacle steering and link-level avoidance;
     ``transport_weight`` multiplies the learnt pick-and-place's (a lower carry). A tree tries
     such variants when a predicted path is not clear. ``compiled``: see
@@ -343,9 +342,8 @@ def transport_composition(
     terms = absolute_terms(
         reweight(plan, avoid_gain, transport_weight), library, world, name, points
     )
-    absolute = saturate_avoidance(terms, grip_acceleration_limit(world, name, squeeze_depth))
+    absolute = saturate_avoidance(terms, grip_acceleration_limit(world, name, squeeze_force_n))
     # The handed-over palm poses are the squeezed grip already: hold them as they are.
-    del squeeze_depth
     relative = hold_terms(plan, library, geometry, 0.0)
     return DualArmComposer.start(
         state,
@@ -355,6 +353,85 @@ def transport_composition(
         absolute=absolute,
         relative=relative,
         compiled=compiled,
+    )
+
+
+@dataclass(frozen=True, eq=False)
+class MovePlan:
+    """One move composed: what PathClear checked and hands to Transport to run.
+
+    Attributes
+    ----------
+    object : str
+        The held object.
+    index : int
+        Index of the task's move, from 0.
+    move : Move
+        The move: its goal and the obstacles present (active since it was composed).
+    squeeze_force_n : float
+        The grip's force per palm the composition was bounded by, N.
+    avoid_gain, transport_weight : float
+        The variant of the plan composed (see :func:`transport_composition`).
+    from_state : DualArmState
+        The handed-over state it was composed from.
+    composer : DualArmComposer
+        The composition as built; never stepped itself (use :meth:`fresh`).
+    start : DualArmState
+        The composer's first state (``from_state`` with the phase restarted).
+    """
+
+    object: str
+    index: int
+    move: Move
+    squeeze_force_n: float
+    avoid_gain: float
+    transport_weight: float
+    from_state: DualArmState
+    composer: DualArmComposer
+    start: DualArmState = field(init=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "start", self.composer.state)
+
+    def fresh(self) -> DualArmComposer:
+        """The composition at its first state, to roll out or run (the terms are shared)."""
+        return replace(self.composer, state=self.start)
+
+
+def compose_move(
+    plan: SemanticAction,
+    library: SkillLibrary,
+    world: WorldPort,
+    name: str,
+    index: int,
+    state: DualArmState,
+    squeeze_force_n: float,
+    avoid_gain: float = 1.0,
+    transport_weight: float = 1.0,
+    compiled: bool = False,
+) -> MovePlan:
+    """Activate move ``index``'s obstacles and compose it from ``state``.
+
+    The one place a move's obstacles are switched on: the composition asks the world for
+    the obstacles present, so they must be the move's before it is built. Arguments as
+    :func:`transport_composition`'s; ``index`` must be one of ``world.task_moves(name)``.
+    """
+    move = world.task_moves(name)[index]
+    world.set_active_obstacles(move.obstacles)
+    composer = transport_composition(
+        plan,
+        library,
+        world,
+        name,
+        move,
+        state,
+        squeeze_force_n,
+        avoid_gain=avoid_gain,
+        transport_weight=transport_weight,
+        compiled=compiled,
+    )
+    return MovePlan(
+        name, index, move, squeeze_force_n, avoid_gain, transport_weight, state, composer
     )
 
 

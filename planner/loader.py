@@ -29,14 +29,12 @@ from pathlib import Path
 import py_trees
 from py_trees.parsers.behaviour_tree_xml import parse_behaviour_tree_xml
 
-from planner.validate import (
-    Registry,
+from planner.tree_checks import check_tree_document
+from planner.tree_ports import Registry, effective_registry
+from planner.tree_problems import TreeFileError, TreeProblem
+from planner.tree_reading import (
     TreeDocument,
-    TreeFileError,
-    TreeProblem,
-    check_tree_document,
     describe,
-    effective_registry,
     read_tree_document,
     read_tree_document_string,
 )

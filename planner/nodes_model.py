@@ -28,7 +28,7 @@ from typing import Any
 import py_trees
 from py_trees.ports import PortInformation, PortsMixin, get_ports_registry
 
-from planner.validate import Registry, registry_class, type_name
+from planner.tree_ports import Registry, registry_class, type_name
 
 __all__ = ["leaf_kind", "nodes_model_xml", "summary_line"]
 

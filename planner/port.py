@@ -1,9 +1,15 @@
 """The world port: everything the planner's leaves may ask of, or tell, a world.
 
-The simulated world (``worlds.sim_world.SimWorld``) and the in-memory fake
-(:class:`planner.testing.FakeWorld`) both satisfy :class:`WorldPort`, so a leaf is tested
-without PyBullet and run unchanged against it. Leaves never step the world: the runner calls
-:meth:`WorldPort.advance` between ticks, so ``update()`` never blocks.
+The port is split by role: :class:`Clock` (time), :class:`ObjectSensing` (objects, task,
+gravity), :class:`PalmControl` (palms and the robot's declared capabilities) and
+:class:`ObstacleScene` (obstacles and collision queries). :class:`WorldPort` is all four. The
+simulated world (``worlds.sim_world.SimWorld``) and the in-memory fake
+(:class:`planner.testing.FakeWorld`) both satisfy it, so a leaf is tested without PyBullet and
+run unchanged against it. Leaves never step the world: the runner calls
+:meth:`Clock.advance` between ticks, so ``update()`` never blocks.
+
+Forces cross the port as forces (N): the planner asks for the squeeze depth that gives a force
+(:meth:`PalmControl.squeeze_depth`) and never sees the controller's stiffness.
 
 Poses are (position (3,), quaternion (4,) scalar-last) pairs in the world frame; twists are
 (6,) arrays ``[vx, vy, vz, wx, wy, wz]``, world frame.
@@ -108,8 +114,8 @@ class PathCheck:
 
 
 @runtime_checkable
-class WorldPort(Protocol):
-    """What a world offers the planner. Units SI, world frame."""
+class Clock(Protocol):
+    """Simulated time. Leaves read it; only the runner advances it."""
 
     def time(self) -> float:
         """Simulated time, s."""
@@ -119,7 +125,11 @@ class WorldPort(Protocol):
         """Run the world for ``dt`` seconds of simulated time (called by the runner only)."""
         ...
 
-    # -- objects and task ---------------------------------------------------------------------
+
+@runtime_checkable
+class ObjectSensing(Protocol):
+    """The objects as measured and declared, the task's moves, and the gravity they feel."""
+
     def object_pose(self, name: str) -> Pose:
         """Measured pose of an object's centre."""
         ...
@@ -138,18 +148,22 @@ class WorldPort(Protocol):
         ...
 
     def object_context(self, name: str) -> ObjectContext:
-        """The object's context for the affordance reasoner."""
-        ...
-
-    def robot_capabilities(self) -> RobotCapabilities:
-        """What the robot can carry and squeeze."""
+        """The object's declared properties and surroundings, for the affordance reasoner."""
         ...
 
     def task_moves(self, name: str) -> tuple[Move, ...]:
         """The moves the task asks of an object, in order."""
         ...
 
-    # -- palms ---------------------------------------------------------------------------------
+    def gravity(self) -> float:
+        """Magnitude of the world's gravity, m/s^2 (what a grip must carry)."""
+        ...
+
+
+@runtime_checkable
+class PalmControl(Protocol):
+    """The two palms: what they measure, what the robot declares, and how to command them."""
+
     def palm_pose(self, arm: Arm) -> Pose:
         """Measured pose of a palm frame."""
         ...
@@ -166,8 +180,13 @@ class WorldPort(Protocol):
         """Thickness of a palm along its contact normal, m."""
         ...
 
-    def palm_stiffness(self) -> float:
-        """Translational stiffness of the palm controller, N/m: squeeze depth = force / it."""
+    def robot_capabilities(self) -> RobotCapabilities:
+        """What the robot declares it can carry and squeeze, and its palms' friction."""
+        ...
+
+    def squeeze_depth(self, force_n: float) -> float:
+        """How far inside an object's face to command a palm for it to press with
+        ``force_n`` N, m (the world's palm controller sets the ratio)."""
         ...
 
     def command_palm(self, arm: Arm, pose: Pose, twist: Array | None = None) -> None:
@@ -182,7 +201,11 @@ class WorldPort(Protocol):
         """Normal force between a palm and an object, N (0 without contact)."""
         ...
 
-    # -- obstacles and collision -----------------------------------------------------------------
+
+@runtime_checkable
+class ObstacleScene(Protocol):
+    """The obstacles of the present move and the collision queries against them."""
+
     def set_active_obstacles(self, names: Iterable[str]) -> None:
         """Make exactly these obstacles present."""
         ...
@@ -218,3 +241,12 @@ class WorldPort(Protocol):
     def scene_query(self) -> SceneQuery:
         """The collision port the affordance reasoner's scene rules use."""
         ...
+
+
+@runtime_checkable
+class WorldPort(Clock, ObjectSensing, PalmControl, ObstacleScene, Protocol):
+    """Everything a world offers the planner: all four roles. Units SI, world frame.
+
+    A leaf's docstring names the roles it uses; a function that needs one role takes that
+    role, so a test can hand it a stub of that role alone.
+    """

@@ -238,6 +238,10 @@ class SimWorld:
                 )
         return tuple(moves)
 
+    def gravity(self) -> float:
+        """Magnitude of the scene's gravity, m/s^2."""
+        return abs(float(self.scene.spec.gravity))
+
     # -- palms -------------------------------------------------------------------------------
     def palm_pose(self, arm: Arm) -> Pose:
         """Measured palm pose."""
@@ -257,9 +261,10 @@ class SimWorld:
         """m."""
         return float(self.world_file.robot.palm_size[2])
 
-    def palm_stiffness(self) -> float:
-        """The impedance controller's translational stiffness, N/m."""
-        return float(self.gains.stiffness_linear)
+    def squeeze_depth(self, force_n: float) -> float:
+        """Depth inside a face that the impedance controller's translational stiffness turns
+        into ``force_n`` N of squeeze, m."""
+        return force_n / float(self.gains.stiffness_linear)
 
     def command_palm(self, arm: Arm, pose: Pose, twist: Array | None = None) -> None:
         """Track ``pose`` with feed-forward ``twist`` (impedance control)."""

@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 import numpy as np
 from py_trees.ports import PortInformation
 
 from planner.composition import lateral_geometry
 from planner.leaves.palm_motion import ViaPointLeaf, ViaPointMotion, measured_state
-from planner.port import Pose
+from planner.port import ObjectSensing, PalmControl, Pose
 from skills import quaternion as quat
 from skills.dual_arm import ARMS
 from skills.labels import Arm
@@ -37,6 +39,8 @@ def pregrasp_poses(
 
 class Approach(ViaPointLeaf):
     """Move both palms to ``standoff`` m outside the object's faces via set-points above."""
+
+    WORLD_ROLES: ClassVar[tuple[type, ...]] = (ObjectSensing, PalmControl)
 
     INPUT_PORTS = {
         "object": PortInformation(str, description="object to approach"),

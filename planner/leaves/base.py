@@ -13,6 +13,9 @@ from skills.library import SkillLibrary
 
 #: Control period used when ``setup()`` is not given one, s.
 DEFAULT_CONTROL_DT = 1.0 / 60.0
+#: Squeeze force per palm a grasp reaches and a move is composed with, unless the plan's hold
+#: skill asks for more, N.
+SQUEEZE_FORCE_N = 15.0
 
 
 class WorldLeaf(BehaviourWithPorts):
@@ -21,9 +24,14 @@ class WorldLeaf(BehaviourWithPorts):
     ``__init__`` only configures, so a tree builds and renders offline; ``setup(world=...,
     library=..., control_dt=...)`` connects it. A leaf used before ``setup`` fails with an
     explanation rather than an exception.
+
+    ``WORLD_ROLES`` names the roles of the port (:mod:`planner.port`) a leaf uses; a test
+    ticks each leaf through :class:`planner.testing.RoleView`, which offers those alone.
     """
 
     NODE_TYPE: ClassVar[str] = "Action"
+    #: The port's roles the leaf asks the world for (all of them unless a leaf says fewer).
+    WORLD_ROLES: ClassVar[tuple[type, ...]] = (WorldPort,)
 
     def __init__(self, name: str, **kwargs: Any) -> None:
         super().__init__(name=name, **kwargs)
@@ -97,6 +105,12 @@ def status_is_halt(new_status: Status) -> bool:
 def composition_ports() -> dict[str, PortInformation]:
     """The ports that choose a transport composition, shared by Transport and PathClear."""
     return {
+        "force_n": PortInformation(
+            float,
+            required=False,
+            default_value=SQUEEZE_FORCE_N,
+            description="squeeze force per palm the move is composed with, N",
+        ),
         "avoid_gain": PortInformation(
             float,
             required=False,

@@ -9,15 +9,18 @@ from py_trees.common import Status
 from py_trees.ports import PortInformation
 
 from affordances import SemanticAction
-from planner.composition import goal_error, transport_composition
+from planner.composition import MovePlan, compose_move, goal_error
 from planner.leaves.base import WorldLeaf, composition_ports
 from planner.leaves.grasp import squeeze_force
+from planner.port import ObjectSensing, ObstacleScene, PalmControl
 from skills.composer import DualArmState
 from skills.dual_arm import ARMS
 
 
 class IsHeld(WorldLeaf):
     """Both palms press on the object and it has not slipped from where the grasp holds it."""
+
+    WORLD_ROLES: ClassVar[tuple[type, ...]] = (ObjectSensing, PalmControl)
 
     NODE_TYPE: ClassVar[str] = "Condition"
     INPUT_PORTS = {
@@ -62,6 +65,8 @@ class IsHeld(WorldLeaf):
 class AtGoal(WorldLeaf):
     """The object is within tolerance of a move's goal pose."""
 
+    WORLD_ROLES: ClassVar[tuple[type, ...]] = (ObjectSensing,)
+
     NODE_TYPE: ClassVar[str] = "Condition"
     INPUT_PORTS = {
         "object": PortInformation(str, description="the object"),
@@ -97,7 +102,13 @@ class AtGoal(WorldLeaf):
 
 
 class PathClear(WorldLeaf):
-    """The predicted rollout of a move's composition keeps clear of the obstacles (FCL)."""
+    """The predicted rollout of a move's composition keeps clear of the obstacles (FCL).
+
+    Composes the move (which activates its obstacles), rolls a copy out open loop and checks
+    it; on SUCCESS writes the composition it checked to ``composition``, for Transport to run.
+    """
+
+    WORLD_ROLES: ClassVar[tuple[type, ...]] = (ObjectSensing, PalmControl, ObstacleScene)
 
     NODE_TYPE: ClassVar[str] = "Condition"
     INPUT_PORTS = {
@@ -110,7 +121,11 @@ class PathClear(WorldLeaf):
             float, required=False, default_value=0.0, description="clearance required, m"
         ),
     }
-    OUTPUT_PORTS: dict[str, PortInformation] = {}
+    OUTPUT_PORTS = {
+        "composition": PortInformation(
+            MovePlan, description="the move's composition as checked, at its start state"
+        ),
+    }
 
     def update(self) -> Status:
         """Roll the composition out open loop and check it; SUCCESS if clear."""
@@ -122,23 +137,21 @@ class PathClear(WorldLeaf):
         moves = world.task_moves(name)
         if not 0 <= index < len(moves):
             return self.fail(f"move {index}: expected an index below {len(moves)}")
-        world.set_active_obstacles(moves[index].obstacles)
         plan: SemanticAction = self.get_input("plan")
-        depth = squeeze_force(plan, 15.0) / world.palm_stiffness()
-        composer = transport_composition(
+        checked = compose_move(
             plan,
             self.library,
             world,
             name,
-            moves[index],
+            index,
             self.get_input("from_state"),
-            depth,
+            squeeze_force(plan, float(self.get_input("force_n"))),
             avoid_gain=float(self.get_input("avoid_gain")),
             transport_weight=float(self.get_input("transport_weight")),
             compiled=self.compiled,
         )
-        n = int(np.ceil((composer.target.tau + 0.5) / self.control_dt))
-        path = composer.rollout(n, self.control_dt)
+        n = int(np.ceil((checked.composer.target.tau + 0.5) / self.control_dt))
+        path = checked.fresh().rollout(n, self.control_dt)
         obj_p = path.object_positions
         check = world.check_trajectory(
             name,
@@ -149,6 +162,7 @@ class PathClear(WorldLeaf):
             float(self.get_input("margin_m")),
         )
         if check.clear:
+            self._set_output("composition", checked)
             return self.succeed(f"clear by {check.min_distance_m * 1000:.0f} mm over {n} steps")
         k = check.first_collision or 0
         where = np.round(obj_p[k], 3).tolist()

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 from py_trees.common import Status
 from py_trees.ports import PortInformation
 
@@ -12,8 +14,8 @@ from planner.composition import (
     measured_dual_state,
     static_composition,
 )
-from planner.leaves.base import MotionLeaf
-from planner.port import Pose
+from planner.leaves.base import SQUEEZE_FORCE_N, MotionLeaf
+from planner.port import Clock, ObjectSensing, PalmControl, Pose
 from skills.composer import DualArmComposer, DualArmState, relative_from_world
 from skills.dual_arm import ARMS
 from skills.labels import Action
@@ -55,12 +57,14 @@ def squeeze_force(plan: SemanticAction | None, default: float) -> float:
 class Grasp(MotionLeaf):
     """Lateral contact, then squeeze: grasp maintenance pulls the palms onto the faces."""
 
+    WORLD_ROLES: ClassVar[tuple[type, ...]] = (Clock, ObjectSensing, PalmControl)
+
     INPUT_PORTS = {
         "object": PortInformation(str, description="object to grasp"),
         "force_n": PortInformation(
             float,
             required=False,
-            default_value=15.0,
+            default_value=SQUEEZE_FORCE_N,
             description="squeeze force per palm to reach, N",
         ),
         "plan": PortInformation(
@@ -84,7 +88,7 @@ class Grasp(MotionLeaf):
         world = self.world
         name = self.get_input("object")
         self.force = squeeze_force(self.optional_input("plan"), float(self.get_input("force_n")))
-        depth = self.force / world.palm_stiffness()
+        depth = world.squeeze_depth(self.force)
         relative = hold_terms(
             self.optional_input("plan"), self.library, lateral_geometry(world, name), depth
         )

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 import numpy as np
 from py_trees.common import Status
 from py_trees.ports import PortInformation
@@ -14,13 +16,15 @@ from planner.composition import (
 )
 from planner.leaves.base import MotionLeaf
 from planner.leaves.palm_motion import ViaPointLeaf, ViaPointMotion, measured_state
-from planner.port import Pose
+from planner.port import Clock, ObjectSensing, PalmControl, Pose
 from skills.composer import DualArmComposer, DualArmState
 from skills.dual_arm import ARMS
 
 
 class Release(MotionLeaf):
     """Move each palm ``opening_m`` out along its contact normal (a relative skill)."""
+
+    WORLD_ROLES: ClassVar[tuple[type, ...]] = (Clock, ObjectSensing, PalmControl)
 
     INPUT_PORTS = {
         "object": PortInformation(str, description="the held object"),
@@ -75,6 +79,8 @@ class Release(MotionLeaf):
 
 class Retreat(ViaPointLeaf):
     """Take both palms back to their rest poses, rising first."""
+
+    WORLD_ROLES: ClassVar[tuple[type, ...]] = (PalmControl,)
 
     INPUT_PORTS = {
         "rise_m": PortInformation(

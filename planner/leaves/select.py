@@ -2,16 +2,21 @@
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 from py_trees.common import Status
 from py_trees.ports import PortInformation
 
 from affordances import SemanticAction, reason
 from planner.leaves.base import WorldLeaf
+from planner.port import ObjectSensing, ObstacleScene, PalmControl
 from skills.labels import Grasp
 
 
 class SelectSkills(WorldLeaf):
     """Rank semantic actions for the object and write the best one as the plan."""
+
+    WORLD_ROLES: ClassVar[tuple[type, ...]] = (ObjectSensing, PalmControl, ObstacleScene)
 
     INPUT_PORTS = {
         "object": PortInformation(str, description="object to reason about"),

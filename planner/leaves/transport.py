@@ -2,16 +2,18 @@
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 import numpy as np
 from py_trees.common import Status
 from py_trees.ports import PortInformation
 
 from affordances import SemanticAction
-from planner.composition import goal_error, transport_composition
+from planner.composition import MovePlan, compose_move, goal_error
 from planner.leaves.base import MotionLeaf, composition_ports
 from planner.leaves.grasp import squeeze_force
 from planner.move_result import MoveResult, publish_move_result
-from planner.port import Move, Pose
+from planner.port import Clock, Move, ObjectSensing, ObstacleScene, PalmControl, Pose
 from skills.composer import DualArmComposer, DualArmState
 from skills.dual_arm import ARMS
 
@@ -25,16 +27,19 @@ class Transport(MotionLeaf):
     state and hands its own on. Fails, explaining why, if the grip is lost on the way.
     Publishes the move's composition and outcome as a :class:`~planner.move_result.MoveResult`
     when it starts and when it ends.
+
+    Runs the composition PathClear checked when one is given (``composition``: it must be of
+    this object, move, force and variant, from this ``from_state``); composes the move itself
+    otherwise.
     """
+
+    WORLD_ROLES: ClassVar[tuple[type, ...]] = (Clock, ObjectSensing, PalmControl, ObstacleScene)
 
     INPUT_PORTS = {
         "object": PortInformation(str, description="the held object"),
         "move": PortInformation(int, description="index of the task's move, from 0"),
         "plan": PortInformation(SemanticAction, description="skills and weights to compose"),
         "from_state": PortInformation(DualArmState, description="handed-over full state"),
-        "force_n": PortInformation(
-            float, required=False, default_value=15.0, description="squeeze force per palm, N"
-        ),
         "min_force_n": PortInformation(
             float,
             required=False,
@@ -42,6 +47,11 @@ class Transport(MotionLeaf):
             description="contact force below which the grip is lost, N",
         ),
         **composition_ports(),
+        "composition": PortInformation(
+            MovePlan,
+            required=False,
+            description="the move as PathClear composed and checked it; else composed here",
+        ),
         "settle_s": PortInformation(
             float,
             required=False,
@@ -54,7 +64,7 @@ class Transport(MotionLeaf):
     }
 
     def initialise(self) -> None:
-        """Activate the move's obstacles and compose its skills from the handed-over state."""
+        """Run the checked composition, or activate the move's obstacles and compose it."""
         self.composer: DualArmComposer | None = None
         self.problem: str | None = None
         if (why := self.connected()) is not None:
@@ -67,22 +77,52 @@ class Transport(MotionLeaf):
         if not 0 <= index < len(moves):
             self.problem = f"move {index}: expected an index below {len(moves)}"
             return
-        self.move: Move = moves[index]
-        world.set_active_obstacles(self.move.obstacles)
         plan: SemanticAction = self.get_input("plan")
-        depth = squeeze_force(plan, float(self.get_input("force_n"))) / world.palm_stiffness()
-        self.composer = transport_composition(
-            plan,
-            self.library,
-            world,
-            name,
-            self.move,
-            self.get_input("from_state"),
-            depth,
-            avoid_gain=float(self.get_input("avoid_gain")),
-            transport_weight=float(self.get_input("transport_weight")),
-            compiled=self.compiled,
-        )
+        force = squeeze_force(plan, float(self.get_input("force_n")))
+        state: DualArmState = self.get_input("from_state")
+        avoid_gain = float(self.get_input("avoid_gain"))
+        transport_weight = float(self.get_input("transport_weight"))
+        checked: MovePlan | None = self.optional_input("composition")
+        if checked is None:
+            checked = compose_move(
+                plan,
+                self.library,
+                world,
+                name,
+                index,
+                state,
+                force,
+                avoid_gain=avoid_gain,
+                transport_weight=transport_weight,
+                compiled=self.compiled,
+            )
+        else:
+            ours = {
+                "object": name,
+                "move": index,
+                "force_n": force,
+                "avoid_gain": avoid_gain,
+                "transport_weight": transport_weight,
+            }
+            theirs = (
+                checked.object,
+                checked.index,
+                checked.squeeze_force_n,
+                checked.avoid_gain,
+                checked.transport_weight,
+            )
+            wrong = [
+                f"{port} {value!r}, checked with {other!r}"
+                for (port, value), other in zip(ours.items(), theirs, strict=True)
+                if value != other
+            ]
+            if checked.from_state is not state:
+                wrong.append("from_state is not the state it was checked from")
+            if wrong:
+                self.problem = "not the composition of this move: " + "; ".join(wrong)
+                return
+        self.move: Move = checked.move
+        self.composer = checked.fresh()
         self.started = world.time()
         self.weak_ticks = 0
         self._publish(Status.RUNNING)

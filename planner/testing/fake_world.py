@@ -27,6 +27,7 @@ from affordances import (
     ObjectContext,
     RobotCapabilities,
     SceneQuery,
+    grip_friction_n,
     make_object_context,
 )
 from affordances.context import PAPER_ROBOT
@@ -179,7 +180,7 @@ class FakeWorld:
         obj = self._objects[name]
         f = min(self.contact_force(arm, name) for arm in ARMS)
         mu = obj.friction * self.palm_friction
-        return f > 0.0 and 2.0 * mu * f >= obj.mass * GRAVITY
+        return f > 0.0 and grip_friction_n(mu, f) >= obj.mass * GRAVITY
 
     # -- WorldPort: objects and task ---------------------------------------------------------
     def object_pose(self, name: str) -> Pose:
@@ -224,13 +225,13 @@ class FakeWorld:
             goals=[m.goal.position.tolist() for m in self._moves.get(name, ())],
         )
 
-    def robot_capabilities(self) -> RobotCapabilities:
-        """The paper's robot."""
-        return PAPER_ROBOT
-
     def task_moves(self, name: str) -> tuple[Move, ...]:
         """Moves of ``name``."""
         return self._moves.get(name, ())
+
+    def gravity(self) -> float:
+        """m/s^2."""
+        return GRAVITY
 
     # -- WorldPort: palms --------------------------------------------------------------------
     def palm_pose(self, arm: Arm) -> Pose:
@@ -249,9 +250,13 @@ class FakeWorld:
         """m."""
         return self._palm_thickness
 
-    def palm_stiffness(self) -> float:
-        """N/m: the contact spring stands in for the controller's."""
-        return self.contact_stiffness
+    def robot_capabilities(self) -> RobotCapabilities:
+        """The paper's robot."""
+        return PAPER_ROBOT
+
+    def squeeze_depth(self, force_n: float) -> float:
+        """m: the contact spring stands in for the controller's."""
+        return force_n / self.contact_stiffness
 
     def command_palm(self, arm: Arm, pose: Pose, twist: Array | None = None) -> None:
         """Target for the next advance."""

@@ -7,7 +7,12 @@ import math
 import pytest
 from numpy.testing import assert_allclose
 
-from affordances import ReasonerConfig, combined_friction, required_squeeze_force
+from affordances import (
+    ReasonerConfig,
+    combined_friction,
+    required_squeeze_force,
+    spare_grip_acceleration,
+)
 from affordances.physics import (
     FaceAxis,
     assess,
@@ -29,6 +34,17 @@ def test_required_squeeze_force() -> None:
     # 2 * mu * F = k * m * g
     assert_allclose(required_squeeze_force(12.0, 0.64, 1.5, 9.81), 137.953125)
     assert required_squeeze_force(1.0, 0.0, 1.5, 9.81) == math.inf
+
+
+def test_spare_grip_acceleration_is_the_same_law_as_the_required_force() -> None:
+    # Squeezing with the force that holds k times the weight leaves (k - 1) g to accelerate.
+    box, g, k = parcel(), 9.81, 1.5
+    mu = combined_friction(box.friction, ROBOT.palm_friction)
+    need = required_squeeze_force(box.mass_kg, mu, k, g)
+    assert_allclose(spare_grip_acceleration(box, ROBOT, need, g), (k - 1.0) * g, rtol=1e-12)
+    # The paper's 1 kg parcel and palms, 15 N each: (2 * 0.64 * 15 - 9.81) / 1
+    assert_allclose(spare_grip_acceleration(box, ROBOT, 15.0, g), 2.0 * 0.64 * 15.0 - 9.81)
+    assert spare_grip_acceleration(box, ROBOT, 0.0, g) == pytest.approx(-g)
 
 
 def test_face_pairs_per_shape() -> None:

@@ -3,12 +3,12 @@
 from __future__ import annotations
 
 import numpy as np
-import pytest
 import py_trees
+import pytest
 from py_trees.common import Status
 
 from affordances import SemanticAction, SkillSelection
-from planner.composition import lateral_geometry
+from planner.composition import MovePlan, lateral_geometry
 from planner.leaves import (
     Approach,
     AtGoal,
@@ -353,3 +353,63 @@ def test_selection_helpers_are_typed() -> None:
     sel = SkillSelection(Action.TRANSPORT, Space.ABSOLUTE, 1.0, {})
     assert sel.action is Action.TRANSPORT
     assert Pose.of([0, 0, 0], quat.IDENTITY).position.shape == (3,)
+
+
+def test_transport_runs_the_composition_path_clear_checked(
+    fake_world: FakeWorld, library: SkillLibrary, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    plan = select(fake_world, library)
+    approach_and_grasp(fake_world, library)
+    py_trees.blackboard.Blackboard.set("/bare", _plan_without_avoidance(plan))
+    activated: list[tuple[str, ...]] = []
+    activate = fake_world.set_active_obstacles
+    monkeypatch.setattr(
+        fake_world,
+        "set_active_obstacles",
+        lambda names: (activated.append(tuple(names)), activate(names)),
+    )
+    ports = {"object": "parcel", "move": 0, "plan": "{bare}", "from_state": "{state}"}
+    clear = ready(PathClear("clear"), fake_world, library, composition="{checked}", **ports)
+    clear.tick_once()
+    assert clear.status == Status.SUCCESS, clear.feedback_message
+    checked = blackboard_value("/checked")
+    assert isinstance(checked, MovePlan) and checked.index == 0
+    carry = ready(
+        Transport("carry"),
+        fake_world,
+        library,
+        composition="{checked}",
+        to_state="{state}",
+        **ports,
+    )
+    log = tick_until(carry, fake_world, DT, max_ticks=3000)
+    assert log.final == Status.SUCCESS, log.feedback
+    # Composed once: Transport ran the checked terms, and only PathClear switched obstacles on.
+    assert carry.composer is not None and carry.composer.absolute is checked.composer.absolute
+    assert activated == [()]
+
+
+def test_transport_refuses_a_composition_checked_for_another_variant(
+    fake_world: FakeWorld, library: SkillLibrary
+) -> None:
+    plan = select(fake_world, library)
+    approach_and_grasp(fake_world, library)
+    py_trees.blackboard.Blackboard.set("/bare", _plan_without_avoidance(plan))
+    ports = {"object": "parcel", "move": 0, "plan": "{bare}", "from_state": "{state}"}
+    clear = ready(PathClear("clear"), fake_world, library, composition="{checked}", **ports)
+    clear.tick_once()
+    assert clear.status == Status.SUCCESS, clear.feedback_message
+    carry = ready(
+        Transport("carry"),
+        fake_world,
+        library,
+        composition="{checked}",
+        avoid_gain=2.0,
+        to_state="{state}",
+        **ports,
+    )
+    carry.tick_once()
+    assert carry.status == Status.FAILURE
+    assert "not the composition of this move: avoid_gain 2.0, checked with 1.0" in (
+        carry.feedback_message
+    )

@@ -1,0 +1,55 @@
+"""What is wrong with a tree file: one :class:`TreeProblem` per mistake, and the error that
+carries them."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class TreeProblem:
+    """One thing wrong with a tree file.
+
+    Attributes
+    ----------
+    file : str
+        The file as given (or the ``source`` label of a string).
+    line : int or None
+        1-based line of the offending element; None for whole-file problems.
+    node : str
+        The element as written, e.g. ``<Grasp name="grip">``; empty for whole-file problems.
+    message : str
+        What is wrong and what was expected.
+    column : int or None
+        1-based column, for XML syntax errors only.
+    """
+
+    file: str
+    line: int | None
+    node: str
+    message: str
+    column: int | None = None
+
+    def __str__(self) -> str:
+        where = self.file
+        if self.line is not None:
+            where += f":{self.line}"
+            if self.column is not None:
+                where += f":{self.column}"
+        return f"{where}: {self.node}: {self.message}" if self.node else f"{where}: {self.message}"
+
+
+class TreeFileError(ValueError):
+    """A tree file that cannot be loaded; ``str()`` gives one ``file:line: node: message`` per line.
+
+    Parameters
+    ----------
+    problems : sequence of TreeProblem
+        At least one problem.
+    """
+
+    def __init__(self, problems: list[TreeProblem] | tuple[TreeProblem, ...]) -> None:
+        if not problems:
+            raise ValueError("TreeFileError: expected at least one problem")
+        self.problems: tuple[TreeProblem, ...] = tuple(problems)
+        super().__init__("\n".join(str(p) for p in self.problems))

@@ -1,0 +1,370 @@
+"""Reading a tree file: expat with the line of every element, ``<include>`` inlined, and BT.CPP
+spellings (``Fallback``, ``RetryUntilSuccessful num_attempts=``, ``Timeout msec=`` ...)
+translated into the tags py_trees' parser builds."""
+
+from __future__ import annotations
+
+import os
+import xml.etree.ElementTree as ET
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from xml.parsers import expat
+
+from py_trees.parsers.behaviour_tree_xml import DECORATOR_NODES
+from py_trees.ports import get_ports_registry
+
+from planner.tree_ports import Registry
+from planner.tree_problems import TreeFileError, TreeProblem
+
+#: Groot/BT.CPP bookkeeping attributes that carry no meaning for a run; dropped silently.
+_IGNORED_ATTRIBUTES = frozenset({"_description", "_uid", "_fullpath"})
+
+
+class SourceElement(ET.Element):
+    """An element that remembers where it was written.
+
+    ``sourcefile`` and ``sourceline`` locate the start tag; ``source_tag`` and ``source_attrib``
+    keep the spelling as written, before BT.CPP names are translated, for messages.
+    """
+
+    sourcefile: str
+    sourceline: int
+    source_tag: str
+    source_attrib: dict[str, str]
+
+
+def describe(elem: ET.Element) -> str:
+    """Return the element as written for messages, e.g. ``<Grasp name="grip">``."""
+    tag = getattr(elem, "source_tag", elem.tag)
+    attrib = getattr(elem, "source_attrib", elem.attrib)
+    parts = [tag]
+    for key in ("ID", "name"):
+        if key in attrib:
+            parts.append(f'{key}="{attrib[key]}"')
+    return "<" + " ".join(parts) + ">"
+
+
+def source_line(elem: ET.Element) -> int | None:
+    """1-based line of an element's start tag, if it was read from text."""
+    return getattr(elem, "sourceline", None)
+
+
+def source_file(elem: ET.Element, default: str) -> str:
+    """The file an element was read from (an include's), else ``default``."""
+    return getattr(elem, "sourcefile", default)
+
+
+def _parse_xml(data: bytes | str, source: str) -> SourceElement:
+    """Parse XML text into :class:`SourceElement` s; raise TreeFileError on a syntax error."""
+    parser = expat.ParserCreate()
+    stack: list[SourceElement] = []
+    document: list[SourceElement] = []
+
+    def start(tag: str, attrib: dict[str, str]) -> None:
+        elem = SourceElement(tag, attrib)
+        elem.sourcefile = source
+        elem.sourceline = parser.CurrentLineNumber
+        elem.source_tag = tag
+        elem.source_attrib = dict(attrib)
+        if stack:
+            stack[-1].append(elem)
+        else:
+            document.append(elem)
+        stack.append(elem)
+
+    def end(tag: str) -> None:
+        stack.pop()
+
+    parser.StartElementHandler = start
+    parser.EndElementHandler = end
+    try:
+        parser.Parse(data, True)
+    except expat.ExpatError as exc:
+        message = expat.errors.messages.get(exc.code, str(exc)) if exc.code else str(exc)
+        raise TreeFileError(
+            [
+                TreeProblem(
+                    source,
+                    exc.lineno,
+                    "",
+                    f"XML syntax error: {message}",
+                    column=exc.offset + 1,
+                )
+            ]
+        ) from None
+    return document[0]
+
+
+@dataclass
+class TreeDocument:
+    """A tree file read and translated, ready to check or build.
+
+    Attributes
+    ----------
+    file : str
+        The file as given, or the ``source`` label of a string.
+    root : SourceElement
+        The ``<root>`` element, includes inlined and BT.CPP spellings translated.
+    main_tree_id : str or None
+        The tree to run: ``main_tree_to_execute``, or the only ``<BehaviorTree>``.
+    problems : list of TreeProblem
+        Problems met while reading and translating.
+    """
+
+    file: str
+    root: SourceElement
+    main_tree_id: str | None
+    problems: list[TreeProblem] = field(default_factory=list)
+
+    def behaviour_trees(self) -> dict[str, ET.Element]:
+        """Return ``{ID: <BehaviorTree> element}``; first definition wins."""
+        index: dict[str, ET.Element] = {}
+        for bt in self.root.findall("BehaviorTree"):
+            bt_id = bt.attrib.get("ID")
+            if bt_id is not None and bt_id not in index:
+                index[bt_id] = bt
+        return index
+
+
+def read_tree_document(
+    path: str | os.PathLike[str],
+    registry: Registry | None = None,
+    main_tree_id: str | None = None,
+) -> TreeDocument:
+    """Read a tree file: line numbers, includes inlined, BT.CPP spellings translated.
+
+    Parameters
+    ----------
+    path : path-like
+        The XML file.
+    registry : mapping tag -> class, optional
+        Leaf classes; default the py_trees ports registry (see :func:`effective_registry`).
+    main_tree_id : str, optional
+        The tree to run instead of ``main_tree_to_execute``.
+
+    Raises
+    ------
+    TreeFileError
+        When the file is missing, unreadable or not well-formed XML.
+    """
+    source = os.fspath(path)
+    try:
+        data = Path(source).read_bytes()
+    except OSError as exc:
+        raise TreeFileError(
+            [TreeProblem(source, None, "", f"cannot read: {exc.strerror}")]
+        ) from None
+    return _read(data, source, os.path.dirname(os.path.abspath(source)), registry, main_tree_id)
+
+
+def read_tree_document_string(
+    text: str,
+    source: str = "<string>",
+    registry: Registry | None = None,
+    main_tree_id: str | None = None,
+) -> TreeDocument:
+    """Read tree XML from a string (see :func:`read_tree_document`); includes resolve from cwd."""
+    return _read(text, source, os.getcwd(), registry, main_tree_id)
+
+
+def _read(
+    data: bytes | str,
+    source: str,
+    base_dir: str,
+    registry: Registry | None,
+    main_tree_id: str | None = None,
+) -> TreeDocument:
+    root = _parse_xml(data, source)
+    problems: list[TreeProblem] = []
+    if root.tag != "root":
+        problems.append(
+            TreeProblem(
+                source, root.sourceline, describe(root), "expected <root> as the document element"
+            )
+        )
+    visited = {os.path.abspath(source)} if os.path.exists(source) else set()
+    _inline_includes(root, base_dir, visited, problems)
+    # Translate against the caller's registry only: a user-registered tag wins over a BT.CPP
+    # spelling, but our own default Timeout still takes the BT.CPP ``msec`` spelling.
+    user = get_ports_registry() if registry is None else registry
+    for bt in root.findall("BehaviorTree"):
+        for elem in bt.iter():
+            if elem is not bt:
+                _translate(elem, user, problems)
+    main_id = main_tree_id or root.attrib.get("main_tree_to_execute")
+    trees = [bt.attrib.get("ID") for bt in root.findall("BehaviorTree")]
+    if main_id is None:
+        if len(trees) == 1:
+            main_id = trees[0]
+        else:
+            found = ", ".join(str(t) for t in trees) or "none"
+            problems.append(
+                TreeProblem(
+                    source,
+                    root.sourceline,
+                    describe(root),
+                    f'cannot tell the main tree: expected main_tree_to_execute="..." on <root> '
+                    f"naming one of the <BehaviorTree> IDs ({found})",
+                )
+            )
+    elif main_id not in trees:
+        found = ", ".join(str(t) for t in trees) or "none"
+        problems.append(
+            TreeProblem(
+                source,
+                root.sourceline,
+                describe(root),
+                f"main tree '{main_id}' not found; expected one of the <BehaviorTree> IDs: {found}",
+            )
+        )
+    return TreeDocument(source, root, main_id, problems)
+
+
+def _inline_includes(
+    root: SourceElement, base_dir: str, visited: set[str], problems: list[TreeProblem]
+) -> None:
+    """Replace top-level ``<include path=...>`` (BT.CPP) / ``<Import src=...>`` with its trees."""
+    for inc in [c for c in root if c.tag.lower() in ("include", "import")]:
+        assert isinstance(inc, SourceElement)
+        root.remove(inc)
+        ref = inc.attrib.get("path") or inc.attrib.get("src") or inc.attrib.get("file")
+        if not ref or "ros_pkg" in inc.attrib:
+            problems.append(
+                TreeProblem(
+                    inc.sourcefile,
+                    inc.sourceline,
+                    describe(inc),
+                    'expected a path="file.xml" attribute (relative to this file; ros_pkg '
+                    "is not supported)",
+                )
+            )
+            continue
+        target = os.path.abspath(os.path.join(base_dir, ref))
+        if target in visited:
+            continue
+        visited.add(target)
+        try:
+            data = Path(target).read_bytes()
+        except OSError as exc:
+            problems.append(
+                TreeProblem(
+                    inc.sourcefile,
+                    inc.sourceline,
+                    describe(inc),
+                    f"cannot read included file '{ref}' ({target}): {exc.strerror}",
+                )
+            )
+            continue
+        try:
+            shown = (
+                ref if os.path.isabs(ref) else os.path.join(os.path.dirname(inc.sourcefile), ref)
+            )
+            other = _parse_xml(data, os.path.normpath(shown))
+        except TreeFileError as exc:
+            problems.extend(exc.problems)
+            continue
+        _inline_includes(other, os.path.dirname(target), visited, problems)
+        for bt in other.findall("BehaviorTree"):
+            root.append(bt)
+
+
+def _drop_attribute(elem: ET.Element, old: str) -> str | None:
+    return elem.attrib.pop(old, None)
+
+
+def _translate(elem: ET.Element, registry: Registry, problems: list[TreeProblem]) -> None:
+    """Rewrite one element from BT.CPP spelling to what py_trees' parser builds (in place)."""
+    assert isinstance(elem, SourceElement)
+
+    def problem(message: str) -> None:
+        problems.append(TreeProblem(elem.sourcefile, elem.sourceline, describe(elem), message))
+
+    if elem.tag in ("root", "BehaviorTree", "TreeNodesModel") or elem.tag in registry:
+        return
+    # Explicit form: <Action ID="Grasp" .../> is <Grasp .../>.
+    if elem.tag in ("Action", "Condition", "Control", "Decorator") and "ID" in elem.attrib:
+        elem.tag = elem.attrib.pop("ID")
+        if elem.tag in registry:
+            return
+    for key in [k for k in elem.attrib if k.startswith("_")]:
+        value = elem.attrib.pop(key)
+        if key in _IGNORED_ATTRIBUTES or (key == "_autoremap" and value.lower() == "false"):
+            continue
+        problem(
+            f"attribute '{key}' (BT.CPP scripting/pre-/post-conditions/_autoremap) is not "
+            "supported by the py_trees parser; remap subtree ports explicitly"
+        )
+    lower = elem.tag.lower()
+    # BT.CPP's SequenceWithMemory (no restart after a failure) has no py_trees equivalent.
+    if lower in ("sequence", "reactivesequence"):
+        elem.tag = "Sequence"
+        if lower == "reactivesequence":
+            elem.attrib.setdefault("memory", "false")
+    elif lower in ("selector", "fallback", "reactivefallback"):
+        elem.tag = "Selector"
+        if lower == "reactivefallback":
+            elem.attrib.setdefault("memory", "false")
+    elif lower == "parallel":
+        elem.tag = "Parallel"
+        _translate_parallel(elem, problem)
+    elif lower in ("retry", "retryuntilsuccessful"):
+        elem.tag = "Retry"
+        attempts = _drop_attribute(elem, "num_attempts")
+        if attempts is not None:
+            if attempts.strip() == "-1":
+                problem('num_attempts="-1" (retry forever) is not supported; give a count >= 1')
+            elem.attrib.setdefault("num_failures", attempts)
+    elif lower == "timeout":
+        elem.tag = "Timeout"
+        msec = _drop_attribute(elem, "msec")
+        if msec is not None:
+            try:
+                elem.attrib.setdefault("duration", repr(int(msec) / 1000.0))
+            except ValueError:
+                problem(
+                    f"attribute 'msec': expected an integer number of milliseconds, got '{msec}'"
+                )
+    elif lower == "repeat":
+        elem.tag = "Repeat"
+        cycles = _drop_attribute(elem, "num_cycles")
+        if cycles is not None:
+            elem.attrib.setdefault("num_success", cycles)
+    elif lower == "forcesuccess":
+        elem.tag = "FailureIsSuccess"
+    elif lower == "forcefailure":
+        elem.tag = "SuccessIsFailure"
+    elif lower in ("subtree", "subtreeplus"):
+        elem.tag = "SubTree"
+    elif lower in DECORATOR_NODES:
+        elem.tag = DECORATOR_NODES[lower].__name__
+
+
+def _translate_parallel(elem: ET.Element, problem: Callable[[str], None]) -> None:
+    """Map BT.CPP ``success_count``/``failure_count`` to a py_trees policy (default: all)."""
+    success = elem.attrib.pop("success_count", None)
+    failure = elem.attrib.pop("failure_count", None)
+    n_children = len(elem)
+    if failure is not None and failure.strip() != "1":
+        problem(
+            f'failure_count="{failure}" is not supported: py_trees\' Parallel fails as soon as '
+            'one child fails (failure_count="1")'
+        )
+    if success is None:
+        # BT.CPP's default (and so an unannotated Groot tree's) is: succeed when all succeed.
+        elem.attrib.setdefault("policy", "success_on_all")
+        return
+    try:
+        count = int(success)
+    except ValueError:
+        problem(f"success_count: expected an integer, got '{success}'")
+        return
+    if count == -1 or count == n_children:
+        elem.attrib.setdefault("policy", "success_on_all")
+    elif count == 1:
+        elem.attrib.setdefault("policy", "success_on_one")
+    else:
+        problem(
+            f'success_count="{success}" is not supported; expected 1 (any child) or -1 / '
+            f"{n_children} (all children)"
+        )
