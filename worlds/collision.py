@@ -25,7 +25,9 @@ import pybullet as pb
 import trimesh
 from numpy.typing import ArrayLike, NDArray
 
+from skills import quaternion as quat
 from skills.labels import Arm
+from skills.types import Array
 from worlds.scene import Scene, ShapeKind, ShapeSpec
 
 FloatArray = NDArray[np.float64]
@@ -41,20 +43,6 @@ def arm_group(arm: Arm) -> str:
 
 # ---------------------------------------------------------------------------------------------
 # Geometry helpers
-
-
-def quaternions_to_matrices(quaternions: ArrayLike) -> FloatArray:
-    """Rotation matrices of scalar-last unit quaternions, (..., 4) -> (..., 3, 3)."""
-    q = np.asarray(quaternions, dtype=float)
-    x, y, z, w = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
-    return np.stack(
-        [
-            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)], -1),
-            np.stack([2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)], -1),
-            np.stack([2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], -1),
-        ],
-        axis=-2,
-    )
 
 
 def _convex_from_mesh(mesh: trimesh.Trimesh) -> tuple[fcl.Convex, FloatArray]:
@@ -278,7 +266,7 @@ class CollisionWorld:
         raise ValueError(f"CollisionWorld: expected an element named {name!r}")
 
     @staticmethod
-    def _set_pose(element: _Element, position: FloatArray, rotation: FloatArray) -> None:
+    def _set_pose(element: _Element, position: FloatArray, rotation: Array) -> None:
         element.obj.setTransform(fcl.Transform(rotation, position))
         element.centre = rotation @ element.centre_local + position
 
@@ -346,14 +334,14 @@ class CollisionWorld:
             base = pb.getBasePositionAndOrientation(body, physicsClientId=c)
             frame_p = np.array([by_link[link][0] if link >= 0 else base[0] for link in links])
             frame_q = np.array([by_link[link][1] if link >= 0 else base[1] for link in links])
-            frame_r = quaternions_to_matrices(frame_q)
+            frame_r = quat.to_matrix(frame_q)
             positions = np.einsum("nij,nj->ni", frame_r, local_p) + frame_p
-            rotations = frame_r @ quaternions_to_matrices(local_q)
+            rotations = frame_r @ quat.to_matrix(local_q)
             for row, position, rotation in zip(rows, positions, rotations, strict=True):
                 self._set_pose(self._elements[row], position, rotation)
         for name, row in self._objects.items():
             position, quaternion = self.scene.object_pose(name)
-            self._set_pose(self._elements[row], position, quaternions_to_matrices(quaternion))
+            self._set_pose(self._elements[row], position, quat.to_matrix(quaternion))
         self._active = [self._obstacles[name] for name in sorted(self.scene.active_obstacles)]
 
     # -- queries -----------------------------------------------------------------------------
@@ -608,7 +596,7 @@ class CollisionWorld:
             o_centre = np.array([o.centre for o in obstacles])
             o_radius = np.array([o.radius for o in obstacles])
             p_all = np.stack(body_p, axis=1)  # (N, B, 3)
-            r_all = quaternions_to_matrices(np.stack(body_q, axis=1))  # (N, B, 3, 3)
+            r_all = quat.to_matrix(np.stack(body_q, axis=1))  # (N, B, 3, 3)
             local = np.array([self._elements[r].centre_local for r in rows])
             radius = np.array([self._elements[r].radius for r in rows])
             centres = np.einsum("nbij,bj->nbi", r_all, local) + p_all
@@ -650,7 +638,7 @@ def _attached_check(
     obstacles = [world._elements[r] for r in world._active]
     o_centre = np.array([o.centre for o in obstacles])
     o_radius = np.array([o.radius for o in obstacles])
-    palm_r = quaternions_to_matrices(palm_quaternions)  # (N, 2, 3, 3)
+    palm_r = quat.to_matrix(palm_quaternions)  # (N, 2, 3, 3)
     for a, arm in enumerate((Arm.LEFT, Arm.RIGHT)):
         rows = world._rows(arm_group(arm))
         palm = world._elements[world._palm_rows[arm]]
@@ -689,5 +677,4 @@ __all__ = [
     "Proximity",
     "TrajectoryCheck",
     "arm_group",
-    "quaternions_to_matrices",
 ]

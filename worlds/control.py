@@ -33,94 +33,16 @@ import numpy as np
 import pybullet as pb
 from numpy.typing import ArrayLike, NDArray
 
+from skills import quaternion as quat
 from skills.labels import Arm
+from skills.types import Array
 from worlds.robots import ArmSpec, RobotModel
 
 FloatArray = NDArray[np.float64]
 
 
 # ---------------------------------------------------------------------------------------------
-# Quaternion helpers (scalar-last, vectorised over leading dimensions)
-
-
-def _hamilton_tensor() -> FloatArray:
-    # (q1 * q2)_i = sum_jk H_ijk q1_j q2_k for scalar-last quaternions.
-    h = np.zeros((4, 4, 4))
-    terms = (
-        (0, 3, 0, 1), (0, 0, 3, 1), (0, 1, 2, 1), (0, 2, 1, -1),
-        (1, 3, 1, 1), (1, 0, 2, -1), (1, 1, 3, 1), (1, 2, 0, 1),
-        (2, 3, 2, 1), (2, 0, 1, 1), (2, 1, 0, -1), (2, 2, 3, 1),
-        (3, 3, 3, 1), (3, 0, 0, -1), (3, 1, 1, -1), (3, 2, 2, -1),
-    )  # fmt: skip
-    for i, j, k, sign in terms:
-        h[i, j, k] = sign
-    return h
-
-
-_HAMILTON = _hamilton_tensor()
-
-
-def quaternion_multiply(q1: ArrayLike, q2: ArrayLike) -> FloatArray:
-    """Hamilton product ``q1 * q2`` of scalar-last quaternions, shape (..., 4)."""
-    # One einsum instead of ~30 tiny ufunc calls: this sits in the control loop.
-    a = np.asarray(q1, dtype=float)
-    b = np.asarray(q2, dtype=float)
-    return np.asarray(np.einsum("ijk,...j,...k->...i", _HAMILTON, a, b), dtype=float)
-
-
-def quaternion_conjugate(q: ArrayLike) -> FloatArray:
-    """Conjugate (inverse of a unit quaternion), scalar-last, shape (..., 4)."""
-    return np.asarray(q, dtype=float) * np.array([-1.0, -1.0, -1.0, 1.0])
-
-
-def quaternion_to_rotvec(q: ArrayLike) -> FloatArray:
-    """Rotation vector (axis * angle, rad) of unit quaternions, shortest way round, (..., 3)."""
-    q = np.asarray(q, dtype=float)
-    q = np.where(q[..., 3:] < 0.0, -q, q)
-    sin_half = np.linalg.norm(q[..., :3], axis=-1, keepdims=True)
-    angle = 2.0 * np.arctan2(sin_half, q[..., 3:])
-    # angle / sin_half -> 2 as the rotation vanishes.
-    scale = np.divide(angle, sin_half, out=np.full_like(angle, 2.0), where=sin_half > 1e-12)
-    return q[..., :3] * scale
-
-
-def rotate_vector(q: ArrayLike, v: ArrayLike) -> FloatArray:
-    """Rotate vectors ``v`` (..., 3) by unit quaternions ``q`` (..., 4), shape (..., 3)."""
-    q = np.asarray(q, dtype=float)
-    v = np.asarray(v, dtype=float)
-    u, w = q[..., :3], q[..., 3:]
-    c = _cross(u, v)
-    return v + 2.0 * (w * c + _cross(u, c))
-
-
-def _cross(a: FloatArray, b: FloatArray) -> FloatArray:
-    # np.cross costs ~30 us on tiny arrays; this is a few.
-    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
-    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
-    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
-
-
-def orientation_error(target_quaternion: ArrayLike, quaternion: ArrayLike) -> FloatArray:
-    """Rotation vector (world frame, rad) from ``quaternion`` to ``target_quaternion``, (..., 3)."""
-    return quaternion_to_rotvec(
-        quaternion_multiply(target_quaternion, quaternion_conjugate(quaternion))
-    )
-
-
-# ---------------------------------------------------------------------------------------------
 # Values
-
-
-def _rotation_matrix(q: FloatArray) -> FloatArray:
-    """Rotation matrix (3, 3) of a scalar-last unit quaternion (4,)."""
-    x, y, z, w = q
-    return np.array(
-        [
-            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-        ]
-    )
 
 
 def _vector(value: ArrayLike, shape: tuple[int, ...], name: str) -> FloatArray:
@@ -181,10 +103,7 @@ class PalmCommand:
         """Spring anchor: ``position`` shifted by ``squeeze_offset`` along the palm's z, m, (3,)."""
         if self.squeeze_offset == 0.0:
             return self.position
-        x, y, z, w = self.quaternion
-        normal = np.array(
-            [2.0 * (x * z + y * w), 2.0 * (y * z - x * w), 1.0 - 2.0 * (x * x + y * y)]
-        )
+        normal = quat.to_matrix(self.quaternion)[:, 2]
         return self.position + self.squeeze_offset * normal
 
     def twist(self) -> FloatArray:
@@ -460,7 +379,7 @@ def affine_law(
     error = np.concatenate(
         [
             target_position - terms.palm_position,
-            orientation_error(target_quaternion, terms.palm_quaternion),
+            quat.rotation_error(target_quaternion, terms.palm_quaternion),
         ],
         axis=-1,
     )
@@ -636,7 +555,7 @@ class DualArmImpedanceController:
         self._terms: ImpedanceTerms | None = None
         self._targets_changed = True
         self._gravity_world = np.array([0.0, 0.0, -9.81])
-        self._base_rotation: dict[int, FloatArray | None] = {}
+        self._base_rotation: dict[int, Array | None] = {}
         self._gravity_in_base: dict[int, list[float] | None] = {}
         self._steps_since_refresh = 0
         self._steps_since_target = 0
@@ -667,7 +586,7 @@ class DualArmImpedanceController:
         )
         for body in self._bodies:
             _, base_q = pb.getBasePositionAndOrientation(body, physicsClientId=self.client)
-            rotation = _rotation_matrix(np.asarray(base_q, dtype=float))
+            rotation = quat.to_matrix(base_q)
             turned = not np.allclose(rotation, np.eye(3), atol=1e-12)
             self._base_rotation[body] = rotation if turned else None
             self._gravity_in_base[body] = (
@@ -909,9 +828,4 @@ __all__ = [
     "impedance_law",
     "impedance_terms",
     "limit_torque",
-    "orientation_error",
-    "quaternion_conjugate",
-    "quaternion_multiply",
-    "quaternion_to_rotvec",
-    "rotate_vector",
 ]

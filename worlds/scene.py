@@ -23,8 +23,8 @@ from typing import Any
 import numpy as np
 import pybullet as pb
 from numpy.typing import ArrayLike, NDArray
-from scipy.spatial.transform import Rotation
 
+from skills import quaternion as quat
 from skills.labels import Arm
 from worlds.control import DualArmImpedanceController, ImpedanceGains, PalmCommand, PalmState
 from worlds.robots import RobotModel, build_robot_model
@@ -238,11 +238,11 @@ class RobotSpec:
 
 def _lateral_palm_quaternions() -> dict[Arm, Quat]:
     # Palm z (the contact normal) points at the object along -+y; palm x points down.
-    left = Rotation.from_matrix(np.array([[0.0, 1.0, 0.0], [0.0, 0.0, -1.0], [-1.0, 0.0, 0.0]]))
-    right = Rotation.from_matrix(np.array([[0.0, -1.0, 0.0], [0.0, 0.0, 1.0], [-1.0, 0.0, 0.0]]))
+    left = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, -1.0], [-1.0, 0.0, 0.0]])
+    right = np.array([[0.0, -1.0, 0.0], [0.0, 0.0, 1.0], [-1.0, 0.0, 0.0]])
     quaternions: dict[Arm, Quat] = {}
     for arm, rotation in ((Arm.LEFT, left), (Arm.RIGHT, right)):
-        x, y, z, w = (float(v) for v in rotation.as_quat())
+        x, y, z, w = quat.from_matrix(rotation).tolist()
         quaternions[arm] = (x, y, z, w)
     return quaternions
 

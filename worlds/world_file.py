@@ -361,10 +361,10 @@ class Pose(_FileModel):
         tuple of 4 float
             ``(x, y, z, w)``, same frame as ``position``.
         """
-        from scipy.spatial.transform import Rotation  # lazily: validating a file needs no scipy
+        from skills import quaternion as quat  # lazily: validating a file needs no numpy
 
-        x, y, z, w = Rotation.from_euler("xyz", self.rpy_deg, degrees=True).as_quat()
-        return (float(x), float(y), float(z), float(w))
+        x, y, z, w = quat.from_rpy([math.radians(a) for a in self.rpy_deg]).tolist()
+        return (x, y, z, w)
 
 
 class BoxShape(_FileModel):

@@ -1,4 +1,4 @@
-"""Impedance control: the pure law, quaternion helpers, palm tracking in PyBullet, the scene."""
+"""Impedance control: the pure law, palm tracking in PyBullet, the scene."""
 
 from __future__ import annotations
 
@@ -7,6 +7,7 @@ import pybullet as pb
 import pytest
 from scipy.spatial.transform import Rotation
 
+from skills import quaternion as quat
 from skills.labels import Arm
 from worlds.control import (
     GainArrays,
@@ -14,43 +15,11 @@ from worlds.control import (
     PalmCommand,
     impedance_law,
     limit_torque,
-    orientation_error,
-    quaternion_multiply,
-    quaternion_to_rotvec,
-    rotate_vector,
 )
 from worlds.robots import build_robot_model
 from worlds.scene import LATERAL_PALM_QUATERNIONS, Scene, SceneSpec
 
 RNG_SEED = 3
-
-
-# -- quaternion helpers ---------------------------------------------------------------------
-
-
-def test_quaternion_helpers_match_scipy() -> None:
-    rng = np.random.default_rng(RNG_SEED)
-    a = Rotation.random(5, random_state=1)
-    b = Rotation.random(5, random_state=2)
-    np.testing.assert_allclose(
-        np.abs(np.sum(quaternion_multiply(a.as_quat(), b.as_quat()) * (a * b).as_quat(), axis=1)),
-        1.0,
-        atol=1e-12,
-    )
-    np.testing.assert_allclose(quaternion_to_rotvec(a.as_quat()), a.as_rotvec(), atol=1e-12)
-    v = rng.normal(size=(5, 3))
-    np.testing.assert_allclose(rotate_vector(a.as_quat(), v), a.apply(v), atol=1e-12)
-
-
-def test_orientation_error_points_from_current_to_target() -> None:
-    current = Rotation.from_euler("z", 10, degrees=True)
-    target = Rotation.from_euler("z", 30, degrees=True)
-    error = orientation_error(target.as_quat(), current.as_quat())
-    np.testing.assert_allclose(error, [0.0, 0.0, np.radians(20)], atol=1e-12)
-    # Shortest way round: q and -q are the same rotation.
-    np.testing.assert_allclose(
-        orientation_error(-target.as_quat(), current.as_quat()), error, atol=1e-12
-    )
 
 
 # -- values ---------------------------------------------------------------------------------
@@ -198,7 +167,7 @@ def tracking() -> dict[str, float]:
         state = scene.palm_state(Arm.LEFT)
         right = scene.palm_state(Arm.RIGHT)
         out["position_error"] = float(np.linalg.norm(state.position - target_p))
-        out["angle_error"] = float(np.linalg.norm(orientation_error(target_q, state.quaternion)))
+        out["angle_error"] = float(np.linalg.norm(quat.rotation_error(target_q, state.quaternion)))
         out["speed"] = float(np.linalg.norm(state.linear_velocity))
         out["right_drift"] = float(np.linalg.norm(right.position - start[Arm.RIGHT][0]))
         out["peak_torque"] = peak
