@@ -189,7 +189,7 @@ class PalmState:
 
 @dataclass(frozen=True)
 class GainArrays:
-    """Gains of ``k`` arms as arrays, for :func:`impedance_law`.
+    """Gains of ``k`` arms as arrays, for :func:`impedance_terms`.
 
     Attributes
     ----------
@@ -387,47 +387,6 @@ def affine_law(
     a = terms.a_base + (terms.error_gain @ error[..., None])[..., 0]
     a = a + (terms.twist_gain @ target_twist[..., None])[..., 0]
     return AffineTorqueLaw(a=a, a_rate=a_rate, b=terms.b, c=terms.c)
-
-
-def impedance_law(
-    jacobian: FloatArray,
-    palm_position: FloatArray,
-    palm_quaternion: FloatArray,
-    q: FloatArray,
-    gravity_torque: FloatArray,
-    target_position: FloatArray,
-    target_quaternion: FloatArray,
-    target_twist: FloatArray,
-    gains: GainArrays,
-    rest_posture: FloatArray,
-    mass_matrix: FloatArray | None = None,
-    dt: float = 0.0,
-) -> AffineTorqueLaw:
-    """:func:`impedance_terms` then :func:`affine_law`; shapes as there.
-
-    Returns
-    -------
-    AffineTorqueLaw
-    """
-    terms = impedance_terms(
-        jacobian,
-        palm_position,
-        palm_quaternion,
-        q,
-        gravity_torque,
-        gains,
-        rest_posture,
-        mass_matrix=mass_matrix,
-        dt=dt,
-    )
-    return affine_law(terms, target_position, target_quaternion, target_twist)
-
-
-def limit_torque(
-    q: FloatArray, lower: FloatArray, upper: FloatArray, margin: FloatArray, stiffness: FloatArray
-) -> FloatArray:
-    """Repulsive torque pushing joints out of the ``margin`` band next to their limits, (n,)."""
-    return stiffness * (np.clip(q, lower + margin, upper - margin) - q)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -647,7 +606,7 @@ class DualArmImpedanceController:
         self._gain_arrays = GainArrays.of(self._gains)
         margin = np.repeat([g.limit_margin for g in self._gains], self._n)
         self._limit_k = np.repeat([g.limit_stiffness for g in self._gains], self._n)
-        # limit_torque inlined: the band starts this far inside the limits.
+        # The joint-limit repulsion band starts this far inside the limits.
         self._soft_lower = self._lower + margin
         self._soft_upper = self._upper - margin
 
@@ -825,7 +784,5 @@ __all__ = [
     "PalmCommand",
     "PalmState",
     "affine_law",
-    "impedance_law",
     "impedance_terms",
-    "limit_torque",
 ]

@@ -18,7 +18,7 @@ from skills.composer import (
 )
 from skills.couplings import GraspMaintenance, ObstacleSteering, PotentialFieldAvoidance
 from skills.default_library import build_default_library
-from skills.dual_arm import ARMS, GraspGeometry, compose_twists, palm_poses
+from skills.dual_arm import ARMS, GraspGeometry, contact_twists
 from skills.labels import Action, Arm
 from skills.pose_dmp import (
     LearntForcing,
@@ -286,20 +286,15 @@ def test_commands_are_the_palm_poses_and_eq5_twists() -> None:
     state = DualArmState(*(perturbed(s, rng) for s in (state.object, state.left, state.right)))
     cmd: PalmCommands = commands_for(state)
     obj, palms = state.object, (state.left, state.right)
-    positions, orientations = palm_poses(
-        obj.position,
-        obj.orientation,
-        np.stack([p.position for p in palms]),
-        np.stack([p.orientation for p in palms]),
-    )
-    twists = compose_twists(
-        obj.twist()[None],
-        [1.0],
-        positions - obj.position,
-        np.stack([p.twist() for p in palms])[None],
-        [1.0],
-        obj.orientation,
-    )
+    # Eq. (5) in numpy: palm2world from object2world, and G^T y_o' + R_o y_C'.
+    rel_p = np.stack([p.position for p in palms])
+    positions = obj.position + quat.rotate(obj.orientation, rel_p)
+    orientations = quat.multiply(obj.orientation, np.stack([p.orientation for p in palms]))
+    rotation = quat.to_matrix(obj.orientation)
+    relative = np.stack([p.twist() for p in palms])
+    twists = contact_twists(obj.twist(), positions - obj.position)
+    twists[:, :3] += relative[:, :3] @ rotation.T
+    twists[:, 3:] += relative[:, 3:] @ rotation.T
     assert_allclose(cmd.positions, positions, atol=1e-12)
     assert_allclose(cmd.orientations, orientations, atol=1e-12)
     assert_allclose(cmd.twists, twists, atol=1e-12)
