@@ -18,7 +18,8 @@ from worlds.control import (
     impedance_terms,
 )
 from worlds.robots import build_robot_model
-from worlds.scene import LATERAL_PALM_QUATERNIONS, Scene, SceneSpec
+from worlds.scene import LATERAL_PALM_QUATERNIONS, Scene
+from worlds.spec import SceneSpec
 
 RNG_SEED = 3
 
@@ -276,7 +277,7 @@ def test_robot_model_errors_are_explained() -> None:
 
 
 def test_scene_spec_is_validated() -> None:
-    from worlds.scene import ObstacleSpec, ShapeSpec, default_parcel
+    from worlds.spec import ObstacleSpec, ShapeSpec, default_parcel
 
     with pytest.raises(ValueError, match="expected physics_hz a positive multiple of control_hz"):
         SceneSpec(physics_hz=240, control_hz=70)
@@ -323,7 +324,7 @@ def test_scene_from_the_default_world_file() -> None:
 
 @pytest.mark.sim
 def test_obstacle_overlapping_the_parcel_is_reported() -> None:
-    from worlds.scene import ObstacleSpec, ShapeSpec
+    from worlds.spec import ObstacleSpec, ShapeSpec
 
     inside = ObstacleSpec("inside", ShapeSpec.sphere(0.05), (0.6, 0.0, 0.7))
     with Scene(SceneSpec(obstacles=(inside,))) as scene:
@@ -336,7 +337,7 @@ def test_obstacle_overlapping_the_parcel_is_reported() -> None:
 @pytest.mark.sim
 def test_turned_robot_base_still_tracks() -> None:
     """PyBullet gives Jacobians and inverse dynamics in the base frame; the law must not."""
-    from worlds.scene import RobotSpec
+    from worlds.spec import RobotSpec
 
     spec = SceneSpec(
         robot=RobotSpec(base_position=(0.1, 0.05, 0.0), base_rpy_deg=(0, 0, 20)), objects=()

@@ -18,6 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from skills.labels import Arm
+from worlds.spec import RobotModelName
 
 FloatArray = NDArray[np.float64]
 
@@ -137,13 +138,13 @@ class RobotModel:
         object.__setattr__(self, "arms", MappingProxyType(dict(self.arms)))
 
 
-def build_robot_model(model: str, **params: Any) -> RobotModel:
+def build_robot_model(model: RobotModelName, **params: Any) -> RobotModel:
     """Build a robot model by name.
 
     Parameters
     ----------
-    model : str
-        ``"kuka_iiwa"`` or ``"icub"``.
+    model : RobotModelName
+        The model (its value, ``"kuka_iiwa"`` or ``"icub"``, is accepted too).
     **params
         Passed to the model's builder (e.g. ``arm_separation``, ``mount_height``, ``palm_size``).
 
@@ -151,15 +152,16 @@ def build_robot_model(model: str, **params: Any) -> RobotModel:
     -------
     RobotModel
     """
-    if model == "kuka_iiwa":
+    if model == RobotModelName.KUKA_IIWA:
         from worlds.robots.kuka import kuka_iiwa_model
 
         return kuka_iiwa_model(**params)
-    if model == "icub":
+    if model == RobotModelName.ICUB:
         from worlds.robots.icub import icub_model
 
         return icub_model(**params)
-    raise ValueError(f"build_robot_model: expected model in ['kuka_iiwa', 'icub'], got {model!r}")
+    known = [m.value for m in RobotModelName]
+    raise ValueError(f"build_robot_model: expected model in {known}, got {model!r}")
 
 
 __all__ = ["ArmSpec", "BodySpec", "FloatArray", "RobotModel", "build_robot_model"]
