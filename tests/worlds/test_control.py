@@ -9,7 +9,7 @@ from scipy.spatial.transform import Rotation
 
 from skills import quaternion as quat
 from skills.labels import Arm
-from worlds.control import (
+from worlds.impedance import (
     AffineTorqueLaw,
     GainArrays,
     ImpedanceGains,
