@@ -12,9 +12,7 @@ on or off per move by parking them far below the floor.
 
 from __future__ import annotations
 
-import os
-import sys
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Iterable, Mapping
 from dataclasses import replace
 
 import numpy as np
@@ -23,9 +21,17 @@ from numpy.typing import ArrayLike, NDArray
 
 from skills import quaternion as quat
 from skills.labels import Arm
+from worlds.bodies import (
+    NoDisplayError,
+    build_robot,
+    connect,
+    create_object,
+    create_obstacle,
+    create_table,
+    load_robot,
+)
 from worlds.control import DualArmImpedanceController, ImpedanceGains, PalmCommand, PalmState
-from worlds.robots import RobotModel, build_robot_model
-from worlds.spec import ObstacleSpec, Quat, RobotSpec, SceneSpec, Shape, ShapeSpec, WorldSpec
+from worlds.spec import ObstacleSpec, Quat, SceneSpec, WorldSpec
 from worlds.world_file import World, as_world_spec
 
 FloatArray = NDArray[np.float64]
@@ -40,18 +46,6 @@ RELINEARISE_TOLERANCE = 0.01
 
 #: Where inactive obstacles wait: far below the floor, out of every contact.
 PARKING_OFFSET = (0.0, 0.0, -100.0)
-
-
-def build_robot(spec: RobotSpec) -> RobotModel:
-    """The robot model ``spec`` describes (:func:`worlds.robots.build_robot_model`)."""
-    return build_robot_model(
-        spec.model,
-        base_position=spec.base_position,
-        base_rpy_deg=spec.base_rpy_deg,
-        arm_separation=spec.arm_separation,
-        mount_height=spec.mount_height,
-        palm_size=spec.palm_size,
-    )
 
 
 def _lateral_palm_quaternions() -> dict[Arm, Quat]:
@@ -99,67 +93,6 @@ def lateral_grasp_palm_poses(
         arm: (centre + np.array([0.0, side * offset, 0.0]), np.array(LATERAL_PALM_QUATERNIONS[arm]))
         for arm, side in ((Arm.LEFT, 1.0), (Arm.RIGHT, -1.0))
     }
-
-
-def _shape_ids(client: int, shape: ShapeSpec, rgba: Sequence[float]) -> tuple[int, int]:
-    """Collision and visual shape ids of ``shape``."""
-    if shape.kind == Shape.BOX:
-        half = [s / 2.0 for s in shape.size]
-        col = pb.createCollisionShape(pb.GEOM_BOX, halfExtents=half, physicsClientId=client)
-        vis = pb.createVisualShape(
-            pb.GEOM_BOX, halfExtents=half, rgbaColor=rgba, physicsClientId=client
-        )
-    elif shape.kind == Shape.SPHERE:
-        col = pb.createCollisionShape(pb.GEOM_SPHERE, radius=shape.radius, physicsClientId=client)
-        vis = pb.createVisualShape(
-            pb.GEOM_SPHERE, radius=shape.radius, rgbaColor=rgba, physicsClientId=client
-        )
-    elif shape.kind == Shape.CYLINDER:
-        col = pb.createCollisionShape(
-            pb.GEOM_CYLINDER, radius=shape.radius, height=shape.height, physicsClientId=client
-        )
-        vis = pb.createVisualShape(
-            pb.GEOM_CYLINDER,
-            radius=shape.radius,
-            length=shape.height,
-            rgbaColor=rgba,
-            physicsClientId=client,
-        )
-    else:
-        scale = [shape.scale] * 3
-        col = pb.createCollisionShape(
-            pb.GEOM_MESH, fileName=str(shape.mesh_path), meshScale=scale, physicsClientId=client
-        )
-        vis = pb.createVisualShape(
-            pb.GEOM_MESH,
-            fileName=str(shape.mesh_path),
-            meshScale=scale,
-            rgbaColor=rgba,
-            physicsClientId=client,
-        )
-    return col, vis
-
-
-class NoDisplayError(RuntimeError):
-    """PyBullet's window was asked for where there is no display."""
-
-
-def connect(gui: bool) -> int:
-    """A PyBullet client: DIRECT by default, a window (GUI) when asked and a display exists.
-
-    Raises
-    ------
-    NoDisplayError
-        If ``gui`` is asked for and no display is available (``DISPLAY`` unset or refused).
-    """
-    if not gui:
-        return int(pb.connect(pb.DIRECT))
-    if not os.environ.get("DISPLAY") and sys.platform.startswith("linux"):
-        raise NoDisplayError("--gui: expected a display (DISPLAY is not set); run without --gui")
-    client = int(pb.connect(pb.GUI))
-    if client < 0:
-        raise NoDisplayError("--gui: PyBullet could not open a window on this display")
-    return client
 
 
 class Scene:
@@ -236,67 +169,13 @@ class Scene:
         self.floor_id = pb.createMultiBody(0.0, floor, physicsClientId=c)
 
         self.robot = build_robot(self.spec.robot)
-        self.robot_ids: tuple[int, ...] = tuple(
-            pb.loadURDF(
-                str(body.urdf_path),
-                body.base2world_position,
-                body.base2world_quaternion,
-                useFixedBase=True,
-                flags=pb.URDF_USE_INERTIA_FROM_FILE,
-                physicsClientId=c,
-            )
-            for body in self.robot.bodies
-        )
-        self._exclude_collisions()
-        for arm in (Arm.LEFT, Arm.RIGHT):
-            spec = self.robot.arms[arm]
-            body = self.robot_ids[spec.body]
-            for joint, q in zip(spec.joint_indices, spec.rest_posture, strict=True):
-                pb.resetJointState(body, joint, q, 0.0, physicsClientId=c)
-
-        table = self.spec.table
-        half = (table.size[0] / 2.0, table.size[1] / 2.0, table.size[2] / 2.0)
-        col = pb.createCollisionShape(pb.GEOM_BOX, halfExtents=half, physicsClientId=c)
-        vis = pb.createVisualShape(
-            pb.GEOM_BOX, halfExtents=half, rgbaColor=[0.6, 0.45, 0.3, 1.0], physicsClientId=c
-        )
-        self.table_id = pb.createMultiBody(
-            0.0,
-            col,
-            vis,
-            basePosition=[table.position[0], table.position[1], table.position[2] - half[2]],
-            physicsClientId=c,
-        )
-        pb.changeDynamics(self.table_id, -1, lateralFriction=table.friction, physicsClientId=c)
-
-        self.object_ids: dict[str, int] = {}
-        for obj in self.spec.objects:
-            col, vis = _shape_ids(c, obj.shape, [0.8, 0.6, 0.35, 1.0])
-            body = pb.createMultiBody(
-                obj.mass,
-                col,
-                vis,
-                basePosition=obj.position,
-                baseOrientation=obj.quaternion,
-                physicsClientId=c,
-            )
-            pb.changeDynamics(
-                body,
-                -1,
-                lateralFriction=obj.friction,
-                spinningFriction=0.0,
-                rollingFriction=0.0,
-                physicsClientId=c,
-            )
-            self.object_ids[obj.name] = body
-
-        self.obstacle_ids: dict[str, int] = {}
+        self.robot_ids = load_robot(c, self.robot)
+        self.table_id = create_table(c, self.spec.table)
+        self.object_ids = {obj.name: create_object(c, obj) for obj in self.spec.objects}
+        self.obstacle_ids = {
+            o.name: create_obstacle(c, o, self._parking(o)) for o in self.spec.obstacles
+        }
         self._active_obstacles: set[str] = set()
-        for obstacle in self.spec.obstacles:
-            col, vis = _shape_ids(c, obstacle.shape, [0.8, 0.2, 0.2, 1.0])
-            self.obstacle_ids[obstacle.name] = pb.createMultiBody(
-                0.0, col, vis, basePosition=self._parking(obstacle), physicsClientId=c
-            )
 
         self.controller = DualArmImpedanceController(
             self.robot,
@@ -310,27 +189,6 @@ class Scene:
             relinearise_tolerance=relinearise_tolerance,
         )
         self.controller.enable()
-
-    def _exclude_collisions(self) -> None:
-        """Switch off the robot's :attr:`RobotModel.collision_exclusions` link pairs."""
-        if not self.robot.collision_exclusions:
-            return
-        c = self.client
-        indices: list[dict[str, int]] = []
-        for body in self.robot_ids:
-            names = {"base": -1}
-            for j in range(pb.getNumJoints(body, physicsClientId=c)):
-                names[pb.getJointInfo(body, j, physicsClientId=c)[12].decode()] = j
-            indices.append(names)
-        for body_a, link_a, body_b, link_b in self.robot.collision_exclusions:
-            pb.setCollisionFilterPair(
-                self.robot_ids[body_a],
-                self.robot_ids[body_b],
-                indices[body_a][link_a],
-                indices[body_b][link_b],
-                enableCollision=0,
-                physicsClientId=c,
-            )
 
     # -- setup -------------------------------------------------------------------------------
 
@@ -551,13 +409,12 @@ class Scene:
         self.close()
 
 
+# NoDisplayError is re-exported: the command line catches it from here.
 __all__ = [
     "LATERAL_PALM_QUATERNIONS",
     "RELINEARISE_HZ",
     "RELINEARISE_TOLERANCE",
     "NoDisplayError",
     "Scene",
-    "build_robot",
-    "connect",
     "lateral_grasp_palm_poses",
 ]
