@@ -299,3 +299,60 @@ def multiply_scalar(a: Quat, b: Quat) -> Quat:
         aw * bz + ax * by - ay * bx + az * bw,
         aw * bw - ax * bx - ay * by - az * bz,
     )
+
+
+def from_rpy(rpy: ArrayLike) -> Array:
+    """Quaternions ``(..., 4)`` of extrinsic x-y-z angles ``(roll, pitch, yaw)`` ``(..., 3)``, rad.
+
+    Rotations about the fixed x, then y, then z axes (the URDF and PyBullet convention):
+    ``q = q_z(yaw) * q_y(pitch) * q_x(roll)``.
+    """
+    half = 0.5 * np.asarray(rpy, dtype=float)
+    cr, cp, cy = np.cos(half[..., 0]), np.cos(half[..., 1]), np.cos(half[..., 2])
+    sr, sp, sy = np.sin(half[..., 0]), np.sin(half[..., 1]), np.sin(half[..., 2])
+    return np.stack(
+        (
+            sr * cp * cy - cr * sp * sy,
+            cr * sp * cy + sr * cp * sy,
+            cr * cp * sy - sr * sp * cy,
+            cr * cp * cy + sr * sp * sy,
+        ),
+        axis=-1,
+    )
+
+
+def from_matrix(m: ArrayLike) -> Array:
+    """Unit quaternions ``(..., 4)`` of rotation matrices ``(..., 3, 3)``.
+
+    Shepperd's method: each quaternion is read from its largest of ``x, y, z, w`` (the first
+    on a tie), so no division is by a small number. The sign is the one that branch gives,
+    as scipy's ``Rotation.from_matrix`` does; :func:`canonical` picks ``w >= 0``.
+    """
+    r = np.asarray(m, dtype=float)
+    if r.shape[-2:] != (3, 3):
+        raise ValueError(f"from_matrix: expected shape (..., 3, 3), got {r.shape}")
+    r00, r11, r22 = r[..., 0, 0], r[..., 1, 1], r[..., 2, 2]
+    # Four times the squares of w, x, y, z; the largest picks the branch.
+    squares = np.stack(
+        (1 + r00 - r11 - r22, 1 - r00 + r11 - r22, 1 - r00 - r11 + r22, 1 + r00 + r11 + r22),
+        axis=-1,
+    )
+    best = np.argmax(squares, axis=-1)
+    s = 2.0 * np.sqrt(np.maximum(np.take_along_axis(squares, best[..., None], -1)[..., 0], 0.0))
+    yz = r[..., 1, 2] + r[..., 2, 1]
+    xz = r[..., 0, 2] + r[..., 2, 0]
+    xy = r[..., 0, 1] + r[..., 1, 0]
+    wx = r[..., 2, 1] - r[..., 1, 2]
+    wy = r[..., 0, 2] - r[..., 2, 0]
+    wz = r[..., 1, 0] - r[..., 0, 1]
+    candidates = np.stack(
+        (
+            np.stack((s * s / 4, xy, xz, wx), axis=-1),
+            np.stack((xy, s * s / 4, yz, wy), axis=-1),
+            np.stack((xz, yz, s * s / 4, wz), axis=-1),
+            np.stack((wx, wy, wz, s * s / 4), axis=-1),
+        ),
+        axis=-2,
+    )
+    q = np.take_along_axis(candidates, best[..., None, None], -2)[..., 0, :] / s[..., None]
+    return q / np.linalg.norm(q, axis=-1, keepdims=True)

@@ -25,8 +25,11 @@ import pybullet as pb
 import trimesh
 from numpy.typing import ArrayLike, NDArray
 
+from skills import quaternion as quat
 from skills.labels import Arm
-from worlds.scene import Scene, ShapeKind, ShapeSpec
+from skills.types import Array
+from worlds.scene import Scene
+from worlds.spec import Shape, ShapeSpec
 
 FloatArray = NDArray[np.float64]
 
@@ -41,20 +44,6 @@ def arm_group(arm: Arm) -> str:
 
 # ---------------------------------------------------------------------------------------------
 # Geometry helpers
-
-
-def quaternions_to_matrices(quaternions: ArrayLike) -> FloatArray:
-    """Rotation matrices of scalar-last unit quaternions, (..., 4) -> (..., 3, 3)."""
-    q = np.asarray(quaternions, dtype=float)
-    x, y, z, w = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
-    return np.stack(
-        [
-            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)], -1),
-            np.stack([2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)], -1),
-            np.stack([2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], -1),
-        ],
-        axis=-2,
-    )
 
 
 def _convex_from_mesh(mesh: trimesh.Trimesh) -> tuple[fcl.Convex, FloatArray]:
@@ -82,12 +71,12 @@ def _mesh_geometry(path: Path, scale: float) -> tuple[fcl.Convex, FloatArray]:
 
 def _shape_geometry(shape: ShapeSpec) -> tuple[fcl.CollisionGeometry, FloatArray, float]:
     """FCL geometry, bounding-sphere centre (3,) in the shape frame and radius of a shape."""
-    if shape.kind == ShapeKind.BOX:
+    if shape.kind == Shape.BOX:
         geometry: fcl.CollisionGeometry = fcl.Box(*shape.size)
         return geometry, np.zeros(3), 0.5 * float(np.linalg.norm(shape.size))
-    if shape.kind == ShapeKind.SPHERE:
+    if shape.kind == Shape.SPHERE:
         return fcl.Sphere(shape.radius), np.zeros(3), shape.radius
-    if shape.kind == ShapeKind.CYLINDER:
+    if shape.kind == Shape.CYLINDER:
         radius = float(np.hypot(shape.radius, shape.height / 2.0))
         return fcl.Cylinder(shape.radius, shape.height), np.zeros(3), radius
     assert shape.mesh_path is not None
@@ -109,7 +98,7 @@ def _pybullet_geometry(data: Sequence[Any]) -> tuple[fcl.CollisionGeometry, Floa
     if kind == pb.GEOM_MESH:
         name = data[4]
         path = Path(name.decode() if isinstance(name, bytes) else str(name))
-        return _shape_geometry(ShapeSpec(ShapeKind.MESH, mesh_path=path, scale=float(dims[0])))
+        return _shape_geometry(ShapeSpec(Shape.MESH, mesh_path=path, scale=float(dims[0])))
     raise ValueError(f"collision: expected a box, sphere, cylinder or mesh shape, got type {kind}")
 
 
@@ -278,7 +267,7 @@ class CollisionWorld:
         raise ValueError(f"CollisionWorld: expected an element named {name!r}")
 
     @staticmethod
-    def _set_pose(element: _Element, position: FloatArray, rotation: FloatArray) -> None:
+    def _set_pose(element: _Element, position: FloatArray, rotation: Array) -> None:
         element.obj.setTransform(fcl.Transform(rotation, position))
         element.centre = rotation @ element.centre_local + position
 
@@ -321,13 +310,46 @@ class CollisionWorld:
         ndarray
             (N,) True where a carried link is within ``margin`` of an active obstacle.
         """
-        return _attached_check(
-            self,
-            np.asarray(palm_positions, dtype=float),
-            np.asarray(palm_quaternions, dtype=float),
-            distal_links,
-            margin,
-        )
+        positions = np.asarray(palm_positions, dtype=float)
+        quaternions = np.asarray(palm_quaternions, dtype=float)
+        n = positions.shape[0]
+        collides = np.zeros(n, dtype=bool)
+        if not self._active or n == 0:
+            return collides
+        obstacles = [self._elements[r] for r in self._active]
+        o_centre = np.array([o.centre for o in obstacles])
+        o_radius = np.array([o.radius for o in obstacles])
+        palm_r = quat.to_matrix(quaternions)  # (N, 2, 3, 3)
+        for a, arm in enumerate((Arm.LEFT, Arm.RIGHT)):
+            rows = self._rows(arm_group(arm))
+            palm = self._elements[self._palm_rows[arm]]
+            p_now = np.asarray(palm.obj.getTranslation(), dtype=float)
+            r_now = np.asarray(palm.obj.getRotation(), dtype=float)
+            links = [r for r in rows if r != self._palm_rows[arm]][-distal_links:]
+            for row in links:
+                element = self._elements[row]
+                # The link in the palm's frame now, carried rigidly along its predicted poses.
+                lp = r_now.T @ (np.asarray(element.obj.getTranslation(), dtype=float) - p_now)
+                lr = r_now.T @ np.asarray(element.obj.getRotation(), dtype=float)
+                rot = palm_r[:, a] @ lr  # (N, 3, 3)
+                pos = np.einsum("nij,j->ni", palm_r[:, a], lp) + positions[:, a]
+                centres = np.einsum("nij,j->ni", rot, element.centre_local) + pos
+                gaps = (
+                    np.linalg.norm(centres[:, None] - o_centre, axis=-1) - element.radius - o_radius
+                )
+                probe = fcl.CollisionObject(element.geometry, fcl.Transform())
+                for w, o in np.argwhere(gaps <= margin):
+                    if collides[w]:
+                        continue
+                    probe.setTransform(fcl.Transform(rot[w], pos[w]))
+                    if margin > 0.0:
+                        hit = fcl.distance(probe, obstacles[o].obj, fcl.DistanceRequest()) < margin
+                    else:
+                        hit = fcl.collide(
+                            probe, obstacles[o].obj, fcl.CollisionRequest(), fcl.CollisionResult()
+                        )
+                    collides[w] = bool(hit)
+        return collides
 
     def arm_links(self, arm: Arm) -> tuple[str, ...]:
         """Element names of an arm, base to palm."""
@@ -346,14 +368,14 @@ class CollisionWorld:
             base = pb.getBasePositionAndOrientation(body, physicsClientId=c)
             frame_p = np.array([by_link[link][0] if link >= 0 else base[0] for link in links])
             frame_q = np.array([by_link[link][1] if link >= 0 else base[1] for link in links])
-            frame_r = quaternions_to_matrices(frame_q)
+            frame_r = quat.to_matrix(frame_q)
             positions = np.einsum("nij,nj->ni", frame_r, local_p) + frame_p
-            rotations = frame_r @ quaternions_to_matrices(local_q)
+            rotations = frame_r @ quat.to_matrix(local_q)
             for row, position, rotation in zip(rows, positions, rotations, strict=True):
                 self._set_pose(self._elements[row], position, rotation)
         for name, row in self._objects.items():
             position, quaternion = self.scene.object_pose(name)
-            self._set_pose(self._elements[row], position, quaternions_to_matrices(quaternion))
+            self._set_pose(self._elements[row], position, quat.to_matrix(quaternion))
         self._active = [self._obstacles[name] for name in sorted(self.scene.active_obstacles)]
 
     # -- queries -----------------------------------------------------------------------------
@@ -608,7 +630,7 @@ class CollisionWorld:
             o_centre = np.array([o.centre for o in obstacles])
             o_radius = np.array([o.radius for o in obstacles])
             p_all = np.stack(body_p, axis=1)  # (N, B, 3)
-            r_all = quaternions_to_matrices(np.stack(body_q, axis=1))  # (N, B, 3, 3)
+            r_all = quat.to_matrix(np.stack(body_q, axis=1))  # (N, B, 3, 3)
             local = np.array([self._elements[r].centre_local for r in rows])
             radius = np.array([self._elements[r].radius for r in rows])
             centres = np.einsum("nbij,bj->nbi", r_all, local) + p_all
@@ -635,52 +657,6 @@ class CollisionWorld:
         return TrajectoryCheck(collides, int(hits[0]) if len(hits) else -1)
 
 
-def _attached_check(
-    world: CollisionWorld,
-    palm_positions: FloatArray,
-    palm_quaternions: FloatArray,
-    distal_links: int,
-    margin: float,
-) -> NDArray[np.bool_]:
-    """See :meth:`CollisionWorld.check_attached_links`."""
-    n = palm_positions.shape[0]
-    collides = np.zeros(n, dtype=bool)
-    if not world._active or n == 0:
-        return collides
-    obstacles = [world._elements[r] for r in world._active]
-    o_centre = np.array([o.centre for o in obstacles])
-    o_radius = np.array([o.radius for o in obstacles])
-    palm_r = quaternions_to_matrices(palm_quaternions)  # (N, 2, 3, 3)
-    for a, arm in enumerate((Arm.LEFT, Arm.RIGHT)):
-        rows = world._rows(arm_group(arm))
-        palm = world._elements[world._palm_rows[arm]]
-        p_now = np.asarray(palm.obj.getTranslation(), dtype=float)
-        r_now = np.asarray(palm.obj.getRotation(), dtype=float)
-        links = [r for r in rows if r != world._palm_rows[arm]][-distal_links:]
-        for row in links:
-            element = world._elements[row]
-            # The link in the palm's frame now; carried rigidly along the palm's predicted poses.
-            lp = r_now.T @ (np.asarray(element.obj.getTranslation(), dtype=float) - p_now)
-            lr = r_now.T @ np.asarray(element.obj.getRotation(), dtype=float)
-            rot = palm_r[:, a] @ lr  # (N, 3, 3)
-            pos = np.einsum("nij,j->ni", palm_r[:, a], lp) + palm_positions[:, a]
-            centres = np.einsum("nij,j->ni", rot, element.centre_local) + pos
-            gaps = np.linalg.norm(centres[:, None] - o_centre, axis=-1) - element.radius - o_radius
-            probe = fcl.CollisionObject(element.geometry, fcl.Transform())
-            for w, o in np.argwhere(gaps <= margin):
-                if collides[w]:
-                    continue
-                probe.setTransform(fcl.Transform(rot[w], pos[w]))
-                if margin > 0.0:
-                    hit = fcl.distance(probe, obstacles[o].obj, fcl.DistanceRequest()) < margin
-                else:
-                    hit = fcl.collide(
-                        probe, obstacles[o].obj, fcl.CollisionRequest(), fcl.CollisionResult()
-                    )
-                collides[w] = bool(hit)
-    return collides
-
-
 __all__ = [
     "OBSTACLES",
     "TABLE",
@@ -689,5 +665,4 @@ __all__ = [
     "Proximity",
     "TrajectoryCheck",
     "arm_group",
-    "quaternions_to_matrices",
 ]

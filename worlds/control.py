@@ -1,25 +1,8 @@
-"""Cartesian impedance torque control of the two palms.
+"""The impedance controller: torque control of both palms of a robot loaded in PyBullet.
 
-Each palm is pulled to a target pose by a task-space spring-damper; gravity is compensated with
-PyBullet's inverse dynamics; a rest-posture spring acts in the Jacobian null space; a repulsive
-torque keeps the joints off their limits; torques are clipped to the joint limits. PyBullet's
-velocity motors are switched off and the torques go out with TORQUE_CONTROL.
-
-The law is an affine map of the joint state, re-linearised every ``refresh_every`` physics steps
-around the configuration ``q0`` (palm pose ``x0``, Jacobian ``J``, gravity torque ``g``, inertia
-``M``)::
-
-    tau(q, qd) = g + G (a + a_rate * t + B q + C qd) + tau_limits(q)
-    B = -(J^T K J + k_n P),   C = -(J^T D J + d_n P + d_j I),   P = I - J^T (J J^T + l^2 I)^-1 J
-    a = J^T K (e0 + J q0) + J^T D xd* + k_n P q_rest,   a_rate = J^T K xd*,
-    G = M (M - dt C)^-1
-
-with ``e0`` the pose error of the target against ``x0`` (position; rotation vector of
-``target * palm^-1``), ``xd*`` the feed-forward twist, ``t`` the time since the target was set,
-``K, D`` the 6 x 6 stiffness and damping. ``G`` makes the damping implicit, which keeps the
-light wrist stable at 240 Hz. Between re-linearisations the spring and damper still act on the
-measured joint state at every physics step (the pose error is linearised through ``J``); a new
-target acts at once without re-linearising. With ``refresh_every=1`` this is the plain law.
+:class:`DualArmImpedanceController` reads the joint state, re-linearises the law of
+:mod:`worlds.impedance` (Jacobian, gravity, inertia from PyBullet), adds the joint-limit
+repulsion, clips to the torque limits and sends the torques with TORQUE_CONTROL.
 
 Quaternions are scalar-last (x, y, z, w); twists are (linear, angular) in the world frame.
 """
@@ -27,488 +10,28 @@ Quaternions are scalar-last (x, y, z, w); twists are (linear, angular) in the wo
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 
 import numpy as np
 import pybullet as pb
 from numpy.typing import ArrayLike, NDArray
 
+from skills import quaternion as quat
 from skills.labels import Arm
+from skills.types import Array
+from worlds.impedance import (
+    GainArrays,
+    ImpedanceGains,
+    ImpedanceTerms,
+    PalmCommand,
+    PalmState,
+    affine_law,
+    checked_vector,
+    impedance_terms,
+)
 from worlds.robots import ArmSpec, RobotModel
 
 FloatArray = NDArray[np.float64]
-
-
-# ---------------------------------------------------------------------------------------------
-# Quaternion helpers (scalar-last, vectorised over leading dimensions)
-
-
-def _hamilton_tensor() -> FloatArray:
-    # (q1 * q2)_i = sum_jk H_ijk q1_j q2_k for scalar-last quaternions.
-    h = np.zeros((4, 4, 4))
-    terms = (
-        (0, 3, 0, 1), (0, 0, 3, 1), (0, 1, 2, 1), (0, 2, 1, -1),
-        (1, 3, 1, 1), (1, 0, 2, -1), (1, 1, 3, 1), (1, 2, 0, 1),
-        (2, 3, 2, 1), (2, 0, 1, 1), (2, 1, 0, -1), (2, 2, 3, 1),
-        (3, 3, 3, 1), (3, 0, 0, -1), (3, 1, 1, -1), (3, 2, 2, -1),
-    )  # fmt: skip
-    for i, j, k, sign in terms:
-        h[i, j, k] = sign
-    return h
-
-
-_HAMILTON = _hamilton_tensor()
-
-
-def quaternion_multiply(q1: ArrayLike, q2: ArrayLike) -> FloatArray:
-    """Hamilton product ``q1 * q2`` of scalar-last quaternions, shape (..., 4)."""
-    # One einsum instead of ~30 tiny ufunc calls: this sits in the control loop.
-    a = np.asarray(q1, dtype=float)
-    b = np.asarray(q2, dtype=float)
-    return np.asarray(np.einsum("ijk,...j,...k->...i", _HAMILTON, a, b), dtype=float)
-
-
-def quaternion_conjugate(q: ArrayLike) -> FloatArray:
-    """Conjugate (inverse of a unit quaternion), scalar-last, shape (..., 4)."""
-    return np.asarray(q, dtype=float) * np.array([-1.0, -1.0, -1.0, 1.0])
-
-
-def quaternion_to_rotvec(q: ArrayLike) -> FloatArray:
-    """Rotation vector (axis * angle, rad) of unit quaternions, shortest way round, (..., 3)."""
-    q = np.asarray(q, dtype=float)
-    q = np.where(q[..., 3:] < 0.0, -q, q)
-    sin_half = np.linalg.norm(q[..., :3], axis=-1, keepdims=True)
-    angle = 2.0 * np.arctan2(sin_half, q[..., 3:])
-    # angle / sin_half -> 2 as the rotation vanishes.
-    scale = np.divide(angle, sin_half, out=np.full_like(angle, 2.0), where=sin_half > 1e-12)
-    return q[..., :3] * scale
-
-
-def rotate_vector(q: ArrayLike, v: ArrayLike) -> FloatArray:
-    """Rotate vectors ``v`` (..., 3) by unit quaternions ``q`` (..., 4), shape (..., 3)."""
-    q = np.asarray(q, dtype=float)
-    v = np.asarray(v, dtype=float)
-    u, w = q[..., :3], q[..., 3:]
-    c = _cross(u, v)
-    return v + 2.0 * (w * c + _cross(u, c))
-
-
-def _cross(a: FloatArray, b: FloatArray) -> FloatArray:
-    # np.cross costs ~30 us on tiny arrays; this is a few.
-    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
-    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
-    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
-
-
-def orientation_error(target_quaternion: ArrayLike, quaternion: ArrayLike) -> FloatArray:
-    """Rotation vector (world frame, rad) from ``quaternion`` to ``target_quaternion``, (..., 3)."""
-    return quaternion_to_rotvec(
-        quaternion_multiply(target_quaternion, quaternion_conjugate(quaternion))
-    )
-
-
-# ---------------------------------------------------------------------------------------------
-# Values
-
-
-def _rotation_matrix(q: FloatArray) -> FloatArray:
-    """Rotation matrix (3, 3) of a scalar-last unit quaternion (4,)."""
-    x, y, z, w = q
-    return np.array(
-        [
-            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-        ]
-    )
-
-
-def _vector(value: ArrayLike, shape: tuple[int, ...], name: str) -> FloatArray:
-    array = np.asarray(value, dtype=float)
-    if array.shape != shape:
-        raise ValueError(f"{name}: expected shape {shape}, got {array.shape}")
-    if not np.all(np.isfinite(array)):
-        raise ValueError(f"{name}: expected finite values, got {array}")
-    return array
-
-
-@dataclass(frozen=True)
-class PalmCommand:
-    """Target pose of one palm, with an optional feed-forward twist.
-
-    Attributes
-    ----------
-    position : ndarray
-        (3,) palm frame origin target in the world frame, m.
-    quaternion : ndarray
-        (4,) palm orientation target in the world frame, scalar-last (x, y, z, w).
-    linear_velocity : ndarray
-        (3,) feed-forward linear velocity of the target, world frame, m/s.
-    angular_velocity : ndarray
-        (3,) feed-forward angular velocity of the target, world frame, rad/s.
-    squeeze_offset : float
-        Shift of the target along the target palm's +z axis (into the grasped face), m; with the
-        linear stiffness it sets the squeeze force (15 mm at 1000 N/m gives about 15 N).
-    """
-
-    position: FloatArray
-    quaternion: FloatArray
-    linear_velocity: FloatArray = field(default_factory=lambda: np.zeros(3))
-    angular_velocity: FloatArray = field(default_factory=lambda: np.zeros(3))
-    squeeze_offset: float = 0.0
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "position", _vector(self.position, (3,), "PalmCommand.position"))
-        quaternion = _vector(self.quaternion, (4,), "PalmCommand.quaternion")
-        norm = float(np.linalg.norm(quaternion))
-        if norm < 1e-9:
-            raise ValueError(
-                f"PalmCommand.quaternion: expected a unit quaternion, got {quaternion}"
-            )
-        object.__setattr__(self, "quaternion", quaternion / norm)
-        object.__setattr__(
-            self,
-            "linear_velocity",
-            _vector(self.linear_velocity, (3,), "PalmCommand.linear_velocity"),
-        )
-        object.__setattr__(
-            self,
-            "angular_velocity",
-            _vector(self.angular_velocity, (3,), "PalmCommand.angular_velocity"),
-        )
-
-    def target_position(self) -> FloatArray:
-        """Spring anchor: ``position`` shifted by ``squeeze_offset`` along the palm's z, m, (3,)."""
-        if self.squeeze_offset == 0.0:
-            return self.position
-        x, y, z, w = self.quaternion
-        normal = np.array(
-            [2.0 * (x * z + y * w), 2.0 * (y * z - x * w), 1.0 - 2.0 * (x * x + y * y)]
-        )
-        return self.position + self.squeeze_offset * normal
-
-    def twist(self) -> FloatArray:
-        """Feed-forward twist (linear m/s, angular rad/s), world frame, (6,)."""
-        return np.concatenate([self.linear_velocity, self.angular_velocity])
-
-
-@dataclass(frozen=True)
-class ImpedanceGains:
-    """Gains of the palm impedance law.
-
-    Attributes
-    ----------
-    stiffness_linear, damping_linear : float
-        Translational spring (N/m) and damper (N s/m).
-    stiffness_angular, damping_angular : float
-        Rotational spring (N m/rad) and damper (N m s/rad); stiffer than about 10 N m/rad
-        oscillates at 240 Hz with the light iiwa wrist.
-    stiffness_null, damping_null : float
-        Rest-posture spring (N m/rad) and damper (N m s/rad), projected into the null space.
-    joint_damping : float
-        Extra damping on every joint, N m s/rad.
-    limit_margin : float
-        Distance from a joint limit where the repulsive torque starts, rad.
-    limit_stiffness : float
-        Repulsive torque per radian inside the margin, N m/rad.
-    """
-
-    stiffness_linear: float = 1000.0
-    damping_linear: float = 60.0
-    stiffness_angular: float = 10.0
-    damping_angular: float = 1.0
-    stiffness_null: float = 5.0
-    damping_null: float = 1.0
-    joint_damping: float = 0.5
-    limit_margin: float = 0.15
-    limit_stiffness: float = 200.0
-
-    def __post_init__(self) -> None:
-        for name, value in vars(self).items():
-            if not np.isfinite(value) or value < 0.0:
-                raise ValueError(f"ImpedanceGains.{name}: expected finite >= 0, got {value}")
-
-    def stiffness_matrix(self) -> FloatArray:
-        """Task-space stiffness, (6, 6): linear block N/m, angular block N m/rad."""
-        return np.diag([self.stiffness_linear] * 3 + [self.stiffness_angular] * 3)
-
-    def damping_matrix(self) -> FloatArray:
-        """Task-space damping, (6, 6): linear block N s/m, angular block N m s/rad."""
-        return np.diag([self.damping_linear] * 3 + [self.damping_angular] * 3)
-
-
-@dataclass(frozen=True)
-class PalmState:
-    """Measured state of one arm and its palm.
-
-    Attributes
-    ----------
-    position : ndarray
-        (3,) palm frame origin in the world frame, m.
-    quaternion : ndarray
-        (4,) palm orientation in the world frame, scalar-last.
-    linear_velocity, angular_velocity : ndarray
-        (3,) palm twist in the world frame, m/s and rad/s.
-    joint_positions, joint_velocities : ndarray
-        (n,) arm joint positions (rad) and velocities (rad/s).
-    joint_torques : ndarray
-        (n,) torques commanded at the last step, N m.
-    """
-
-    position: FloatArray
-    quaternion: FloatArray
-    linear_velocity: FloatArray
-    angular_velocity: FloatArray
-    joint_positions: FloatArray
-    joint_velocities: FloatArray
-    joint_torques: FloatArray
-
-
-# ---------------------------------------------------------------------------------------------
-# Pure law (vectorised over arms)
-
-
-@dataclass(frozen=True)
-class GainArrays:
-    """Gains of ``k`` arms as arrays, for :func:`impedance_law`.
-
-    Attributes
-    ----------
-    stiffness : ndarray
-        (k, 6) task-space spring diagonal: N/m (first 3), N m/rad (last 3).
-    damping : ndarray
-        (k, 6) task-space damper diagonal: N s/m, N m s/rad.
-    null_stiffness, null_damping, joint_damping : ndarray
-        (k,) posture spring (N m/rad), posture damper and joint damper (N m s/rad).
-    """
-
-    stiffness: FloatArray
-    damping: FloatArray
-    null_stiffness: FloatArray
-    null_damping: FloatArray
-    joint_damping: FloatArray
-
-    @staticmethod
-    def of(gains: Sequence[ImpedanceGains]) -> GainArrays:
-        """Stack the gains of several arms."""
-        return GainArrays(
-            stiffness=np.array(
-                [[g.stiffness_linear] * 3 + [g.stiffness_angular] * 3 for g in gains]
-            ),
-            damping=np.array([[g.damping_linear] * 3 + [g.damping_angular] * 3 for g in gains]),
-            null_stiffness=np.array([g.stiffness_null for g in gains]),
-            null_damping=np.array([g.damping_null for g in gains]),
-            joint_damping=np.array([g.joint_damping for g in gains]),
-        )
-
-
-@dataclass(frozen=True)
-class AffineTorqueLaw:
-    """``tau = a + a_rate * elapsed + B q + C qd`` for ``k`` arms, valid near its linearisation.
-
-    Attributes
-    ----------
-    a, a_rate : ndarray
-        (k, n) constant torque (N m) and its rate from the moving target (N m/s).
-    b, c : ndarray
-        (k, n, n) joint stiffness (N m/rad) and damping (N m s/rad).
-    """
-
-    a: FloatArray
-    a_rate: FloatArray
-    b: FloatArray
-    c: FloatArray
-
-
-@dataclass(frozen=True)
-class ImpedanceTerms:
-    """The target-independent part of the linearised law of ``k`` arms.
-
-    With the pose error ``e`` (6,) of the target against ``palm_position``/``palm_quaternion``
-    and the target twist ``xd*`` (6,): ``a = a_base + error_gain e + twist_gain xd*`` and
-    ``a_rate = error_gain xd*`` (see :func:`affine_law`).
-
-    Attributes
-    ----------
-    a_base : ndarray
-        (k, n) gravity, posture and linearisation-offset torque, N m.
-    error_gain, twist_gain : ndarray
-        (k, n, 6) torque per unit pose error (N m per m or rad) and per unit twist.
-    b, c : ndarray
-        (k, n, n) joint stiffness (N m/rad) and damping (N m s/rad).
-    palm_position : ndarray
-        (k, 3) palm positions at the linearisation point, world frame, m.
-    palm_quaternion : ndarray
-        (k, 4) palm orientations at the linearisation point, scalar-last.
-    """
-
-    a_base: FloatArray
-    error_gain: FloatArray
-    twist_gain: FloatArray
-    b: FloatArray
-    c: FloatArray
-    palm_position: FloatArray
-    palm_quaternion: FloatArray
-
-
-def impedance_terms(
-    jacobian: FloatArray,
-    palm_position: FloatArray,
-    palm_quaternion: FloatArray,
-    q: FloatArray,
-    gravity_torque: FloatArray,
-    gains: GainArrays,
-    rest_posture: FloatArray,
-    mass_matrix: FloatArray | None = None,
-    dt: float = 0.0,
-    pinv_damping: float = 1e-3,
-) -> ImpedanceTerms:
-    """Linearise the palm impedance law of ``k`` arms around their configurations ``q``.
-
-    With ``mass_matrix`` and ``dt`` the damping is made implicit: the control torque (all but
-    gravity) is multiplied by ``G = M (M + dt D_q)^-1``, ``D_q = -C`` the joint damping matrix.
-    This gives the joint velocity one implicit Euler step of the damper would give, which keeps
-    the light wrist joints stable at 240 Hz (explicit damping diverges once ``dt D_q / M > 2``;
-    the iiwa's last joint with a palm has about 0.002 kg m^2).
-
-    Parameters
-    ----------
-    jacobian : ndarray
-        (k, 6, n) palm Jacobians (linear rows first), world frame.
-    palm_position : ndarray
-        (k, 3) palm positions at ``q``, world frame, m.
-    palm_quaternion : ndarray
-        (k, 4) palm orientations at ``q``, scalar-last.
-    q : ndarray
-        (k, n) joint positions, rad.
-    gravity_torque : ndarray
-        (k, n) torques holding the arms still against gravity at ``q``, N m.
-    gains : GainArrays
-        Spring, damper and posture gains of the ``k`` arms.
-    rest_posture : ndarray
-        (k, n) null-space posture targets, rad.
-    mass_matrix : ndarray, optional
-        (k, n, n) joint-space inertia at ``q``, kg m^2.
-    dt : float
-        Physics time step, s; used with ``mass_matrix``.
-    pinv_damping : float
-        Damping of the pseudo-inverse behind the null-space projector.
-
-    Returns
-    -------
-    ImpedanceTerms
-    """
-    n = q.shape[-1]
-    eye = np.eye(n)
-    jt = np.swapaxes(jacobian, -1, -2)  # (k, n, 6)
-    jt_k = jt * gains.stiffness[:, None, :]
-    jt_d = jt * gains.damping[:, None, :]
-    gram = jacobian @ jt + (pinv_damping**2) * np.eye(6)
-    # P = I - J^T (J J^T + l^2 I)^-1 J: symmetric, removes the palm's directions.
-    projector = eye - jt @ np.linalg.solve(gram, jacobian)
-    k_null = gains.null_stiffness[:, None, None]
-    b = -(jt_k @ jacobian + k_null * projector)
-    c = -(
-        jt_d @ jacobian
-        + gains.null_damping[:, None, None] * projector
-        + gains.joint_damping[:, None, None] * eye
-    )
-    a_base = (jt_k @ (jacobian @ q[..., None]) + k_null * (projector @ rest_posture[..., None]))[
-        ..., 0
-    ]
-    if mass_matrix is not None and dt > 0.0:
-        # G X = M (M - dt C)^-1 X, every term in one solve.
-        stacked = np.concatenate([b, c, jt_k, jt_d, a_base[..., None]], axis=-1)
-        stacked = mass_matrix @ np.linalg.solve(mass_matrix - dt * c, stacked)
-        b, c = stacked[..., :n], stacked[..., n : 2 * n]
-        jt_k, jt_d = stacked[..., 2 * n : 2 * n + 6], stacked[..., 2 * n + 6 : 2 * n + 12]
-        a_base = stacked[..., 2 * n + 12]
-    return ImpedanceTerms(
-        a_base=a_base + gravity_torque,
-        error_gain=jt_k,
-        twist_gain=jt_d,
-        b=b,
-        c=c,
-        palm_position=palm_position,
-        palm_quaternion=palm_quaternion,
-    )
-
-
-def affine_law(
-    terms: ImpedanceTerms,
-    target_position: FloatArray,
-    target_quaternion: FloatArray,
-    target_twist: FloatArray,
-) -> AffineTorqueLaw:
-    """Complete linearised terms with the targets of ``k`` arms.
-
-    Parameters
-    ----------
-    terms : ImpedanceTerms
-        From :func:`impedance_terms`.
-    target_position : ndarray
-        (k, 3) spring anchors (squeeze offset included), world frame, m.
-    target_quaternion : ndarray
-        (k, 4) target orientations, scalar-last.
-    target_twist : ndarray
-        (k, 6) feed-forward twists (m/s, rad/s), world frame.
-
-    Returns
-    -------
-    AffineTorqueLaw
-    """
-    error = np.concatenate(
-        [
-            target_position - terms.palm_position,
-            orientation_error(target_quaternion, terms.palm_quaternion),
-        ],
-        axis=-1,
-    )
-    a_rate = (terms.error_gain @ target_twist[..., None])[..., 0]
-    a = terms.a_base + (terms.error_gain @ error[..., None])[..., 0]
-    a = a + (terms.twist_gain @ target_twist[..., None])[..., 0]
-    return AffineTorqueLaw(a=a, a_rate=a_rate, b=terms.b, c=terms.c)
-
-
-def impedance_law(
-    jacobian: FloatArray,
-    palm_position: FloatArray,
-    palm_quaternion: FloatArray,
-    q: FloatArray,
-    gravity_torque: FloatArray,
-    target_position: FloatArray,
-    target_quaternion: FloatArray,
-    target_twist: FloatArray,
-    gains: GainArrays,
-    rest_posture: FloatArray,
-    mass_matrix: FloatArray | None = None,
-    dt: float = 0.0,
-) -> AffineTorqueLaw:
-    """:func:`impedance_terms` then :func:`affine_law`; shapes as there.
-
-    Returns
-    -------
-    AffineTorqueLaw
-    """
-    terms = impedance_terms(
-        jacobian,
-        palm_position,
-        palm_quaternion,
-        q,
-        gravity_torque,
-        gains,
-        rest_posture,
-        mass_matrix=mass_matrix,
-        dt=dt,
-    )
-    return affine_law(terms, target_position, target_quaternion, target_twist)
-
-
-def limit_torque(
-    q: FloatArray, lower: FloatArray, upper: FloatArray, margin: FloatArray, stiffness: FloatArray
-) -> FloatArray:
-    """Repulsive torque pushing joints out of the ``margin`` band next to their limits, (n,)."""
-    return stiffness * (np.clip(q, lower + margin, upper - margin) - q)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -636,7 +159,7 @@ class DualArmImpedanceController:
         self._terms: ImpedanceTerms | None = None
         self._targets_changed = True
         self._gravity_world = np.array([0.0, 0.0, -9.81])
-        self._base_rotation: dict[int, FloatArray | None] = {}
+        self._base_rotation: dict[int, Array | None] = {}
         self._gravity_in_base: dict[int, list[float] | None] = {}
         self._steps_since_refresh = 0
         self._steps_since_target = 0
@@ -667,7 +190,7 @@ class DualArmImpedanceController:
         )
         for body in self._bodies:
             _, base_q = pb.getBasePositionAndOrientation(body, physicsClientId=self.client)
-            rotation = _rotation_matrix(np.asarray(base_q, dtype=float))
+            rotation = quat.to_matrix(base_q)
             turned = not np.allclose(rotation, np.eye(3), atol=1e-12)
             self._base_rotation[body] = rotation if turned else None
             self._gravity_in_base[body] = (
@@ -721,14 +244,14 @@ class DualArmImpedanceController:
 
     def set_rest_posture(self, arm: Arm, q: ArrayLike) -> None:
         """Set the null-space posture target of ``arm``, rad, shape (n,)."""
-        self._rest[self.ARMS.index(Arm(arm))] = _vector(q, (self._n,), "set_rest_posture")
+        self._rest[self.ARMS.index(Arm(arm))] = checked_vector(q, (self._n,), "set_rest_posture")
         self._steps_since_refresh = self.refresh_every
 
     def _update_gains(self) -> None:
         self._gain_arrays = GainArrays.of(self._gains)
         margin = np.repeat([g.limit_margin for g in self._gains], self._n)
         self._limit_k = np.repeat([g.limit_stiffness for g in self._gains], self._n)
-        # limit_torque inlined: the band starts this far inside the limits.
+        # The joint-limit repulsion band starts this far inside the limits.
         self._soft_lower = self._lower + margin
         self._soft_upper = self._upper - margin
 
@@ -897,21 +420,11 @@ class DualArmImpedanceController:
         return {arm: self.palm_state(arm) for arm in self.ARMS}
 
 
+# The values callers hand the controller are re-exported: ``from worlds.control import
+# PalmCommand`` is how the scene, the simulated world and the benches name them.
 __all__ = [
-    "AffineTorqueLaw",
     "DualArmImpedanceController",
-    "GainArrays",
     "ImpedanceGains",
-    "ImpedanceTerms",
     "PalmCommand",
     "PalmState",
-    "affine_law",
-    "impedance_law",
-    "impedance_terms",
-    "limit_torque",
-    "orientation_error",
-    "quaternion_conjugate",
-    "quaternion_multiply",
-    "quaternion_to_rotvec",
-    "rotate_vector",
 ]

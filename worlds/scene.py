@@ -1,7 +1,7 @@
 """The PyBullet scene: two palm arms behind a table, objects on it, static obstacles.
 
-A :class:`Scene` is built from a :class:`SceneSpec` (plain parameters) or from a validated world
-(:meth:`Scene.from_world`). It owns one PyBullet client in DIRECT mode and the
+A :class:`Scene` is built from a :class:`worlds.spec.SceneSpec` (plain parameters) or from a
+world (:meth:`Scene.from_world`). It owns one PyBullet client in DIRECT mode and the
 :class:`worlds.control.DualArmImpedanceController` that drives the palms; :meth:`Scene.step`
 applies the control torques and advances physics by one step.
 
@@ -12,26 +12,30 @@ on or off per move by parking them far below the floor.
 
 from __future__ import annotations
 
-import os
-import sys
-from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass, field, replace
-from enum import StrEnum
-from pathlib import Path
-from typing import Any
+from collections.abc import Iterable, Mapping
+from dataclasses import replace
 
 import numpy as np
 import pybullet as pb
 from numpy.typing import ArrayLike, NDArray
-from scipy.spatial.transform import Rotation
 
+from skills import quaternion as quat
 from skills.labels import Arm
+from worlds.bodies import (
+    NoDisplayError,
+    build_robot,
+    connect,
+    create_object,
+    create_obstacle,
+    create_table,
+    load_robot,
+)
 from worlds.control import DualArmImpedanceController, ImpedanceGains, PalmCommand, PalmState
-from worlds.robots import RobotModel, build_robot_model
+from worlds.spec import ObstacleSpec, Quat, SceneSpec, WorldSpec
+from worlds.world_file import World, as_world_spec
 
 FloatArray = NDArray[np.float64]
-Vec3 = tuple[float, float, float]
-Quat = tuple[float, float, float, float]
+
 
 #: Slowest rate of re-linearising the control law (Jacobian, gravity, inertia), Hz. The
 #: spring and damper still act on the measured joint state at every physics step; the grasp
@@ -44,205 +48,13 @@ RELINEARISE_TOLERANCE = 0.01
 PARKING_OFFSET = (0.0, 0.0, -100.0)
 
 
-class ShapeKind(StrEnum):
-    """Primitive or mesh geometry of an object or obstacle."""
-
-    BOX = "box"
-    CYLINDER = "cylinder"
-    SPHERE = "sphere"
-    MESH = "mesh"
-
-
-@dataclass(frozen=True)
-class ShapeSpec:
-    """Geometry in the body frame, centred on the body origin.
-
-    Attributes
-    ----------
-    kind : ShapeKind
-        Which of the fields below apply.
-    size : tuple of float
-        (3,) full box extents along x, y, z, m (BOX).
-    radius : float
-        Radius, m (CYLINDER, SPHERE).
-    height : float
-        Full height along z, m (CYLINDER).
-    mesh_path : Path or None
-        Mesh file (MESH); dynamic bodies collide with its convex hull.
-    scale : float
-        Uniform mesh scale (MESH).
-    """
-
-    kind: ShapeKind
-    size: Vec3 = (0.0, 0.0, 0.0)
-    radius: float = 0.0
-    height: float = 0.0
-    mesh_path: Path | None = None
-    scale: float = 1.0
-
-    def __post_init__(self) -> None:
-        ok = {
-            ShapeKind.BOX: min(self.size) > 0.0,
-            ShapeKind.CYLINDER: self.radius > 0.0 and self.height > 0.0,
-            ShapeKind.SPHERE: self.radius > 0.0,
-            ShapeKind.MESH: self.mesh_path is not None and self.scale > 0.0,
-        }[ShapeKind(self.kind)]
-        if not ok:
-            raise ValueError(
-                f"ShapeSpec: expected positive dimensions for a {self.kind}, got {self}"
-            )
-
-    @staticmethod
-    def box(size: ArrayLike) -> ShapeSpec:
-        """Box of full extents ``size`` (3,), m."""
-        x, y, z = (float(v) for v in np.asarray(size, dtype=float).reshape(3))
-        return ShapeSpec(ShapeKind.BOX, size=(x, y, z))
-
-    @staticmethod
-    def sphere(radius: float) -> ShapeSpec:
-        """Sphere of ``radius``, m."""
-        return ShapeSpec(ShapeKind.SPHERE, radius=float(radius))
-
-    @staticmethod
-    def cylinder(radius: float, height: float) -> ShapeSpec:
-        """Cylinder along z of ``radius`` and full ``height``, m."""
-        return ShapeSpec(ShapeKind.CYLINDER, radius=float(radius), height=float(height))
-
-    def bounding_radius(self) -> float:
-        """Radius of a sphere around the body origin that holds the shape, m."""
-        if self.kind == ShapeKind.BOX:
-            return 0.5 * float(np.linalg.norm(self.size))
-        if self.kind == ShapeKind.SPHERE:
-            return self.radius
-        if self.kind == ShapeKind.CYLINDER:
-            return float(np.hypot(self.radius, self.height / 2.0))
-        import trimesh
-
-        assert self.mesh_path is not None
-        mesh = trimesh.load(self.mesh_path, force="mesh")
-        assert isinstance(mesh, trimesh.Trimesh)
-        return float(np.max(np.linalg.norm(mesh.vertices, axis=1))) * self.scale
-
-
-@dataclass(frozen=True)
-class ObjectSpec:
-    """A movable object on the table.
-
-    Attributes
-    ----------
-    name : str
-        Unique name.
-    shape : ShapeSpec
-        Geometry.
-    mass : float
-        Mass, kg.
-    friction : float
-        Lateral friction coefficient (Bullet multiplies the two bodies' coefficients).
-    position : tuple of float
-        (3,) initial centre in the world frame, m.
-    quaternion : tuple of float
-        (4,) initial orientation, scalar-last.
-    """
-
-    name: str
-    shape: ShapeSpec
-    mass: float
-    friction: float
-    position: Vec3
-    quaternion: Quat = (0.0, 0.0, 0.0, 1.0)
-
-    def __post_init__(self) -> None:
-        if self.mass <= 0.0 or self.friction < 0.0:
-            raise ValueError(
-                f"ObjectSpec {self.name!r}: expected mass > 0 and friction >= 0, "
-                f"got {self.mass} and {self.friction}"
-            )
-
-
-@dataclass(frozen=True)
-class ObstacleSpec:
-    """A static obstacle (mass 0, no physics response).
-
-    Attributes
-    ----------
-    name : str
-        Unique name.
-    shape : ShapeSpec
-        Geometry.
-    position : tuple of float
-        (3,) centre in the world frame, m.
-    """
-
-    name: str
-    shape: ShapeSpec
-    position: Vec3
-
-
-@dataclass(frozen=True)
-class TableSpec:
-    """The table: a static box whose top surface centre is ``position``.
-
-    Attributes
-    ----------
-    position : tuple of float
-        (3,) centre of the top surface, world frame, m.
-    size : tuple of float
-        (3,) length along x, width along y, height of the top above the floor, m.
-    friction : float
-        Lateral friction coefficient of the top.
-    """
-
-    position: Vec3 = (0.65, 0.0, 0.6)
-    size: Vec3 = (0.6, 1.0, 0.6)
-    friction: float = 0.5
-
-
-@dataclass(frozen=True)
-class RobotSpec:
-    """Parameters of the robot builder (:func:`worlds.robots.build_robot_model`).
-
-    Attributes
-    ----------
-    model : str
-        Robot model name.
-    base_position : tuple of float
-        (3,) robot frame origin in the world, m.
-    base_rpy_deg : tuple of float
-        (3,) robot frame roll, pitch, yaw, degrees.
-    arm_separation : float
-        Distance between the arm bases, m.
-    mount_height : float
-        Arm base height above the robot frame, m.
-    palm_size : tuple of float
-        (3,) palm box extents, m.
-    """
-
-    model: str = "kuka_iiwa"
-    base_position: Vec3 = (0.0, 0.0, 0.0)
-    base_rpy_deg: Vec3 = (0.0, 0.0, 0.0)
-    arm_separation: float = 0.7
-    mount_height: float = 0.6
-    palm_size: Vec3 = (0.12, 0.09, 0.02)
-
-    def build(self) -> RobotModel:
-        """The robot model these parameters describe."""
-        return build_robot_model(
-            self.model,
-            base_position=self.base_position,
-            base_rpy_deg=self.base_rpy_deg,
-            arm_separation=self.arm_separation,
-            mount_height=self.mount_height,
-            palm_size=self.palm_size,
-        )
-
-
 def _lateral_palm_quaternions() -> dict[Arm, Quat]:
     # Palm z (the contact normal) points at the object along -+y; palm x points down.
-    left = Rotation.from_matrix(np.array([[0.0, 1.0, 0.0], [0.0, 0.0, -1.0], [-1.0, 0.0, 0.0]]))
-    right = Rotation.from_matrix(np.array([[0.0, -1.0, 0.0], [0.0, 0.0, 1.0], [-1.0, 0.0, 0.0]]))
+    left = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, -1.0], [-1.0, 0.0, 0.0]])
+    right = np.array([[0.0, -1.0, 0.0], [0.0, 0.0, 1.0], [-1.0, 0.0, 0.0]])
     quaternions: dict[Arm, Quat] = {}
     for arm, rotation in ((Arm.LEFT, left), (Arm.RIGHT, right)):
-        x, y, z, w = (float(v) for v in rotation.as_quat())
+        x, y, z, w = quat.from_matrix(rotation).tolist()
         quaternions[arm] = (x, y, z, w)
     return quaternions
 
@@ -281,187 +93,6 @@ def lateral_grasp_palm_poses(
         arm: (centre + np.array([0.0, side * offset, 0.0]), np.array(LATERAL_PALM_QUATERNIONS[arm]))
         for arm, side in ((Arm.LEFT, 1.0), (Arm.RIGHT, -1.0))
     }
-
-
-def default_parcel() -> ObjectSpec:
-    """The 1 kg, 0.20 x 0.30 x 0.15 m parcel at (0.6, 0, 0.675), friction 0.8."""
-    return ObjectSpec(
-        name="parcel",
-        shape=ShapeSpec.box((0.20, 0.30, 0.15)),
-        mass=1.0,
-        friction=0.8,
-        position=(0.6, 0.0, 0.675),
-    )
-
-
-@dataclass(frozen=True)
-class SceneSpec:
-    """Everything needed to build a :class:`Scene`.
-
-    Attributes
-    ----------
-    robot : RobotSpec
-        Robot model parameters.
-    table : TableSpec
-        The table.
-    objects : tuple of ObjectSpec
-        Movable objects.
-    obstacles : tuple of ObstacleSpec
-        Static obstacles (all inactive at the start).
-    physics_hz : int
-        Physics rate, Hz.
-    control_hz : int
-        Rate at which callers are expected to update palm commands, Hz.
-    gravity : float
-        Gravity along world z, m/s^2.
-    seed : int
-        Seed of the scene's random generator.
-    """
-
-    robot: RobotSpec = field(default_factory=RobotSpec)
-    table: TableSpec = field(default_factory=TableSpec)
-    objects: tuple[ObjectSpec, ...] = field(default_factory=lambda: (default_parcel(),))
-    obstacles: tuple[ObstacleSpec, ...] = ()
-    physics_hz: int = 240
-    control_hz: int = 60
-    gravity: float = -9.81
-    seed: int = 0
-
-    def __post_init__(self) -> None:
-        if self.physics_hz <= 0 or self.control_hz <= 0 or self.physics_hz % self.control_hz:
-            raise ValueError(
-                "SceneSpec: expected physics_hz a positive multiple of control_hz, "
-                f"got {self.physics_hz} and {self.control_hz}"
-            )
-        names = [o.name for o in self.objects] + [o.name for o in self.obstacles]
-        duplicates = sorted({n for n in names if names.count(n) > 1})
-        if duplicates:
-            raise ValueError(f"SceneSpec: expected unique names, got duplicates {duplicates}")
-
-
-def _shape_from_world(shape: Any, resolve: Any) -> ShapeSpec:
-    kind = ShapeKind(str(getattr(shape.type, "value", shape.type)))
-    if kind == ShapeKind.BOX:
-        return ShapeSpec.box(shape.size)
-    if kind == ShapeKind.SPHERE:
-        return ShapeSpec.sphere(shape.radius)
-    if kind == ShapeKind.CYLINDER:
-        return ShapeSpec.cylinder(shape.radius, shape.height)
-    return ShapeSpec(ShapeKind.MESH, mesh_path=Path(resolve(shape.file)), scale=float(shape.scale))
-
-
-def scene_spec_from_world(world: Any) -> SceneSpec:
-    """Turn a validated :class:`worlds.world_file.World` into a :class:`SceneSpec`.
-
-    Parameters
-    ----------
-    world : World
-        A world loaded by :func:`worlds.world_file.load_world` (or built in code).
-
-    Returns
-    -------
-    SceneSpec
-    """
-    robot = world.robot
-    return SceneSpec(
-        robot=RobotSpec(
-            model=str(getattr(robot.model, "value", robot.model)),
-            base_position=tuple(robot.base.position),
-            base_rpy_deg=tuple(robot.base.rpy_deg),
-            arm_separation=float(robot.arm_separation),
-            mount_height=float(robot.mount_height),
-            palm_size=tuple(robot.palm_size),
-        ),
-        table=TableSpec(
-            position=tuple(world.table.position),
-            size=tuple(world.table.size),
-            friction=float(world.table.friction),
-        ),
-        objects=tuple(
-            ObjectSpec(
-                name=o.name,
-                shape=_shape_from_world(o.shape, world.resolve_path),
-                mass=float(o.mass),
-                friction=float(o.friction),
-                position=tuple(o.pose.position),
-                quaternion=tuple(o.pose.quaternion_xyzw()),
-            )
-            for o in world.objects
-        ),
-        obstacles=tuple(
-            ObstacleSpec(
-                name=o.name,
-                shape=_shape_from_world(o.shape, world.resolve_path),
-                position=tuple(o.position),
-            )
-            for o in world.obstacles
-        ),
-        physics_hz=int(world.sim.physics_hz),
-        control_hz=int(world.sim.control_hz),
-        gravity=float(world.sim.gravity),
-        seed=int(world.sim.seed),
-    )
-
-
-def _shape_ids(client: int, shape: ShapeSpec, rgba: Sequence[float]) -> tuple[int, int]:
-    """Collision and visual shape ids of ``shape``."""
-    if shape.kind == ShapeKind.BOX:
-        half = [s / 2.0 for s in shape.size]
-        col = pb.createCollisionShape(pb.GEOM_BOX, halfExtents=half, physicsClientId=client)
-        vis = pb.createVisualShape(
-            pb.GEOM_BOX, halfExtents=half, rgbaColor=rgba, physicsClientId=client
-        )
-    elif shape.kind == ShapeKind.SPHERE:
-        col = pb.createCollisionShape(pb.GEOM_SPHERE, radius=shape.radius, physicsClientId=client)
-        vis = pb.createVisualShape(
-            pb.GEOM_SPHERE, radius=shape.radius, rgbaColor=rgba, physicsClientId=client
-        )
-    elif shape.kind == ShapeKind.CYLINDER:
-        col = pb.createCollisionShape(
-            pb.GEOM_CYLINDER, radius=shape.radius, height=shape.height, physicsClientId=client
-        )
-        vis = pb.createVisualShape(
-            pb.GEOM_CYLINDER,
-            radius=shape.radius,
-            length=shape.height,
-            rgbaColor=rgba,
-            physicsClientId=client,
-        )
-    else:
-        scale = [shape.scale] * 3
-        col = pb.createCollisionShape(
-            pb.GEOM_MESH, fileName=str(shape.mesh_path), meshScale=scale, physicsClientId=client
-        )
-        vis = pb.createVisualShape(
-            pb.GEOM_MESH,
-            fileName=str(shape.mesh_path),
-            meshScale=scale,
-            rgbaColor=rgba,
-            physicsClientId=client,
-        )
-    return col, vis
-
-
-class NoDisplayError(RuntimeError):
-    """PyBullet's window was asked for where there is no display."""
-
-
-def connect(gui: bool) -> int:
-    """A PyBullet client: DIRECT by default, a window (GUI) when asked and a display exists.
-
-    Raises
-    ------
-    NoDisplayError
-        If ``gui`` is asked for and no display is available (``DISPLAY`` unset or refused).
-    """
-    if not gui:
-        return int(pb.connect(pb.DIRECT))
-    if not os.environ.get("DISPLAY") and sys.platform.startswith("linux"):
-        raise NoDisplayError("--gui: expected a display (DISPLAY is not set); run without --gui")
-    client = int(pb.connect(pb.GUI))
-    if client < 0:
-        raise NoDisplayError("--gui: PyBullet could not open a window on this display")
-    return client
 
 
 class Scene:
@@ -506,15 +137,16 @@ class Scene:
     @classmethod
     def from_world(
         cls,
-        world: Any,
+        world: World | WorldSpec,
         gains: ImpedanceGains | None = None,
         refresh_every: int | None = None,
         relinearise_tolerance: float = RELINEARISE_TOLERANCE,
         gui: bool = False,
     ) -> Scene:
-        """Build the scene of a validated world (:class:`worlds.world_file.World`)."""
+        """Build the scene of a world: a :class:`worlds.spec.WorldSpec`, or a validated
+        :class:`worlds.world_file.World`, converted here."""
         return cls(
-            scene_spec_from_world(world),
+            as_world_spec(world).scene,
             gains=gains,
             refresh_every=refresh_every,
             relinearise_tolerance=relinearise_tolerance,
@@ -536,68 +168,14 @@ class Scene:
         floor = pb.createCollisionShape(pb.GEOM_PLANE, physicsClientId=c)
         self.floor_id = pb.createMultiBody(0.0, floor, physicsClientId=c)
 
-        self.robot = self.spec.robot.build()
-        self.robot_ids: tuple[int, ...] = tuple(
-            pb.loadURDF(
-                str(body.urdf_path),
-                body.base2world_position,
-                body.base2world_quaternion,
-                useFixedBase=True,
-                flags=pb.URDF_USE_INERTIA_FROM_FILE,
-                physicsClientId=c,
-            )
-            for body in self.robot.bodies
-        )
-        self._exclude_collisions()
-        for arm in (Arm.LEFT, Arm.RIGHT):
-            spec = self.robot.arms[arm]
-            body = self.robot_ids[spec.body]
-            for joint, q in zip(spec.joint_indices, spec.rest_posture, strict=True):
-                pb.resetJointState(body, joint, q, 0.0, physicsClientId=c)
-
-        table = self.spec.table
-        half = (table.size[0] / 2.0, table.size[1] / 2.0, table.size[2] / 2.0)
-        col = pb.createCollisionShape(pb.GEOM_BOX, halfExtents=half, physicsClientId=c)
-        vis = pb.createVisualShape(
-            pb.GEOM_BOX, halfExtents=half, rgbaColor=[0.6, 0.45, 0.3, 1.0], physicsClientId=c
-        )
-        self.table_id = pb.createMultiBody(
-            0.0,
-            col,
-            vis,
-            basePosition=[table.position[0], table.position[1], table.position[2] - half[2]],
-            physicsClientId=c,
-        )
-        pb.changeDynamics(self.table_id, -1, lateralFriction=table.friction, physicsClientId=c)
-
-        self.object_ids: dict[str, int] = {}
-        for obj in self.spec.objects:
-            col, vis = _shape_ids(c, obj.shape, [0.8, 0.6, 0.35, 1.0])
-            body = pb.createMultiBody(
-                obj.mass,
-                col,
-                vis,
-                basePosition=obj.position,
-                baseOrientation=obj.quaternion,
-                physicsClientId=c,
-            )
-            pb.changeDynamics(
-                body,
-                -1,
-                lateralFriction=obj.friction,
-                spinningFriction=0.0,
-                rollingFriction=0.0,
-                physicsClientId=c,
-            )
-            self.object_ids[obj.name] = body
-
-        self.obstacle_ids: dict[str, int] = {}
+        self.robot = build_robot(self.spec.robot)
+        self.robot_ids = load_robot(c, self.robot)
+        self.table_id = create_table(c, self.spec.table)
+        self.object_ids = {obj.name: create_object(c, obj) for obj in self.spec.objects}
+        self.obstacle_ids = {
+            o.name: create_obstacle(c, o, self._parking(o)) for o in self.spec.obstacles
+        }
         self._active_obstacles: set[str] = set()
-        for obstacle in self.spec.obstacles:
-            col, vis = _shape_ids(c, obstacle.shape, [0.8, 0.2, 0.2, 1.0])
-            self.obstacle_ids[obstacle.name] = pb.createMultiBody(
-                0.0, col, vis, basePosition=self._parking(obstacle), physicsClientId=c
-            )
 
         self.controller = DualArmImpedanceController(
             self.robot,
@@ -611,27 +189,6 @@ class Scene:
             relinearise_tolerance=relinearise_tolerance,
         )
         self.controller.enable()
-
-    def _exclude_collisions(self) -> None:
-        """Switch off the robot's :attr:`RobotModel.collision_exclusions` link pairs."""
-        if not self.robot.collision_exclusions:
-            return
-        c = self.client
-        indices: list[dict[str, int]] = []
-        for body in self.robot_ids:
-            names = {"base": -1}
-            for j in range(pb.getNumJoints(body, physicsClientId=c)):
-                names[pb.getJointInfo(body, j, physicsClientId=c)[12].decode()] = j
-            indices.append(names)
-        for body_a, link_a, body_b, link_b in self.robot.collision_exclusions:
-            pb.setCollisionFilterPair(
-                self.robot_ids[body_a],
-                self.robot_ids[body_b],
-                indices[body_a][link_a],
-                indices[body_b][link_b],
-                enableCollision=0,
-                physicsClientId=c,
-            )
 
     # -- setup -------------------------------------------------------------------------------
 
@@ -852,19 +409,12 @@ class Scene:
         self.close()
 
 
+# NoDisplayError is re-exported: the command line catches it from here.
 __all__ = [
     "LATERAL_PALM_QUATERNIONS",
     "RELINEARISE_HZ",
     "RELINEARISE_TOLERANCE",
-    "ObjectSpec",
-    "ObstacleSpec",
-    "RobotSpec",
+    "NoDisplayError",
     "Scene",
-    "SceneSpec",
-    "ShapeKind",
-    "ShapeSpec",
-    "TableSpec",
-    "default_parcel",
     "lateral_grasp_palm_poses",
-    "scene_spec_from_world",
 ]

@@ -24,8 +24,9 @@ from skills.types import Array
 from worlds.adapters import object_contexts, robot_capabilities
 from worlds.collision import CollisionWorld, arm_group
 from worlds.control import ImpedanceGains, PalmCommand
-from worlds.scene import LATERAL_PALM_QUATERNIONS, Scene, ShapeKind, ShapeSpec
-from worlds.world_file import World
+from worlds.scene import LATERAL_PALM_QUATERNIONS, Scene
+from worlds.spec import Shape, ShapeSpec, WorldSpec
+from worlds.world_file import World, as_world_spec
 
 ARMS = (Arm.LEFT, Arm.RIGHT)
 #: Extra clearance asked of predicted forearm poses (carried rigidly with the palms), m.
@@ -36,11 +37,11 @@ MAX_LIFT_M = 0.30
 
 def shape_extents(shape: ShapeSpec) -> Array:
     """Bounding-box extents (3,) of a shape in its own frame, m."""
-    if shape.kind is ShapeKind.BOX:
+    if shape.kind is Shape.BOX:
         return np.asarray(shape.size, dtype=float)
-    if shape.kind is ShapeKind.SPHERE:
+    if shape.kind is Shape.SPHERE:
         return np.full(3, 2.0 * shape.radius)
-    if shape.kind is ShapeKind.CYLINDER:
+    if shape.kind is Shape.CYLINDER:
         return np.array([2.0 * shape.radius, 2.0 * shape.radius, shape.height])
     return np.full(3, 2.0 * shape.bounding_radius())
 
@@ -77,8 +78,8 @@ class SimWorld:
 
     Parameters
     ----------
-    world : World
-        The validated world file.
+    world : WorldSpec or World
+        The world; a validated world file is converted here, once.
     object_name : str, optional
         The object the monitor watches for drops (default: the first task's object).
     gains : ImpedanceGains, optional
@@ -87,29 +88,29 @@ class SimWorld:
 
     def __init__(
         self,
-        world: World,
+        world: World | WorldSpec,
         object_name: str | None = None,
         gains: ImpedanceGains | None = None,
         gui: bool = False,
     ) -> None:
-        self.world_file = world
-        self.scene = Scene.from_world(world, gains=gains, gui=gui)
+        self.spec = spec = as_world_spec(world)
+        self.scene = Scene(spec.scene, gains=gains, gui=gui)
         self.gains = self.scene.controller.gains(Arm.LEFT)
         self.collision = CollisionWorld(self.scene)
         self.watched = object_name or (
-            world.task[0].object if world.task else world.objects[0].name
+            spec.task[0].object if spec.task else spec.scene.objects[0].name
         )
         self.safety = SafetyRecord()
         self._rest = self._rest_poses()
         self.scene.place_palms({a: (p.position, p.orientation) for a, p in self._rest.items()})
         self._commands: dict[Arm, Pose] = dict(self._rest)
-        self._contexts = {c.name: c for c in object_contexts(world)}
+        self._contexts = {c.name: c for c in object_contexts(spec)}
         self._extents = {o.name: shape_extents(o.shape) for o in self.scene.spec.objects}
         self._obstacle_info = {
             o.name: ObstacleInfo(o.name, np.asarray(o.position, float), o.shape.bounding_radius())
             for o in self.scene.spec.obstacles
         }
-        self._substeps = max(1, round(world.sim.physics_hz / world.sim.control_hz))
+        self._substeps = max(1, round(spec.scene.physics_hz / spec.scene.control_hz))
         self._rest_z = {
             o.name: float(o.position[2]) for o in self.scene.spec.objects
         }  # resting centre height
@@ -117,7 +118,7 @@ class SimWorld:
 
     def _rest_poses(self) -> dict[Arm, Pose]:
         """Palms waiting above the table's near edge, outside the objects, facing inwards."""
-        table = self.world_file.table
+        table = self.spec.scene.table
         near_x = table.position[0] - table.size[0] / 2.0
         inset, half_width, height = self.scene.robot.rest_palms
         z = table.position[2] + height
@@ -207,7 +208,7 @@ class SimWorld:
         """Centre bounds: over the table top by half the object's height, over its footprint,
         at most ``MAX_LIFT_M`` above the table (higher lifts bring the forearms up to the
         obstacles the object avoids)."""
-        t = self.world_file.table
+        t = self.spec.scene.table
         half = self._extents[name] / 2.0
         top = t.position[2]
         lower = np.array(
@@ -224,19 +225,14 @@ class SimWorld:
 
     def robot_capabilities(self) -> RobotCapabilities:
         """The world's robot for the reasoner."""
-        return robot_capabilities(self.world_file)
+        return robot_capabilities(self.spec)
 
     def task_moves(self, name: str) -> tuple[Move, ...]:
         """The world file's moves for ``name``."""
-        moves: list[Move] = []
-        for step in self.world_file.task:
-            if step.object != name:
-                continue
-            for m in step.moves:
-                moves.append(
-                    Move(Pose.of(m.goal.position, m.goal.quaternion_xyzw()), tuple(m.obstacles))
-                )
-        return tuple(moves)
+        return tuple(
+            Move(Pose.of(m.goal_position, m.goal_quaternion), m.obstacles)
+            for m in self.spec.moves_of(name)
+        )
 
     def gravity(self) -> float:
         """Magnitude of the scene's gravity, m/s^2."""
@@ -259,7 +255,7 @@ class SimWorld:
 
     def palm_thickness(self) -> float:
         """m."""
-        return float(self.world_file.robot.palm_size[2])
+        return float(self.spec.scene.robot.palm_size[2])
 
     def squeeze_depth(self, force_n: float) -> float:
         """Depth inside a face that the impedance controller's translational stiffness turns

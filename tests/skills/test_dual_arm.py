@@ -8,11 +8,9 @@ from numpy.testing import assert_allclose
 from skills import quaternion as quat
 from skills.dual_arm import (
     GraspGeometry,
-    compose_twists,
     contact_twists,
     grasp_matrix,
     integrate_twist,
-    palm_poses,
     skew,
 )
 from skills.labels import Arm
@@ -45,12 +43,19 @@ def test_grasp_matrix_sums_contact_wrenches_at_the_centre() -> None:
     assert_allclose(grasp_matrix(r) @ lift, [0, 0, 10.0, 0, 0, 0], atol=1e-12)
 
 
+def palms_in_world(
+    obj_p: np.ndarray, obj_q: np.ndarray, rel_p: np.ndarray, rel_q: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """``palm2world`` (2, 3), (2, 4) from ``object2world`` and each ``palm2object``."""
+    return obj_p + quat.rotate(obj_q, rel_p), quat.multiply(obj_q, rel_q)
+
+
 def test_absolute_skills_alone_move_the_palms_as_one_rigid_body() -> None:
     geometry = GraspGeometry.lateral(0.30)
     obj_p, obj_q = np.array([0.6, 0.0, 0.675]), quat.from_axis_angle([0.1, 0.2, 1.0], 0.3)
     rel_p = np.stack((geometry.left_position, geometry.right_position))
     rel_q = np.stack((geometry.left_orientation, geometry.right_orientation))
-    palms_p, palms_q = palm_poses(obj_p, obj_q, rel_p, rel_q)
+    palms_p, palms_q = palms_in_world(obj_p, obj_q, rel_p, rel_q)
     d0 = np.linalg.norm(palms_p[0] - palms_p[1])
     rel0 = quat.multiply(quat.conjugate(palms_q[0]), palms_q[1])
     dt = 0.004
@@ -63,9 +68,8 @@ def test_absolute_skills_alone_move_the_palms_as_one_rigid_body() -> None:
                 [0.0, -0.03, 0.01, 0.2 * np.cos(2 * t), -0.1, 0.3],
             ]
         )
-        r = palms_p - obj_p
-        palm_twists = compose_twists(twists, [0.7, 0.3], r)
         obj_twist = np.array([0.7, 0.3]) @ twists
+        palm_twists = contact_twists(obj_twist, palms_p - obj_p)
         obj_p, obj_q = integrate_twist(obj_p, obj_q, obj_twist, dt)
         palms_p, palms_q = integrate_twist(palms_p, palms_q, palm_twists, dt)
     # Distance and relative orientation between the palms are unchanged (rounding only).
@@ -73,23 +77,9 @@ def test_absolute_skills_alone_move_the_palms_as_one_rigid_body() -> None:
     rel = quat.multiply(quat.conjugate(palms_q[0]), palms_q[1])
     assert quat.angle_between(rel, rel0) < 1e-9
     # And the palms are still where the object's pose says they are.
-    expect_p, expect_q = palm_poses(obj_p, obj_q, rel_p, rel_q)
+    expect_p, expect_q = palms_in_world(obj_p, obj_q, rel_p, rel_q)
     assert_allclose(palms_p, expect_p, atol=1e-9)
     assert np.all(quat.angle_between(palms_q, expect_q) < 1e-9)
-
-
-def test_relative_skills_alone_leave_the_object_still() -> None:
-    obj_q = quat.from_axis_angle([0.0, 0.0, 1.0], 0.7)
-    r = np.array([[0.0, 0.15, 0.0], [0.0, -0.15, 0.0]])
-    rel = RNG.normal(size=(2, 2, 6))
-    palms = compose_twists(np.zeros((1, 6)), [1.0], r, rel, [0.5, 0.5], obj_q)
-    # The object twist is the absolute part only: zero.
-    assert_allclose(np.array([1.0]) @ np.zeros((1, 6)), np.zeros(6))
-    # Each palm moves by the weighted relative twists rotated into the world frame.
-    expected = 0.5 * rel[0] + 0.5 * rel[1]
-    rot = quat.to_matrix(obj_q)
-    assert_allclose(palms[:, :3], expected[:, :3] @ rot.T, atol=1e-14)
-    assert_allclose(palms[:, 3:], expected[:, 3:] @ rot.T, atol=1e-14)
 
 
 def test_lateral_geometry_faces_the_palms_inward() -> None:

@@ -106,3 +106,20 @@ def test_to_matrix_and_rotate_match_scipy() -> None:
     v = RNG.normal(size=(10, 3))
     assert_allclose(quat.to_matrix(q), Rotation.from_quat(q).as_matrix(), atol=1e-12)
     assert_allclose(quat.rotate(q, v), Rotation.from_quat(q).apply(v), atol=1e-12)
+
+
+def test_from_rpy_matches_scipy_extrinsic_xyz() -> None:
+    rpy = RNG.uniform(-3.0, 3.0, size=(20, 3))
+    expected = Rotation.from_euler("xyz", rpy).as_quat()
+    assert_allclose(quat.angle_between(quat.from_rpy(rpy), expected), 0.0, atol=1e-12)
+
+
+def test_from_matrix_inverts_to_matrix_with_scipys_sign() -> None:
+    q = random_quats(50)
+    matrices = quat.to_matrix(q)
+    expected = Rotation.from_matrix(matrices).as_quat()
+    assert_allclose(quat.from_matrix(matrices), expected, atol=1e-12)
+    # A half turn (w = 0) and a trace-0 permutation take the other branches.
+    for m in (np.diag([1.0, -1.0, -1.0]), np.array([[0.0, -1, 0], [0, 0, 1], [-1, 0, 0]])):
+        assert_allclose(quat.to_matrix(quat.from_matrix(m)), m, atol=1e-15)
+        assert_allclose(quat.from_matrix(m), Rotation.from_matrix(m).as_quat(), atol=1e-15)

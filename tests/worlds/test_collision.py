@@ -10,14 +10,8 @@ import pytest
 
 from skills.labels import Arm
 from worlds.collision import OBSTACLES, TABLE, CollisionWorld, arm_group
-from worlds.scene import (
-    LATERAL_PALM_QUATERNIONS,
-    ObstacleSpec,
-    Scene,
-    SceneSpec,
-    ShapeSpec,
-    lateral_grasp_palm_poses,
-)
+from worlds.scene import LATERAL_PALM_QUATERNIONS, Scene, lateral_grasp_palm_poses
+from worlds.spec import ObstacleSpec, SceneSpec, ShapeSpec
 
 pytestmark = pytest.mark.sim
 

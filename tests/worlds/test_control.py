@@ -1,4 +1,4 @@
-"""Impedance control: the pure law, quaternion helpers, palm tracking in PyBullet, the scene."""
+"""Impedance control: the pure law, palm tracking in PyBullet, the scene."""
 
 from __future__ import annotations
 
@@ -7,50 +7,21 @@ import pybullet as pb
 import pytest
 from scipy.spatial.transform import Rotation
 
+from skills import quaternion as quat
 from skills.labels import Arm
-from worlds.control import (
+from worlds.impedance import (
+    AffineTorqueLaw,
     GainArrays,
     ImpedanceGains,
     PalmCommand,
-    impedance_law,
-    limit_torque,
-    orientation_error,
-    quaternion_multiply,
-    quaternion_to_rotvec,
-    rotate_vector,
+    affine_law,
+    impedance_terms,
 )
 from worlds.robots import build_robot_model
-from worlds.scene import LATERAL_PALM_QUATERNIONS, Scene, SceneSpec
+from worlds.scene import LATERAL_PALM_QUATERNIONS, Scene
+from worlds.spec import SceneSpec
 
 RNG_SEED = 3
-
-
-# -- quaternion helpers ---------------------------------------------------------------------
-
-
-def test_quaternion_helpers_match_scipy() -> None:
-    rng = np.random.default_rng(RNG_SEED)
-    a = Rotation.random(5, random_state=1)
-    b = Rotation.random(5, random_state=2)
-    np.testing.assert_allclose(
-        np.abs(np.sum(quaternion_multiply(a.as_quat(), b.as_quat()) * (a * b).as_quat(), axis=1)),
-        1.0,
-        atol=1e-12,
-    )
-    np.testing.assert_allclose(quaternion_to_rotvec(a.as_quat()), a.as_rotvec(), atol=1e-12)
-    v = rng.normal(size=(5, 3))
-    np.testing.assert_allclose(rotate_vector(a.as_quat(), v), a.apply(v), atol=1e-12)
-
-
-def test_orientation_error_points_from_current_to_target() -> None:
-    current = Rotation.from_euler("z", 10, degrees=True)
-    target = Rotation.from_euler("z", 30, degrees=True)
-    error = orientation_error(target.as_quat(), current.as_quat())
-    np.testing.assert_allclose(error, [0.0, 0.0, np.radians(20)], atol=1e-12)
-    # Shortest way round: q and -q are the same rotation.
-    np.testing.assert_allclose(
-        orientation_error(-target.as_quat(), current.as_quat()), error, atol=1e-12
-    )
 
 
 # -- values ---------------------------------------------------------------------------------
@@ -79,13 +50,6 @@ def test_gains_reject_negative_values() -> None:
         ImpedanceGains(stiffness_linear=-1.0)
 
 
-def test_limit_torque_pushes_away_from_limits() -> None:
-    lower, upper = np.full(3, -1.0), np.full(3, 1.0)
-    margin, stiffness = np.full(3, 0.1), np.full(3, 100.0)
-    tau = limit_torque(np.array([-0.95, 0.0, 0.97]), lower, upper, margin, stiffness)
-    np.testing.assert_allclose(tau, [5.0, 0.0, -7.0], atol=1e-9)
-
-
 # -- the pure law ---------------------------------------------------------------------------
 
 
@@ -102,13 +66,34 @@ def _random_law_inputs(seed: int) -> dict[str, np.ndarray]:
     }
 
 
+def linearised_law(
+    jacobian: np.ndarray,
+    palm_position: np.ndarray,
+    palm_quaternion: np.ndarray,
+    q: np.ndarray,
+    gravity: np.ndarray,
+    target_position: np.ndarray,
+    target_quaternion: np.ndarray,
+    target_twist: np.ndarray,
+    gains: GainArrays,
+    rest: np.ndarray,
+    mass_matrix: np.ndarray | None = None,
+    dt: float = 0.0,
+) -> AffineTorqueLaw:
+    """The law as the controller builds it: linearised terms completed with the targets."""
+    terms = impedance_terms(
+        jacobian, palm_position, palm_quaternion, q, gravity, gains, rest, mass_matrix, dt
+    )
+    return affine_law(terms, target_position, target_quaternion, target_twist)
+
+
 def test_law_at_rest_on_target_is_gravity_compensation() -> None:
     x = _random_law_inputs(0)
     quaternion = np.array([[0.0, 0.0, 0.0, 1.0]])
     position = np.array([[0.5, 0.1, 0.7]])
     gains = GainArrays.of([ImpedanceGains()])
     for mass in (None, x["mass"]):
-        law = impedance_law(
+        law = linearised_law(
             x["jacobian"],
             position,
             quaternion,
@@ -133,7 +118,7 @@ def test_law_applies_the_task_space_spring_through_the_jacobian() -> None:
     position = np.zeros((1, 3))
     target = np.array([[0.01, -0.02, 0.005]])
     gains = ImpedanceGains(stiffness_null=0.0)
-    law = impedance_law(
+    law = linearised_law(
         x["jacobian"],
         position,
         quaternion,
@@ -165,11 +150,11 @@ def test_implicit_damping_tends_to_explicit_for_small_steps() -> None:
         GainArrays.of([ImpedanceGains()]),
         x["q"],
     )
-    explicit = impedance_law(*args)
-    implicit = impedance_law(*args, mass_matrix=x["mass"], dt=1e-9)
+    explicit = linearised_law(*args)
+    implicit = linearised_law(*args, mass_matrix=x["mass"], dt=1e-9)
     np.testing.assert_allclose(implicit.c, explicit.c, atol=1e-5)
     # And it damps less than the explicit law at a real step (that is what keeps it stable).
-    coarse = impedance_law(*args, mass_matrix=x["mass"], dt=0.05)
+    coarse = linearised_law(*args, mass_matrix=x["mass"], dt=0.05)
     assert np.trace(-coarse.c[0]) < np.trace(-explicit.c[0])
 
 
@@ -194,11 +179,12 @@ def tracking() -> dict[str, float]:
         peak = 0.0
         for _ in range(360):
             scene.step()
-            peak = max(peak, float(np.max(np.abs(scene.controller._tau))))
+            torques = [scene.palm_state(arm).joint_torques for arm in (Arm.LEFT, Arm.RIGHT)]
+            peak = max(peak, float(np.max(np.abs(torques))))
         state = scene.palm_state(Arm.LEFT)
         right = scene.palm_state(Arm.RIGHT)
         out["position_error"] = float(np.linalg.norm(state.position - target_p))
-        out["angle_error"] = float(np.linalg.norm(orientation_error(target_q, state.quaternion)))
+        out["angle_error"] = float(np.linalg.norm(quat.rotation_error(target_q, state.quaternion)))
         out["speed"] = float(np.linalg.norm(state.linear_velocity))
         out["right_drift"] = float(np.linalg.norm(right.position - start[Arm.RIGHT][0]))
         out["peak_torque"] = peak
@@ -291,7 +277,7 @@ def test_robot_model_errors_are_explained() -> None:
 
 
 def test_scene_spec_is_validated() -> None:
-    from worlds.scene import ObstacleSpec, ShapeSpec, default_parcel
+    from worlds.spec import ObstacleSpec, ShapeSpec, default_parcel
 
     with pytest.raises(ValueError, match="expected physics_hz a positive multiple of control_hz"):
         SceneSpec(physics_hz=240, control_hz=70)
@@ -338,7 +324,7 @@ def test_scene_from_the_default_world_file() -> None:
 
 @pytest.mark.sim
 def test_obstacle_overlapping_the_parcel_is_reported() -> None:
-    from worlds.scene import ObstacleSpec, ShapeSpec
+    from worlds.spec import ObstacleSpec, ShapeSpec
 
     inside = ObstacleSpec("inside", ShapeSpec.sphere(0.05), (0.6, 0.0, 0.7))
     with Scene(SceneSpec(obstacles=(inside,))) as scene:
@@ -351,7 +337,7 @@ def test_obstacle_overlapping_the_parcel_is_reported() -> None:
 @pytest.mark.sim
 def test_turned_robot_base_still_tracks() -> None:
     """PyBullet gives Jacobians and inverse dynamics in the base frame; the law must not."""
-    from worlds.scene import RobotSpec
+    from worlds.spec import RobotSpec
 
     spec = SceneSpec(
         robot=RobotSpec(base_position=(0.1, 0.05, 0.0), base_rpy_deg=(0, 0, 20)), objects=()

@@ -25,7 +25,7 @@ from worlds.world_file import (
     ObjectState,
     Pose,
     RobotModelName,
-    ShapeType,
+    Shape,
     SphereShape,
     World,
     WorldFileError,
@@ -162,7 +162,7 @@ def test_mesh_shape_resolves_relative_to_the_world_file(
     world = load_world(world_file)
     shape = world.objects[0].shape
     assert isinstance(shape, MeshShape)
-    assert shape.type is ShapeType.MESH
+    assert shape.type is Shape.MESH
     assert world.resolve_path(shape.file) == tmp_path / "meshes" / "parcel.obj"
     assert world.resolve_path(world.skills.library).is_dir()
 

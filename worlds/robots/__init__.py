@@ -12,15 +12,16 @@ from typing import Any
 from worlds.robots.icub import icub_model
 from worlds.robots.kuka import kuka_iiwa_model
 from worlds.robots.model import ArmSpec, BodySpec, FloatArray, RobotModel
+from worlds.spec import RobotModelName
 
 
-def build_robot_model(model: str, **params: Any) -> RobotModel:
+def build_robot_model(model: RobotModelName, **params: Any) -> RobotModel:
     """Build a robot model by name.
 
     Parameters
     ----------
-    model : str
-        ``"kuka_iiwa"`` or ``"icub"``.
+    model : RobotModelName
+        The model (its value, ``"kuka_iiwa"`` or ``"icub"``, is accepted too).
     **params
         Passed to the model's builder (e.g. ``arm_separation``, ``mount_height``, ``palm_size``).
 
@@ -28,11 +29,12 @@ def build_robot_model(model: str, **params: Any) -> RobotModel:
     -------
     RobotModel
     """
-    if model == "kuka_iiwa":
+    if model == RobotModelName.KUKA_IIWA:
         return kuka_iiwa_model(**params)
-    if model == "icub":
+    if model == RobotModelName.ICUB:
         return icub_model(**params)
-    raise ValueError(f"build_robot_model: expected model in ['kuka_iiwa', 'icub'], got {model!r}")
+    known = [m.value for m in RobotModelName]
+    raise ValueError(f"build_robot_model: expected model in {known}, got {model!r}")
 
 
 __all__ = ["ArmSpec", "BodySpec", "FloatArray", "RobotModel", "build_robot_model"]

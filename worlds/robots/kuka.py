@@ -13,8 +13,10 @@ import math
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
+import numpy as np
 import pybullet_data
 
+from skills import quaternion as quat
 from skills.labels import Arm
 from worlds.robots.cache import cached_urdf
 from worlds.robots.model import ArmSpec, BodySpec, RobotModel
@@ -207,16 +209,14 @@ def kuka_iiwa_model(
     urdf = write_kuka_palm_urdf(
         palm_size, mount_height, palm_friction, cache_dir, mount_pitch_deg=mount_pitch_deg
     )
-    roll, pitch, yaw = (math.radians(a) for a in base_rpy_deg)
-    robot2world_quaternion = _quaternion_from_rpy(roll, pitch, yaw)
-    lean = math.radians(mount_pitch_deg) / 2.0
-    base2world_quaternion = _multiply(
-        robot2world_quaternion, (0.0, math.sin(lean), 0.0, math.cos(lean))
-    )
+    robot2world_quaternion = quat.from_rpy(np.radians(base_rpy_deg))
+    lean = quat.from_axis_angle([0.0, 1.0, 0.0], math.radians(mount_pitch_deg))
+    x, y, z, w = quat.multiply(robot2world_quaternion, lean).tolist()
+    base2world_quaternion = (x, y, z, w)
     bodies = []
     for side in (1.0, -1.0):
         offset = (0.0, side * arm_separation / 2.0, mount_height)
-        position = _rotate(robot2world_quaternion, offset)
+        position = quat.rotate(robot2world_quaternion, offset).tolist()
         bodies.append(
             BodySpec(
                 urdf_path=urdf,
@@ -261,48 +261,6 @@ def kuka_iiwa_model(
         bodies=tuple(bodies),
         arms=arms,
         palm2flange_position=palm2flange_position(palm_size),
-    )
-
-
-def _quaternion_from_rpy(
-    roll: float, pitch: float, yaw: float
-) -> tuple[float, float, float, float]:
-    """Scalar-last quaternion of extrinsic x-y-z (roll, pitch, yaw) angles, rad."""
-    cr, sr = math.cos(roll / 2), math.sin(roll / 2)
-    cp, sp = math.cos(pitch / 2), math.sin(pitch / 2)
-    cy, sy = math.cos(yaw / 2), math.sin(yaw / 2)
-    return (
-        sr * cp * cy - cr * sp * sy,
-        cr * sp * cy + sr * cp * sy,
-        cr * cp * sy - sr * sp * cy,
-        cr * cp * cy + sr * sp * sy,
-    )
-
-
-def _multiply(
-    a: tuple[float, float, float, float], b: tuple[float, float, float, float]
-) -> tuple[float, float, float, float]:
-    x1, y1, z1, w1 = a
-    x2, y2, z2, w2 = b
-    return (
-        w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
-        w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
-        w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2,
-        w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2,
-    )
-
-
-def _rotate(
-    quaternion: tuple[float, float, float, float], vector: tuple[float, float, float]
-) -> tuple[float, float, float]:
-    x, y, z, w = quaternion
-    vx, vy, vz = vector
-    # v' = v + 2 w (u x v) + 2 u x (u x v), u the vector part.
-    cx, cy, cz = y * vz - z * vy, z * vx - x * vz, x * vy - y * vx
-    return (
-        vx + 2 * (w * cx + y * cz - z * cy),
-        vy + 2 * (w * cy + z * cx - x * cz),
-        vz + 2 * (w * cz + x * cy - y * cx),
     )
 
 

@@ -1,0 +1,200 @@
+"""PyBullet bodies of a scene: the robot's URDFs, the table, objects and obstacles.
+
+Each function creates bodies in the given client from :mod:`worlds.spec` values and returns
+their ids; :class:`worlds.scene.Scene` calls them in a fixed order (PyBullet's results depend
+on the order bodies are created in).
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from collections.abc import Sequence
+
+import pybullet as pb
+
+from skills.labels import Arm
+from worlds.robots import RobotModel, build_robot_model
+from worlds.spec import ObjectSpec, ObstacleSpec, RobotSpec, Shape, ShapeSpec, TableSpec
+
+TABLE_RGBA = (0.6, 0.45, 0.3, 1.0)
+OBJECT_RGBA = (0.8, 0.6, 0.35, 1.0)
+OBSTACLE_RGBA = (0.8, 0.2, 0.2, 1.0)
+
+
+def build_robot(spec: RobotSpec) -> RobotModel:
+    """The robot model ``spec`` describes (:func:`worlds.robots.build_robot_model`)."""
+    return build_robot_model(
+        spec.model,
+        base_position=spec.base_position,
+        base_rpy_deg=spec.base_rpy_deg,
+        arm_separation=spec.arm_separation,
+        mount_height=spec.mount_height,
+        palm_size=spec.palm_size,
+    )
+
+
+def load_robot(client: int, robot: RobotModel) -> tuple[int, ...]:
+    """Load the robot's bodies with fixed bases, exclude its collision pairs and put both arms
+    in their rest postures; returns the body ids in :attr:`RobotModel.bodies` order."""
+    robot_ids = tuple(
+        pb.loadURDF(
+            str(body.urdf_path),
+            body.base2world_position,
+            body.base2world_quaternion,
+            useFixedBase=True,
+            flags=pb.URDF_USE_INERTIA_FROM_FILE,
+            physicsClientId=client,
+        )
+        for body in robot.bodies
+    )
+    exclude_collisions(client, robot, robot_ids)
+    for arm in (Arm.LEFT, Arm.RIGHT):
+        spec = robot.arms[arm]
+        body = robot_ids[spec.body]
+        for joint, q in zip(spec.joint_indices, spec.rest_posture, strict=True):
+            pb.resetJointState(body, joint, q, 0.0, physicsClientId=client)
+    return robot_ids
+
+
+def exclude_collisions(client: int, robot: RobotModel, robot_ids: Sequence[int]) -> None:
+    """Switch off the robot's :attr:`RobotModel.collision_exclusions` link pairs."""
+    if not robot.collision_exclusions:
+        return
+    indices: list[dict[str, int]] = []
+    for body in robot_ids:
+        names = {"base": -1}
+        for j in range(pb.getNumJoints(body, physicsClientId=client)):
+            names[pb.getJointInfo(body, j, physicsClientId=client)[12].decode()] = j
+        indices.append(names)
+    for body_a, link_a, body_b, link_b in robot.collision_exclusions:
+        pb.setCollisionFilterPair(
+            robot_ids[body_a],
+            robot_ids[body_b],
+            indices[body_a][link_a],
+            indices[body_b][link_b],
+            enableCollision=0,
+            physicsClientId=client,
+        )
+
+
+def create_table(client: int, table: TableSpec) -> int:
+    """The static table box, its top surface centred on ``table.position``; its body id."""
+    half = (table.size[0] / 2.0, table.size[1] / 2.0, table.size[2] / 2.0)
+    col = pb.createCollisionShape(pb.GEOM_BOX, halfExtents=half, physicsClientId=client)
+    vis = pb.createVisualShape(
+        pb.GEOM_BOX, halfExtents=half, rgbaColor=list(TABLE_RGBA), physicsClientId=client
+    )
+    body = pb.createMultiBody(
+        0.0,
+        col,
+        vis,
+        basePosition=[table.position[0], table.position[1], table.position[2] - half[2]],
+        physicsClientId=client,
+    )
+    pb.changeDynamics(body, -1, lateralFriction=table.friction, physicsClientId=client)
+    return int(body)
+
+
+def create_object(client: int, obj: ObjectSpec) -> int:
+    """A movable object at its initial pose, no spinning or rolling friction; its body id."""
+    col, vis = shape_ids(client, obj.shape, OBJECT_RGBA)
+    body = pb.createMultiBody(
+        obj.mass,
+        col,
+        vis,
+        basePosition=obj.position,
+        baseOrientation=obj.quaternion,
+        physicsClientId=client,
+    )
+    pb.changeDynamics(
+        body,
+        -1,
+        lateralFriction=obj.friction,
+        spinningFriction=0.0,
+        rollingFriction=0.0,
+        physicsClientId=client,
+    )
+    return int(body)
+
+
+def create_obstacle(client: int, obstacle: ObstacleSpec, position: Sequence[float]) -> int:
+    """A static obstacle at ``position`` (3,), m (where it waits while inactive); its body id."""
+    col, vis = shape_ids(client, obstacle.shape, OBSTACLE_RGBA)
+    return int(
+        pb.createMultiBody(0.0, col, vis, basePosition=list(position), physicsClientId=client)
+    )
+
+
+def shape_ids(client: int, shape: ShapeSpec, rgba: Sequence[float]) -> tuple[int, int]:
+    """Collision and visual shape ids of ``shape``, coloured ``rgba`` (4,)."""
+    if shape.kind == Shape.BOX:
+        half = [s / 2.0 for s in shape.size]
+        col = pb.createCollisionShape(pb.GEOM_BOX, halfExtents=half, physicsClientId=client)
+        vis = pb.createVisualShape(
+            pb.GEOM_BOX, halfExtents=half, rgbaColor=list(rgba), physicsClientId=client
+        )
+    elif shape.kind == Shape.SPHERE:
+        col = pb.createCollisionShape(pb.GEOM_SPHERE, radius=shape.radius, physicsClientId=client)
+        vis = pb.createVisualShape(
+            pb.GEOM_SPHERE, radius=shape.radius, rgbaColor=list(rgba), physicsClientId=client
+        )
+    elif shape.kind == Shape.CYLINDER:
+        col = pb.createCollisionShape(
+            pb.GEOM_CYLINDER, radius=shape.radius, height=shape.height, physicsClientId=client
+        )
+        vis = pb.createVisualShape(
+            pb.GEOM_CYLINDER,
+            radius=shape.radius,
+            length=shape.height,
+            rgbaColor=list(rgba),
+            physicsClientId=client,
+        )
+    else:
+        scale = [shape.scale] * 3
+        col = pb.createCollisionShape(
+            pb.GEOM_MESH, fileName=str(shape.mesh_path), meshScale=scale, physicsClientId=client
+        )
+        vis = pb.createVisualShape(
+            pb.GEOM_MESH,
+            fileName=str(shape.mesh_path),
+            meshScale=scale,
+            rgbaColor=list(rgba),
+            physicsClientId=client,
+        )
+    return col, vis
+
+
+class NoDisplayError(RuntimeError):
+    """PyBullet's window was asked for where there is no display."""
+
+
+def connect(gui: bool) -> int:
+    """A PyBullet client: DIRECT by default, a window (GUI) when asked and a display exists.
+
+    Raises
+    ------
+    NoDisplayError
+        If ``gui`` is asked for and no display is available (``DISPLAY`` unset or refused).
+    """
+    if not gui:
+        return int(pb.connect(pb.DIRECT))
+    if not os.environ.get("DISPLAY") and sys.platform.startswith("linux"):
+        raise NoDisplayError("--gui: expected a display (DISPLAY is not set); run without --gui")
+    client = int(pb.connect(pb.GUI))
+    if client < 0:
+        raise NoDisplayError("--gui: PyBullet could not open a window on this display")
+    return client
+
+
+__all__ = [
+    "NoDisplayError",
+    "build_robot",
+    "connect",
+    "create_object",
+    "create_obstacle",
+    "create_table",
+    "exclude_collisions",
+    "load_robot",
+    "shape_ids",
+]

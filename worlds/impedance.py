@@ -1,0 +1,402 @@
+"""The palm impedance law: its values and the pure, vectorised linearisation.
+
+Each palm is pulled to a target pose by a task-space spring-damper; gravity is compensated with
+PyBullet's inverse dynamics; a rest-posture spring acts in the Jacobian null space; a repulsive
+torque keeps the joints off their limits; torques are clipped to the joint limits. PyBullet's
+velocity motors are switched off and the torques go out with TORQUE_CONTROL
+(:class:`worlds.control.DualArmImpedanceController`, which reads PyBullet; this module does not).
+
+The law is an affine map of the joint state, re-linearised every ``refresh_every`` physics steps
+around the configuration ``q0`` (palm pose ``x0``, Jacobian ``J``, gravity torque ``g``, inertia
+``M``)::
+
+    tau(q, qd) = g + G (a + a_rate * t + B q + C qd) + tau_limits(q)
+    B = -(J^T K J + k_n P),   C = -(J^T D J + d_n P + d_j I),   P = I - J^T (J J^T + l^2 I)^-1 J
+    a = J^T K (e0 + J q0) + J^T D xd* + k_n P q_rest,   a_rate = J^T K xd*,
+    G = M (M - dt C)^-1
+
+with ``e0`` the pose error of the target against ``x0`` (position; rotation vector of
+``target * palm^-1``), ``xd*`` the feed-forward twist, ``t`` the time since the target was set,
+``K, D`` the 6 x 6 stiffness and damping. ``G`` makes the damping implicit, which keeps the
+light wrist stable at 240 Hz. Between re-linearisations the spring and damper still act on the
+measured joint state at every physics step (the pose error is linearised through ``J``); a new
+target acts at once without re-linearising. With ``refresh_every=1`` this is the plain law.
+
+Quaternions are scalar-last (x, y, z, w); twists are (linear, angular) in the world frame.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from skills import quaternion as quat
+
+FloatArray = NDArray[np.float64]
+
+
+# ---------------------------------------------------------------------------------------------
+# Values
+
+
+def checked_vector(value: ArrayLike, shape: tuple[int, ...], name: str) -> FloatArray:
+    """``value`` as a float array of ``shape``, finite; ``ValueError`` naming ``name`` if not."""
+    array = np.asarray(value, dtype=float)
+    if array.shape != shape:
+        raise ValueError(f"{name}: expected shape {shape}, got {array.shape}")
+    if not np.all(np.isfinite(array)):
+        raise ValueError(f"{name}: expected finite values, got {array}")
+    return array
+
+
+@dataclass(frozen=True)
+class PalmCommand:
+    """Target pose of one palm, with an optional feed-forward twist.
+
+    Attributes
+    ----------
+    position : ndarray
+        (3,) palm frame origin target in the world frame, m.
+    quaternion : ndarray
+        (4,) palm orientation target in the world frame, scalar-last (x, y, z, w).
+    linear_velocity : ndarray
+        (3,) feed-forward linear velocity of the target, world frame, m/s.
+    angular_velocity : ndarray
+        (3,) feed-forward angular velocity of the target, world frame, rad/s.
+    squeeze_offset : float
+        Shift of the target along the target palm's +z axis (into the grasped face), m; with the
+        linear stiffness it sets the squeeze force (15 mm at 1000 N/m gives about 15 N).
+    """
+
+    position: FloatArray
+    quaternion: FloatArray
+    linear_velocity: FloatArray = field(default_factory=lambda: np.zeros(3))
+    angular_velocity: FloatArray = field(default_factory=lambda: np.zeros(3))
+    squeeze_offset: float = 0.0
+
+    def __post_init__(self) -> None:
+        object.__setattr__(
+            self, "position", checked_vector(self.position, (3,), "PalmCommand.position")
+        )
+        quaternion = checked_vector(self.quaternion, (4,), "PalmCommand.quaternion")
+        norm = float(np.linalg.norm(quaternion))
+        if norm < 1e-9:
+            raise ValueError(
+                f"PalmCommand.quaternion: expected a unit quaternion, got {quaternion}"
+            )
+        object.__setattr__(self, "quaternion", quaternion / norm)
+        object.__setattr__(
+            self,
+            "linear_velocity",
+            checked_vector(self.linear_velocity, (3,), "PalmCommand.linear_velocity"),
+        )
+        object.__setattr__(
+            self,
+            "angular_velocity",
+            checked_vector(self.angular_velocity, (3,), "PalmCommand.angular_velocity"),
+        )
+
+    def target_position(self) -> FloatArray:
+        """Spring anchor: ``position`` shifted by ``squeeze_offset`` along the palm's z, m, (3,)."""
+        if self.squeeze_offset == 0.0:
+            return self.position
+        normal = quat.to_matrix(self.quaternion)[:, 2]
+        return self.position + self.squeeze_offset * normal
+
+    def twist(self) -> FloatArray:
+        """Feed-forward twist (linear m/s, angular rad/s), world frame, (6,)."""
+        return np.concatenate([self.linear_velocity, self.angular_velocity])
+
+
+@dataclass(frozen=True)
+class ImpedanceGains:
+    """Gains of the palm impedance law.
+
+    Attributes
+    ----------
+    stiffness_linear, damping_linear : float
+        Translational spring (N/m) and damper (N s/m).
+    stiffness_angular, damping_angular : float
+        Rotational spring (N m/rad) and damper (N m s/rad); stiffer than about 10 N m/rad
+        oscillates at 240 Hz with the light iiwa wrist.
+    stiffness_null, damping_null : float
+        Rest-posture spring (N m/rad) and damper (N m s/rad), projected into the null space.
+    joint_damping : float
+        Extra damping on every joint, N m s/rad.
+    limit_margin : float
+        Distance from a joint limit where the repulsive torque starts, rad.
+    limit_stiffness : float
+        Repulsive torque per radian inside the margin, N m/rad.
+    """
+
+    stiffness_linear: float = 1000.0
+    damping_linear: float = 60.0
+    stiffness_angular: float = 10.0
+    damping_angular: float = 1.0
+    stiffness_null: float = 5.0
+    damping_null: float = 1.0
+    joint_damping: float = 0.5
+    limit_margin: float = 0.15
+    limit_stiffness: float = 200.0
+
+    def __post_init__(self) -> None:
+        for name, value in vars(self).items():
+            if not np.isfinite(value) or value < 0.0:
+                raise ValueError(f"ImpedanceGains.{name}: expected finite >= 0, got {value}")
+
+    def stiffness_matrix(self) -> FloatArray:
+        """Task-space stiffness, (6, 6): linear block N/m, angular block N m/rad."""
+        return np.diag([self.stiffness_linear] * 3 + [self.stiffness_angular] * 3)
+
+    def damping_matrix(self) -> FloatArray:
+        """Task-space damping, (6, 6): linear block N s/m, angular block N m s/rad."""
+        return np.diag([self.damping_linear] * 3 + [self.damping_angular] * 3)
+
+
+@dataclass(frozen=True)
+class PalmState:
+    """Measured state of one arm and its palm.
+
+    Attributes
+    ----------
+    position : ndarray
+        (3,) palm frame origin in the world frame, m.
+    quaternion : ndarray
+        (4,) palm orientation in the world frame, scalar-last.
+    linear_velocity, angular_velocity : ndarray
+        (3,) palm twist in the world frame, m/s and rad/s.
+    joint_positions, joint_velocities : ndarray
+        (n,) arm joint positions (rad) and velocities (rad/s).
+    joint_torques : ndarray
+        (n,) torques commanded at the last step, N m.
+    """
+
+    position: FloatArray
+    quaternion: FloatArray
+    linear_velocity: FloatArray
+    angular_velocity: FloatArray
+    joint_positions: FloatArray
+    joint_velocities: FloatArray
+    joint_torques: FloatArray
+
+
+# ---------------------------------------------------------------------------------------------
+# Pure law (vectorised over arms)
+
+
+@dataclass(frozen=True)
+class GainArrays:
+    """Gains of ``k`` arms as arrays, for :func:`impedance_terms`.
+
+    Attributes
+    ----------
+    stiffness : ndarray
+        (k, 6) task-space spring diagonal: N/m (first 3), N m/rad (last 3).
+    damping : ndarray
+        (k, 6) task-space damper diagonal: N s/m, N m s/rad.
+    null_stiffness, null_damping, joint_damping : ndarray
+        (k,) posture spring (N m/rad), posture damper and joint damper (N m s/rad).
+    """
+
+    stiffness: FloatArray
+    damping: FloatArray
+    null_stiffness: FloatArray
+    null_damping: FloatArray
+    joint_damping: FloatArray
+
+    @staticmethod
+    def of(gains: Sequence[ImpedanceGains]) -> GainArrays:
+        """Stack the gains of several arms."""
+        return GainArrays(
+            stiffness=np.array(
+                [[g.stiffness_linear] * 3 + [g.stiffness_angular] * 3 for g in gains]
+            ),
+            damping=np.array([[g.damping_linear] * 3 + [g.damping_angular] * 3 for g in gains]),
+            null_stiffness=np.array([g.stiffness_null for g in gains]),
+            null_damping=np.array([g.damping_null for g in gains]),
+            joint_damping=np.array([g.joint_damping for g in gains]),
+        )
+
+
+@dataclass(frozen=True)
+class AffineTorqueLaw:
+    """``tau = a + a_rate * elapsed + B q + C qd`` for ``k`` arms, valid near its linearisation.
+
+    Attributes
+    ----------
+    a, a_rate : ndarray
+        (k, n) constant torque (N m) and its rate from the moving target (N m/s).
+    b, c : ndarray
+        (k, n, n) joint stiffness (N m/rad) and damping (N m s/rad).
+    """
+
+    a: FloatArray
+    a_rate: FloatArray
+    b: FloatArray
+    c: FloatArray
+
+
+@dataclass(frozen=True)
+class ImpedanceTerms:
+    """The target-independent part of the linearised law of ``k`` arms.
+
+    With the pose error ``e`` (6,) of the target against ``palm_position``/``palm_quaternion``
+    and the target twist ``xd*`` (6,): ``a = a_base + error_gain e + twist_gain xd*`` and
+    ``a_rate = error_gain xd*`` (see :func:`affine_law`).
+
+    Attributes
+    ----------
+    a_base : ndarray
+        (k, n) gravity, posture and linearisation-offset torque, N m.
+    error_gain, twist_gain : ndarray
+        (k, n, 6) torque per unit pose error (N m per m or rad) and per unit twist.
+    b, c : ndarray
+        (k, n, n) joint stiffness (N m/rad) and damping (N m s/rad).
+    palm_position : ndarray
+        (k, 3) palm positions at the linearisation point, world frame, m.
+    palm_quaternion : ndarray
+        (k, 4) palm orientations at the linearisation point, scalar-last.
+    """
+
+    a_base: FloatArray
+    error_gain: FloatArray
+    twist_gain: FloatArray
+    b: FloatArray
+    c: FloatArray
+    palm_position: FloatArray
+    palm_quaternion: FloatArray
+
+
+def impedance_terms(
+    jacobian: FloatArray,
+    palm_position: FloatArray,
+    palm_quaternion: FloatArray,
+    q: FloatArray,
+    gravity_torque: FloatArray,
+    gains: GainArrays,
+    rest_posture: FloatArray,
+    mass_matrix: FloatArray | None = None,
+    dt: float = 0.0,
+    pinv_damping: float = 1e-3,
+) -> ImpedanceTerms:
+    """Linearise the palm impedance law of ``k`` arms around their configurations ``q``.
+
+    With ``mass_matrix`` and ``dt`` the damping is made implicit: the control torque (all but
+    gravity) is multiplied by ``G = M (M + dt D_q)^-1``, ``D_q = -C`` the joint damping matrix.
+    This gives the joint velocity one implicit Euler step of the damper would give, which keeps
+    the light wrist joints stable at 240 Hz (explicit damping diverges once ``dt D_q / M > 2``;
+    the iiwa's last joint with a palm has about 0.002 kg m^2).
+
+    Parameters
+    ----------
+    jacobian : ndarray
+        (k, 6, n) palm Jacobians (linear rows first), world frame.
+    palm_position : ndarray
+        (k, 3) palm positions at ``q``, world frame, m.
+    palm_quaternion : ndarray
+        (k, 4) palm orientations at ``q``, scalar-last.
+    q : ndarray
+        (k, n) joint positions, rad.
+    gravity_torque : ndarray
+        (k, n) torques holding the arms still against gravity at ``q``, N m.
+    gains : GainArrays
+        Spring, damper and posture gains of the ``k`` arms.
+    rest_posture : ndarray
+        (k, n) null-space posture targets, rad.
+    mass_matrix : ndarray, optional
+        (k, n, n) joint-space inertia at ``q``, kg m^2.
+    dt : float
+        Physics time step, s; used with ``mass_matrix``.
+    pinv_damping : float
+        Damping of the pseudo-inverse behind the null-space projector.
+
+    Returns
+    -------
+    ImpedanceTerms
+    """
+    n = q.shape[-1]
+    eye = np.eye(n)
+    jt = np.swapaxes(jacobian, -1, -2)  # (k, n, 6)
+    jt_k = jt * gains.stiffness[:, None, :]
+    jt_d = jt * gains.damping[:, None, :]
+    gram = jacobian @ jt + (pinv_damping**2) * np.eye(6)
+    # P = I - J^T (J J^T + l^2 I)^-1 J: symmetric, removes the palm's directions.
+    projector = eye - jt @ np.linalg.solve(gram, jacobian)
+    k_null = gains.null_stiffness[:, None, None]
+    b = -(jt_k @ jacobian + k_null * projector)
+    c = -(
+        jt_d @ jacobian
+        + gains.null_damping[:, None, None] * projector
+        + gains.joint_damping[:, None, None] * eye
+    )
+    a_base = (jt_k @ (jacobian @ q[..., None]) + k_null * (projector @ rest_posture[..., None]))[
+        ..., 0
+    ]
+    if mass_matrix is not None and dt > 0.0:
+        # G X = M (M - dt C)^-1 X, every term in one solve.
+        stacked = np.concatenate([b, c, jt_k, jt_d, a_base[..., None]], axis=-1)
+        stacked = mass_matrix @ np.linalg.solve(mass_matrix - dt * c, stacked)
+        b, c = stacked[..., :n], stacked[..., n : 2 * n]
+        jt_k, jt_d = stacked[..., 2 * n : 2 * n + 6], stacked[..., 2 * n + 6 : 2 * n + 12]
+        a_base = stacked[..., 2 * n + 12]
+    return ImpedanceTerms(
+        a_base=a_base + gravity_torque,
+        error_gain=jt_k,
+        twist_gain=jt_d,
+        b=b,
+        c=c,
+        palm_position=palm_position,
+        palm_quaternion=palm_quaternion,
+    )
+
+
+def affine_law(
+    terms: ImpedanceTerms,
+    target_position: FloatArray,
+    target_quaternion: FloatArray,
+    target_twist: FloatArray,
+) -> AffineTorqueLaw:
+    """Complete linearised terms with the targets of ``k`` arms.
+
+    Parameters
+    ----------
+    terms : ImpedanceTerms
+        From :func:`impedance_terms`.
+    target_position : ndarray
+        (k, 3) spring anchors (squeeze offset included), world frame, m.
+    target_quaternion : ndarray
+        (k, 4) target orientations, scalar-last.
+    target_twist : ndarray
+        (k, 6) feed-forward twists (m/s, rad/s), world frame.
+
+    Returns
+    -------
+    AffineTorqueLaw
+    """
+    error = np.concatenate(
+        [
+            target_position - terms.palm_position,
+            quat.rotation_error(target_quaternion, terms.palm_quaternion),
+        ],
+        axis=-1,
+    )
+    a_rate = (terms.error_gain @ target_twist[..., None])[..., 0]
+    a = terms.a_base + (terms.error_gain @ error[..., None])[..., 0]
+    a = a + (terms.twist_gain @ target_twist[..., None])[..., 0]
+    return AffineTorqueLaw(a=a, a_rate=a_rate, b=terms.b, c=terms.c)
+
+
+__all__ = [
+    "AffineTorqueLaw",
+    "GainArrays",
+    "ImpedanceGains",
+    "ImpedanceTerms",
+    "PalmCommand",
+    "PalmState",
+    "affine_law",
+    "checked_vector",
+    "impedance_terms",
+]

@@ -1,0 +1,554 @@
+"""The world file's schema: pydantic v2 models of a dual-arm pick-and-place world.
+
+Every model forbids unknown keys and is immutable. Validators raise
+:class:`worlds.world_errors.FieldProblems`, so that a bad value reports its field path, what
+was expected and what was received. The core never reads these models: it reads the
+dataclasses of :mod:`worlds.spec`, made once by :func:`worlds.world_file.world_spec`.
+
+Conventions: SI units; angles in the file are degrees (``rpy_deg``); world frame z up; the
+robot faces +x and its left arm is at +y. Relative paths (mesh files, skill library) are
+resolved against the folder of the world file.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Annotated, Any, Literal
+
+from pydantic import (
+    BaseModel,
+    BeforeValidator,
+    ConfigDict,
+    Field,
+    PrivateAttr,
+    StrictBool,
+    ValidationInfo,
+    field_validator,
+    model_validator,
+)
+
+from worlds.spec import Fragility, ObjectState, RobotModelName, Shape
+from worlds.world_errors import FieldProblems, Issue, Shown, field_problem, format_path, show_value
+
+WORLD_FILE_VERSION = 1
+"""The only world file format version this module reads."""
+
+DEFAULT_SKILL_LIBRARY = "default"
+"""Value of ``skills.library`` that selects the skill library shipped with the project."""
+
+CONTEXT_BASE_DIR = "base_dir"
+"""Key of the validation context that holds the folder relative paths resolve against."""
+
+
+# --------------------------------------------------------------------------------------------
+# Field types
+# --------------------------------------------------------------------------------------------
+
+
+def _vector3(value: Any) -> Any:
+    """Check for exactly 3 finite numbers before pydantic's own tuple validation."""
+    if isinstance(value, str | bytes) or not isinstance(value, Sequence):
+        raise field_problem("a list of exactly 3 numbers [x, y, z]", value)
+    if len(value) != 3:
+        raise field_problem(
+            "a list of exactly 3 numbers [x, y, z]",
+            Shown(f"{len(value)} items {show_value(value)}"),
+        )
+    for i, item in enumerate(value):
+        _check_finite(item, i)
+    return tuple(float(item) for item in value)
+
+
+def _check_finite(item: Any, index: int) -> None:
+    """Raise unless ``item`` (at ``index`` of a list) is a finite int or float, not a bool."""
+    if isinstance(item, bool) or not isinstance(item, int | float):
+        raise field_problem("a number", item, index)
+    try:
+        finite = math.isfinite(item)
+    except OverflowError:  # an int too large for a float
+        finite = False
+    if not finite:
+        raise field_problem("a finite number", item, index)
+
+
+_Finite = Annotated[float, Field(strict=True, allow_inf_nan=False)]
+_Positive = Annotated[float, Field(strict=True, allow_inf_nan=False, gt=0)]
+_NonNegative = Annotated[float, Field(strict=True, allow_inf_nan=False, ge=0)]
+_PositiveInt = Annotated[int, Field(strict=True, gt=0)]
+_NonNegativeInt = Annotated[int, Field(strict=True, ge=0)]
+_Name = Annotated[str, Field(strict=True, min_length=1)]
+_Text = Annotated[str, Field(strict=True)]
+
+Vector3 = Annotated[tuple[_Finite, _Finite, _Finite], BeforeValidator(_vector3)]
+"""Three finite numbers ``[x, y, z]``."""
+
+PositiveVector3 = Annotated[tuple[_Positive, _Positive, _Positive], BeforeValidator(_vector3)]
+"""Three finite numbers ``[x, y, z]``, each greater than 0."""
+
+
+def _range(value: Any) -> Any:
+    """Check for exactly 2 finite numbers ``[low, high]`` with ``low <= high``."""
+    if isinstance(value, str | bytes) or not isinstance(value, Sequence) or len(value) != 2:
+        raise field_problem("a list of exactly 2 numbers [low, high]", value)
+    for i, item in enumerate(value):
+        _check_finite(item, i)
+    if value[0] > value[1]:
+        raise field_problem("low <= high", value)
+    return (float(value[0]), float(value[1]))
+
+
+Range = Annotated[tuple[_Finite, _Finite], BeforeValidator(_range)]
+"""Two finite numbers ``[low, high]``, low <= high: values are drawn uniformly between them."""
+
+
+class _FileModel(BaseModel):
+    """Base of every world file model: unknown keys are errors and values are immutable."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+_EXCLUSIVE_STATES = ((ObjectState.OPEN, ObjectState.CLOSED), (ObjectState.FULL, ObjectState.EMPTY))
+
+
+# --------------------------------------------------------------------------------------------
+# Geometry
+# --------------------------------------------------------------------------------------------
+
+
+class Pose(_FileModel):
+    """A position and a roll-pitch-yaw orientation in degrees.
+
+    ``rpy_deg`` are extrinsic rotations about the fixed x, then y, then z axes (the
+    URDF/PyBullet convention).
+    """
+
+    position: Vector3 = Field(description="position [x, y, z], m")
+    rpy_deg: Vector3 = Field(
+        default=(0.0, 0.0, 0.0),
+        description="roll, pitch, yaw about the fixed x, y, z axes, degrees",
+    )
+
+    def quaternion_xyzw(self) -> tuple[float, float, float, float]:
+        """Orientation as a unit quaternion, scalar last.
+
+        Returns
+        -------
+        tuple of 4 float
+            ``(x, y, z, w)``, same frame as ``position``.
+        """
+        from skills import quaternion as quat  # lazily: validating a file needs no numpy
+
+        x, y, z, w = quat.from_rpy([math.radians(a) for a in self.rpy_deg]).tolist()
+        return (x, y, z, w)
+
+
+class BoxShape(_FileModel):
+    """A box centred on its pose."""
+
+    type: Literal[Shape.BOX] = Shape.BOX
+    size: PositiveVector3 = Field(description="full extents [x, y, z] in the body frame, m")
+
+
+class CylinderShape(_FileModel):
+    """A cylinder centred on its pose, axis along the body z axis."""
+
+    type: Literal[Shape.CYLINDER] = Shape.CYLINDER
+    radius: _Positive = Field(description="radius, m, > 0")
+    height: _Positive = Field(description="full height along z, m, > 0")
+
+
+class SphereShape(_FileModel):
+    """A sphere centred on its pose."""
+
+    type: Literal[Shape.SPHERE] = Shape.SPHERE
+    radius: _Positive = Field(description="radius, m, > 0")
+
+
+class MeshShape(_FileModel):
+    """A triangle mesh loaded with trimesh, in the body frame, scaled uniformly.
+
+    ``file`` is kept as written; resolve it with :meth:`World.resolve_path`.
+    """
+
+    type: Literal[Shape.MESH] = Shape.MESH
+    file: _Name = Field(
+        description="mesh file (obj, stl, ply, ...), relative to the world file's folder"
+    )
+    scale: _Positive = Field(default=1.0, description="uniform scale factor, > 0")
+
+    @field_validator("file")
+    @classmethod
+    def _mesh_loads(cls, file: str, info: ValidationInfo) -> str:
+        path = _resolve(file, info)
+        expected = "a mesh file that exists and trimesh can load"
+        if not path.is_file():
+            reason = "a folder" if path.is_dir() else "no such file"
+            raise field_problem(expected, Shown(f"{file!r} ({reason}: {path})"))
+        _check_mesh(path, file, expected)
+        return file
+
+
+def _check_mesh(path: Path, file: str, expected: str) -> None:
+    import trimesh  # lazily: only worlds with meshes pay for it
+
+    try:
+        mesh = trimesh.load(path, force="mesh")
+    except Exception as exc:  # trimesh raises many kinds; any of them means "unloadable"
+        raise field_problem(expected, Shown(f"{file!r} ({type(exc).__name__}: {exc})")) from None
+    if len(getattr(mesh, "faces", ())) == 0:
+        raise field_problem(expected, Shown(f"{file!r} (no triangles in {path})"))
+
+
+ShapeModel = Annotated[
+    BoxShape | CylinderShape | SphereShape | MeshShape,
+    Field(discriminator="type"),
+]
+"""Geometry of an object or obstacle, selected by its ``type`` key (a :class:`Shape`)."""
+
+
+def _resolve(path: str, info: ValidationInfo) -> Path:
+    """Resolve ``path`` against the world file's folder from the validation context."""
+    candidate = Path(path)
+    if candidate.is_absolute():
+        return candidate
+    context = info.context if isinstance(info.context, Mapping) else {}
+    base = context.get(CONTEXT_BASE_DIR)
+    return (Path(base) if base is not None else Path.cwd()) / candidate
+
+
+# --------------------------------------------------------------------------------------------
+# Scene
+# --------------------------------------------------------------------------------------------
+
+
+class Robot(_FileModel):
+    """The dual-arm robot: model, placement and hardware limits."""
+
+    model: RobotModelName = Field(description="robot model")
+    base: Pose = Field(
+        description="robot frame in the world: midpoint between the two arm bases, x forward"
+    )
+    arm_separation: _Positive = Field(
+        description="distance between the arm bases along the robot's y axis, m, > 0"
+    )
+    mount_height: _NonNegative = Field(
+        description="height of the arm bases above the floor, m, >= 0"
+    )
+    payload_kg: _Positive = Field(description="payload per arm, kg, > 0")
+    squeeze_force_n: _Positive = Field(description="largest steady squeeze per palm, N, > 0")
+    palm_size: PositiveVector3 = Field(description="flat palm box extents [x, y, z], m")
+
+
+class Table(_FileModel):
+    """The table the objects stand on."""
+
+    position: Vector3 = Field(description="centre of the table top surface, world frame, m")
+    size: PositiveVector3 = Field(
+        description="[length along x, width along y, height of the top above the floor], m"
+    )
+    friction: _NonNegative = Field(description="friction coefficient of the top, >= 0")
+
+    @model_validator(mode="after")
+    def _top_height_agrees(self) -> Table:
+        # The top's height is written twice (position z and size z); disagreeing copies
+        # would make the scene builder and the planner see different tables.
+        if not math.isclose(self.position[2], self.size[2], abs_tol=1e-6):
+            raise field_problem(
+                f"z equal to size[2] (the top's height above the floor, {self.size[2]} m)",
+                self.position[2],
+                "position",
+                2,
+            )
+        return self
+
+
+class WorldObject(_FileModel):
+    """An object the robot can manipulate."""
+
+    name: _Name = Field(description="unique name (across objects and obstacles)")
+    category: _Name = Field(description="free text: parcel, box, glass, bottle, tray, ...")
+    shape: ShapeModel
+    mass: _Positive = Field(description="mass, kg, > 0")
+    friction: _NonNegative = Field(description="friction coefficient, >= 0")
+    material: _Text = Field(default="unknown", description="free text: cardboard, glass, ...")
+    fragility: Fragility = Field(default=Fragility.NORMAL, description="how carefully to handle")
+    state: tuple[ObjectState, ...] = Field(default=(), description="semantic state flags")
+    pose: Pose = Field(description="initial pose of the object's centre, world frame")
+
+    @field_validator("state")
+    @classmethod
+    def _states_consistent(cls, state: tuple[ObjectState, ...]) -> tuple[ObjectState, ...]:
+        issues = []
+        for i, flag in enumerate(state):
+            if flag in state[:i]:
+                issues.append(Issue((i,), "each state at most once", show_value(flag)))
+        for a, b in _EXCLUSIVE_STATES:
+            if a in state and b in state:
+                issues.append(
+                    Issue((), f"at most one of {a.value!r} and {b.value!r}", show_value(state))
+                )
+        if issues:
+            raise FieldProblems(issues)
+        return state
+
+
+class Obstacle(_FileModel):
+    """A static obstacle, present only during the moves that name it."""
+
+    name: _Name = Field(description="unique name (across objects and obstacles)")
+    shape: ShapeModel
+    position: Vector3 = Field(description="centre of the obstacle, world frame, m")
+
+
+class Move(_FileModel):
+    """One place goal for an object, with the obstacles present while moving there."""
+
+    goal: Pose = Field(description="goal pose of the object's centre, world frame")
+    obstacles: tuple[_Name, ...] = Field(
+        default=(), description="names of the obstacles present during this move"
+    )
+
+
+class TaskStep(_FileModel):
+    """A sequence of moves applied to one object; each move starts where the last ended."""
+
+    object: _Name = Field(description="name of the object to move")
+    moves: tuple[Move, ...] = Field(min_length=1, description="consecutive goals, at least 1")
+
+
+class SimSettings(_FileModel):
+    """Simulation rates, seed and limits."""
+
+    physics_hz: _PositiveInt = Field(default=240, description="physics rate, Hz, > 0")
+    control_hz: _PositiveInt = Field(
+        default=60, description="control rate, Hz, > 0, divides physics_hz"
+    )
+    seed: _NonNegativeInt = Field(default=0, description="seed of every random choice, >= 0")
+    gravity: _Finite = Field(default=-9.81, description="gravity along world z, m/s^2")
+    max_sim_time_s: _Positive = Field(default=120.0, description="simulated time limit, s, > 0")
+    compiled: StrictBool = Field(
+        default=False,
+        description="run the skills' composition step compiled (numba, the fast extra): "
+        "within 1e-9 of the numpy path, several times faster",
+    )
+
+    @model_validator(mode="after")
+    def _rates_divide(self) -> SimSettings:
+        if self.physics_hz % self.control_hz != 0:
+            raise field_problem(
+                f"a multiple of control_hz ({self.control_hz})", self.physics_hz, "physics_hz"
+            )
+        return self
+
+
+class SkillSettings(_FileModel):
+    """Where the skill library comes from."""
+
+    library: _Name = Field(
+        default=DEFAULT_SKILL_LIBRARY,
+        description='"default", or a folder relative to the world file\'s folder',
+    )
+
+    @field_validator("library")
+    @classmethod
+    def _library_exists(cls, library: str, info: ValidationInfo) -> str:
+        if library == DEFAULT_SKILL_LIBRARY:
+            return library
+        path = _resolve(library, info)
+        if not path.is_dir():
+            reason = "a file, not a folder" if path.exists() else "no such folder"
+            raise field_problem(
+                f'"{DEFAULT_SKILL_LIBRARY}" or an existing folder',
+                Shown(f"{library!r} ({reason}: {path})"),
+            )
+        return library
+
+
+class Region(_FileModel):
+    """A rectangle of the table where an object's centre is drawn."""
+
+    x: Range = Field(description="[low, high] of the centre's x, world frame, m")
+    y: Range = Field(description="[low, high] of the centre's y, world frame, m")
+
+
+class TrialSettings(_FileModel):
+    """How ``app.py trials`` draws the paper's experiment in this world.
+
+    The workspace depends on the robot, so the world says where the object starts, where its
+    centre, right (-y) and left (+y) goals lie, and how the obstacle spheres are drawn. The
+    defaults suit the default two-iiwa world.
+    """
+
+    start: Region = Field(
+        default=Region(x=(0.50, 0.60), y=(-0.04, 0.04)), description="the object's start"
+    )
+    centre: Region = Field(
+        default=Region(x=(0.58, 0.68), y=(-0.03, 0.03)), description="the first goal"
+    )
+    right: Region = Field(
+        default=Region(x=(0.55, 0.65), y=(-0.18, -0.12)), description="the second goal (-y)"
+    )
+    left: Region = Field(
+        default=Region(x=(0.55, 0.65), y=(0.12, 0.18)), description="the third goal (+y)"
+    )
+    sphere_radius: Range = Field(default=(0.03, 0.05), description="obstacle radius, m, > 0")
+    line_gap: Range = Field(
+        default=(0.03, 0.06),
+        description="a sphere on the line: its bottom above the object's top, m",
+    )
+    ahead_gap: Range = Field(
+        default=(0.0, 0.04),
+        description="a sphere ahead: its surface in front (+x) of the object's front face, m",
+    )
+    ahead_height: Range = Field(
+        default=(-0.02, 0.06),
+        description="a sphere ahead: its centre above the object's top, m",
+    )
+    clearance: _NonNegative = Field(
+        default=0.02,
+        description="least gap between a sphere and the object at its move's start and goal, m",
+    )
+    robot_clearance: _NonNegative = Field(
+        default=0.05,
+        description="least gap between a sphere and the robot grasping the object at its "
+        "move's start and goal, m",
+    )
+    lift: _NonNegative = Field(
+        default=0.03,
+        description="the robot_clearance holds also with the object lifted this much at the "
+        "start and the goal (a carry begins with a lift and ends with a lowering), m",
+    )
+
+    @field_validator("sphere_radius")
+    @classmethod
+    def _radius_positive(cls, radius: tuple[float, float]) -> tuple[float, float]:
+        if radius[0] <= 0.0:
+            raise field_problem("radii > 0", radius)
+        return radius
+
+
+class World(_FileModel):
+    """A whole world file.
+
+    The absolute path of the file it was loaded from is :attr:`source` (None when built in
+    code); it is not a field, so it is neither in the schema nor written by :func:`dump_world`.
+    """
+
+    version: Annotated[int, Field(strict=True)] = Field(
+        description="world file format version, must be 1",
+        json_schema_extra={"const": WORLD_FILE_VERSION},
+    )
+    name: _Name = Field(description="world name")
+    description: _Text = Field(default="", description="free text")
+    robot: Robot
+    table: Table
+    objects: tuple[WorldObject, ...] = Field(min_length=1, description="at least 1 object")
+    obstacles: tuple[Obstacle, ...] = Field(default=(), description="may be empty")
+    task: tuple[TaskStep, ...] = Field(min_length=1, description="at least 1 step")
+    sim: SimSettings = Field(default_factory=SimSettings)
+    skills: SkillSettings = Field(default_factory=SkillSettings)
+    trials: TrialSettings = Field(default_factory=TrialSettings)
+
+    _source: Path | None = PrivateAttr(default=None)
+
+    @property
+    def source(self) -> Path | None:
+        """Absolute path of the world file, or None if the world was built in code."""
+        return self._source
+
+    @property
+    def base_dir(self) -> Path:
+        """Folder that relative paths in the file are resolved against (cwd if no source)."""
+        return self._source.parent if self._source is not None else Path.cwd()
+
+    def resolve_path(self, path: str) -> Path:
+        """Resolve a path written in the file (mesh, library) against :attr:`base_dir`."""
+        candidate = Path(path)
+        return candidate if candidate.is_absolute() else self.base_dir / candidate
+
+    def object_named(self, name: str) -> WorldObject:
+        """The object called ``name``; raises KeyError if there is none."""
+        for obj in self.objects:
+            if obj.name == name:
+                return obj
+        raise KeyError(f"world {self.name!r}: expected an object named {name!r}, found none")
+
+    def obstacle_named(self, name: str) -> Obstacle:
+        """The obstacle called ``name``; raises KeyError if there is none."""
+        for obstacle in self.obstacles:
+            if obstacle.name == name:
+                return obstacle
+        raise KeyError(f"world {self.name!r}: expected an obstacle named {name!r}, found none")
+
+    @field_validator("version")
+    @classmethod
+    def _known_version(cls, version: int) -> int:
+        if version != WORLD_FILE_VERSION:
+            raise field_problem(
+                f"{WORLD_FILE_VERSION} (the only world file version this program reads)", version
+            )
+        return version
+
+    @model_validator(mode="after")
+    def _names_resolve(self, info: ValidationInfo) -> World:
+        issues: list[Issue] = []
+        first_use: dict[str, str] = {}
+        named: list[tuple[str, int, str]] = [
+            ("objects", i, o.name) for i, o in enumerate(self.objects)
+        ] + [("obstacles", i, o.name) for i, o in enumerate(self.obstacles)]
+        for group, i, name in named:
+            here = format_path((group, i))
+            if name in first_use:
+                issues.append(
+                    Issue(
+                        (group, i, "name"),
+                        f"a name not already used (used by {first_use[name]})",
+                        show_value(name),
+                    )
+                )
+            else:
+                first_use[name] = here
+        object_names = [o.name for o in self.objects]
+        obstacle_names = [o.name for o in self.obstacles]
+        for s, step in enumerate(self.task):
+            if step.object not in object_names:
+                issues.append(
+                    Issue(
+                        ("task", s, "object"),
+                        f"the name of an object ({_one_of(object_names)})",
+                        show_value(step.object),
+                    )
+                )
+            for m, move in enumerate(step.moves):
+                for k, obstacle in enumerate(move.obstacles):
+                    if obstacle not in obstacle_names:
+                        issues.append(
+                            Issue(
+                                ("task", s, "moves", m, "obstacles", k),
+                                f"the name of an obstacle ({_one_of(obstacle_names)})",
+                                show_value(obstacle),
+                            )
+                        )
+                    elif obstacle in move.obstacles[:k]:
+                        issues.append(
+                            Issue(
+                                ("task", s, "moves", m, "obstacles", k),
+                                "each obstacle named at most once per move",
+                                show_value(obstacle),
+                            )
+                        )
+        if issues:
+            raise FieldProblems(issues)
+        context = info.context if isinstance(info.context, Mapping) else {}
+        source = context.get("source")
+        if source is not None:
+            self._source = Path(source)
+        return self
+
+
+def _one_of(names: Sequence[str]) -> str:
+    if not names:
+        return "there are none"
+    return "one of " + ", ".join(repr(n) for n in names)
