@@ -206,11 +206,11 @@ def _skills_command(args: argparse.Namespace) -> int:
 def _teach_command(args: argparse.Namespace) -> int:
     """Learn a skill from a demonstration CSV into a library; report recognition first."""
     from skills.demos.io import DemoFileError, read_demo_csv
-    from skills.labels import Action, Space
     from skills.library import LibraryFileError
     from skills.pose_dmp import fit_pose
     from skills.recognition import recognise
     from skills.skill import Provenance, learnt_skill
+    from skills.vocabulary import Action, Space
 
     try:
         action = Action(args.label)

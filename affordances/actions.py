@@ -7,7 +7,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
 
-from skills.labels import Action, Grasp, Space
+from skills.vocabulary import Action, GraspType, Space
 
 #: A skill parameter: a number (SI units named in the key), a word, or a tuple of words.
 ParamValue = float | str | tuple[str, ...]
@@ -32,12 +32,12 @@ DEFAULT_SPACE: Mapping[Action, Space] = MappingProxyType(
 )
 
 #: Order in which grasps are listed when their scores tie: the earlier, the preferred.
-GRASP_ORDER: tuple[Grasp, ...] = (
-    Grasp.TWO_PALM_LATERAL,
-    Grasp.TWO_ARM_SUPPORT,
-    Grasp.ONE_ARM_SIDE,
-    Grasp.ONE_ARM_TOP,
-    Grasp.NONE,
+GRASP_ORDER: tuple[GraspType, ...] = (
+    GraspType.TWO_PALM_LATERAL,
+    GraspType.TWO_ARM_SUPPORT,
+    GraspType.ONE_ARM_SIDE,
+    GraspType.ONE_ARM_TOP,
+    GraspType.NONE,
 )
 
 _ACTION_ORDER = {action: i for i, action in enumerate(Action)}
@@ -99,7 +99,7 @@ class SkillSelection:
 
 
 def sort_skills(skills: tuple[SkillSelection, ...]) -> tuple[SkillSelection, ...]:
-    """Absolute skills before relative ones, each in :class:`~skills.labels.Action`'s order."""
+    """Absolute skills before relative ones, each in :class:`~skills.vocabulary.Action`'s order."""
     return tuple(
         sorted(skills, key=lambda s: (s.space is not Space.ABSOLUTE, _ACTION_ORDER[s.action]))
     )
@@ -111,17 +111,17 @@ class SemanticAction:
 
     Attributes
     ----------
-    grasp : Grasp
+    grasp : GraspType
         How the object is held.
     skills : tuple of SkillSelection
-        Skills to compose, in :class:`~skills.labels.Action` order.
+        Skills to compose, in :class:`~skills.vocabulary.Action` order.
     score : float
         Summed weight of the rules that prefer this grasp; higher ranks first.
     because : tuple of str
         Short human-readable reasons: hard constraints, scene checks and fired rules.
     """
 
-    grasp: Grasp
+    grasp: GraspType
     skills: tuple[SkillSelection, ...]
     score: float
     because: tuple[str, ...]

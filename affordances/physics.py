@@ -35,7 +35,7 @@ from affordances.context import (
     Shape,
     Vector3,
 )
-from skills.labels import Action, AffordanceElement, Arm, Grasp
+from skills.vocabulary import Action, AffordanceElement, Arm, GraspType
 
 #: Bullet clamps the combined friction coefficient to this value.
 BULLET_MAX_FRICTION = 10.0
@@ -81,10 +81,10 @@ class GraspOption:
 
     Attributes
     ----------
-    grasp : Grasp
+    grasp : GraspType
         The grasp type.
     arms : tuple of Arm
-        Arms used, in :class:`~skills.labels.Arm` order.
+        Arms used, in :class:`~skills.vocabulary.Arm` order.
     palms : tuple of tuple of float, each shape (3,)
         Palm centre of each arm (same order as ``arms``) in {W} at the start pose, metres.
     skills : tuple of SkillSelection
@@ -93,7 +93,7 @@ class GraspOption:
         Reasons specific to this grasp.
     """
 
-    grasp: Grasp
+    grasp: GraspType
     arms: tuple[Arm, ...]
     palms: tuple[Vector3, ...]
     skills: tuple[SkillSelection, ...]
@@ -330,7 +330,7 @@ def assess_lateral(
         f"available ({friction_note})",
     )
     option = GraspOption(
-        Grasp.TWO_PALM_LATERAL,
+        GraspType.TWO_PALM_LATERAL,
         (Arm.LEFT, Arm.RIGHT),
         (left, right),
         (_transport((Arm.LEFT, Arm.RIGHT)), hold),
@@ -382,7 +382,7 @@ def assess_support(
         f"{_fmt(load)} N each",
     )
     option = GraspOption(
-        Grasp.TWO_ARM_SUPPORT,
+        GraspType.TWO_ARM_SUPPORT,
         (Arm.LEFT, Arm.RIGHT),
         (left, right),
         (_transport((Arm.LEFT, Arm.RIGHT)), hold),
@@ -411,8 +411,8 @@ def one_arm_options(context: ObjectContext) -> tuple[GraspOption, ...]:
     top = (x, y, z + 0.5 * object_height(context))
     note = f"hard: {arm.value} arm, on the object's side"
     return (
-        GraspOption(Grasp.ONE_ARM_SIDE, (arm,), (side,), (_transport((arm,)),), (note,)),
-        GraspOption(Grasp.ONE_ARM_TOP, (arm,), (top,), (_transport((arm,)),), (note,)),
+        GraspOption(GraspType.ONE_ARM_SIDE, (arm,), (side,), (_transport((arm,)),), (note,)),
+        GraspOption(GraspType.ONE_ARM_TOP, (arm,), (top,), (_transport((arm,)),), (note,)),
     )
 
 

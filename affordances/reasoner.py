@@ -29,7 +29,7 @@ from affordances.rules import (
     default_rules,
 )
 from affordances.scene import GeometricSceneQuery, SceneQuery, check_scene
-from skills.labels import Action, Grasp
+from skills.vocabulary import Action, GraspType
 
 
 def object_facts(context: ObjectContext, hard: HardAssessment) -> dict[Fact, FactValue]:
@@ -155,7 +155,7 @@ def reason(
     Returns
     -------
     tuple of SemanticAction
-        Feasible actions by descending score (ties in grasp order); a single ``Grasp.NONE``
+        Feasible actions by descending score (ties in grasp order); a single ``GraspType.NONE``
         action explaining why when nothing is feasible.
     """
     config = config or ReasonerConfig()
@@ -163,7 +163,7 @@ def reason(
     scene = scene or GeometricSceneQuery()
     hard = assess(context, robot, config)
     if not hard.options:
-        return (SemanticAction(Grasp.NONE, (), 0.0, hard.because),)
+        return (SemanticAction(GraspType.NONE, (), 0.0, hard.because),)
     actions = [
         _compose(context, robot, hard, option, rules, scene, config) for option in hard.options
     ]
@@ -203,4 +203,4 @@ class AffordanceReasoner:
 
 def needs_both_arms(action: SemanticAction) -> bool:
     """Whether an action's grasp uses both arms."""
-    return action.grasp in (Grasp.TWO_PALM_LATERAL, Grasp.TWO_ARM_SUPPORT)
+    return action.grasp in (GraspType.TWO_PALM_LATERAL, GraspType.TWO_ARM_SUPPORT)

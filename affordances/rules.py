@@ -39,7 +39,7 @@ import yaml
 
 from affordances.actions import DEFAULT_SPACE, ParamValue
 from affordances.context import Fragility, ObjectState, Shape
-from skills.labels import Action, AffordanceElement, Grasp, Space
+from skills.vocabulary import Action, AffordanceElement, GraspType, Space
 
 #: File the package ships; used unless the caller leaves it out.
 DEFAULT_RULES_FILE = "default.yaml"
@@ -102,7 +102,7 @@ _FACT_KINDS: Mapping[Fact, tuple[_Kind, type[StrEnum] | None]] = {
     Fact.HEIGHT_M: (_Kind.NUMBER, None),
     Fact.STATE: (_Kind.SET, ObjectState),
     Fact.ELEMENTS: (_Kind.SET, AffordanceElement),
-    Fact.GRASP: (_Kind.TEXT, Grasp),
+    Fact.GRASP: (_Kind.TEXT, GraspType),
 }
 
 _OPS: Mapping[_Kind, tuple[Op, ...]] = {
@@ -215,7 +215,7 @@ def _show(value: Any) -> str:
 class GraspEffect:
     """Add ``weight`` to the score of ``grasp``."""
 
-    grasp: Grasp
+    grasp: GraspType
     weight: float
 
 
@@ -415,7 +415,7 @@ def _effect(item: Any, where: _Where, field: str) -> Effect:
     if kind == "grasp":
         if "weight" not in item:
             raise where.error(f"{field}.weight", "missing; a grasp effect needs a weight")
-        grasp = Grasp(_member(item["grasp"], Grasp, where, f"{field}.grasp"))
+        grasp = GraspType(_member(item["grasp"], GraspType, where, f"{field}.grasp"))
         return GraspEffect(grasp, _number(item["weight"], where, f"{field}.weight"))
     if kind == "skill":
         action = Action(_member(item["skill"], Action, where, f"{field}.skill"))

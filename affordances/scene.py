@@ -20,7 +20,7 @@ from affordances.actions import DEFAULT_SPACE, SkillSelection
 from affordances.config import ReasonerConfig
 from affordances.context import ObjectContext, Obstacle, Vector3, check_positive, check_vector3
 from affordances.physics import GraspOption, bounding_radius
-from skills.labels import Action, AffordanceElement, Arm
+from skills.vocabulary import Action, AffordanceElement, Arm
 
 FloatArray = NDArray[np.float64]
 

@@ -29,15 +29,15 @@ import numpy as np
 
 from skills import quaternion as quat
 from skills.composer import DualArmComposer, PalmCommands, grasped_state, reference_step
-from skills.coupling import CouplingTerm
 from skills.couplings.forcing import LearntForcing
 from skills.couplings.grasp import GraspMaintenance
 from skills.couplings.potential import DistanceQuery, PotentialFieldAvoidance, SphereObstacles
 from skills.couplings.steering import ObstacleSteering
+from skills.couplings.term import CouplingTerm
 from skills.default_library import build_default_library
-from skills.dual_arm import ARMS, GraspGeometry
-from skills.labels import Action
+from skills.dual_arm import GraspGeometry
 from skills.types import Array
+from skills.vocabulary import ARMS, Action
 
 OBSTACLE = np.array([0.62, -0.08, 0.82])
 RADIUS = 0.04

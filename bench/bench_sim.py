@@ -28,7 +28,7 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from skills.labels import Arm  # noqa: E402
+from skills.vocabulary import Arm  # noqa: E402
 from worlds.collision import CollisionWorld  # noqa: E402
 from worlds.control import PalmCommand  # noqa: E402
 from worlds.scene import LATERAL_PALM_QUATERNIONS, Scene, lateral_grasp_palm_poses  # noqa: E402

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from skills.labels import Arm
+from skills.vocabulary import Arm
 from worlds.scene import Scene, lateral_grasp_palm_poses
 from worlds.world_file import World, load_world
 

@@ -18,17 +18,17 @@ from affordances import SemanticAction, SkillSelection, spare_grip_acceleration
 from planner.port import Move, Pose, WorldPort
 from skills import quaternion as quat
 from skills.composer import DualArmComposer, DualArmState, relative_from_world
-from skills.coupling import CouplingTerm
 from skills.couplings import LearntForcing, Saturated
 from skills.couplings.grasp import GraspMaintenance
 from skills.couplings.limits import WorkspaceRepulsion
 from skills.couplings.potential import PotentialFieldAvoidance
 from skills.couplings.steering import ObstacleSteering
-from skills.dual_arm import ARMS, GraspGeometry
-from skills.labels import Action, Arm, Space
+from skills.couplings.term import CouplingTerm
+from skills.dual_arm import GraspGeometry
 from skills.library import SkillLibrary
 from skills.pose_dmp import PoseState
 from skills.skill import Skill, SkillKind
+from skills.vocabulary import ARMS, Action, Arm, Space
 
 #: Shortest move duration, s (the demonstrations last about 2 s).
 MIN_TAU_S = 2.0

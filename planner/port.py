@@ -26,8 +26,8 @@ from numpy.typing import ArrayLike
 
 from affordances import ObjectContext, RobotCapabilities, SceneQuery
 from skills import quaternion as quat
-from skills.labels import Arm
 from skills.types import Array
+from skills.vocabulary import Arm
 
 
 @dataclass(frozen=True)

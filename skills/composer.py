@@ -29,16 +29,16 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from skills import quaternion as quat
-from skills.coupling import CouplingTerm, Weighted, sum_couplings
 from skills.couplings.forcing import LearntForcing
+from skills.couplings.term import CouplingTerm, Weighted, sum_couplings
 from skills.dmp import DMPParams
 from skills.interpreter import Program
-from skills.labels import ARMS, Arm
 from skills.layout import COMMANDS, PHASES, ROW_SIZE
 from skills.pose_model import PoseModel
 from skills.state import STATE_SIZE, PoseState, PoseTarget, state_from, state_values
 from skills.transformation import attractor, integrate
 from skills.types import Array
+from skills.vocabulary import ARMS, Arm
 
 
 @dataclass(frozen=True)

@@ -25,11 +25,11 @@ import numpy as np
 from skills.couplings.steering_fit import AvoidanceDemo, fit_obstacle_steering
 from skills.demonstration import Demonstration
 from skills.demos.io import DemoFile, columns, read_demo_csv
-from skills.labels import Action, AffordanceElement, Space
 from skills.library import SkillLibrary
 from skills.pose_dmp import fit_pose
 from skills.scaling import Scaling
 from skills.skill import Provenance, Skill, SkillKind, learnt_skill
+from skills.vocabulary import Action, AffordanceElement, Space
 
 DEMOS_DIR = Path(__file__).resolve().parent / "demos"
 #: Provenance time stamp of the shipped library: fixed so the build is reproducible.

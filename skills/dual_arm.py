@@ -23,10 +23,10 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from skills import quaternion as quat
-from skills.labels import ARMS, Arm
 from skills.types import Array
+from skills.vocabulary import Arm
 
-__all__ = ["ARMS", "GraspGeometry", "contact_twists", "grasp_matrix", "integrate_twist", "skew"]
+__all__ = ["GraspGeometry", "contact_twists", "grasp_matrix", "integrate_twist", "skew"]
 
 
 def skew(r: ArrayLike) -> Array:

@@ -21,13 +21,13 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from skills.coupling import Weighted
 from skills.couplings.forcing import LearntForcing, activations_kernel, forcing_kernel
 from skills.couplings.grasp import grasp_kernel
 from skills.couplings.limits import workspace_kernel
 from skills.couplings.potential import potential_kernel
 from skills.couplings.saturated import saturate_kernel
 from skills.couplings.steering import steering_kernel
+from skills.couplings.term import Weighted
 from skills.dmp import DMPParams
 from skills.kernel import kernel, matrix_q, multiply_q, quaternion_at
 from skills.layout import COMMANDS, PHASES, ROW_SIZE

@@ -20,9 +20,9 @@ from typing import Any
 
 import numpy as np
 
-from skills.labels import Action, AffordanceElement, Space
 from skills.skill import Provenance, Skill, SkillKind, model_from_data
 from skills.types import Array
+from skills.vocabulary import Action, AffordanceElement, Space
 
 FORMAT = "duet-skill-library"
 VERSION = 1

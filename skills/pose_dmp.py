@@ -15,8 +15,8 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from numpy.typing import ArrayLike
 
-from skills.coupling import CouplingTerm, Weighted, sum_couplings
 from skills.couplings.forcing import forcing_acceleration
+from skills.couplings.term import CouplingTerm, Weighted, sum_couplings
 from skills.dmp import linear_rollout
 from skills.pose_model import PoseModel, fit_pose
 from skills.quaternion_dmp import integrate_orientation

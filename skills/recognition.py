@@ -24,11 +24,11 @@ import numpy as np
 
 from skills import quaternion as quat
 from skills.demonstration import Demonstration
-from skills.labels import Space
 from skills.library import SkillLibrary
 from skills.pose_dmp import PoseState, pose_rollout
 from skills.skill import Skill, SkillKind
 from skills.types import Array
+from skills.vocabulary import Space
 
 DEFAULT_THRESHOLD = 0.9
 _MIN_EXTENT_M = 0.01

@@ -18,11 +18,11 @@ import numpy as np
 
 from skills.basis import RBFBasis
 from skills.dmp import DMPParams, ForcingTerm, PositionModel
-from skills.labels import Action, AffordanceElement, Space
 from skills.pose_dmp import PoseModel
 from skills.quaternion_dmp import OrientationModel
 from skills.scaling import Scaling
 from skills.types import Array
+from skills.vocabulary import Action, AffordanceElement, Space
 
 
 class SkillKind(StrEnum):

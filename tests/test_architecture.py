@@ -76,7 +76,7 @@ def test_package_never_names_the_simulator(package: str) -> None:
 
 def test_the_rules_catch_a_late_import_of_the_planner() -> None:
     allowed, _ = LAYERS["worlds"]
-    assert allowed("planner.port") and allowed("skills.labels")
+    assert allowed("planner.port") and allowed("skills.vocabulary")
     assert not allowed("planner.leaves") and not allowed("planner")
     assert not allowed("experiment.episode")
     assert not LAYERS["planner"][0]("worlds.sim_world")

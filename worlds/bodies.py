@@ -13,7 +13,7 @@ from collections.abc import Sequence
 
 import pybullet as pb
 
-from skills.labels import Arm
+from skills.vocabulary import Arm
 from worlds.robots import RobotModel, build_robot_model
 from worlds.spec import ObjectSpec, ObstacleSpec, RobotSpec, Shape, ShapeSpec, TableSpec
 

@@ -26,8 +26,8 @@ import trimesh
 from numpy.typing import ArrayLike, NDArray
 
 from skills import quaternion as quat
-from skills.labels import Arm
 from skills.types import Array
+from skills.vocabulary import Arm
 from worlds.scene import Scene
 from worlds.spec import Shape, ShapeSpec
 

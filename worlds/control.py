@@ -17,8 +17,8 @@ import pybullet as pb
 from numpy.typing import ArrayLike, NDArray
 
 from skills import quaternion as quat
-from skills.labels import Arm
 from skills.types import Array
+from skills.vocabulary import Arm
 from worlds.impedance import (
     GainArrays,
     ImpedanceGains,

@@ -20,7 +20,7 @@ import pybullet as pb
 from numpy.typing import ArrayLike, NDArray
 
 from skills import quaternion as quat
-from skills.labels import Arm
+from skills.vocabulary import Arm
 from worlds.bodies import (
     NoDisplayError,
     build_robot,

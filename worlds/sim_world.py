@@ -19,8 +19,8 @@ from affordances import ObjectContext, RobotCapabilities, SceneQuery
 from affordances.scene import GeometricSceneQuery
 from planner.port import Move, ObstacleInfo, PathCheck, Pose
 from skills import quaternion as quat
-from skills.labels import Arm
 from skills.types import Array
+from skills.vocabulary import ARMS, Arm
 from worlds.adapters import object_contexts, robot_capabilities
 from worlds.collision import CollisionWorld, arm_group
 from worlds.control import ImpedanceGains, PalmCommand
@@ -28,7 +28,6 @@ from worlds.scene import LATERAL_PALM_QUATERNIONS, Scene
 from worlds.spec import Shape, ShapeSpec, WorldSpec
 from worlds.world_file import World, as_world_spec
 
-ARMS = (Arm.LEFT, Arm.RIGHT)
 #: Extra clearance asked of predicted forearm poses (carried rigidly with the palms), m.
 FOREARM_MARGIN_M = 0.03
 #: Highest an object's centre may be carried above the table top, m.

@@ -53,9 +53,9 @@ from worlds.world_schema import (
     BoxShape,
     CylinderShape,
     MeshShape,
-    Move,
+    MoveEntry,
     Obstacle,
-    Pose,
+    PoseEntry,
     Range,
     Region,
     Robot,
@@ -80,10 +80,10 @@ __all__ = [
     "CylinderShape",
     "Fragility",
     "MeshShape",
-    "Move",
+    "MoveEntry",
     "ObjectState",
     "Obstacle",
-    "Pose",
+    "PoseEntry",
     "Range",
     "Region",
     "Robot",
@@ -300,7 +300,7 @@ def _object_spec(obj: WorldObject, world: World) -> ObjectSpec:
     )
 
 
-def _move_spec(move: Move) -> MoveSpec:
+def _move_spec(move: MoveEntry) -> MoveSpec:
     x, y, z = move.goal.position
     return MoveSpec(
         goal_position=(x, y, z),

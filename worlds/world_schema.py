@@ -117,7 +117,7 @@ _EXCLUSIVE_STATES = ((ObjectState.OPEN, ObjectState.CLOSED), (ObjectState.FULL, 
 # --------------------------------------------------------------------------------------------
 
 
-class Pose(_FileModel):
+class PoseEntry(_FileModel):
     """A position and a roll-pitch-yaw orientation in degrees.
 
     ``rpy_deg`` are extrinsic rotations about the fixed x, then y, then z axes (the
@@ -227,7 +227,7 @@ class Robot(_FileModel):
     """The dual-arm robot: model, placement and hardware limits."""
 
     model: RobotModelName = Field(description="robot model")
-    base: Pose = Field(
+    base: PoseEntry = Field(
         description="robot frame in the world: midpoint between the two arm bases, x forward"
     )
     arm_separation: _Positive = Field(
@@ -275,7 +275,7 @@ class WorldObject(_FileModel):
     material: _Text = Field(default="unknown", description="free text: cardboard, glass, ...")
     fragility: Fragility = Field(default=Fragility.NORMAL, description="how carefully to handle")
     state: tuple[ObjectState, ...] = Field(default=(), description="semantic state flags")
-    pose: Pose = Field(description="initial pose of the object's centre, world frame")
+    pose: PoseEntry = Field(description="initial pose of the object's centre, world frame")
 
     @field_validator("state")
     @classmethod
@@ -302,10 +302,10 @@ class Obstacle(_FileModel):
     position: Vector3 = Field(description="centre of the obstacle, world frame, m")
 
 
-class Move(_FileModel):
+class MoveEntry(_FileModel):
     """One place goal for an object, with the obstacles present while moving there."""
 
-    goal: Pose = Field(description="goal pose of the object's centre, world frame")
+    goal: PoseEntry = Field(description="goal pose of the object's centre, world frame")
     obstacles: tuple[_Name, ...] = Field(
         default=(), description="names of the obstacles present during this move"
     )
@@ -315,7 +315,7 @@ class TaskStep(_FileModel):
     """A sequence of moves applied to one object; each move starts where the last ended."""
 
     object: _Name = Field(description="name of the object to move")
-    moves: tuple[Move, ...] = Field(min_length=1, description="consecutive goals, at least 1")
+    moves: tuple[MoveEntry, ...] = Field(min_length=1, description="consecutive goals, at least 1")
 
 
 class SimSettings(_FileModel):

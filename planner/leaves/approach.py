@@ -11,8 +11,7 @@ from planner.composition import lateral_geometry
 from planner.leaves.palm_motion import ViaPointLeaf, ViaPointMotion, measured_state
 from planner.port import ObjectSensing, PalmControl, Pose
 from skills import quaternion as quat
-from skills.dual_arm import ARMS
-from skills.labels import Arm
+from skills.vocabulary import ARMS, Arm
 
 
 def pregrasp_poses(

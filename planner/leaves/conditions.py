@@ -14,7 +14,7 @@ from planner.leaves.base import WorldLeaf, composition_ports
 from planner.leaves.grasp import squeeze_force
 from planner.port import ObjectSensing, ObstacleScene, PalmControl
 from skills.composer import DualArmState
-from skills.dual_arm import ARMS
+from skills.vocabulary import ARMS
 
 
 class IsHeld(WorldLeaf):

@@ -17,9 +17,8 @@ from planner.composition import (
 from planner.leaves.base import SQUEEZE_FORCE_N, MotionLeaf
 from planner.port import Clock, ObjectSensing, PalmControl, Pose
 from skills.composer import DualArmComposer, DualArmState, relative_from_world
-from skills.dual_arm import ARMS
-from skills.labels import Action
 from skills.pose_dmp import PoseState
+from skills.vocabulary import ARMS, Action
 
 
 def anchored(composer: DualArmComposer, measured: Pose) -> DualArmState:

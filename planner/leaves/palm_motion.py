@@ -16,8 +16,8 @@ from py_trees.common import Status
 from planner.leaves.base import MotionLeaf
 from planner.port import Pose
 from skills import quaternion as quat
-from skills.labels import Arm
 from skills.pose_dmp import PoseDMP, PoseModel, PoseState
+from skills.vocabulary import Arm
 
 
 class ViaPointMotion:

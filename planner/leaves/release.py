@@ -18,7 +18,7 @@ from planner.leaves.base import MotionLeaf
 from planner.leaves.palm_motion import ViaPointLeaf, ViaPointMotion, measured_state
 from planner.port import Clock, ObjectSensing, PalmControl, Pose
 from skills.composer import DualArmComposer, DualArmState
-from skills.dual_arm import ARMS
+from skills.vocabulary import ARMS
 
 
 class Release(MotionLeaf):

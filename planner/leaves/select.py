@@ -10,7 +10,7 @@ from py_trees.ports import PortInformation
 from affordances import SemanticAction, reason
 from planner.leaves.base import WorldLeaf
 from planner.port import ObjectSensing, ObstacleScene, PalmControl
-from skills.labels import Grasp
+from skills.vocabulary import GraspType
 
 
 class SelectSkills(WorldLeaf):
@@ -36,7 +36,7 @@ class SelectSkills(WorldLeaf):
         if (why := self.connected()) is not None:
             return self.fail(why)
         name = self.get_input("object")
-        wanted = Grasp(self.get_input("grasp"))
+        wanted = GraspType(self.get_input("grasp"))
         world = self.world
         ranked = reason(
             world.object_context(name), world.robot_capabilities(), scene=world.scene_query()

@@ -15,7 +15,7 @@ from planner.leaves.grasp import squeeze_force
 from planner.move_result import MoveResult, publish_move_result
 from planner.port import Clock, Move, ObjectSensing, ObstacleScene, PalmControl, Pose
 from skills.composer import DualArmComposer, DualArmState
-from skills.dual_arm import ARMS
+from skills.vocabulary import ARMS
 
 
 class Transport(MotionLeaf):

@@ -35,11 +35,10 @@ from affordances.scene import GeometricSceneQuery
 from planner.port import Move, ObstacleInfo, PathCheck, Pose
 from skills import quaternion as quat
 from skills.dual_arm import GraspGeometry
-from skills.labels import Arm
 from skills.types import Array
+from skills.vocabulary import ARMS, Arm
 
 GRAVITY = 9.81
-ARMS = (Arm.LEFT, Arm.RIGHT)
 
 
 @dataclass

@@ -1,6 +1,6 @@
 """The coupling-term library: one small class per behaviour, each with ``acceleration``.
 
-Every class satisfies :class:`skills.coupling.CouplingTerm`: ``acceleration(state, target)``
+Every class satisfies :class:`skills.couplings.term.CouplingTerm`: ``acceleration(state, target)``
 returns additive (linear m/s^2, angular rad/s^2) accelerations for a pose DMP.
 
 =============================  ===========================================================

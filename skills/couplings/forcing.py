@@ -27,7 +27,7 @@ def forcing_acceleration(s: float, table: Array, target: PoseTarget) -> tuple[Ar
 
 
 class LearntForcing:
-    """The learnt RBF forcing term of ``model`` as a :class:`skills.coupling.CouplingTerm`.
+    """The learnt RBF forcing term of ``model`` as a :class:`skills.couplings.term.CouplingTerm`.
 
     Used to compose a learnt skill with others on a shared transformation system: its forcing
     is scaled for the running target's start and goal with ``model``'s own scaling, and read

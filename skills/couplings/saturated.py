@@ -13,7 +13,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from skills.coupling import CouplingTerm, Weighted, sum_couplings
+from skills.couplings.term import CouplingTerm, Weighted, sum_couplings
 from skills.kernel import kernel
 from skills.program import Kind, Packer
 from skills.state import PoseState, PoseTarget

@@ -27,8 +27,8 @@ from skills.demos.avoidance import avoidance_demo, straight_demo
 from skills.demos.io import write_demo_csv
 from skills.demos.rotation import rotation_demo
 from skills.dual_arm import GraspGeometry
-from skills.labels import Arm
 from skills.types import Array
+from skills.vocabulary import Arm
 
 HERE = Path(__file__).resolve().parent
 DEFAULT_SEED = 2019

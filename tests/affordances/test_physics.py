@@ -21,7 +21,7 @@ from affordances.physics import (
     parallel_face_pairs,
     wrap_angle,
 )
-from skills.labels import AffordanceElement, Grasp
+from skills.vocabulary import AffordanceElement, GraspType
 from tests.affordances.cases import ROBOT, heavy_box, open_bottle, parcel, small_box, tray
 
 
@@ -76,7 +76,7 @@ def test_arms_needed_and_elements() -> None:
     assert AffordanceElement.GRASPABLE_LATERAL in wide.elements
     heavy = assess(heavy_box(), ROBOT, config)
     assert heavy.arms_needed == 2 and AffordanceElement.HEAVY in heavy.elements
-    assert [o.grasp for o in heavy.options] == [Grasp.TWO_ARM_SUPPORT]
+    assert [o.grasp for o in heavy.options] == [GraspType.TWO_ARM_SUPPORT]
     assert assess(heavy_box(mass_kg=14.5), ROBOT, config).arms_needed == 0
 
 
@@ -84,14 +84,14 @@ def test_span_limits_the_squeeze() -> None:
     config = ReasonerConfig()
     # both face pairs 0.7 m apart: wider than the 0.6 m span
     big = assess(parcel(dimensions=(0.7, 0.7, 0.2)), ROBOT, config)
-    assert [o.grasp for o in big.options] == [Grasp.TWO_ARM_SUPPORT]
+    assert [o.grasp for o in big.options] == [GraspType.TWO_ARM_SUPPORT]
     assert any("outside span 0.15..0.6 m" in line for line in big.because)
 
 
 def test_lateral_palms_face_the_robot_sides() -> None:
     (lateral, _) = assess(parcel(yaw=math.pi / 2), ROBOT, ReasonerConfig()).options
     # rotated by 90 deg, the 0.20 m faces now face left and right
-    assert lateral.grasp == Grasp.TWO_PALM_LATERAL
+    assert lateral.grasp == GraspType.TWO_PALM_LATERAL
     left, right = lateral.palms
     assert_allclose(left, (0.4, 0.1, 0.075), atol=1e-12)
     assert_allclose(right, (0.4, -0.1, 0.075), atol=1e-12)

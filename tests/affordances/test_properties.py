@@ -18,11 +18,11 @@ from affordances import (
     reason,
     render_json,
 )
-from skills.labels import Grasp
+from skills.vocabulary import GraspType
 from tests.affordances.cases import ROBOT
 
 PROPERTY_SETTINGS = settings(max_examples=80, deadline=None, derandomize=True)
-ONE_ARM = (Grasp.ONE_ARM_SIDE, Grasp.ONE_ARM_TOP)
+ONE_ARM = (GraspType.ONE_ARM_SIDE, GraspType.ONE_ARM_TOP)
 
 lengths = st.floats(0.03, 0.7)
 coordinates = st.floats(-0.5, 0.5)
@@ -116,8 +116,8 @@ def test_more_mass_never_turns_two_arms_into_one(context: ObjectContext, factor:
     heavy = reason(replace(context, mass_kg=context.mass_kg * factor), ROBOT)[0]
     if needs_both_arms(light):
         assert heavy.grasp not in ONE_ARM
-    if light.grasp == Grasp.NONE:
-        assert heavy.grasp == Grasp.NONE
+    if light.grasp == GraspType.NONE:
+        assert heavy.grasp == GraspType.NONE
 
 
 @PROPERTY_SETTINGS

@@ -18,7 +18,7 @@ from affordances import (
     reason,
     rule_set,
 )
-from skills.labels import Action, Grasp, Space
+from skills.vocabulary import Action, GraspType, Space
 from tests.affordances.cases import (
     ROBOT,
     STRONG_ROBOT,
@@ -31,7 +31,7 @@ from tests.affordances.cases import (
     wine_glass,
 )
 
-ONE_ARM = (Grasp.ONE_ARM_SIDE, Grasp.ONE_ARM_TOP)
+ONE_ARM = (GraspType.ONE_ARM_SIDE, GraspType.ONE_ARM_TOP)
 
 
 @dataclass(frozen=True)
@@ -41,7 +41,7 @@ class Case:
     name: str
     make: Callable[[], ObjectContext]
     robot: RobotCapabilities
-    grasps: tuple[Grasp, ...]
+    grasps: tuple[GraspType, ...]
     required: tuple[Action, ...]
     forbidden: tuple[Action, ...] = ()
 
@@ -51,7 +51,7 @@ CASES = [
         "paper parcel",
         parcel,
         ROBOT,
-        (Grasp.TWO_PALM_LATERAL,),
+        (GraspType.TWO_PALM_LATERAL,),
         (Action.TRANSPORT, Action.HOLD_LATERAL),
         (Action.KEEP_UPRIGHT, Action.KEEP_LEVEL),
     ),
@@ -59,7 +59,7 @@ CASES = [
         "heavy box, 40 N palms: friction cannot carry it",
         heavy_box,
         ROBOT,
-        (Grasp.TWO_ARM_SUPPORT,),
+        (GraspType.TWO_ARM_SUPPORT,),
         (Action.TRANSPORT, Action.HOLD_FORCE),
         (Action.HOLD_LATERAL,),
     ),
@@ -67,7 +67,7 @@ CASES = [
         "heavy box, 150 N palms: squeeze possible, support from below still preferred",
         heavy_box,
         STRONG_ROBOT,
-        (Grasp.TWO_ARM_SUPPORT,),
+        (GraspType.TWO_ARM_SUPPORT,),
         (Action.TRANSPORT, Action.HOLD_FORCE),
     ),
     Case("small light box", small_box, ROBOT, ONE_ARM, (Action.TRANSPORT,), (Action.HOLD_LATERAL,)),
@@ -83,14 +83,14 @@ CASES = [
         "open bottle",
         open_bottle,
         ROBOT,
-        (Grasp.ONE_ARM_SIDE,),
+        (GraspType.ONE_ARM_SIDE,),
         (Action.TRANSPORT, Action.KEEP_UPRIGHT),
     ),
     Case(
         "tray with items",
         tray,
         ROBOT,
-        (Grasp.TWO_ARM_SUPPORT,),
+        (GraspType.TWO_ARM_SUPPORT,),
         (Action.TRANSPORT, Action.KEEP_LEVEL, Action.HOLD_FORCE),
         (Action.HOLD_LATERAL,),
     ),
@@ -110,7 +110,7 @@ def test_top_action(case: Case) -> None:
     assert scores == sorted(scores, reverse=True)
 
 
-def _only(actions: tuple[SemanticAction, ...], grasp: Grasp) -> SemanticAction:
+def _only(actions: tuple[SemanticAction, ...], grasp: GraspType) -> SemanticAction:
     return next(a for a in actions if a.grasp == grasp)
 
 
@@ -135,11 +135,11 @@ def test_heavy_box_reports_why_it_cannot_be_squeezed() -> None:
     assert any("mass 12 kg > payload 7 kg per arm" in line for line in top.because)
     # 1.5 * 12 * 9.81 / (2 * 0.64) = 138 N per palm, more than the 40 N the palms have
     assert any("needs 138 N per palm > 40 N available" in line for line in top.because)
-    assert all(a.grasp != Grasp.TWO_PALM_LATERAL for a in reason(heavy_box(), ROBOT))
+    assert all(a.grasp != GraspType.TWO_PALM_LATERAL for a in reason(heavy_box(), ROBOT))
 
 
 def test_heavy_box_with_strong_palms_can_be_squeezed_with_the_needed_force() -> None:
-    lateral = _only(reason(heavy_box(), STRONG_ROBOT), Grasp.TWO_PALM_LATERAL)
+    lateral = _only(reason(heavy_box(), STRONG_ROBOT), GraspType.TWO_PALM_LATERAL)
     hold = lateral.skill(Action.HOLD_LATERAL)
     assert hold is not None
     assert_allclose(number(hold.params["squeeze_force_n"]), 1.5 * 12.0 * 9.81 / 1.28, rtol=1e-12)
@@ -151,7 +151,7 @@ def test_heavy_box_with_strong_palms_can_be_squeezed_with_the_needed_force() -> 
 
 def test_too_heavy_for_both_arms_gives_none_with_reason() -> None:
     actions = reason(heavy_box(mass_kg=15.0), ROBOT)
-    assert [a.grasp for a in actions] == [Grasp.NONE]
+    assert [a.grasp for a in actions] == [GraspType.NONE]
     assert actions[0].skills == ()
     assert any("cannot lift" in line for line in actions[0].because)
 
@@ -174,8 +174,8 @@ def test_fragile_glass_is_never_squeezed_and_says_so() -> None:
 
 def test_fragile_wide_box_is_supported_not_squeezed() -> None:
     actions = reason(parcel(fragility="fragile"), ROBOT)
-    assert actions[0].grasp == Grasp.TWO_ARM_SUPPORT
-    assert all(a.grasp != Grasp.TWO_PALM_LATERAL for a in actions)
+    assert actions[0].grasp == GraspType.TWO_ARM_SUPPORT
+    assert all(a.grasp != GraspType.TWO_PALM_LATERAL for a in actions)
 
 
 def test_tray_is_too_thin_to_squeeze() -> None:
@@ -186,7 +186,7 @@ def test_tray_is_too_thin_to_squeeze() -> None:
 def test_sphere_has_no_parallel_faces() -> None:
     ball = parcel(name="ball", category="ball", shape="sphere", dimensions=(0.12,))
     actions = reason(ball, ROBOT)
-    assert [a.grasp for a in actions] == [Grasp.TWO_ARM_SUPPORT]
+    assert [a.grasp for a in actions] == [GraspType.TWO_ARM_SUPPORT]
     assert any("sphere has no parallel faces" in line for line in actions[0].because)
 
 
@@ -219,10 +219,10 @@ def test_user_rule_file_adds_to_the_defaults(tmp_path: Path) -> None:
     )
     reasoner = AffordanceReasoner(ROBOT, rules=rule_set([path]))
     actions = reasoner.rank(parcel())
-    assert actions[0].grasp == Grasp.TWO_ARM_SUPPORT
+    assert actions[0].grasp == GraspType.TWO_ARM_SUPPORT
     assert actions[0].score == pytest.approx(10.0)
     assert "rule parcels_from_below (+10): category parcel, mass_kg 1 < 5" in actions[0].because
-    lateral = _only(actions, Grasp.TWO_PALM_LATERAL)
+    lateral = _only(actions, GraspType.TWO_PALM_LATERAL)
     assert lateral.score == pytest.approx(3.0)
     # the later rule wins over default_speed; the squeeze force is clamped to the 40 N available
     transport, hold = lateral.skill(Action.TRANSPORT), lateral.skill(Action.HOLD_LATERAL)
@@ -239,7 +239,7 @@ def test_user_rule_file_can_replace_the_defaults(tmp_path: Path) -> None:
     )
     actions = reason(parcel(), ROBOT, rules=rule_set([path], include_default=False))
     # no rule scores two-arm grasps, so they tie at 0 and keep the grasp order
-    assert [a.grasp for a in actions] == [Grasp.TWO_PALM_LATERAL, Grasp.TWO_ARM_SUPPORT]
+    assert [a.grasp for a in actions] == [GraspType.TWO_PALM_LATERAL, GraspType.TWO_ARM_SUPPORT]
     assert all(a.score == 0.0 for a in actions)
     top = actions[0]
     assert top.actions == (Action.TRANSPORT, Action.HOLD_LATERAL)

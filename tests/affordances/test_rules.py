@@ -10,7 +10,7 @@ import yaml
 
 from affordances import RuleFileError, default_rules, load_rules, parse_rules
 from affordances.rules import Condition, Fact, GraspEffect, Op, ParamEffect, SkillEffect
-from skills.labels import Action, Grasp, Space
+from skills.vocabulary import Action, GraspType, Space
 
 
 def _rule(**fields: Any) -> dict[str, Any]:
@@ -60,7 +60,7 @@ def test_parse_forms() -> None:
         Condition(Fact.STATE, Op.CONTAINS, "open"),
         Condition(Fact.ELEMENTS, Op.CONTAINS, ("wide", "heavy")),
     )
-    assert rule.effects[0] == GraspEffect(Grasp.TWO_ARM_SUPPORT, 2.0)
+    assert rule.effects[0] == GraspEffect(GraspType.TWO_ARM_SUPPORT, 2.0)
     skill = rule.effects[1]
     assert isinstance(skill, SkillEffect)
     assert (skill.action, skill.space, skill.weight, dict(skill.params)) == (
@@ -128,7 +128,7 @@ BAD = [
     ),
     (
         _doc(_rule(effects=[{"grasp": "pinch", "weight": 1}])),
-        r"field 'effects\[0\]\.grasp': unknown Grasp 'pinch'",
+        r"field 'effects\[0\]\.grasp': unknown GraspType 'pinch'",
     ),
     (
         _doc(_rule(effects=[{"grasp": "two_arm_support", "weight": "lots"}])),

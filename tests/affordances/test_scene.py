@@ -11,7 +11,7 @@ from numpy.testing import assert_allclose
 
 from affordances import GeometricSceneQuery, Obstacle, reason
 from affordances.scene import FloatArray, sample_polyline, segment_distances
-from skills.labels import Action, Arm, Grasp, Space
+from skills.vocabulary import Action, Arm, GraspType, Space
 from tests.affordances.cases import ROBOT, parcel, small_box
 
 START, GOAL = (0.4, -0.2, 0.1), (0.4, 0.2, 0.1)
@@ -20,7 +20,7 @@ START, GOAL = (0.4, -0.2, 0.1), (0.4, 0.2, 0.1)
 def _carry(*obstacles: dict[str, Any]) -> tuple[Action, ...]:
     context = parcel(position=START, goals=[GOAL], obstacles=list(obstacles))
     top = reason(context, ROBOT)[0]
-    assert top.grasp == Grasp.TWO_PALM_LATERAL
+    assert top.grasp == GraspType.TWO_PALM_LATERAL
     return top.actions
 
 

@@ -25,10 +25,8 @@ from planner.port import Pose
 from planner.testing import FakeWorld, tick_until
 from planner.wiring import wire
 from skills import quaternion as quat
-from skills.dual_arm import ARMS
-from skills.labels import Action, Space
-from skills.labels import Grasp as GraspType
 from skills.library import SkillLibrary
+from skills.vocabulary import ARMS, Action, GraspType, Space
 
 DT = 1.0 / 60.0
 

@@ -20,7 +20,7 @@ from planner.leaves import (
     Transport,
 )
 from planner.testing.harness import TickLog
-from skills.dual_arm import ARMS
+from skills.vocabulary import ARMS
 from worlds.sim_world import SimWorld
 
 pytestmark = pytest.mark.sim

@@ -13,8 +13,8 @@ from planner.default_tree import default_tree
 from planner.runlog import RunLog, node_labels
 from planner.runner import run_tree
 from planner.testing import FakeWorld
-from skills.labels import Arm
 from skills.library import SkillLibrary
+from skills.vocabulary import Arm
 
 DT = 1.0 / 60.0
 

@@ -14,7 +14,6 @@ from skills.composer import (
     grasped_state,
     relative_from_world,
 )
-from skills.coupling import Weighted
 from skills.couplings import (
     GraspMaintenance,
     LearntForcing,
@@ -22,11 +21,12 @@ from skills.couplings import (
     PotentialFieldAvoidance,
     Saturated,
 )
+from skills.couplings.term import Weighted
 from skills.default_library import build_default_library
-from skills.dual_arm import ARMS, GraspGeometry, grasp_matrix
-from skills.labels import Action, Arm
+from skills.dual_arm import GraspGeometry, grasp_matrix
 from skills.pose_dmp import PoseState, PoseTarget, coupled_step, fit_pose, pose_step
 from skills.types import Array
+from skills.vocabulary import ARMS, Action, Arm
 from tests.skills.conftest import pick_place_demo
 
 DT = 1.0 / 60.0

@@ -9,8 +9,8 @@ import pytest
 from numpy.testing import assert_allclose
 
 from skills import quaternion as quat
-from skills.coupling import CouplingTerm
 from skills.couplings import ForceTrackingGrasp, GraspMaintenance
+from skills.couplings.term import CouplingTerm
 from skills.interpreter import kernel_acceleration
 from skills.pose_dmp import PoseModel, PoseState
 

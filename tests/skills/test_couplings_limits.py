@@ -7,9 +7,9 @@ import pytest
 from numpy.testing import assert_allclose
 
 from skills import quaternion as quat
-from skills.coupling import CouplingTerm
 from skills.couplings import JointLimitRepulsion, WorkspaceRepulsion
 from skills.couplings.limits import barrier
+from skills.couplings.term import CouplingTerm
 from skills.pose_dmp import PoseModel, PoseState
 
 #: Coupling terms here ignore the DMP's target; any valid one will do.

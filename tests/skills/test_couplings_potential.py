@@ -9,9 +9,9 @@ import pytest
 from numpy.testing import assert_allclose
 
 from skills import quaternion as quat
-from skills.coupling import CouplingTerm
 from skills.couplings import PotentialFieldAvoidance, SphereObstacles
 from skills.couplings.potential import point_accelerations, potential
+from skills.couplings.term import CouplingTerm
 from skills.interpreter import kernel_acceleration
 from skills.pose_dmp import PoseModel, PoseState
 from skills.types import Array

@@ -11,7 +11,6 @@ from hypothesis import assume, given, settings
 from numpy.testing import assert_allclose
 
 from skills import quaternion as quat
-from skills.coupling import CouplingTerm
 from skills.couplings import (
     AvoidanceDemo,
     ObstacleSteering,
@@ -19,6 +18,7 @@ from skills.couplings import (
     fit_obstacle_steering,
     steering_accelerations,
 )
+from skills.couplings.term import CouplingTerm
 from skills.demonstration import Demonstration
 from skills.demos import avoidance_demo, straight_demo
 from skills.interpreter import kernel_acceleration

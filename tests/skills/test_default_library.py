@@ -10,8 +10,8 @@ import pytest
 from skills.default_library import build_default_library, fit_grasp_maintenance
 from skills.demos.generate import TEACHER_DAMPING, TEACHER_STIFFNESS, write_all
 from skills.demos.io import DemoFileError, read_demo_csv, write_demo_csv
-from skills.labels import Action, Space
 from skills.skill import SkillKind
+from skills.vocabulary import Action, Space
 
 DEMOS = Path(__file__).resolve().parents[2] / "skills" / "demos"
 

@@ -13,7 +13,7 @@ from skills.dual_arm import (
     integrate_twist,
     skew,
 )
-from skills.labels import Arm
+from skills.vocabulary import Arm
 
 RNG = np.random.default_rng(11)
 

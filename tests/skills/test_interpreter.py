@@ -10,7 +10,6 @@ from numpy.testing import assert_allclose
 
 from skills import quaternion as quat
 from skills.composer import DualArmComposer, DualArmState, grasped_state, reference_step
-from skills.coupling import CouplingTerm, Weighted
 from skills.couplings import (
     GraspMaintenance,
     LearntForcing,
@@ -20,13 +19,14 @@ from skills.couplings import (
     SphereObstacles,
     WorkspaceRepulsion,
 )
+from skills.couplings.term import CouplingTerm, Weighted
 from skills.default_library import build_default_library
 from skills.dual_arm import GraspGeometry
 from skills.interpreter import kernel_acceleration
-from skills.labels import ARMS, Action
 from skills.program import Kind
 from skills.state import PoseState, PoseTarget
 from skills.types import Array
+from skills.vocabulary import ARMS, Action
 
 DT = 1.0 / 60.0
 OBSTACLE = np.array([0.62, -0.08, 0.82])

@@ -11,11 +11,11 @@ from numpy.testing import assert_allclose
 
 from skills import quaternion as quat
 from skills.demonstration import Demonstration
-from skills.labels import Action, AffordanceElement, Space
 from skills.library import LibraryFileError, SkillLibrary
 from skills.pose_dmp import PoseState, fit_pose, pose_rollout
 from skills.recognition import recognise
 from skills.skill import Provenance, Skill, SkillKind, learnt_skill
+from skills.vocabulary import Action, AffordanceElement, Space
 from tests.skills.conftest import min_jerk, pick_place_demo
 
 WHEN = Provenance.now(("pick_place.csv",), "ridge regression", {"rms_m": 1e-4})

@@ -8,7 +8,7 @@ import numpy as np
 import pybullet as pb
 import pytest
 
-from skills.labels import Arm
+from skills.vocabulary import Arm
 from worlds.collision import OBSTACLES, TABLE, CollisionWorld, arm_group
 from worlds.scene import LATERAL_PALM_QUATERNIONS, Scene, lateral_grasp_palm_poses
 from worlds.spec import ObstacleSpec, SceneSpec, ShapeSpec

@@ -8,7 +8,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from skills import quaternion as quat
-from skills.labels import Arm
+from skills.vocabulary import Arm
 from worlds.impedance import (
     AffineTorqueLaw,
     GainArrays,

@@ -13,7 +13,7 @@ import pytest
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
-from skills.labels import Arm
+from skills.vocabulary import Arm
 from worlds.control import PalmCommand
 from worlds.scene import Scene, lateral_grasp_palm_poses
 from worlds.spec import SceneSpec

@@ -15,7 +15,7 @@ import pybullet as pb
 import pytest
 from numpy.typing import NDArray
 
-from skills.labels import Arm
+from skills.vocabulary import ARMS, Arm
 from tests.worlds.test_grasp import Log, minimum_jerk, tilt_deg
 from worlds.collision import CollisionWorld
 from worlds.control import PalmCommand
@@ -28,7 +28,6 @@ pytestmark = pytest.mark.sim
 WORLD = Path(__file__).resolve().parents[2] / "worlds" / "icub_parcel_pick_place.yaml"
 PARCEL = "parcel"
 SQUEEZE = 0.015  # target this far inside the face, m
-ARMS = (Arm.LEFT, Arm.RIGHT)
 
 
 @pytest.fixture(scope="module")

@@ -23,7 +23,7 @@ from worlds.world_file import (
     Fragility,
     MeshShape,
     ObjectState,
-    Pose,
+    PoseEntry,
     RobotModelName,
     Shape,
     SphereShape,
@@ -107,15 +107,15 @@ def test_default_world_obstacles_sit_where_documented(default_world: World) -> N
 
 def test_pose_quaternion_is_scalar_last_extrinsic_xyz_in_degrees() -> None:
     half = math.sqrt(0.5)
-    assert_allclose(Pose(position=(0, 0, 0)).quaternion_xyzw(), (0, 0, 0, 1))
+    assert_allclose(PoseEntry(position=(0, 0, 0)).quaternion_xyzw(), (0, 0, 0, 1))
     assert_allclose(
-        Pose(position=(0, 0, 0), rpy_deg=(90, 0, 0)).quaternion_xyzw(), (half, 0, 0, half)
+        PoseEntry(position=(0, 0, 0), rpy_deg=(90, 0, 0)).quaternion_xyzw(), (half, 0, 0, half)
     )
     assert_allclose(
-        Pose(position=(0, 0, 0), rpy_deg=(0, 0, 90)).quaternion_xyzw(), (0, 0, half, half)
+        PoseEntry(position=(0, 0, 0), rpy_deg=(0, 0, 90)).quaternion_xyzw(), (0, 0, half, half)
     )
     # Extrinsic: roll 90 then yaw 90 about the fixed axes = q_yaw * q_roll.
-    q = Pose(position=(0, 0, 0), rpy_deg=(90, 0, 90)).quaternion_xyzw()
+    q = PoseEntry(position=(0, 0, 0), rpy_deg=(90, 0, 90)).quaternion_xyzw()
     assert_allclose(q, (0.5, 0.5, 0.5, 0.5), atol=1e-12)
 
 

@@ -17,7 +17,7 @@ import numpy as np
 import pybullet_data
 
 from skills import quaternion as quat
-from skills.labels import Arm
+from skills.vocabulary import Arm
 from worlds.robots.cache import cached_urdf
 from worlds.robots.model import ArmSpec, BodySpec, RobotModel
 

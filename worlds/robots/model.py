@@ -19,7 +19,7 @@ from types import MappingProxyType
 import numpy as np
 from numpy.typing import NDArray
 
-from skills.labels import Arm
+from skills.vocabulary import Arm
 
 FloatArray = NDArray[np.float64]
 
@@ -96,7 +96,7 @@ class RobotModel:
     bodies : tuple of BodySpec
         Bodies to load, in order; :attr:`ArmSpec.body` indexes this tuple.
     arms : Mapping[Arm, ArmSpec]
-        Both arms, keyed by :class:`skills.labels.Arm`.
+        Both arms, keyed by :class:`skills.vocabulary.Arm`.
     palm2flange_position : tuple of float
         (3,) palm frame origin in the last arm link's frame, m (documentation and collision use).
     collision_exclusions : tuple of (int, str, int, str)

@@ -64,8 +64,8 @@ class AffordanceElement(StrEnum):
     ROTATABLE = "rotatable"
 
 
-class Grasp(StrEnum):
-    """Grasp types the reasoner can choose."""
+class GraspType(StrEnum):
+    """The grasps the reasoner can choose (the leaf that closes one is planner.leaves.Grasp)."""
 
     TWO_PALM_LATERAL = "two_palm_lateral"
     TWO_ARM_SUPPORT = "two_arm_support"
@@ -80,5 +80,5 @@ def _check_unique(enum_cls: type[Enum]) -> None:
         raise RuntimeError(f"{enum_cls.__name__}: duplicate values")
 
 
-for _cls in (Space, Arm, Action, AffordanceElement, Grasp):
+for _cls in (Space, Arm, Action, AffordanceElement, GraspType):
     _check_unique(_cls)
