@@ -19,10 +19,6 @@ import numpy as np
 EXIT_OK = 0
 EXIT_FAILURE = 1
 EXIT_BAD_INPUT = 2
-COMPILED_HELP = (
-    "compose compiled (numba, the fast extra), as the world file's sim.compiled: within 1e-9 "
-    "of the numpy path"
-)
 
 
 def _demo_command(args: argparse.Namespace) -> int:
@@ -138,14 +134,6 @@ def _load_world_or_exit(path: str) -> Any:
     except WorldFileError as err:
         print(err, file=sys.stderr)
         raise SystemExit(EXIT_BAD_INPUT) from None
-
-
-def _with_compiled_or_exit(world: Any, path: str, flag: bool) -> Any:
-    """The world composing compiled when ``--compiled`` or its ``sim.compiled`` asks; exit 2
-    when numba, which that needs, is not installed."""
-    if flag:
-        world = world.model_copy(update={"sim": world.sim.model_copy(update={"compiled": True})})
-    return world
 
 
 def _affordances_command(args: argparse.Namespace) -> int:
@@ -285,7 +273,7 @@ def _run_command(args: argparse.Namespace) -> int:
     from skills.library import LibraryFileError
     from worlds.scene import NoDisplayError
 
-    world = _with_compiled_or_exit(_load_world_or_exit(args.world), args.world, args.compiled)
+    world = _load_world_or_exit(args.world)
     if args.seed is not None:
         world = world.model_copy(update={"sim": world.sim.model_copy(update={"seed": args.seed})})
     out = Path(args.out)
@@ -333,7 +321,7 @@ def _trials_command(args: argparse.Namespace) -> int:
     """The paper's experiment: N trials of three moves with new obstacles, judged, resumable."""
     from experiment.trials import campaign_results, reason_of, run_campaign, summarise
 
-    world = _with_compiled_or_exit(_load_world_or_exit(args.world), args.world, args.compiled)
+    world = _load_world_or_exit(args.world)
     if args.n < 1 or args.workers < 1:
         print("--n, --workers: expected positive whole numbers", file=sys.stderr)
         return EXIT_BAD_INPUT
@@ -348,7 +336,7 @@ def _trials_command(args: argparse.Namespace) -> int:
             print(err, file=sys.stderr)
             return EXIT_BAD_INPUT
     out = Path(args.out)
-    earlier = campaign_results(out / "results.jsonl", args.seed, tree, world.sim.compiled).values()
+    earlier = campaign_results(out / "results.jsonl", args.seed, tree).values()
     tally = {"ok": sum(1 for r in earlier if r.get("success"))}
 
     def progress(rec: dict[str, Any], finished: int, total: int) -> None:
@@ -444,7 +432,6 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--gui", action="store_true", help="show PyBullet's window (needs a display)")
     run.add_argument("--no-animation", action="store_true", help="skip the GIF (faster)")
     run.add_argument("--json", action="store_true", help="print a JSON summary as the last line")
-    run.add_argument("--compiled", action="store_true", help=COMPILED_HELP)
     run.set_defaults(handler=_run_command)
     trials = sub.add_parser("trials", help="the paper's experiment: many randomised trials")
     trials.add_argument("world", help="world file (robot, table, object, settings)")
@@ -462,7 +449,6 @@ def build_parser() -> argparse.ArgumentParser:
     )
     trials.add_argument("--out", default="out/trials", help="folder of results.jsonl")
     trials.add_argument("--json", action="store_true", help="print a JSON summary as the last line")
-    trials.add_argument("--compiled", action="store_true", help=COMPILED_HELP)
     trials.set_defaults(handler=_trials_command)
     skills = sub.add_parser("skills", help="list a skill library")
     skills.add_argument("--library", help="library folder (default: learnt from skills/demos)")

@@ -251,7 +251,6 @@ def run_episode(
                 {"/object": name},
                 on_tick=on_tick,
                 attach=tuple(hooks),
-                compiled=world.sim.compiled,
             )
         finally:
             if log is not None:

@@ -263,7 +263,6 @@ def run_trial(job: tuple[dict[str, Any], int, int]) -> dict[str, Any]:
             "trial": trial,
             "seed": seed,
             "tree": base_data["tree"],
-            "compiled": base.sim.compiled,
             "obstacles": kinds,
             "failure": failure,
         }
@@ -303,18 +302,13 @@ def tree_key(tree: Path | None) -> str:
     return str(tree.resolve()) if tree is not None else ""
 
 
-def campaign_results(
-    path: Path, seed: int, tree: Path | None, compiled: bool = False
-) -> dict[int, dict[str, Any]]:
-    """The records in ``results.jsonl`` of one campaign: this seed, this tree, composed
-    compiled or not (the same within 1e-9, but not to the bit)."""
+def campaign_results(path: Path, seed: int, tree: Path | None) -> dict[int, dict[str, Any]]:
+    """The records in ``results.jsonl`` of one campaign: this seed, this tree."""
     key = tree_key(tree)
     return {
         r["trial"]: r  # a trial run twice (an interrupted write) counts once, the last
         for r in read_results(path)
-        if r.get("seed") == seed
-        and r.get("tree", "") == key
-        and bool(r.get("compiled", False)) == compiled
+        if r.get("seed") == seed and r.get("tree", "") == key
     }
 
 
@@ -353,7 +347,7 @@ def run_campaign(
     """
     out.mkdir(parents=True, exist_ok=True)
     results = out / "results.jsonl"
-    done = campaign_results(results, seed, tree, base.sim.compiled)
+    done = campaign_results(results, seed, tree)
     pending = [t for t in range(n) if t not in done]
     payload = {
         "world": base.model_dump(mode="json"),

@@ -301,14 +301,10 @@ def static_composition(
     state: DualArmState,
     relative: Mapping[Arm, list[tuple[CouplingTerm, float]]],
     tau: float,
-    compiled: bool = False,
 ) -> DualArmComposer:
-    """Relative skills only: the object's pose is held where it is (``compiled``: see
-    :meth:`skills.composer.DualArmComposer.start`)."""
+    """Relative skills only: the object's pose is held where it is."""
     obj = state.object
-    return DualArmComposer.start(
-        state, obj.position, obj.orientation, tau, relative=relative, compiled=compiled
-    )
+    return DualArmComposer.start(state, obj.position, obj.orientation, tau, relative=relative)
 
 
 def transport_composition(
@@ -322,15 +318,13 @@ def transport_composition(
     settings: TransportSettings | None = None,
     avoid_gain: float = 1.0,
     transport_weight: float = 1.0,
-    compiled: bool = False,
 ) -> DualArmComposer:
     """The simultaneous composition of one move, starting from the handed-over state.
 
     ``squeeze_force_n`` is the grip's force per palm, N, which bounds what avoidance may ask.
     ``avoid_gain`` multiplies the weights of obstacle steering and link-level avoidance;
     ``transport_weight`` multiplies the learnt pick-and-place's (a lower carry). A tree tries
-    such variants when a predicted path is not clear. ``compiled``: see
-    :meth:`skills.composer.DualArmComposer.start`.
+    such variants when a predicted path is not clear.
     """
     s = settings or TransportSettings()
     sel = plan.skill(Action.TRANSPORT)
@@ -352,7 +346,6 @@ def transport_composition(
         tau,
         absolute=absolute,
         relative=relative,
-        compiled=compiled,
     )
 
 
@@ -408,7 +401,6 @@ def compose_move(
     squeeze_force_n: float,
     avoid_gain: float = 1.0,
     transport_weight: float = 1.0,
-    compiled: bool = False,
 ) -> MovePlan:
     """Activate move ``index``'s obstacles and compose it from ``state``.
 
@@ -428,7 +420,6 @@ def compose_move(
         squeeze_force_n,
         avoid_gain=avoid_gain,
         transport_weight=transport_weight,
-        compiled=compiled,
     )
     return MovePlan(
         name, index, move, squeeze_force_n, avoid_gain, transport_weight, state, composer

@@ -74,7 +74,6 @@ def run_tree(
     blackboard: Mapping[str, Any] | None = None,
     on_tick: Callable[[py_trees.trees.BehaviourTree], None] | None = None,
     attach: tuple[Callable[[py_trees.trees.BehaviourTree], Any], ...] = (),
-    compiled: bool = False,
 ) -> RunResult:
     """Set up ``root`` with the world and tick it until it finishes or time runs out.
 
@@ -94,16 +93,12 @@ def run_tree(
     attach : tuple of callables
         Each is given the tree before setup (e.g. ``RunLog.attach``, or a function adding a
         post-tick handler).
-    compiled : bool
-        Leaves compose compiled (:mod:`skills.compiled`; needs numba).
     """
     seed_blackboard(blackboard or {})
     tree = py_trees.trees.BehaviourTree(root)
     for hook in attach:
         hook(tree)
-    tree.setup(
-        world=world, library=library, control_dt=control_dt, clock=world.time, compiled=compiled
-    )
+    tree.setup(world=world, library=library, control_dt=control_dt, clock=world.time)
     start_sim, start_wall = world.time(), time.perf_counter()
     ticks = 0
     while True:

@@ -191,7 +191,6 @@ class DualArmComposer:
         relative: Mapping[Arm, Sequence[tuple[CouplingTerm, float]]] | None = None,
         params: DMPParams | None = None,
         fresh_phase: bool = True,
-        compiled: bool = True,
     ) -> DualArmComposer:
         """Compose skills from a handed-over full state towards a goal pose of the object.
 
@@ -211,10 +210,7 @@ class DualArmComposer:
             Gains of the shared transformation system.
         fresh_phase : bool
             Restart the phase at 1 (a new move) rather than continue the handed-over one.
-        compiled : bool
-            Ignored: a composition always runs compiled.
         """
-        del compiled
         base = PoseModel.still(params)
         obj = state.object.with_phase(1.0) if fresh_phase else state.object
         target = base.target(obj.position, obj.orientation, goal_position, goal_orientation, tau)

@@ -98,13 +98,12 @@ def test_package_does_not_import_simulator(package: str) -> None:
     assert out == "", f"{package} imported {out}"
 
 
-def test_skills_imports_only_numpy_and_scipy() -> None:
-    # And numba, optional, for skills.compiled: what numba imports itself (it reads a YAML
-    # configuration when PyYAML is there) is numba's, so it is imported first.
+def test_skills_imports_only_numpy_scipy_and_numba() -> None:
+    # numba compiles the kernels: what numba imports itself (it reads a YAML configuration
+    # when PyYAML is there) is numba's, so it is imported first.
     code = (
-        "import importlib, importlib.util, pkgutil, sys\n"
-        "if importlib.util.find_spec('numba'):\n"
-        "    import numba\n"
+        "import importlib, pkgutil, sys\n"
+        "import numba\n"
         "before = set(sys.modules)\n"
         "import skills\n"
         "for m in pkgutil.walk_packages(skills.__path__, 'skills.'):\n"

@@ -366,8 +366,6 @@ class WorldSpec:
         What to move where.
     max_sim_time_s : float
         Simulated time limit of a run, s.
-    compiled : bool
-        Run the skills' composition step compiled.
     skill_library : Path or None
         Folder of the skill library, absolute; None for the default library.
     source : Path or None
@@ -378,7 +376,6 @@ class WorldSpec:
     scene: SceneSpec
     task: tuple[TaskStepSpec, ...]
     max_sim_time_s: float = 120.0
-    compiled: bool = False
     skill_library: Path | None = None
     source: Path | None = None
 

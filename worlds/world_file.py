@@ -362,7 +362,6 @@ def world_spec(world: World) -> WorldSpec:
             for step in world.task
         ),
         max_sim_time_s=float(sim.max_sim_time_s),
-        compiled=bool(sim.compiled),
         skill_library=None if library == DEFAULT_SKILL_LIBRARY else world.resolve_path(library),
         source=world.source,
     )

@@ -329,9 +329,8 @@ class SimSettings(_FileModel):
     gravity: _Finite = Field(default=-9.81, description="gravity along world z, m/s^2")
     max_sim_time_s: _Positive = Field(default=120.0, description="simulated time limit, s, > 0")
     compiled: StrictBool = Field(
-        default=False,
-        description="run the skills' composition step compiled (numba, the fast extra): "
-        "within 1e-9 of the numpy path, several times faster",
+        default=True,
+        description="ignored, kept so that older files load: every composition runs compiled",
     )
 
     @model_validator(mode="after")

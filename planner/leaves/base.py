@@ -38,12 +38,10 @@ class WorldLeaf(BehaviourWithPorts):
         self._world: WorldPort | None = None
         self._library: SkillLibrary | None = None
         self.control_dt = DEFAULT_CONTROL_DT
-        #: Compose compiled (``DualArmComposer.start(..., compiled=True)``; needs numba).
-        self.compiled = False
 
     def setup(self, **kwargs: Any) -> None:
-        """Receive the world port (``world``), the skill library (``library``), ``control_dt``
-        and whether to compose compiled (``compiled``)."""
+        """Receive the world port (``world``), the skill library (``library``) and
+        ``control_dt``."""
         world = kwargs.get("world")
         if world is not None:
             self._world = world
@@ -51,7 +49,6 @@ class WorldLeaf(BehaviourWithPorts):
         if library is not None:
             self._library = library
         self.control_dt = float(kwargs.get("control_dt", self.control_dt))
-        self.compiled = bool(kwargs.get("compiled", self.compiled))
 
     @property
     def world(self) -> WorldPort:

@@ -148,7 +148,6 @@ class PathClear(WorldLeaf):
             squeeze_force(plan, float(self.get_input("force_n"))),
             avoid_gain=float(self.get_input("avoid_gain")),
             transport_weight=float(self.get_input("transport_weight")),
-            compiled=self.compiled,
         )
         n = int(np.ceil((checked.composer.target.tau + 0.5) / self.control_dt))
         path = checked.fresh().rollout(n, self.control_dt)

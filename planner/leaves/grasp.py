@@ -95,7 +95,6 @@ class Grasp(MotionLeaf):
             measured_dual_state(world, name),
             relative,
             float(self.get_input("close_s")),
-            self.compiled,
         )
         self.started = world.time()
 

@@ -54,9 +54,7 @@ class Release(MotionLeaf):
             held_geometry(state, lateral_geometry(self.world, name)),
             float(self.get_input("opening_m")),
         )
-        self.composer = static_composition(
-            state, relative, float(self.get_input("open_s")), self.compiled
-        )
+        self.composer = static_composition(state, relative, float(self.get_input("open_s")))
         self.started = self.world.time()
 
     def update(self) -> Status:

@@ -94,7 +94,6 @@ class Transport(MotionLeaf):
                 force,
                 avoid_gain=avoid_gain,
                 transport_weight=transport_weight,
-                compiled=self.compiled,
             )
         else:
             ours = {

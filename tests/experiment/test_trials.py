@@ -128,16 +128,15 @@ def test_results_resume_and_summarise(tmp_path: Path) -> None:
     assert reason_of("move 2 placed 3.1 cm, 1.0 deg from its goal") == "move 2"
 
 
-def test_a_campaign_owns_the_records_of_its_seed_tree_and_compilation(tmp_path: Path) -> None:
+def test_a_campaign_owns_the_records_of_its_seed_and_tree(tmp_path: Path) -> None:
     results = tmp_path / "results.jsonl"
     records = [
-        {"trial": 0, "seed": 0, "tree": "", "success": True},  # before records said
-        {"trial": 1, "seed": 0, "tree": "", "compiled": False, "success": True},
-        {"trial": 0, "seed": 0, "tree": "", "compiled": True, "success": False},
-        {"trial": 2, "seed": 1, "tree": "", "compiled": True, "success": True},
+        {"trial": 0, "seed": 0, "tree": "", "success": True},
+        {"trial": 1, "seed": 0, "tree": "/elsewhere.xml", "success": True},
+        {"trial": 0, "seed": 0, "tree": "", "success": False},  # run again: the last counts
+        {"trial": 2, "seed": 1, "tree": "", "success": True},
     ]
     results.write_text("".join(json.dumps(r) + "\n" for r in records), encoding="utf-8")
-    assert sorted(campaign_results(results, 0, None)) == [0, 1]
-    assert campaign_results(results, 0, None)[0]["success"] is True
-    assert list(campaign_results(results, 0, None, compiled=True)) == [0]
-    assert list(campaign_results(results, 1, None, compiled=True)) == [2]
+    assert sorted(campaign_results(results, 0, None)) == [0]
+    assert campaign_results(results, 0, None)[0]["success"] is False
+    assert list(campaign_results(results, 1, None)) == [2]
