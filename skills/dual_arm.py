@@ -184,25 +184,7 @@ def _frame(normal_axis: Array, down_axis: Array, inward: Array) -> Array:
     down = np.array([0.0, 0.0, -1.0])
     body = np.stack((n, d, np.cross(n, d)), axis=1)
     world = np.stack((inward, down, np.cross(inward, down)), axis=1)
-    return _matrix_to_quaternion(world @ body.T)
-
-
-def _matrix_to_quaternion(m: Array) -> Array:
-    """Unit quaternion (x, y, z, w) of a rotation matrix (Shepperd's method)."""
-    tr = float(np.trace(m))
-    if tr > 0:
-        s = 2.0 * np.sqrt(tr + 1.0)
-        q = [(m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s, s / 4]
-    else:
-        i = int(np.argmax(np.diag(m)))
-        j, k = (i + 1) % 3, (i + 2) % 3
-        s = 2.0 * np.sqrt(1.0 + m[i, i] - m[j, j] - m[k, k])
-        q = [0.0, 0.0, 0.0, (m[k, j] - m[j, k]) / s]
-        q[i] = s / 4
-        q[j] = (m[j, i] + m[i, j]) / s
-        q[k] = (m[k, i] + m[i, k]) / s
-    out = np.array(q)
-    return out / np.linalg.norm(out)
+    return quat.from_matrix(world @ body.T)
 
 
 def integrate_twist(
