@@ -21,11 +21,11 @@ from collections.abc import Iterable
 from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
 
-import numpy as np
 from numpy.typing import ArrayLike
 
 from affordances import ObjectContext, RobotCapabilities, SceneQuery
 from skills import quaternion as quat
+from skills.state import validated_pose
 from skills.types import Array
 from skills.vocabulary import Arm
 
@@ -48,13 +48,7 @@ class Pose:
     @staticmethod
     def of(position: ArrayLike, orientation: ArrayLike = quat.IDENTITY) -> Pose:
         """Validated pose from array-likes."""
-        p = np.array(position, dtype=float)
-        if p.shape != (3,) or not np.all(np.isfinite(p)):
-            raise ValueError(f"position: expected 3 finite numbers, got {position!r}")
-        q = quat.as_quaternions(orientation, "orientation")
-        if q.shape != (4,):
-            raise ValueError(f"orientation: expected one quaternion (4,), got shape {q.shape}")
-        return Pose(p, q)
+        return Pose(*validated_pose(position, orientation))
 
 
 @dataclass(frozen=True)

@@ -17,6 +17,23 @@ from skills import quaternion as quat
 from skills.types import Array
 
 
+def validated_pose(position: ArrayLike, orientation: ArrayLike) -> tuple[Array, Array]:
+    """``position`` as 3 finite floats and ``orientation`` as one unit quaternion (4,).
+
+    Raises
+    ------
+    ValueError
+        Naming the argument, what was expected and what was received.
+    """
+    y = np.array(position, dtype=float)
+    if y.shape != (3,) or not np.all(np.isfinite(y)):
+        raise ValueError(f"position: expected 3 finite numbers, got {position!r}")
+    q = quat.as_quaternions(orientation, "orientation")
+    if q.shape != (4,):
+        raise ValueError(f"orientation: expected one quaternion (4,), got shape {q.shape}")
+    return y, q
+
+
 class PoseState(NamedTuple):
     """Full state of a pose DMP, the unit of handover between skills.
 
@@ -45,12 +62,7 @@ class PoseState(NamedTuple):
     @staticmethod
     def at_rest(position: ArrayLike, orientation: ArrayLike = quat.IDENTITY) -> PoseState:
         """At ``position`` and ``orientation`` with zero velocities, phase 1."""
-        y = np.array(position, dtype=float)
-        if y.shape != (3,) or not np.all(np.isfinite(y)):
-            raise ValueError(f"position: expected 3 finite numbers, got {position!r}")
-        q = quat.as_quaternions(orientation, "orientation")
-        if q.shape != (4,):
-            raise ValueError(f"orientation: expected one quaternion (4,), got shape {q.shape}")
+        y, q = validated_pose(position, orientation)
         z = np.zeros(3)
         return PoseState(y, z, z.copy(), q, z.copy(), z.copy(), 1.0)
 

@@ -341,14 +341,7 @@ class CollisionWorld:
                 for w, o in np.argwhere(gaps <= margin):
                     if collides[w]:
                         continue
-                    probe.setTransform(fcl.Transform(rot[w], pos[w]))
-                    if margin > 0.0:
-                        hit = fcl.distance(probe, obstacles[o].obj, fcl.DistanceRequest()) < margin
-                    else:
-                        hit = fcl.collide(
-                            probe, obstacles[o].obj, fcl.CollisionRequest(), fcl.CollisionResult()
-                        )
-                    collides[w] = bool(hit)
+                    collides[w] = _hit(probe, rot[w], pos[w], obstacles[o].obj, margin)
         return collides
 
     def arm_links(self, arm: Arm) -> tuple[str, ...]:
@@ -644,15 +637,7 @@ class CollisionWorld:
             for w, b, o in candidates:
                 if collides[w]:
                     continue
-                probe = probes[b]
-                probe.setTransform(fcl.Transform(r_all[w, b], p_all[w, b]))
-                if margin > 0.0:
-                    hit = fcl.distance(probe, obstacles[o].obj, fcl.DistanceRequest()) < margin
-                else:
-                    hit = fcl.collide(
-                        probe, obstacles[o].obj, fcl.CollisionRequest(), fcl.CollisionResult()
-                    )
-                collides[w] = bool(hit)
+                collides[w] = _hit(probes[b], r_all[w, b], p_all[w, b], obstacles[o].obj, margin)
         hits = np.flatnonzero(collides)
         return TrajectoryCheck(collides, int(hits[0]) if len(hits) else -1)
 
@@ -666,3 +651,18 @@ __all__ = [
     "TrajectoryCheck",
     "arm_group",
 ]
+
+
+def _hit(
+    probe: Any,
+    rotation: NDArray[np.float64],
+    position: NDArray[np.float64],
+    obstacle: Any,
+    margin: float,
+) -> bool:
+    """Whether ``probe`` posed at ``rotation`` (3, 3) and ``position`` (3,), world frame, comes
+    within ``margin`` m of ``obstacle`` (touches it, for a margin of 0): FCL's exact answer."""
+    probe.setTransform(fcl.Transform(rotation, position))
+    if margin > 0.0:
+        return bool(fcl.distance(probe, obstacle, fcl.DistanceRequest()) < margin)
+    return bool(fcl.collide(probe, obstacle, fcl.CollisionRequest(), fcl.CollisionResult()))
