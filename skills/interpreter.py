@@ -123,6 +123,40 @@ class Program:
             refresh(start, program.data)
         return program
 
+    @staticmethod
+    def single(
+        model: PoseModel, target: PoseTarget, couplings: Sequence[object], start: Array
+    ) -> Program:
+        """Pack one pose DMP: ``model``'s attractor and forcing towards ``target``, and its
+        coupling terms (for :meth:`pose_step`; ``start`` is its 19 values then its phase)."""
+        row = _space_row(model.params, target, True)
+        packer = Packer(0, target, spaces=1)
+        if np.any(target.effective_weights[:, :6]):
+            packer.term(LearntForcing(model), 1.0)
+        for term in couplings:
+            packer.term(term, 1.0)
+        row.append(float(max(packer.basis_size, 1)))
+        program = Program(
+            np.array([row]),
+            np.array(packer.rows, dtype=np.int64).reshape(-1, 3),
+            np.array([*packer.values, 0.0]),
+            tuple(packer.hooks),
+            tuple(packer.refreshers),
+        )
+        for refresh in program.refreshers:
+            refresh(start, program.data)
+        return program
+
+    def pose_step(self, x: Array, dt: float) -> Array:
+        """The next state of a single pose DMP (:meth:`single`), closed loop, from ``x``."""
+        for refresh in self.refreshers:
+            refresh(x, self.data)
+        for hook in self.hooks:
+            hook(x, self.data)
+        out = np.empty(STATE_SIZE + 1)
+        pose_step_kernel(x, self.spaces, self.rows, self.data, float(dt), out)
+        return out
+
     def step(self, x: Array, dt: float, closed_loop: bool = True) -> Array:
         """The next state and the commands (:data:`skills.layout.ROW_SIZE`) from ``x``.
 
@@ -213,10 +247,12 @@ def commands_kernel(out: Array) -> None:
 def accelerations_kernel(
     x: Array, spaces: Array, rows: npt.NDArray[np.int64], data: Array, acc: Array
 ) -> None:
-    """Every space's summed accelerations into ``acc`` (3, 6): its attractor, if it has one,
-    and every row (groups summed under their saturation)."""
+    """Every space's summed accelerations into ``acc`` (S, 6), for the S spaces of ``spaces``
+    (S, 13) and a state ``x`` of their S x 19 values then their S phases: each space's
+    attractor, if it has one, and every row (groups summed under their saturation)."""
     acc[:, :] = 0.0
-    for sp in range(3):
+    phases = STATE_SIZE * spaces.shape[0]
+    for sp in range(spaces.shape[0]):
         if spaces[sp, 0] != 0.0:
             attractor_kernel(x, STATE_SIZE * sp, spaces[sp], acc[sp])
     stack = np.zeros((MAX_DEPTH + 1, 6))  # level 0 is unused: the space's own sum
@@ -232,7 +268,7 @@ def accelerations_kernel(
             stack[level, :] = 0.0
             continue
         if kind == FORCING:
-            s = x[PHASES + sp]
+            s = x[phases + sp]
             table = int(data[o + 3])
             if table != psi_table or s != psi_phase:
                 activations_kernel(s, data, table, int(data[o + 1]), psi)
@@ -252,7 +288,7 @@ def accelerations_kernel(
         else:  # SATURATE: close the innermost group
             for i in range(6):
                 a[i] = stack[level, i]
-            saturate_kernel(a, x[PHASES + sp], data, o)
+            saturate_kernel(a, x[phases + sp], data, o)
             level -= 1
         w = data[o]
         if level == 0:
@@ -274,6 +310,18 @@ def step_kernel(
         integrate_kernel(x, STATE_SIZE * sp, acc[sp], dt, out)
         out[PHASES + sp] = phase_kernel(x[PHASES + sp], dt, spaces[sp, 10], spaces[sp, 11])
     commands_kernel(out)
+
+
+@kernel
+def pose_step_kernel(
+    x: Array, spaces: Array, rows: npt.NDArray[np.int64], data: Array, dt: float, out: Array
+) -> None:
+    """One step of a single pose DMP (one space): its accelerations, integration and phase;
+    ``x`` and ``out`` are its 19 values then its phase."""
+    acc = np.empty((1, 6))
+    accelerations_kernel(x, spaces, rows, data, acc)
+    integrate_kernel(x, 0, acc[0], dt, out)
+    out[STATE_SIZE] = phase_kernel(x[STATE_SIZE], dt, spaces[0, 10], spaces[0, 11])
 
 
 @kernel

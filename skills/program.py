@@ -66,6 +66,9 @@ class Packer:
     refreshers: list[Hook] = field(default_factory=list)
     tables: dict[bytes, int] = field(default_factory=dict)
     basis_size: int = 0
+    #: How many spaces the program has (3 for a dual-arm composition, 1 for a pose DMP): the
+    #: phases follow their states.
+    spaces: int = 3
 
     def add(self, kind: Kind, block: list[float]) -> int:
         """Append a row of ``kind`` over ``block`` (its weight first); its offset in the data."""
@@ -88,7 +91,7 @@ class Packer:
             )
         at = self.add(Kind.EXTERNAL, [weight, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
         base, target = STATE_SIZE * self.space, self.target
-        phase_at = 3 * STATE_SIZE + self.space
+        phase_at = self.spaces * STATE_SIZE + self.space
 
         def evaluate(x: Array, data: Array) -> None:
             lin, ang = acceleration(state_from(x, float(x[phase_at]), base), target)

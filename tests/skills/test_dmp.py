@@ -297,3 +297,38 @@ def test_learnt_forcing_is_the_model_forcing_scaled_for_the_running_target(
         assert_allclose([*lin, *ang], expected, rtol=1e-12, atol=tol)
         fast = np.concatenate(kernel_acceleration(forcing, state, target))
         assert_allclose(fast, expected, rtol=1e-12, atol=tol)
+
+
+class Lift:
+    """A state-dependent coupling of a user's own (no kernel): it runs beside the kernels."""
+
+    def acceleration(self, state: PoseState, target: object) -> tuple[np.ndarray, np.ndarray]:
+        return np.array([0.0, 0.0, 0.2 * state.velocity[0]]), np.array([0.0, 0.0, 0.05])
+
+
+def test_the_compiled_pose_dmp_steps_as_the_numpy_reference(demo: Demonstration) -> None:
+    model = fit_pose(demo)
+    rng = np.random.default_rng(12)
+    start = PoseState(
+        demo.positions[0],
+        rng.normal(size=3) * 0.1,
+        rng.normal(size=3),
+        demo.orientations[0],
+        rng.normal(size=3) * 0.1,
+        rng.normal(size=3),
+        1.0,
+    )
+    goal_q = quat.from_axis_angle([0.0, 0.0, 1.0], 0.5)
+    dmp = PoseDMP.start(model, start, demo.positions[-1] + 0.1, goal_q, 1.5, [Lift()])
+    reference = dmp.state
+    for i in range(400):
+        measured = None
+        if i % 50 == 25:  # closed loop on a nudged state now and then
+            measured = dmp.state._replace(position=dmp.state.position + rng.normal(size=3) * 1e-3)
+            reference = measured
+        reference = pose_step(reference, model, dmp.target, DT, dmp.couplings)
+        got = dmp.step(DT, measured)
+        for a, b in zip(got, reference, strict=True):
+            assert_allclose(a, b, rtol=1e-9, atol=1e-9)
+        if i == 200:
+            dmp.set_goal(demo.positions[-1])  # packs again
