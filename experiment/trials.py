@@ -36,7 +36,7 @@ import numpy as np
 import pybullet as pb
 
 from worlds.scene import Scene, lateral_grasp_palm_poses
-from worlds.world_file import _CONTEXT_BASE_DIR, Region, TrialSettings, World
+from worlds.world_file import Region, TrialSettings, World, world_from_data
 
 #: The goal regions in the order of the moves.
 GOAL_REGIONS = ("centre", "right", "left")
@@ -190,15 +190,7 @@ def draw_trial(
         }
     ]
     data["name"] = f"{base.name}_trial_{trial}"
-    return validate_like(data, base.source), kinds
-
-
-def validate_like(data: dict[str, Any], source: Path | None) -> World:
-    """Validate world data as if it were read from ``source`` (relative paths resolve there)."""
-    context: dict[str, Any] = {}
-    if source is not None:
-        context = {_CONTEXT_BASE_DIR: source.parent, "source": source}
-    return World.model_validate(data, context=context)
+    return world_from_data(data, base.source), kinds
 
 
 def _draw_sphere(
@@ -246,7 +238,7 @@ def run_trial(job: tuple[dict[str, Any], int, int]) -> dict[str, Any]:
 
     base_data, seed, trial = job
     source = Path(base_data["source"]) if base_data["source"] else None
-    base = validate_like(base_data["world"], source)
+    base = world_from_data(base_data["world"], source)
     tree = Path(base_data["tree"]) if base_data["tree"] else None
     try:
         world, kinds = draw_trial(base, seed, trial)

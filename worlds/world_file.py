@@ -70,9 +70,6 @@ from worlds.world_schema import (
     WorldObject,
 )
 
-# The old private name, still read by the trial campaign.
-_CONTEXT_BASE_DIR = CONTEXT_BASE_DIR
-
 __all__ = [
     "DEFAULT_SKILL_LIBRARY",
     "WORLD_FILE_VERSION",
@@ -105,6 +102,7 @@ __all__ = [
     "load_world",
     "world_cli_schema",
     "world_cli_validate",
+    "world_from_data",
     "world_json_schema",
     "world_spec",
 ]
@@ -201,6 +199,21 @@ def _parse(text: str, path: Path, label: str) -> Any:
         raise WorldFileError(label, [problem]) from None
 
 
+def world_from_data(data: Mapping[str, Any], source: Path | None) -> World:
+    """Validate world data as if it were read from the file ``source`` (relative paths inside
+    resolve against its folder; None: against the working directory).
+
+    Raises
+    ------
+    pydantic.ValidationError
+        If the data is not a valid world.
+    """
+    context: dict[str, Any] = {}
+    if source is not None:
+        context = {CONTEXT_BASE_DIR: source.parent, "source": source}
+    return World.model_validate(data, context=context)
+
+
 def load_world(path: str | os.PathLike[str]) -> World:
     """Read and validate a world file (YAML, or JSON if the name ends in ``.json``).
 
@@ -228,10 +241,8 @@ def load_world(path: str | os.PathLike[str]) -> World:
         received = "an empty file" if data is None else show_value(data)
         top = f"a mapping with the keys {', '.join(World.model_fields)}"
         raise WorldFileError(label, [WorldFileProblem(None, top, received)])
-    source = file.absolute()
-    context = {CONTEXT_BASE_DIR: source.parent, "source": source}
     try:
-        return World.model_validate(data, context=context)
+        return world_from_data(data, file.absolute())
     except ValidationError as exc:
         raise WorldFileError(label, problems_from(exc, World)) from None
     except RecursionError:
