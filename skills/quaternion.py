@@ -321,6 +321,32 @@ def from_rpy(rpy: ArrayLike) -> Array:
     )
 
 
+def to_rpy(q: ArrayLike) -> Array:
+    """Extrinsic x-y-z angles ``(roll, pitch, yaw)`` ``(..., 3)``, rad, of quaternions
+    ``(..., 4)``: the inverse of :func:`from_rpy`, pitch in [-pi/2, pi/2].
+
+    At pitch +-pi/2 (gimbal lock) roll and yaw are not separate; roll takes their sum and yaw
+    is 0, which gives the same rotation.
+    """
+    arr = np.asarray(q, dtype=float)
+    x, y, z, w = arr[..., 0], arr[..., 1], arr[..., 2], arr[..., 3]
+    sin_pitch = np.clip(2.0 * (w * y - z * x), -1.0, 1.0)
+    pitch = np.arcsin(sin_pitch)
+    roll = np.arctan2(2.0 * (w * x + y * z), 1.0 - 2.0 * (x * x + y * y))
+    yaw = np.arctan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+    locked = np.abs(sin_pitch) > 1.0 - 1e-12
+    # In gimbal lock only roll -/+ yaw is defined: put it all in roll.
+    both = 2.0 * np.arctan2(x, w) * np.sign(sin_pitch)
+    roll = np.where(locked, np.sign(sin_pitch) * both, roll)
+    yaw = np.where(locked, 0.0, yaw)
+    return np.stack((roll, pitch, yaw), axis=-1)
+
+
+def from_rotation_vector(v: ArrayLike) -> Array:
+    """Quaternions ``(..., 4)`` of rotation vectors ``(..., 3)`` (axis times angle, rad)."""
+    return exp(0.5 * np.asarray(v, dtype=float))
+
+
 def from_matrix(m: ArrayLike) -> Array:
     """Unit quaternions ``(..., 4)`` of rotation matrices ``(..., 3, 3)``.
 

@@ -123,3 +123,21 @@ def test_from_matrix_inverts_to_matrix_with_scipys_sign() -> None:
     for m in (np.diag([1.0, -1.0, -1.0]), np.array([[0.0, -1, 0], [0, 0, 1], [-1, 0, 0]])):
         assert_allclose(quat.to_matrix(quat.from_matrix(m)), m, atol=1e-15)
         assert_allclose(quat.from_matrix(m), Rotation.from_matrix(m).as_quat(), atol=1e-15)
+
+
+def test_to_rpy_inverts_from_rpy_and_keeps_the_rotation_in_gimbal_lock() -> None:
+    rng = np.random.default_rng(21)
+    q = quat.as_quaternions(rng.normal(size=(500, 4)))
+    rpy = quat.to_rpy(q)
+    assert np.all(np.abs(rpy[:, 1]) <= np.pi / 2)
+    assert np.max(quat.angle_between(quat.from_rpy(rpy), q)) < 1e-12
+    for pitch in (np.pi / 2, -np.pi / 2):
+        locked = quat.from_rpy([0.3, pitch, -0.5])
+        # arcsin near 1 keeps half the digits: 1e-8 rad of pitch.
+        assert quat.angle_between(quat.from_rpy(quat.to_rpy(locked)), locked) < 1e-7
+
+
+def test_a_rotation_vector_turns_by_its_length_about_itself() -> None:
+    q = quat.from_rotation_vector([0.0, 0.0, 0.6])
+    np.testing.assert_allclose(q, quat.from_axis_angle([0.0, 0.0, 1.0], 0.6), atol=1e-15)
+    np.testing.assert_allclose(quat.from_rotation_vector(np.zeros(3)), quat.IDENTITY, atol=0)

@@ -26,13 +26,12 @@ of the world file (x forward, left arm at +y) is the root link turned by 180 deg
 from __future__ import annotations
 
 import math
-import warnings
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
+from skills import quaternion as quat
 from skills.vocabulary import Arm
 from worlds.robots.cache import cached_urdf
 from worlds.robots.model import ArmSpec, BodySpec, RobotModel
@@ -80,7 +79,7 @@ PALM_CLEARANCE = 0.002
 #: arm joints are mirrored, so the same values give the mirrored posture of the right arm.
 LEFT_REST = (-0.9, 0.35, 0.3, 1.2, 0.0, 0.0, 0.0)
 #: Root link frame in the robot frame: turned by pi about z (the root's x points backwards).
-_ROOT2ROBOT = Rotation.from_euler("z", math.pi)
+_ROOT2ROBOT = quat.from_axis_angle([0.0, 0.0, 1.0], math.pi)
 
 
 def icub_source() -> Path:
@@ -99,22 +98,20 @@ def _origin(parent: ET.Element, xyz: tuple[float, ...], rpy: tuple[float, ...] =
     )
 
 
-def _read_origin(element: ET.Element) -> tuple[np.ndarray, Rotation]:
+def _read_origin(element: ET.Element) -> tuple[np.ndarray, np.ndarray]:
+    """An element's origin: position (3,) and orientation (4,) in its parent's frame."""
     origin = element.find("origin")
     if origin is None:
-        return np.zeros(3), Rotation.identity()
+        return np.zeros(3), quat.IDENTITY.copy()
     xyz = np.array([float(v) for v in origin.get("xyz", "0 0 0").split()])
     rpy = [float(v) for v in origin.get("rpy", "0 0 0").split()]
-    return xyz, Rotation.from_euler("xyz", rpy)
+    return xyz, quat.from_rpy(rpy)
 
 
-def _set_origin(element: ET.Element, xyz: np.ndarray, rotation: Rotation) -> None:
+def _set_origin(element: ET.Element, xyz: np.ndarray, rotation: np.ndarray) -> None:
     for old in element.findall("origin"):
         element.remove(old)
-    with warnings.catch_warnings():
-        # At +-90 degrees of pitch scipy warns of gimbal lock; the angles still give the rotation.
-        warnings.simplefilter("ignore", UserWarning)
-        rpy = rotation.as_euler("xyz")
+    rpy = quat.to_rpy(rotation)
     origin = ET.Element(
         "origin",
         xyz=" ".join(f"{v:.9g}" for v in xyz),
@@ -144,8 +141,8 @@ def _palm_link(robot: ET.Element, side: str, palm_size: tuple[float, float, floa
     _set_origin(joint, position, rotation)
 
 
-def palm2hand(side: str, palm_size: tuple[float, float, float]) -> tuple[np.ndarray, Rotation]:
-    """Palm frame in the hand link frame: position (3,) m and rotation.
+def palm2hand(side: str, palm_size: tuple[float, float, float]) -> tuple[np.ndarray, np.ndarray]:
+    """Palm frame in the hand link frame: position (3,) m and orientation (4,).
 
     The palm's z axis (contact normal) is the hand's -y axis (out of the inner face), its y
     axis runs along the hand's x (the fingers of the left hand; the right hand's point along -x)
@@ -157,8 +154,8 @@ def palm2hand(side: str, palm_size: tuple[float, float, float]) -> tuple[np.ndar
     position = np.array([fingers * PALM_ALONG_FINGERS, y, PALM_TOWARDS_THUMB])
     # Columns: palm x, y, z in the hand frame; y = z x x is the hand's x for both hands.
     matrix = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, -1.0], [-1.0, 0.0, 0.0]])
-    twist = Rotation.from_rotvec([0.0, 0.0, -fingers * PALM_TWIST])
-    return position, Rotation.from_matrix(matrix) * twist
+    twist = quat.from_rotation_vector([0.0, 0.0, -fingers * PALM_TWIST])
+    return position, quat.multiply(quat.from_matrix(matrix), twist)
 
 
 def _arm_link_names(side: str) -> set[str]:
@@ -169,7 +166,7 @@ def icub_urdf_texts(
     palm_size: tuple[float, float, float],
     palm_friction: float,
     torso_pitch_deg: float = 0.0,
-) -> tuple[str, str, np.ndarray, Rotation]:
+) -> tuple[str, str, np.ndarray, np.ndarray]:
     """URDF texts of the two iCub bodies and where the right-arm body sits.
 
     Parameters
@@ -187,8 +184,8 @@ def icub_urdf_texts(
         Body 0 (everything but the right arm) and body 1 (the right arm on its mount).
     mount2root_position : ndarray
         (3,) chest frame (the right arm's mount) in the root link frame, m.
-    mount2root_rotation : Rotation
-        Its orientation.
+    mount2root_rotation : ndarray
+        (4,) its orientation.
     """
     source = icub_source()
     package_root = source.parents[3]  # share/iCub/robots/<variant>/model.urdf -> share
@@ -219,8 +216,8 @@ def icub_urdf_texts(
             axis_text = axis_element.get("xyz", "0 0 1") if axis_element is not None else "0 0 1"
             axis = np.array([float(v) for v in axis_text.split()])
             xyz, rotation = _read_origin(joint)
-            lean = Rotation.from_rotvec(axis * math.radians(torso_pitch_deg))
-            _set_origin(joint, xyz, rotation * lean)
+            lean = quat.from_rotation_vector(axis * math.radians(torso_pitch_deg))
+            _set_origin(joint, xyz, quat.multiply(rotation, lean))
         joint.set("type", "fixed")
         for tag in ("axis", "limit"):
             for sub in joint.findall(tag):
@@ -228,12 +225,12 @@ def icub_urdf_texts(
 
     # Chest frame in the root frame (the joints up to it are now fixed).
     joint_to = {_child(j): j for j in robot.findall("joint")}
-    position, rotation = np.zeros(3), Rotation.identity()
+    position, rotation = np.zeros(3), quat.IDENTITY.copy()
     link_name = "chest"
     while link_name in joint_to:
         joint = joint_to[link_name]
         xyz, rot = _read_origin(joint)
-        position, rotation = xyz + rot.apply(position), rot * rotation
+        position, rotation = xyz + quat.rotate(rot, position), quat.multiply(rot, rotation)
         link_name = _parent(joint)
 
     right_links = _arm_link_names("r")
@@ -352,22 +349,24 @@ def icub_model(
     )
     trunk_urdf = cached_urdf(trunk_text, "icub_trunk", cache_dir)
     right_urdf = cached_urdf(right_text, "icub_right_arm", cache_dir)
-    robot2world = Rotation.from_euler("xyz", np.radians(base_rpy_deg))
-    root2world = robot2world * _ROOT2ROBOT
-    root_position = np.asarray(base_position, float) + robot2world.apply([0, 0, mount_height])
-    mount_position = root_position + root2world.apply(mount2root_p)
-    mount2world = root2world * mount2root_r
+    robot2world = quat.from_rpy(np.radians(base_rpy_deg))
+    root2world = quat.multiply(robot2world, _ROOT2ROBOT)
+    root_position = np.asarray(base_position, float) + quat.rotate(
+        robot2world, [0, 0, mount_height]
+    )
+    mount_position = root_position + quat.rotate(root2world, mount2root_p)
+    mount2world = quat.multiply(root2world, mount2root_r)
 
-    def quat(rotation: Rotation) -> tuple[float, float, float, float]:
-        x, y, z, w = (float(v) for v in rotation.as_quat())
+    def quat4(rotation: np.ndarray) -> tuple[float, float, float, float]:
+        x, y, z, w = (float(v) for v in rotation)
         return (x, y, z, w)
 
     def vec(v: np.ndarray) -> tuple[float, float, float]:
         return (float(v[0]), float(v[1]), float(v[2]))
 
     bodies = (
-        BodySpec(trunk_urdf, vec(root_position), quat(root2world)),
-        BodySpec(right_urdf, vec(mount_position), quat(mount2world)),
+        BodySpec(trunk_urdf, vec(root_position), quat4(root2world)),
+        BodySpec(right_urdf, vec(mount_position), quat4(mount2world)),
     )
     trunk_links, trunk_joints = _link_and_joint_order(trunk_text)
     right_links, right_joints = _link_and_joint_order(right_text)
