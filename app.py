@@ -319,6 +319,7 @@ def _run_command(args: argparse.Namespace) -> int:
 
 def _trials_command(args: argparse.Namespace) -> int:
     """The paper's experiment: N trials of three moves with new obstacles, judged, resumable."""
+    from experiment.results import ResultsFileError
     from experiment.trials import campaign_results, reason_of, run_campaign, summarise
 
     world = _load_world_or_exit(args.world)
@@ -336,7 +337,11 @@ def _trials_command(args: argparse.Namespace) -> int:
             print(err, file=sys.stderr)
             return EXIT_BAD_INPUT
     out = Path(args.out)
-    earlier = campaign_results(out / "results.jsonl", args.seed, tree).values()
+    try:
+        earlier = campaign_results(out / "results.jsonl", args.seed, tree).values()
+    except ResultsFileError as err:
+        print(err, file=sys.stderr)
+        return EXIT_BAD_INPUT
     tally = {"ok": sum(1 for r in earlier if r.get("success"))}
 
     def progress(rec: dict[str, Any], finished: int, total: int) -> None:
@@ -353,8 +358,16 @@ def _trials_command(args: argparse.Namespace) -> int:
             flush=True,
         )
 
+    def notice(text: str) -> None:
+        print(text, file=sys.stderr)
+
     try:
-        records = run_campaign(world, args.n, args.seed, out, args.workers, progress, tree)
+        records = run_campaign(
+            world, args.n, args.seed, out, args.workers, progress, tree, on_notice=notice
+        )
+    except ResultsFileError as err:  # a folder that is not one, or another campaign in it
+        print(f"\n{err}", file=sys.stderr)
+        return EXIT_BAD_INPUT
     except KeyboardInterrupt:
         print(
             f"\ninterrupted: finished trials are in {out / 'results.jsonl'}; "

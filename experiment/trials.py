@@ -22,9 +22,11 @@ campaign resumes where it stopped.
 
 from __future__ import annotations
 
+import ctypes
 import json
 import math
 import os
+import signal
 from collections import Counter
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
@@ -35,6 +37,12 @@ from typing import Any
 import numpy as np
 import pybullet as pb
 
+from experiment.results import (
+    ResultsFileError,
+    campaign_lock,
+    read_results,
+    repair_tail,
+)
 from worlds.scene import Scene, lateral_grasp_palm_poses
 from worlds.world_file import Region, TrialSettings, World, world_from_data
 
@@ -273,35 +281,38 @@ def reason_of(failure: str) -> str:
     return failure.split(":")[0].split(" placed")[0]
 
 
-def read_results(path: Path) -> list[dict[str, Any]]:
-    """The records in ``results.jsonl``, in order (a torn last line is ignored); each has an
-    integer ``trial``."""
-    records: list[dict[str, Any]] = []
-    if not path.exists():
-        return records
-    for line in path.read_text(encoding="utf-8").splitlines():
-        try:
-            rec = json.loads(line)
-            rec["trial"] = int(rec["trial"])
-        except (json.JSONDecodeError, KeyError, TypeError, ValueError):
-            continue
-        records.append(rec)
-    return records
-
-
 def tree_key(tree: Path | None) -> str:
     """How records name the tree their trials ran: its absolute path, "" for the default."""
     return str(tree.resolve()) if tree is not None else ""
 
 
 def campaign_results(path: Path, seed: int, tree: Path | None) -> dict[int, dict[str, Any]]:
-    """The records in ``results.jsonl`` of one campaign: this seed, this tree."""
+    """The records in ``results.jsonl`` of one campaign: this seed, this tree (lines that are
+    not records are skipped: :func:`experiment.results.read_results` counts them).
+
+    Raises
+    ------
+    ResultsFileError
+        If the file is a folder or unreadable.
+    """
     key = tree_key(tree)
     return {
         r["trial"]: r  # a trial run twice (an interrupted write) counts once, the last
-        for r in read_results(path)
+        for r in read_results(path).records
         if r.get("seed") == seed and r.get("tree", "") == key
     }
+
+
+def _worker_init() -> None:
+    """In a worker: leave Ctrl-C to the parent (which ends the pool), and die with it."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:  # Linux: the kernel sends SIGTERM when the parent dies, even by SIGKILL
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        pass
+    if os.getppid() == 1:  # the parent died before the line above took effect
+        os._exit(1)
 
 
 def run_campaign(
@@ -312,6 +323,7 @@ def run_campaign(
     workers: int = 1,
     on_result: Callable[[dict[str, Any], int, int], None] | None = None,
     tree: Path | None = None,
+    on_notice: Callable[[str], None] | None = None,
 ) -> list[dict[str, Any]]:
     """Run trials ``0..n-1`` not yet in ``out/results.jsonl``; append each as it finishes.
 
@@ -331,14 +343,53 @@ def run_campaign(
     tree : Path, optional
         Behaviour tree XML every trial runs (default: the paper's tree built in code).
         Records remember it: a campaign resumes only the trials of the same seed and tree.
+    on_notice : callable (text), optional
+        Told of what was repaired or skipped in an earlier ``results.jsonl``.
 
     Returns
     -------
     list of dict
         The records of trials ``0..n-1`` for this seed, in trial order.
+
+    Raises
+    ------
+    ResultsFileError
+        If ``out`` cannot hold the results, or its results file cannot be read or repaired.
+    CampaignBusyError
+        If another campaign is writing into ``out``.
     """
-    out.mkdir(parents=True, exist_ok=True)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise ResultsFileError(f"{out}: cannot make the folder: {err.strerror or err}") from None
+    with campaign_lock(out):
+        return _run_locked(base, n, seed, out, workers, on_result, tree, on_notice or _quiet)
+
+
+def _quiet(text: str) -> None:
+    del text
+
+
+def _run_locked(
+    base: World,
+    n: int,
+    seed: int,
+    out: Path,
+    workers: int,
+    on_result: Callable[[dict[str, Any], int, int], None] | None,
+    tree: Path | None,
+    on_notice: Callable[[str], None],
+) -> list[dict[str, Any]]:
     results = out / "results.jsonl"
+    cut = repair_tail(results)
+    if cut:
+        on_notice(f"{results}: cut a torn last line ({cut} bytes) before appending")
+    earlier = read_results(results)
+    if earlier.skipped:
+        on_notice(
+            f"{results}: skipped {earlier.skipped} line(s) that are not trial records; "
+            "their trials run again"
+        )
     done = campaign_results(results, seed, tree)
     pending = [t for t in range(n) if t not in done]
     payload = {
@@ -348,7 +399,11 @@ def run_campaign(
     }
     jobs = [(payload, seed, t) for t in pending]
     finished = n - len(pending)
-    with open(results, "a", encoding="utf-8") as fh:
+    try:
+        fh = open(results, "a", encoding="utf-8")
+    except OSError as err:
+        raise ResultsFileError(f"{results}: cannot write it: {err.strerror or err}") from None
+    with fh:
 
         def keep(rec: dict[str, Any]) -> None:
             nonlocal finished
@@ -367,9 +422,16 @@ def run_campaign(
             import multiprocessing as mp
 
             ctx = mp.get_context("fork")
-            with ctx.Pool(workers) as pool:
+            pool = ctx.Pool(workers, initializer=_worker_init)
+            try:
                 for rec in pool.imap_unordered(run_trial, jobs):
                     keep(rec)
+                pool.close()
+            except BaseException:  # Ctrl-C included: end the workers, keep what finished
+                pool.terminate()
+                raise
+            finally:
+                pool.join()
     return [done[t] for t in range(n) if t in done]
 
 

@@ -9,13 +9,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from experiment.results import read_results
 from experiment.trials import (
     GOAL_REGIONS,
     RobotClearance,
     _box_gap,
     campaign_results,
     draw_trial,
-    read_results,
     reason_of,
     summarise,
 )
@@ -115,8 +115,9 @@ def test_results_resume_and_summarise(tmp_path: Path) -> None:
         },
     ]
     path.write_text("\n".join(json.dumps(r) for r in rows) + '\n{"trial": 2, "se')  # torn line
-    done = read_results(path)
-    assert [r["trial"] for r in done] == [0, 1]
+    read = read_results(path)
+    done = read.records
+    assert [r["trial"] for r in done] == [0, 1] and read.skipped == 1
     s = summarise(done)
     assert s["trials"] == 2 and s["successes"] == 1
     assert s["failure_reasons"] == {"obstacle contact: parcel/right_arm": 1}

@@ -1,0 +1,130 @@
+"""A campaign's results file survives kills, corruption and a second campaign, in real processes."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from experiment.results import CampaignBusyError, campaign_lock, read_results, repair_tail
+
+ROOT = Path(__file__).resolve().parents[2]
+WORLD = ROOT / "worlds" / "parcel_pick_place.yaml"
+
+
+def record(trial: int, seed: int = 0) -> str:
+    return json.dumps({"trial": trial, "seed": seed, "tree": "", "success": True}) + "\n"
+
+
+def trials(out: Path, n: int, *extra: str, **kwargs: object) -> subprocess.Popen[str]:
+    cmd = [sys.executable, str(ROOT / "app.py"), "trials", str(WORLD), "--n", str(n)]
+    return subprocess.Popen(
+        [*cmd, "--out", str(out), *extra],
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        **kwargs,  # type: ignore[arg-type]
+    )
+
+
+def test_a_torn_tail_is_cut_and_bad_lines_are_counted(tmp_path: Path) -> None:
+    path = tmp_path / "results.jsonl"
+    bad_types = json.dumps({"trial": "1", "seed": 0, "success": True})
+    path.write_bytes(
+        (record(0) + "\xff\xfe not text\n").encode("latin-1")
+        + (bad_types + "\n" + record(2) + '{"trial": 3, "se').encode()
+    )
+    assert repair_tail(path) == len('{"trial": 3, "se')
+    assert path.read_bytes().endswith(b"\n")
+    read = read_results(path)
+    assert [r["trial"] for r in read.records] == [0, 2] and read.skipped == 2
+    assert repair_tail(path) == 0  # whole already
+
+
+def test_a_folder_where_the_results_belong_is_one_message(tmp_path: Path) -> None:
+    (tmp_path / "results.jsonl").mkdir()
+    proc = trials(tmp_path, 1)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 2
+    assert "results.jsonl: expected a results file, got a folder" in err
+    assert "Traceback" not in err
+
+
+def test_a_second_campaign_in_the_same_folder_is_refused(tmp_path: Path) -> None:
+    with campaign_lock(tmp_path):
+        with (
+            pytest.raises(CampaignBusyError, match=f"process {os.getpid()}"),
+            campaign_lock(tmp_path),
+        ):
+            pass
+        proc = trials(tmp_path, 1)
+        _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 2
+    assert "another campaign" in err and f"process {os.getpid()}" in err
+    assert "Traceback" not in err
+    assert (
+        not (tmp_path / "results.jsonl").exists()
+        or read_results(tmp_path / "results.jsonl").records == []
+    )
+
+
+@pytest.mark.sim
+def test_a_resumed_campaign_appends_after_a_torn_line(tmp_path: Path) -> None:
+    path = tmp_path / "results.jsonl"
+    path.write_text(record(0) + record(1) + '{"trial": 2, "seed": 0, "tr', encoding="utf-8")
+    proc = trials(tmp_path, 3)
+    _, err = proc.communicate(timeout=300)
+    assert proc.returncode in (0, 1), err
+    assert "cut a torn last line" in err and "Traceback" not in err
+    read = read_results(path)
+    assert [r["trial"] for r in read.records] == [0, 1, 2] and read.skipped == 0
+
+
+def _group_alive(pgid: int) -> bool:
+    try:
+        os.killpg(pgid, 0)
+    except ProcessLookupError:
+        return False
+    return True
+
+
+def _wait_for_records(path: Path, count: int, proc: subprocess.Popen[str]) -> None:
+    deadline = time.monotonic() + 240
+    while time.monotonic() < deadline and proc.poll() is None:
+        if path.exists() and len(read_results(path).records) >= count:
+            return
+        time.sleep(0.2)
+    raise AssertionError(f"no {count} records before the deadline: {proc.poll()}")
+
+
+@pytest.mark.sim
+def test_ctrl_c_with_two_workers_ends_them_without_tracebacks(tmp_path: Path) -> None:
+    proc = trials(tmp_path, 8, "--workers", "2", start_new_session=True)
+    _wait_for_records(tmp_path / "results.jsonl", 1, proc)
+    os.killpg(proc.pid, signal.SIGINT)  # what a terminal's Ctrl-C does: the whole group
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130
+    assert "Traceback" not in err and "KeyboardInterrupt" not in err
+    assert "run the same command again to resume" in err
+    time.sleep(0.5)
+    assert not _group_alive(proc.pid)
+    assert read_results(tmp_path / "results.jsonl").skipped == 0
+
+
+@pytest.mark.sim
+def test_a_killed_parent_leaves_no_worker_running(tmp_path: Path) -> None:
+    proc = trials(tmp_path, 8, "--workers", "2", start_new_session=True)
+    _wait_for_records(tmp_path / "results.jsonl", 1, proc)
+    proc.kill()
+    proc.communicate(timeout=60)
+    deadline = time.monotonic() + 10
+    while _group_alive(proc.pid) and time.monotonic() < deadline:
+        time.sleep(0.2)
+    assert not _group_alive(proc.pid)
