@@ -39,6 +39,7 @@ import yaml
 
 from affordances.actions import DEFAULT_SPACE, ParamValue
 from affordances.context import Fragility, ObjectState, Shape
+from affordances.safe_yaml import YamlFileError, parse_yaml, read_bounded, shown
 from skills.vocabulary import Action, AffordanceElement, GraspType, Space
 
 #: File the package ships; used unless the caller leaves it out.
@@ -285,15 +286,15 @@ class _Where:
         if self.index is not None:
             where += f": rule {self.index}"
             if self.name is not None:
-                where += f" ({self.name!r})"
-        return RuleFileError(f"{where}: field {field!r}: {message}")
+                where += f" ({shown(self.name)})"
+        return RuleFileError(f"{where}: field {shown(field)}: {message}")
 
 
 def _number(value: Any, where: _Where, field: str) -> float:
     if isinstance(value, bool) or not isinstance(value, int | float):
-        raise where.error(field, f"expected a number, got {value!r}")
+        raise where.error(field, f"expected a number, got {shown(value)}")
     if not math.isfinite(value):
-        raise where.error(field, f"expected a finite number, got {value!r}")
+        raise where.error(field, f"expected a finite number, got {shown(value)}")
     return float(value)
 
 
@@ -301,7 +302,7 @@ def _member(value: Any, enum_cls: type[StrEnum], where: _Where, field: str) -> s
     if not isinstance(value, str) or value not in {m.value for m in enum_cls}:
         allowed = ", ".join(m.value for m in enum_cls)
         raise where.error(
-            field, f"unknown {enum_cls.__name__} {value!r}; expected one of {allowed}"
+            field, f"unknown {enum_cls.__name__} {shown(value)}; expected one of {allowed}"
         )
     return value
 
@@ -315,12 +316,14 @@ def _operand(
     )
     if many:
         if not isinstance(value, list) or not value:
-            raise where.error(field, f"expected a non-empty list for {op.value!r}, got {value!r}")
+            raise where.error(
+                field, f"expected a non-empty list for {op.value!r}, got {shown(value)}"
+            )
         return tuple(
             _scalar(v, kind, enum_cls, where, f"{field}[{i}]") for i, v in enumerate(value)
         )
     if isinstance(value, list | dict):
-        raise where.error(field, f"expected a single value for {op.value!r}, got {value!r}")
+        raise where.error(field, f"expected a single value for {op.value!r}, got {shown(value)}")
     return _scalar(value, kind, enum_cls, where, field)
 
 
@@ -332,7 +335,7 @@ def _scalar(
     if enum_cls is not None:
         return _member(value, enum_cls, where, field)
     if not isinstance(value, str) or not value.strip():
-        raise where.error(field, f"expected a non-empty string, got {value!r}")
+        raise where.error(field, f"expected a non-empty string, got {shown(value)}")
     return value.strip().lower()
 
 
@@ -340,13 +343,14 @@ def _conditions(when: Any, where: _Where) -> tuple[Condition, ...]:
     if when is None:
         return ()
     if not isinstance(when, dict):
-        raise where.error("when", f"expected a mapping of facts, got {when!r}")
+        raise where.error("when", f"expected a mapping of facts, got {shown(when)}")
     conditions: list[Condition] = []
     for key, spec in when.items():
         field = f"when.{key}"
         if key not in {f.value for f in Fact}:
             raise where.error(
-                field, f"unknown fact {key!r}; expected one of {', '.join(f.value for f in Fact)}"
+                field,
+                f"unknown fact {shown(key)}; expected one of {', '.join(f.value for f in Fact)}",
             )
         fact = Fact(key)
         kind = _FACT_KINDS[fact][0]
@@ -358,7 +362,7 @@ def _conditions(when: Any, where: _Where) -> tuple[Condition, ...]:
                 if op_name not in {o.value for o in allowed}:
                     raise where.error(
                         field,
-                        f"bad operator {op_name!r} for a {kind.value} fact; expected one of "
+                        f"bad operator {shown(op_name)} for a {kind.value} fact; expected one of "
                         f"{', '.join(o.value for o in allowed)}",
                     )
                 op = Op(op_name)
@@ -387,11 +391,11 @@ def _params(value: Any, where: _Where, field: str) -> dict[str, ParamValue]:
     if value is None:
         return {}
     if not isinstance(value, dict):
-        raise where.error(field, f"expected a mapping, got {value!r}")
+        raise where.error(field, f"expected a mapping, got {shown(value)}")
     params: dict[str, ParamValue] = {}
     for key, item in value.items():
         if not isinstance(key, str):
-            raise where.error(field, f"expected string keys, got {key!r}")
+            raise where.error(field, f"expected string keys, got {shown(key)}")
         params[key] = _param_value(item, where, f"{field}.{key}")
     return params
 
@@ -404,7 +408,7 @@ def _param_value(value: Any, where: _Where, field: str) -> float | str:
 
 def _effect(item: Any, where: _Where, field: str) -> Effect:
     if not isinstance(item, dict):
-        raise where.error(field, f"expected a mapping, got {item!r}")
+        raise where.error(field, f"expected a mapping, got {shown(item)}")
     kinds = [k for k in ("param", "grasp") if k in item] or (["skill"] if "skill" in item else [])
     if len(kinds) != 1:
         raise where.error(
@@ -431,7 +435,7 @@ def _effect(item: Any, where: _Where, field: str) -> Effect:
         )
     name = item["param"]
     if not isinstance(name, str) or not name:
-        raise where.error(f"{field}.param", f"expected a parameter name, got {name!r}")
+        raise where.error(f"{field}.param", f"expected a parameter name, got {shown(name)}")
     if "value" not in item:
         raise where.error(f"{field}.value", "missing; a param effect needs a value")
     value = _param_value(item["value"], where, f"{field}.value")
@@ -442,7 +446,7 @@ def _effect(item: Any, where: _Where, field: str) -> Effect:
     else:
         raise where.error(
             f"{field}.skill",
-            f"missing; {name!r} is not one of {', '.join(PARAM_SKILLS)}, so name its skill",
+            f"missing; {shown(name)} is not one of {', '.join(PARAM_SKILLS)}, so name its skill",
         )
     return ParamEffect(name, value, action)
 
@@ -474,19 +478,21 @@ def parse_rules(data: Any, source: str) -> tuple[Rule, ...]:
         )
     _check_keys(data, ("version", "rules"), top, "")
     if data.get("version") != SUPPORTED_VERSION:
-        raise top.error("version", f"expected {SUPPORTED_VERSION}, got {data.get('version')!r}")
+        raise top.error(
+            "version", f"expected {SUPPORTED_VERSION}, got {shown(data.get('version'))}"
+        )
     items = data.get("rules")
     if not isinstance(items, list):
-        raise top.error("rules", f"expected a list of rules, got {items!r}")
+        raise top.error("rules", f"expected a list of rules, got {shown(items)}")
     rules: list[Rule] = []
     seen: set[str] = set()
     for index, item in enumerate(items):
         where = _Where(source, index)
         if not isinstance(item, dict):
-            raise where.error("", f"expected a mapping, got {item!r}")
+            raise where.error("", f"expected a mapping, got {shown(item)}")
         name = item.get("name")
         if not isinstance(name, str) or not name.strip():
-            raise where.error("name", f"expected a non-empty string, got {name!r}")
+            raise where.error("name", f"expected a non-empty string, got {shown(name)}")
         where = _Where(source, index, name)
         if name in seen:
             raise where.error("name", "duplicate rule name")
@@ -520,11 +526,18 @@ def load_rules(path: str | Path) -> tuple[Rule, ...]:
     """
     path = Path(path)
     try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except yaml.YAMLError as err:
-        raise RuleFileError(f"{path}: not valid YAML: {err}") from None
+        text = read_bounded(path).decode("utf-8-sig")
+    except YamlFileError as err:
+        raise RuleFileError(f"{path}: expected a YAML rule file, got {err.problem}") from None
+    except UnicodeDecodeError as err:
+        raise RuleFileError(f"{path}: byte {err.start} is not UTF-8") from None
     except OSError as err:
-        raise RuleFileError(f"{path}: cannot read: {err.strerror}") from None
+        raise RuleFileError(f"{path}: cannot read: {err.strerror or err}") from None
+    try:
+        data = parse_yaml(text)
+    except YamlFileError as err:
+        where = f":{err.line}" + (f":{err.column}" if err.column else "") if err.line else ""
+        raise RuleFileError(f"{path}{where}: not valid YAML: {err.problem}") from None
     return parse_rules(data, str(path))
 
 

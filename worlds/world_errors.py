@@ -18,6 +18,7 @@ from typing import Annotated, Any
 from pydantic import BaseModel, ValidationError
 from pydantic.fields import FieldInfo
 
+from affordances.safe_yaml import shown
 from worlds.spec import Shape
 
 _MAX_LISTED_PROBLEMS = 20
@@ -143,7 +144,7 @@ def show_value(value: Any) -> str:
     """Format a received value for an error message: a shortened repr, enums as values."""
     if isinstance(value, Shown):
         return value.text
-    text = repr(_plain(value))
+    text = shown(_plain(value))
     if len(text) > _MAX_SHOWN_CHARS:
         text = text[: _MAX_SHOWN_CHARS - 3] + "..."
     if not isinstance(value, str | int | float | bool | type(None) | list | tuple | dict):
@@ -151,12 +152,15 @@ def show_value(value: Any) -> str:
     return text
 
 
-def _plain(value: Any) -> Any:
-    """Enums as their values and tuples as lists, so messages look like the file."""
+def _plain(value: Any, depth: int = 4) -> Any:
+    """Enums as their values and tuples as lists, so messages look like the file; only as
+    deep and as wide as a message shows (a value may share its parts many times over)."""
     if isinstance(value, StrEnum):
         return value.value
     if isinstance(value, list | tuple):
-        return [_plain(item) for item in value]
+        if depth == 0:
+            return [...]
+        return [_plain(item, depth - 1) for item in value[:7]]
     return value
 
 

@@ -30,6 +30,7 @@ from typing import Any
 import yaml
 from pydantic import ValidationError
 
+from affordances.safe_yaml import YamlFileError, parse_yaml, read_bounded
 from worlds.spec import (
     Fragility,
     MoveSpec,
@@ -113,45 +114,12 @@ __all__ = [
 # --------------------------------------------------------------------------------------------
 
 
-class _StrictLoader(yaml.SafeLoader):
-    """Safe YAML loader that rejects duplicate keys (PyYAML silently keeps the last one)."""
-
-
-def _construct_mapping(loader: yaml.SafeLoader, node: yaml.MappingNode) -> dict[Any, Any]:
-    # Only keys written in this mapping count: keys merged in with "<<" may be overridden.
-    seen: set[Any] = set()
-    for key_node, _ in node.value:
-        if key_node.tag == "tag:yaml.org,2002:merge":
-            continue
-        key = loader.construct_object(key_node, deep=True)
-        try:
-            duplicate = key in seen
-            seen.add(key)
-        except TypeError:
-            raise yaml.constructor.ConstructorError(
-                "while constructing a mapping",
-                node.start_mark,
-                "found an unhashable key",
-                key_node.start_mark,
-            ) from None
-        if duplicate:
-            raise yaml.constructor.ConstructorError(
-                "while constructing a mapping",
-                node.start_mark,
-                f"found duplicate key {key!r}",
-                key_node.start_mark,
-            )
-    return loader.construct_mapping(node, deep=True)
-
-
-_StrictLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _construct_mapping)
-
-
 def _read_text(path: Path, label: str) -> str:
     expected = "a readable UTF-8 world file"
     try:
-        is_dir = path.is_dir()
-        data = b"" if is_dir else path.read_bytes()
+        data = read_bounded(path)
+    except YamlFileError as exc:
+        raise WorldFileError(label, [WorldFileProblem(None, expected, exc.problem)]) from None
     except FileNotFoundError:
         raise WorldFileError(label, [WorldFileProblem(None, expected, "no such file")]) from None
     except PermissionError:
@@ -160,8 +128,6 @@ def _read_text(path: Path, label: str) -> str:
     except (OSError, ValueError) as exc:
         problem = WorldFileProblem(None, expected, f"{type(exc).__name__}: {exc}")
         raise WorldFileError(label, [problem]) from None
-    if is_dir:
-        raise WorldFileError(label, [WorldFileProblem(None, expected, "a folder")])
     try:
         return data.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
@@ -181,21 +147,12 @@ def _parse(text: str, path: Path, label: str) -> Any:
             problem = WorldFileProblem(None, "a world file", "JSON nested too deeply")
             raise WorldFileError(label, [problem]) from None
     try:
-        return yaml.load(text, Loader=_StrictLoader)  # a SafeLoader subclass
-    except yaml.MarkedYAMLError as exc:
-        mark = exc.problem_mark or exc.context_mark
-        reason = exc.problem or exc.context or "syntax error"
-        if exc.problem and exc.context and exc.context_mark is not None:
-            start = exc.context_mark
-            reason += f" ({exc.context} at line {start.line + 1}, column {start.column + 1})"
-        line = mark.line + 1 if mark is not None else 1
-        column = mark.column + 1 if mark is not None else None
-        problem = WorldFileProblem(None, "invalid YAML", reason, line, column)
-        raise WorldFileError(label, [problem]) from None
-    except yaml.YAMLError as exc:
-        raise WorldFileError(label, [WorldFileProblem(None, "valid YAML", str(exc))]) from None
-    except RecursionError:
-        problem = WorldFileProblem(None, "a world file", "YAML nested too deeply")
+        return parse_yaml(text)
+    except YamlFileError as exc:
+        if exc.line is not None:
+            problem = WorldFileProblem(None, "invalid YAML", exc.problem, exc.line, exc.column)
+        else:
+            problem = WorldFileProblem(None, "a world file", exc.problem)
         raise WorldFileError(label, [problem]) from None
 
 

@@ -197,5 +197,5 @@ def test_unreadable_and_invalid_yaml(tmp_path: Path) -> None:
         load_rules(tmp_path / "missing.yaml")
     path = tmp_path / "broken.yaml"
     path.write_text("rules: [\n", encoding="utf-8")
-    with pytest.raises(RuleFileError, match=r"broken\.yaml: not valid YAML"):
+    with pytest.raises(RuleFileError, match=r"broken\.yaml:2:1: not valid YAML"):
         load_rules(path)
