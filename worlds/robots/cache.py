@@ -1,19 +1,55 @@
-"""Generated robot description files, cached by content."""
+"""Generated robot description files, cached by content in a folder of the user's own.
+
+A cached file is trusted only if it holds exactly the text it is named after: a file planted
+under its name (say, with palm friction 0) or one truncated by a crash is written again. The
+folder is per user (``$XDG_CACHE_HOME/duet/robots``, else ``~/.cache/duet/robots``), made
+private, and every file is written to a temporary name and renamed into place, so parallel
+workers may race on it safely.
+"""
 
 from __future__ import annotations
 
 import hashlib
 import os
+import stat
 import tempfile
 from pathlib import Path
+
+
+def default_cache_dir() -> Path:
+    """The user's cache folder for generated robot files."""
+    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    return Path(base) / "duet" / "robots"
+
+
+def _private_folder(folder: Path) -> Path:
+    """``folder``, made if missing; refused if it is a link or another user's."""
+    folder.mkdir(parents=True, exist_ok=True, mode=0o700)
+    info = os.lstat(folder)
+    if stat.S_ISLNK(info.st_mode) or not stat.S_ISDIR(info.st_mode):
+        raise OSError(f"{folder}: expected a folder for cached robot files, got a link or a file")
+    if hasattr(os, "getuid") and info.st_uid != os.getuid():
+        raise OSError(f"{folder}: expected a folder of this user's for cached robot files")
+    return folder
+
+
+def _holds(path: Path, data: bytes) -> bool:
+    """Whether ``path`` is a regular file (not a link) holding exactly ``data``."""
+    try:
+        info = os.lstat(path)
+        if not stat.S_ISREG(info.st_mode) or info.st_size != len(data):
+            return False
+        with open(path, "rb") as fh:
+            return fh.read(len(data) + 1) == data
+    except OSError:
+        return False
 
 
 def cached_urdf(text: str, stem: str, cache_dir: Path | None = None) -> Path:
     """Write a generated URDF once per content and return its path.
 
     The file name carries a hash of ``text``, so a changed model gets a new file and an
-    unchanged one is reused. It is written to a temporary file and renamed into place:
-    parallel workers may race on the same file.
+    unchanged one is reused once its content is checked.
 
     Parameters
     ----------
@@ -22,15 +58,34 @@ def cached_urdf(text: str, stem: str, cache_dir: Path | None = None) -> Path:
     stem : str
         File name prefix (``kuka_iiwa_palm``, ``icub_trunk``, ...).
     cache_dir : Path, optional
-        Default: ``duet_robots`` in the system's temporary folder.
+        Default: :func:`default_cache_dir`.
+
+    Raises
+    ------
+    OSError
+        If the cache folder is a link, another user's, or cannot be written (for the default
+        folder: neither the user's cache nor a private temporary folder).
     """
-    digest = hashlib.sha1(text.encode()).hexdigest()[:12]
-    folder = cache_dir if cache_dir is not None else Path(tempfile.gettempdir()) / "duet_robots"
-    folder.mkdir(parents=True, exist_ok=True)
+    data = text.encode()
+    digest = hashlib.sha256(data).hexdigest()[:16]
+    if cache_dir is not None:
+        folder = _private_folder(cache_dir)
+    else:
+        try:
+            folder = _private_folder(default_cache_dir())
+        except OSError:  # no writable home (a container, a sandbox): a private temporary one
+            uid = os.getuid() if hasattr(os, "getuid") else 0
+            folder = _private_folder(Path(tempfile.gettempdir()) / f"duet-robots-{uid}")
     path = folder / f"{stem}_{digest}.urdf"
-    if not path.exists():
-        fd, tmp = tempfile.mkstemp(dir=folder, suffix=".urdf")
-        with os.fdopen(fd, "w") as f:
-            f.write(text)
-        os.replace(tmp, path)
+    if not _holds(path, data):
+        fd, tmp = tempfile.mkstemp(dir=folder, prefix=f".{stem}_", suffix=".urdf")
+        try:
+            with os.fdopen(fd, "wb") as f:
+                f.write(data)
+                f.flush()
+                os.fsync(f.fileno())
+            os.replace(tmp, path)
+        except BaseException:
+            Path(tmp).unlink(missing_ok=True)
+            raise
     return path

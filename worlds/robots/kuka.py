@@ -148,7 +148,7 @@ def write_kuka_palm_urdf(
     palm_friction : float
         Palm lateral friction coefficient.
     cache_dir : Path, optional
-        Folder for generated files; default ``$TMPDIR/duet_robots``.
+        Folder for generated files; default :func:`worlds.robots.cache.default_cache_dir`.
     mount_pitch_deg : float
         Forward lean of the arm base, degrees.
 
