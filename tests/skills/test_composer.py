@@ -15,18 +15,12 @@ from skills.composer import (
     relative_from_world,
 )
 from skills.couplings import (
-    GraspMaintenance,
     LearntForcing,
-    ObstacleSteering,
-    PotentialFieldAvoidance,
-    Saturated,
 )
 from skills.couplings.term import Weighted
-from skills.default_library import build_default_library
 from skills.dual_arm import GraspGeometry, grasp_matrix
 from skills.pose_dmp import PoseState, PoseTarget, coupled_step, fit_pose, pose_step
-from skills.types import Array
-from skills.vocabulary import ARMS, Action, Arm
+from skills.vocabulary import ARMS, Arm
 from tests.skills.conftest import pick_place_demo
 
 DT = 1.0 / 60.0
@@ -112,52 +106,6 @@ def test_relative_from_world_inverts_palm_poses() -> None:
     assert quat.angle_between(back_q, rel_q) < 1e-12
 
 
-OBSTACLE = np.array([0.62, -0.08, 0.82])
-
-
-def sphere(points: Array) -> tuple[Array, Array]:
-    """Distances and closest points on a 4 cm sphere: the shape of an FCL query."""
-    d = points - OBSTACLE
-    n = np.linalg.norm(d, axis=1)
-    return n - 0.04, OBSTACLE + 0.04 * d / n[:, None]
-
-
-def full_composition() -> DualArmComposer:
-    """Every kind of term: two learnt skills, steering, an 8-point field, a saturated group,
-    a term with arrays only, grasp maintenance on both palms; weights not all 1."""
-    lib = build_default_library()
-    g = GraspGeometry.lateral(0.30, 0.02)
-    state = grasped_state(
-        [0.65, 0.0, 0.675],
-        quat.IDENTITY,
-        (g.left_position, g.left_orientation),
-        (g.right_position, g.right_orientation),
-    )
-    steer = lib.first(Action.AVOID_OBSTACLE).params
-    steering = ObstacleSteering(
-        float(steer["gamma"]), float(steer["beta"]), float(steer["k"]), object_radius=0.1
-    ).with_obstacles(OBSTACLE[None], [0.04])
-    rng = np.random.default_rng(1)
-    links = np.array([-0.15, 0.0, 0.1]) + rng.normal(size=(8, 3)) * [0.1, 0.2, 0.05]
-    absolute = [
-        (LearntForcing(lib.first(Action.TRANSPORT).pose_model()), 1.0),
-        (LearntForcing(lib.first(Action.ROTATE_Z).pose_model()), 0.8),
-        (steering, 1.0),
-        (PotentialFieldAvoidance(sphere, links, gain=0.4), 1.2),
-        (Saturated([(PotentialFieldAvoidance(sphere, links[:3]), 1.0)], 5.0, 5.0), 1.0),
-        (Push([0.0, 0.02, 0.0], [0.0, 0.0, 0.05]), 0.5),
-    ]
-    relative = {
-        arm: [
-            (GraspMaintenance(g.position(arm), g.orientation(arm), 0.015), 1.0),
-            (Push([0.0, 0.0, 0.01], [0.0, 0.0, 0.0]), 2.0),
-        ]
-        for arm in ARMS
-    }
-    goal_q = quat.from_axis_angle([0.0, 0.0, 1.0], 0.4)
-    return DualArmComposer.start(state, [0.6, -0.15, 0.675], goal_q, 2.5, absolute, relative)
-
-
 def perturbed(pose: PoseState, rng: np.random.Generator) -> PoseState:
     """A measured state near ``pose``: other pose and twist, same phase."""
     return PoseState(
@@ -186,32 +134,6 @@ def general_step(composer: DualArmComposer, measured: DualArmState) -> DualArmSt
         for arm in ARMS
     )
     return DualArmState(obj, left, right)
-
-
-def test_compiled_step_equals_the_general_step_of_every_space() -> None:
-    composer = full_composition()
-    for _ in range(40):  # mid-move, moving towards the obstacle
-        composer.step(DT)
-    rng = np.random.default_rng(6)
-    for _ in range(10):
-        measured = DualArmState(
-            *(
-                perturbed(s, rng)
-                for s in (composer.state.object, composer.state.left, composer.state.right)
-            )
-        )
-        expected = general_step(composer, measured)
-        cmd = composer.step(DT, measured)
-        for got, want in zip(
-            (composer.state.object, composer.state.left, composer.state.right),
-            (expected.object, expected.left, expected.right),
-            strict=True,
-        ):
-            for a, b in zip(got, want, strict=True):
-                assert_allclose(a, b, rtol=1e-9, atol=1e-9)
-        want_cmd = commands_for(expected)
-        for field in ("positions", "orientations", "twists", "object_twist"):
-            assert_allclose(getattr(cmd, field), getattr(want_cmd, field), rtol=1e-9, atol=1e-9)
 
 
 def test_commands_are_the_palm_poses_and_eq5_twists() -> None:
