@@ -319,3 +319,25 @@ def test_a_rule_file_still_reorders_the_palm_grasps(tmp_path: Path) -> None:
     )
     actions = reason(_box(0.15, 0.25, 0.10, 0.5, "parcel"), ROBOT, rules=rule_set([rules]))
     assert [a.grasp for a in actions] == [GraspType.TWO_ARM_SUPPORT, GraspType.TWO_PALM_LATERAL]
+
+
+def test_a_rule_file_vetoes_a_grasp_and_says_which_rule(tmp_path: Path) -> None:
+    rules = tmp_path / "veto.yaml"
+    rules.write_text(
+        "version: 1\nrules:\n  - name: no_squeeze\n    when: {mass_kg: {lt: 1.0}}\n"
+        "    effects: [{grasp: two_palm_lateral, veto: true}]\n"
+    )
+    box = _box(0.15, 0.25, 0.10, 0.5, "parcel")
+    actions = reason(box, ROBOT, rules=rule_set([rules]))
+    assert [a.grasp for a in actions] == [GraspType.TWO_ARM_SUPPORT]
+    rules.write_text(
+        "version: 1\nrules:\n  - name: no_palms\n    when: {mass_kg: {lt: 1.0}}\n"
+        "    effects:\n      - {grasp: two_palm_lateral, veto: true}\n"
+        "      - {grasp: two_arm_support, veto: true}\n"
+    )
+    [none] = reason(box, ROBOT, rules=rule_set([rules]))
+    assert none.grasp == GraspType.NONE
+    assert none.because[-2:] == (
+        "rule no_palms vetoes two_palm_lateral: mass_kg 0.5 < 1",
+        "rule no_palms vetoes two_arm_support: mass_kg 0.5 < 1",
+    )
