@@ -85,15 +85,33 @@ def _demo_command(args: argparse.Namespace) -> int:
 
 
 def _validate_command(args: argparse.Namespace) -> int:
-    """Check a world file (YAML or JSON) or a behaviour tree (XML)."""
+    """Check a world file (YAML or JSON) and what it asks of the robot, optionally with the
+    tree to run it (``--tree``); or a behaviour tree (XML) alone."""
     if args.file.lower().endswith(".xml"):
+        if args.tree:
+            print(
+                f"--tree: expected a world file to check the tree against, got the tree "
+                f"{args.file}",
+                file=sys.stderr,
+            )
+            return EXIT_BAD_INPUT
         import planner.leaves  # noqa: F401  (registers the leaves the tree may use)
         from planner.validate import tree_cli_validate
 
         return tree_cli_validate(args.file)
-    from worlds.world_file import world_cli_validate
+    from experiment.preflight import validate_cli
 
-    return world_cli_validate(args.file)
+    return validate_cli(args.file, args.tree)
+
+
+def _preflight_or_exit(world: Any, world_file: str, tree: str | None) -> None:
+    """Fail before simulating (exit 2) when the task cannot work: ``validate``'s checks."""
+    from experiment.preflight import preflight_problems
+
+    problems = preflight_problems(world, world_file, Path(tree) if tree else None)
+    if problems:
+        print("\n".join(problems), file=sys.stderr)
+        raise SystemExit(EXIT_BAD_INPUT)
 
 
 def _nodes_command(args: argparse.Namespace) -> int:
@@ -274,6 +292,7 @@ def _run_command(args: argparse.Namespace) -> int:
     from worlds.scene import NoDisplayError
 
     world = _load_world_or_exit(args.world)
+    _preflight_or_exit(world, args.world, args.tree)
     if args.seed is not None:
         world = world.model_copy(update={"sim": world.sim.model_copy(update={"seed": args.seed})})
     out = Path(args.out)
@@ -326,13 +345,14 @@ def _trials_command(args: argparse.Namespace) -> int:
     if args.n < 1 or args.workers < 1:
         print("--n, --workers: expected positive whole numbers", file=sys.stderr)
         return EXIT_BAD_INPUT
+    _preflight_or_exit(world, args.world, args.tree)  # one message now, not one per trial
     tree = Path(args.tree) if args.tree else None
     if tree is not None:
         import planner.leaves  # noqa: F401  (registers the leaves the tree may use)
         from planner.loader import TreeFileError, load_tree
 
         try:
-            load_tree(tree)  # a bad tree is one message now, not one per trial
+            load_tree(tree)
         except TreeFileError as err:
             print(err, file=sys.stderr)
             return EXIT_BAD_INPUT
@@ -410,8 +430,14 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--out", default="out", help="output folder (default: out)")
     demo.add_argument("--json", action="store_true", help="print a JSON summary as the last line")
     demo.set_defaults(handler=_demo_command)
-    validate = sub.add_parser("validate", help="check a world file or a tree; exit 2 if bad")
+    validate = sub.add_parser(
+        "validate",
+        help="check a world file (and what it asks of the robot) or a tree; exit 2 if bad",
+    )
     validate.add_argument("file", help="world file (.yaml, .yml, .json) or tree (.xml)")
+    validate.add_argument(
+        "--tree", help="with a world file: also check this tree XML and its moves against it"
+    )
     validate.set_defaults(handler=_validate_command)
     nodes = sub.add_parser("nodes", help="export a Groot2 TreeNodesModel of our leaves")
     nodes.add_argument("--out", help="write to this file instead of printing")

@@ -13,6 +13,8 @@ from dataclasses import dataclass, field
 from enum import Enum, StrEnum
 from typing import Any, TypeVar
 
+from skills.vocabulary import EndEffector
+
 Vector3 = tuple[float, float, float]
 
 _E = TypeVar("_E", bound=Enum)
@@ -326,6 +328,9 @@ class RobotCapabilities:
         Normal force each palm can press with, newtons (>= 0).
     palm_friction : float
         Coulomb friction coefficient of the palm surface (>= 0).
+    end_effectors : frozenset of EndEffector
+        What the arms end in (at least one kind); it fixes which grasps the robot can make
+        (:data:`affordances.physics.GRASP_END_EFFECTOR`).
     """
 
     payload_per_arm_kg: float
@@ -334,6 +339,7 @@ class RobotCapabilities:
     min_span_m: float
     squeeze_force_n: float
     palm_friction: float
+    end_effectors: frozenset[EndEffector]
 
     def __post_init__(self) -> None:
         owner = "RobotCapabilities"
@@ -360,11 +366,28 @@ class RobotCapabilities:
             check_non_negative(self.squeeze_force_n, owner, "squeeze_force_n"),
         )
         put(self, "palm_friction", check_non_negative(self.palm_friction, owner, "palm_friction"))
+        put(self, "end_effectors", _check_end_effectors(self.end_effectors, owner))
+
+    def describe_end_effectors(self) -> str:
+        """The end-effectors in words, e.g. ``flat palms``."""
+        return " and ".join(_END_EFFECTOR_WORDS[e] for e in sorted(self.end_effectors))
 
     @property
     def palm_width_m(self) -> float:
         """Width across the palm, metres."""
         return self.palm_size_m[1]
+
+
+_END_EFFECTOR_WORDS = {EndEffector.FLAT_PALM: "flat palms", EndEffector.GRIPPER: "grippers"}
+
+
+def _check_end_effectors(value: Any, owner: str) -> frozenset[EndEffector]:
+    if isinstance(value, str | bytes) or not isinstance(value, Iterable):
+        raise ValueError(f"{owner}.end_effectors: expected a set of end-effectors, got {value!r}")
+    kinds = frozenset(check_enum(v, EndEffector, owner, "end_effectors") for v in value)
+    if not kinds:
+        raise ValueError(f"{owner}.end_effectors: expected at least one end-effector, got none")
+    return kinds
 
 
 #: The robot of the paper's parcel experiment, as given in the project brief.
@@ -375,6 +398,7 @@ PAPER_ROBOT = RobotCapabilities(
     min_span_m=0.15,
     squeeze_force_n=40.0,
     palm_friction=0.8,
+    end_effectors=frozenset({EndEffector.FLAT_PALM}),
 )
 
 

@@ -21,11 +21,12 @@ Which shapes offer two parallel faces for a squeeze:
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from enum import StrEnum
+from types import MappingProxyType
 
-from affordances.actions import DEFAULT_SPACE, SkillSelection
+from affordances.actions import DEFAULT_SPACE, GRASP_ORDER, SkillSelection
 from affordances.config import ReasonerConfig
 from affordances.context import (
     Fragility,
@@ -35,10 +36,25 @@ from affordances.context import (
     Shape,
     Vector3,
 )
-from skills.vocabulary import Action, AffordanceElement, Arm, GraspType
+from skills.vocabulary import Action, AffordanceElement, Arm, EndEffector, GraspType
 
 #: Bullet clamps the combined friction coefficient to this value.
 BULLET_MAX_FRICTION = 10.0
+
+#: The end-effector each grasp needs on the arms it uses. Both two-arm grasps are palm grasps:
+#: the lateral one presses two palms on opposite faces, the support one carries the object
+#: on two upturned palms; neither closes anything around the object. The one-arm grasps hold
+#: with one hand alone, so they need fingers or jaws that close around the object.
+GRASP_END_EFFECTOR: Mapping[GraspType, EndEffector] = MappingProxyType(
+    {
+        GraspType.TWO_PALM_LATERAL: EndEffector.FLAT_PALM,
+        GraspType.TWO_ARM_SUPPORT: EndEffector.FLAT_PALM,
+        GraspType.ONE_ARM_SIDE: EndEffector.GRIPPER,
+        GraspType.ONE_ARM_TOP: EndEffector.GRIPPER,
+    }
+)
+
+_NEEDS_WORDS = {EndEffector.FLAT_PALM: "flat palms", EndEffector.GRIPPER: "a gripper"}
 
 _STATE_ELEMENTS = {
     ObjectState.OPEN: AffordanceElement.OPEN,
@@ -101,21 +117,45 @@ class GraspOption:
 
 
 @dataclass(frozen=True)
+class Refusal:
+    """A grasp the hard stage refused, and why in a few words with the numbers.
+
+    Attributes
+    ----------
+    grasp : GraspType
+        The refused grasp.
+    why : str
+        E.g. ``needs a gripper, the robot has flat palms``.
+    """
+
+    grasp: GraspType
+    why: str
+
+    def __str__(self) -> str:
+        return f"{self.grasp.value}: {self.why}"
+
+
+@dataclass(frozen=True)
 class HardAssessment:
     """Everything stage 1 decides about an object.
 
     Attributes
     ----------
     arms_needed : int
-        1 or 2; 0 when even both arms together cannot lift the object.
+        Arms the object's weight and width call for: 2 when it is heavier than one arm's
+        payload or wider than one hand, else 1; 0 when even both arms cannot lift it. Which
+        grasps the robot can make is ``options``.
     elements : frozenset of AffordanceElement
         Object facts the rules can match.
     options : tuple of GraspOption
-        Feasible grasps using ``arms_needed`` arms, in :data:`~affordances.actions.GRASP_ORDER`.
+        Grasps the robot's end-effectors can make that pass the physics, in
+        :data:`~affordances.actions.GRASP_ORDER`.
     skills : tuple of SkillSelection
         Skills every grasp needs (orientation constraints, ``rotate_z``).
     because : tuple of str
         Reasons shared by every grasp, including why other grasps were rejected.
+    refused : tuple of Refusal
+        Every grasp not in ``options``, in :data:`~affordances.actions.GRASP_ORDER`.
     """
 
     arms_needed: int
@@ -123,6 +163,11 @@ class HardAssessment:
     options: tuple[GraspOption, ...]
     skills: tuple[SkillSelection, ...]
     because: tuple[str, ...]
+    refused: tuple[Refusal, ...] = ()
+
+    def no_grasp_reason(self) -> str:
+        """Why no grasp is feasible, one clause per grasp: ``two_palm_lateral: ...; ...``."""
+        return "; ".join(str(r) for r in self.refused)
 
 
 def combined_friction(mu_object: float, mu_palm: float) -> float:
@@ -267,6 +312,10 @@ def assess_lateral(
 ) -> tuple[GraspOption | None, tuple[str, ...]]:
     """Check the two-palm lateral squeeze.
 
+    Palms hold anything whose faces lie between their smallest and largest span, are tall
+    enough to lie flat on, and that friction can carry: neither a light nor a narrow object
+    is refused for being light or narrow.
+
     Returns
     -------
     option : GraspOption or None
@@ -274,8 +323,16 @@ def assess_lateral(
     because : tuple of str
         The reasons, with the numbers.
     """
+    option, because, _ = _lateral(context, robot, config)
+    return option, because
+
+
+def _lateral(
+    context: ObjectContext, robot: RobotCapabilities, config: ReasonerConfig
+) -> tuple[GraspOption | None, tuple[str, ...], str]:
+    """:func:`assess_lateral` and, when it refuses, why in a few words (else ``""``)."""
     if context.fragility == Fragility.FRAGILE:
-        return None, ("hard: no squeeze: fragile object",)
+        return None, ("hard: no squeeze: fragile object",), "fragile object"
     pairs = parallel_face_pairs(context)
     if not pairs:
         why = (
@@ -283,19 +340,21 @@ def assess_lateral(
             if context.shape == Shape.SPHERE
             else "mesh faces unknown"
         )
-        return None, (f"hard: no lateral squeeze: {why}",)
+        return None, (f"hard: no lateral squeeze: {why}",), why
     min_height = config.min_contact_height_factor * robot.palm_width_m
     span = f"{_fmt(robot.min_span_m)}..{_fmt(robot.max_span_m)} m"
     in_span = [p for p in pairs if robot.min_span_m <= p.separation_m <= robot.max_span_m]
     if not in_span:
         seps = ", ".join(f"{_fmt(p.separation_m)} m" for p in pairs)
-        return None, (f"hard: no lateral squeeze: faces {seps} apart, outside span {span}",)
+        why = f"faces {seps} apart, outside the palms' span {span}"
+        return None, (f"hard: no lateral squeeze: {why}",), why
     tall = [p for p in in_span if p.contact_height_m >= min_height]
     if not tall:
-        return None, (
-            f"hard: no lateral squeeze: faces {_fmt(in_span[0].contact_height_m)} m tall "
-            f"< {_fmt(min_height)} m for a flat palm contact",
+        why = (
+            f"faces {_fmt(in_span[0].contact_height_m)} m tall "
+            f"< {_fmt(min_height)} m for a flat palm contact"
         )
+        return None, (f"hard: no lateral squeeze: {why}",), why
     pair = _best_lateral_pair(tall, context.yaw)
     mu = palm_contact_friction(context, robot)
     need = required_squeeze_force(context.mass_kg, mu, config.safety_factor, config.gravity)
@@ -304,10 +363,11 @@ def assess_lateral(
         f"k = {_fmt(config.safety_factor)}, m = {_fmt(context.mass_kg)} kg"
     )
     if need > robot.squeeze_force_n:
-        return None, (
-            f"hard: no lateral squeeze: needs {_fmt(need)} N per palm > "
-            f"{_fmt(robot.squeeze_force_n)} N available ({friction_note})",
+        why = (
+            f"needs {_fmt(need)} N per palm > {_fmt(robot.squeeze_force_n)} N available "
+            f"({friction_note})"
         )
+        return None, (f"hard: no lateral squeeze: {why}",), why
     direction = axis_in_world(pair.axis, context.yaw)
     left, right = _left_right(
         context.position, direction, 0.5 * pair.separation_m, choose_arm(context)
@@ -325,7 +385,7 @@ def assess_lateral(
     )
     because = (
         f"hard: faces {_fmt(pair.separation_m)} m apart along {pair.axis.value}, "
-        f"within span {span}",
+        f"within the palms' span {span}",
         f"hard: squeeze needs {_fmt(need)} N per palm <= {_fmt(robot.squeeze_force_n)} N "
         f"available ({friction_note})",
     )
@@ -336,7 +396,7 @@ def assess_lateral(
         (_transport((Arm.LEFT, Arm.RIGHT)), hold),
         because,
     )
-    return option, because
+    return option, because, ""
 
 
 def assess_support(
@@ -351,6 +411,14 @@ def assess_support(
     because : tuple of str
         The reasons, with the numbers.
     """
+    option, because, _ = _support(context, robot, config)
+    return option, because
+
+
+def _support(
+    context: ObjectContext, robot: RobotCapabilities, config: ReasonerConfig
+) -> tuple[GraspOption | None, tuple[str, ...], str]:
+    """:func:`assess_support` and, when it refuses, why in a few words (else ``""``)."""
     ex, ey = horizontal_extents(context)
     if context.shape in (Shape.BOX, Shape.MESH):
         along_x = abs(math.sin(context.yaw)) > abs(math.cos(context.yaw)) + 1e-9
@@ -358,10 +426,8 @@ def assess_support(
     else:
         axis, extent = FaceAxis.DIAMETER, ex
     if extent < robot.min_span_m:
-        return None, (
-            f"hard: no two-arm support: {_fmt(extent)} m across < smallest span "
-            f"{_fmt(robot.min_span_m)} m",
-        )
+        why = f"{_fmt(extent)} m across < the palms' smallest span {_fmt(robot.min_span_m)} m"
+        return None, (f"hard: no two-arm support: {why}",), why
     span = min(max(extent - robot.palm_width_m, robot.min_span_m), robot.max_span_m)
     bottom = (
         context.position[0],
@@ -388,7 +454,7 @@ def assess_support(
         (_transport((Arm.LEFT, Arm.RIGHT)), hold),
         because,
     )
-    return option, because
+    return option, because, ""
 
 
 def choose_arm(context: ObjectContext) -> Arm:
@@ -456,10 +522,26 @@ def _common_skills(
     return skills, because
 
 
+def _end_effector_refusals(robot: RobotCapabilities) -> dict[GraspType, str]:
+    """The grasps the robot's end-effectors cannot make, and why."""
+    has = robot.describe_end_effectors()
+    return {
+        grasp: f"needs {_NEEDS_WORDS[needed]}, the robot has {has}"
+        for grasp, needed in GRASP_END_EFFECTOR.items()
+        if needed not in robot.end_effectors
+    }
+
+
 def assess(
     context: ObjectContext, robot: RobotCapabilities, config: ReasonerConfig
 ) -> HardAssessment:
-    """Apply the hard constraints: how many arms, which grasps, which constraints.
+    """Apply the hard constraints: which grasps the robot can make, and which constraints.
+
+    A grasp is offered when the robot's end-effectors can make it
+    (:data:`GRASP_END_EFFECTOR`) and the physics allows it: two palms need the object's faces
+    within their span and friction to carry it (:func:`assess_lateral`), or the object wide
+    enough to rest on both (:func:`assess_support`); one arm needs the object within its
+    payload and one hand's width. Every other grasp is in ``refused`` with its reason.
 
     Parameters
     ----------
@@ -504,36 +586,57 @@ def assess(
         elements.add(AffordanceElement.FRAGILE)
     elements.update(_STATE_ELEMENTS[s] for s in context.state if s in _STATE_ELEMENTS)
 
-    lateral, lateral_notes = assess_lateral(context, robot, config)
+    lateral, lateral_notes, lateral_why = _lateral(context, robot, config)
     if lateral is not None:
         elements.add(AffordanceElement.GRASPABLE_LATERAL)
     skills, common_notes = _common_skills(context, config)
+    arms_needed = 2 if heavy or wide else 1
 
+    refused = _end_effector_refusals(robot)
     if mass > 2.0 * payload:
-        because.append(
-            f"hard: mass {_fmt(mass)} kg > both arms' payload {_fmt(2.0 * payload)} kg: cannot lift"
+        cannot = f"mass {_fmt(mass)} kg > both arms' payload {_fmt(2.0 * payload)} kg"
+        because.append(f"hard: {cannot}: cannot lift")
+        refused = {g: refused.get(g, cannot) for g in GRASP_END_EFFECTOR}
+        return HardAssessment(
+            0, frozenset(elements), (), tuple(skills), tuple(because), _refusals(refused)
         )
-        return HardAssessment(0, frozenset(elements), (), tuple(skills), tuple(because))
 
-    options: list[GraspOption] = []
-    if heavy or wide:
-        arms_needed = 2
-        support, support_notes = assess_support(context, robot, config)
+    candidates: list[GraspOption] = []
+    if GraspType.TWO_PALM_LATERAL not in refused:
         if lateral is None:
             because.extend(lateral_notes)
+            refused[GraspType.TWO_PALM_LATERAL] = lateral_why
         else:
-            options.append(lateral)
+            candidates.append(lateral)
+    if GraspType.TWO_ARM_SUPPORT not in refused:
+        support, support_notes, support_why = _support(context, robot, config)
         if support is None:
             because.extend(support_notes)
+            refused[GraspType.TWO_ARM_SUPPORT] = support_why
         else:
-            options.append(support)
-    else:
-        arms_needed = 1
+            candidates.append(support)
+    one_arm = [g for g in (GraspType.ONE_ARM_SIDE, GraspType.ONE_ARM_TOP) if g not in refused]
+    if one_arm and (heavy or wide):
+        why = (
+            f"mass {_fmt(mass)} kg > payload {_fmt(payload)} kg per arm"
+            if heavy
+            else f"width {width_note.format('>')}"
+        )
+        refused.update({g: why for g in one_arm})
+    elif one_arm:
         because.append("hard: one arm suffices")
-        if lateral is None and context.fragility == Fragility.FRAGILE:
-            because.extend(lateral_notes)
-        options.extend(one_arm_options(context))
+        candidates.extend(o for o in one_arm_options(context) if o.grasp in one_arm)
+    for grasp, why in refused.items():
+        if GRASP_END_EFFECTOR[grasp] not in robot.end_effectors or grasp in one_arm:
+            because.append(f"hard: no {grasp.value}: {why}")
     because.extend(common_notes)
+    order = {g: i for i, g in enumerate(GRASP_ORDER)}
+    options = tuple(sorted(candidates, key=lambda o: order[o.grasp]))
     return HardAssessment(
-        arms_needed, frozenset(elements), tuple(options), tuple(skills), tuple(because)
+        arms_needed, frozenset(elements), options, tuple(skills), tuple(because), _refusals(refused)
     )
+
+
+def _refusals(refused: dict[GraspType, str]) -> tuple[Refusal, ...]:
+    order = {g: i for i, g in enumerate(GRASP_ORDER)}
+    return tuple(Refusal(g, refused[g]) for g in sorted(refused, key=lambda g: order[g]))

@@ -89,7 +89,8 @@ def _compose(
     rules: Sequence[Rule],
     scene: SceneQuery,
     config: ReasonerConfig,
-) -> SemanticAction:
+) -> tuple[SemanticAction | None, list[str]]:
+    """The option's action with its skills and score; or None and why, when a rule vetoes it."""
     skills: dict[Action, SkillSelection] = {s.action: s for s in (*option.skills, *hard.skills)}
     because = [*hard.because, *option.because]
 
@@ -105,13 +106,16 @@ def _compose(
     limits = {"squeeze_force_n": robot.squeeze_force_n}
 
     score = 0.0
+    vetoes: list[str] = []
     for rule in rules:
         if not rule.matches(facts):
             continue
         matched = rule.describe(facts)
         for effect in rule.effects:
             if isinstance(effect, GraspEffect):
-                if effect.grasp == option.grasp:
+                if effect.grasp == option.grasp and effect.veto:
+                    vetoes.append(f"rule {rule.name} vetoes {option.grasp.value}: {matched}")
+                elif effect.grasp == option.grasp:
                     score += effect.weight
                     because.append(f"rule {rule.name} ({_fmt_weight(effect.weight)}): {matched}")
             elif isinstance(effect, SkillEffect):
@@ -127,7 +131,12 @@ def _compose(
                 applied, what = _apply_param(skills, effect, limits)
                 if applied:
                     because.append(f"rule {rule.name}: {what}: {matched}")
-    return SemanticAction(option.grasp, sort_skills(tuple(skills.values())), score, tuple(because))
+    if vetoes:
+        return None, vetoes
+    action = SemanticAction(
+        option.grasp, sort_skills(tuple(skills.values())), score, tuple(because)
+    )
+    return action, []
 
 
 def reason(
@@ -155,8 +164,8 @@ def reason(
     Returns
     -------
     tuple of SemanticAction
-        Feasible actions by descending score (ties in grasp order); a single ``GraspType.NONE``
-        action explaining why when nothing is feasible.
+        Feasible actions no rule vetoes, by descending score (ties in grasp order); a single
+        ``GraspType.NONE`` action explaining why when nothing is left.
     """
     config = config or ReasonerConfig()
     rules = default_rules() if rules is None else rules
@@ -164,9 +173,16 @@ def reason(
     hard = assess(context, robot, config)
     if not hard.options:
         return (SemanticAction(GraspType.NONE, (), 0.0, hard.because),)
-    actions = [
-        _compose(context, robot, hard, option, rules, scene, config) for option in hard.options
-    ]
+    actions: list[SemanticAction] = []
+    vetoes: list[str] = []
+    for option in hard.options:
+        action, vetoed = _compose(context, robot, hard, option, rules, scene, config)
+        if action is None:
+            vetoes.extend(vetoed)
+        else:
+            actions.append(action)
+    if not actions:
+        return (SemanticAction(GraspType.NONE, (), 0.0, (*hard.because, *vetoes)),)
     order = {g: i for i, g in enumerate(GRASP_ORDER)}
     return tuple(sorted(actions, key=lambda a: (-a.score, order[a.grasp])))
 

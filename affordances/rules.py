@@ -14,6 +14,7 @@ A rule file::
           elements: [wide, parallel_faces] # a list on a set means "contains all"
         effects:
           - {grasp: two_palm_lateral, weight: 2.0}            # adds to that grasp's score
+          - {grasp: two_arm_support, veto: true}              # never offers that grasp
           - {skill: hold_force, weight: 0.5, params: {...}}   # composes a skill
           - {param: max_speed, value: 0.2}                    # sets a parameter of a skill
 
@@ -130,7 +131,7 @@ Facts = Mapping[Fact, FactValue]
 
 _RULE_KEYS = ("name", "description", "when", "effects")
 _EFFECT_KEYS = {
-    "grasp": ("grasp", "weight"),
+    "grasp": ("grasp", "weight", "veto"),
     "skill": ("skill", "weight", "space", "params"),
     "param": ("param", "value", "skill"),
 }
@@ -214,10 +215,11 @@ def _show(value: Any) -> str:
 
 @dataclass(frozen=True)
 class GraspEffect:
-    """Add ``weight`` to the score of ``grasp``."""
+    """Add ``weight`` to the score of ``grasp``; or, with ``veto``, never offer it."""
 
     grasp: GraspType
     weight: float
+    veto: bool = False
 
 
 @dataclass(frozen=True)
@@ -417,9 +419,17 @@ def _effect(item: Any, where: _Where, field: str) -> Effect:
     kind = kinds[0]
     _check_keys(item, _EFFECT_KEYS[kind], where, field)
     if kind == "grasp":
-        if "weight" not in item:
-            raise where.error(f"{field}.weight", "missing; a grasp effect needs a weight")
         grasp = GraspType(_member(item["grasp"], GraspType, where, f"{field}.grasp"))
+        if "veto" in item:
+            if item["veto"] is not True:
+                raise where.error(f"{field}.veto", f"expected true, got {item['veto']!r}")
+            if "weight" in item:
+                raise where.error(f"{field}.weight", "a vetoed grasp has no weight")
+            return GraspEffect(grasp, 0.0, veto=True)
+        if "weight" not in item:
+            raise where.error(
+                f"{field}.weight", "missing; a grasp effect needs a weight (or veto: true)"
+            )
         return GraspEffect(grasp, _number(item["weight"], where, f"{field}.weight"))
     if kind == "skill":
         action = Action(_member(item["skill"], Action, where, f"{field}.skill"))

@@ -20,7 +20,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy import signal
 
 from skills.basis import DEFAULT_ALPHA_S, RBFBasis, make_basis, phase, phase_step
 from skills.demonstration import Demonstration
@@ -409,6 +408,10 @@ def linear_rollout(
         # Outputs e[2..n] driven by u[1..n-1], seeded with e[1], e[0] as past outputs.
         # Transposed direct-form state for past outputs e[1], e[0] (b has a single tap).
         zi = np.stack((-a[1] * e1 - a[2] * e0, -a[2] * e1))
+        # Imported here: scipy.signal takes about a second to import, which every command
+        # that only reads a tree (validate, nodes) would pay.
+        from scipy import signal
+
         e[2:], _ = signal.lfilter(b, a, drive[1:], axis=0, zi=zi)
     y = e + goal
     yd = np.empty_like(y)

@@ -74,11 +74,23 @@ class GraspType(StrEnum):
     NONE = "none"
 
 
+class EndEffector(StrEnum):
+    """What an arm ends in, which fixes the grasps it can make.
+
+    ``FLAT_PALM`` is a rigid plate: it presses on a face or carries from below, and cannot
+    close around anything, so it takes part in two-arm grasps only. ``GRIPPER`` closes
+    fingers (or jaws) around an object, which the one-arm top and side grasps need.
+    """
+
+    FLAT_PALM = "flat_palm"
+    GRIPPER = "gripper"
+
+
 def _check_unique(enum_cls: type[Enum]) -> None:
     values = [m.value for m in enum_cls]
     if len(values) != len(set(values)):
         raise RuntimeError(f"{enum_cls.__name__}: duplicate values")
 
 
-for _cls in (Space, Arm, Action, AffordanceElement, GraspType):
+for _cls in (Space, Arm, Action, AffordanceElement, GraspType, EndEffector):
     _check_unique(_cls)

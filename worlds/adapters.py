@@ -10,6 +10,7 @@ import math
 
 from affordances import ObjectContext, RobotCapabilities
 from affordances.context import Obstacle
+from worlds.robots import robot_model_of
 from worlds.spec import ObjectSpec, ObstacleSpec, RobotModelName, Shape, ShapeSpec, WorldSpec
 from worlds.world_file import World, as_world_spec
 
@@ -23,7 +24,8 @@ _SPANS_M: dict[RobotModelName, tuple[float, float, float]] = {
 
 
 def robot_capabilities(world: World | WorldSpec) -> RobotCapabilities:
-    """What the world's robot can carry and squeeze, for the affordance reasoner."""
+    """What the world's robot can carry and squeeze and what its arms end in (its model's
+    declared end-effectors), for the affordance reasoner."""
     robot = as_world_spec(world).scene.robot
     min_span, max_span, palm_mu = _SPANS_M.get(robot.model, (0.10, 0.60, 0.8))
     return RobotCapabilities(
@@ -33,6 +35,7 @@ def robot_capabilities(world: World | WorldSpec) -> RobotCapabilities:
         min_span_m=min_span,
         squeeze_force_n=robot.squeeze_force_n,
         palm_friction=palm_mu,
+        end_effectors=robot_model_of(robot).end_effectors,
     )
 
 

@@ -14,7 +14,7 @@ from collections.abc import Sequence
 import pybullet as pb
 
 from skills.vocabulary import Arm
-from worlds.robots import RobotModel, build_robot_model
+from worlds.robots import RobotModel, robot_model_of
 from worlds.spec import ObjectSpec, ObstacleSpec, RobotSpec, Shape, ShapeSpec, TableSpec
 
 TABLE_RGBA = (0.6, 0.45, 0.3, 1.0)
@@ -23,15 +23,8 @@ OBSTACLE_RGBA = (0.8, 0.2, 0.2, 1.0)
 
 
 def build_robot(spec: RobotSpec) -> RobotModel:
-    """The robot model ``spec`` describes (:func:`worlds.robots.build_robot_model`)."""
-    return build_robot_model(
-        spec.model,
-        base_position=spec.base_position,
-        base_rpy_deg=spec.base_rpy_deg,
-        arm_separation=spec.arm_separation,
-        mount_height=spec.mount_height,
-        palm_size=spec.palm_size,
-    )
+    """The robot model ``spec`` describes (:func:`worlds.robots.robot_model_of`)."""
+    return robot_model_of(spec)
 
 
 def load_robot(client: int, robot: RobotModel) -> tuple[int, ...]:

@@ -106,6 +106,7 @@ __all__ = [
     "world_from_data",
     "world_json_schema",
     "world_spec",
+    "world_summary",
 ]
 
 
@@ -372,13 +373,18 @@ def world_cli_validate(path: str) -> int:
             f"{path}: internal error while validating: {type(exc).__name__}: {exc}", file=sys.stderr
         )
         return 1
+    print(f"{path}: ok: {world_summary(world)}")
+    return 0
+
+
+def world_summary(world: World) -> str:
+    """One line on what a world holds: ``world 'x', 1 object, 2 obstacles, ...``."""
     moves = sum(len(step.moves) for step in world.task)
-    print(
-        f"{path}: ok: world {world.name!r}, {_count(len(world.objects), 'object')}, "
+    return (
+        f"world {world.name!r}, {_count(len(world.objects), 'object')}, "
         f"{_count(len(world.obstacles), 'obstacle')}, {_count(len(world.task), 'task step')}, "
         f"{_count(moves, 'move')}"
     )
-    return 0
 
 
 def world_cli_schema() -> int:

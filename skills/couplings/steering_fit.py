@@ -19,7 +19,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.optimize import least_squares
 
 from skills import quaternion as quat
 from skills.couplings._checks import non_negative, vector
@@ -193,6 +192,10 @@ def fit_obstacle_steering(
             cost = float(np.sum((gamma * unit - c_all) ** 2))
             if cost < best[0]:
                 best = (cost, np.array((gamma, beta, k)))
+    # Imported here: scipy.optimize costs about half a second to import, which every command
+    # that registers the leaves (validate, nodes) would pay without fitting anything.
+    from scipy.optimize import least_squares
+
     result = least_squares(
         lambda x: law(x) - c_all,
         best[1],

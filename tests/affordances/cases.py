@@ -12,9 +12,14 @@ from affordances import (
     RobotCapabilities,
     make_object_context,
 )
+from skills.vocabulary import EndEffector
 
 ROBOT: RobotCapabilities = PAPER_ROBOT
 STRONG_ROBOT: RobotCapabilities = replace(PAPER_ROBOT, squeeze_force_n=150.0)
+#: The paper's robot with hands: flat palms that also close fingers, so one-arm grasps too.
+HANDED_ROBOT: RobotCapabilities = replace(
+    PAPER_ROBOT, end_effectors=frozenset({EndEffector.FLAT_PALM, EndEffector.GRIPPER})
+)
 
 
 def number(value: ParamValue) -> float:

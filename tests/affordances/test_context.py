@@ -17,6 +17,7 @@ from affordances import (
     Shape,
     make_object_context,
 )
+from skills.vocabulary import EndEffector
 from tests.affordances.cases import parcel
 
 
@@ -107,5 +108,7 @@ def test_bad_robot_names_the_field(overrides: dict[str, Any], match: str) -> Non
 
 
 def test_robot_palm_width_is_the_middle_palm_size() -> None:
-    robot = RobotCapabilities(7.0, (0.12, 0.09, 0.02), 0.6, 0.15, 40.0, 0.8)
+    robot = RobotCapabilities(
+        7.0, (0.12, 0.09, 0.02), 0.6, 0.15, 40.0, 0.8, frozenset({EndEffector.FLAT_PALM})
+    )
     assert robot.palm_width_m == 0.09

@@ -85,7 +85,7 @@ def test_span_limits_the_squeeze() -> None:
     # both face pairs 0.7 m apart: wider than the 0.6 m span
     big = assess(parcel(dimensions=(0.7, 0.7, 0.2)), ROBOT, config)
     assert [o.grasp for o in big.options] == [GraspType.TWO_ARM_SUPPORT]
-    assert any("outside span 0.15..0.6 m" in line for line in big.because)
+    assert any("outside the palms' span 0.15..0.6 m" in line for line in big.because)
 
 
 def test_lateral_palms_face_the_robot_sides() -> None:

@@ -19,7 +19,7 @@ from affordances import (
     render_json,
 )
 from skills.vocabulary import GraspType
-from tests.affordances.cases import ROBOT
+from tests.affordances.cases import HANDED_ROBOT, ROBOT
 
 PROPERTY_SETTINGS = settings(max_examples=80, deadline=None, derandomize=True)
 ONE_ARM = (GraspType.ONE_ARM_SIDE, GraspType.ONE_ARM_TOP)
@@ -138,5 +138,5 @@ def test_mirror_of_a_one_arm_object_swaps_the_arm() -> None:
     context = make_object_context(
         "cube", "block", "box", (0.05, 0.05, 0.05), 0.2, "wood", 0.5, position=(0.4, 0.2, 0.0)
     )
-    arms = [reason(c, ROBOT)[0].skills[0].params["arms"] for c in (context, mirror(context))]
+    arms = [reason(c, HANDED_ROBOT)[0].skills[0].params["arms"] for c in (context, mirror(context))]
     assert arms == [("left",), ("right",)]

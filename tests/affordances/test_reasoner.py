@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import pytest
@@ -18,8 +18,11 @@ from affordances import (
     reason,
     rule_set,
 )
-from skills.vocabulary import Action, GraspType, Space
+from affordances.config import ReasonerConfig
+from affordances.physics import assess
+from skills.vocabulary import Action, EndEffector, GraspType, Space
 from tests.affordances.cases import (
+    HANDED_ROBOT,
     ROBOT,
     STRONG_ROBOT,
     heavy_box,
@@ -70,19 +73,26 @@ CASES = [
         (GraspType.TWO_ARM_SUPPORT,),
         (Action.TRANSPORT, Action.HOLD_FORCE),
     ),
-    Case("small light box", small_box, ROBOT, ONE_ARM, (Action.TRANSPORT,), (Action.HOLD_LATERAL,)),
     Case(
-        "full fragile glass",
+        "small light box, hands",
+        small_box,
+        HANDED_ROBOT,
+        ONE_ARM,
+        (Action.TRANSPORT,),
+        (Action.HOLD_LATERAL,),
+    ),
+    Case(
+        "full fragile glass, hands",
         wine_glass,
-        ROBOT,
+        HANDED_ROBOT,
         ONE_ARM,
         (Action.TRANSPORT, Action.KEEP_UPRIGHT),
         (Action.HOLD_LATERAL,),
     ),
     Case(
-        "open bottle",
+        "open bottle, hands",
         open_bottle,
-        ROBOT,
+        HANDED_ROBOT,
         (GraspType.ONE_ARM_SIDE,),
         (Action.TRANSPORT, Action.KEEP_UPRIGHT),
     ),
@@ -157,14 +167,14 @@ def test_too_heavy_for_both_arms_gives_none_with_reason() -> None:
 
 
 def test_small_box_uses_the_arm_on_its_side() -> None:
-    right = reason(small_box(), ROBOT)[0].skill(Action.TRANSPORT)
-    left = reason(small_box(position=(0.4, 0.2, 0.03)), ROBOT)[0].skill(Action.TRANSPORT)
+    right = reason(small_box(), HANDED_ROBOT)[0].skill(Action.TRANSPORT)
+    left = reason(small_box(position=(0.4, 0.2, 0.03)), HANDED_ROBOT)[0].skill(Action.TRANSPORT)
     assert right is not None and right.params["arms"] == ("right",)
     assert left is not None and left.params["arms"] == ("left",)
 
 
 def test_fragile_glass_is_never_squeezed_and_says_so() -> None:
-    actions = reason(wine_glass(), ROBOT)
+    actions = reason(wine_glass(), HANDED_ROBOT)
     assert all(Action.HOLD_LATERAL not in a.actions for a in actions)
     assert "hard: no squeeze: fragile object" in actions[0].because
     assert "hard: full: keep upright" in actions[0].because
@@ -244,3 +254,90 @@ def test_user_rule_file_can_replace_the_defaults(tmp_path: Path) -> None:
     top = actions[0]
     assert top.actions == (Action.TRANSPORT, Action.HOLD_LATERAL)
     assert not any(line.startswith("rule ") for line in top.because)
+
+
+def _box(width: float, length: float, height: float, mass: float, category: str) -> ObjectContext:
+    return parcel(name="box", category=category, dimensions=(width, length, height), mass_kg=mass)
+
+
+@pytest.mark.parametrize("category", ["parcel", "box"])
+@pytest.mark.parametrize(
+    ("size", "mass"),
+    [((0.15, 0.25, 0.10), 0.5), ((0.16, 0.30, 0.15), 2.0)],
+    ids=["0.15 m, 0.5 kg", "0.16 m, 2 kg"],
+)
+def test_flat_palms_squeeze_small_light_boxes_first(
+    size: tuple[float, float, float], mass: float, category: str
+) -> None:
+    actions = reason(_box(*size, mass, category), ROBOT)
+    assert [a.grasp for a in actions] == [GraspType.TWO_PALM_LATERAL, GraspType.TWO_ARM_SUPPORT]
+    hold = actions[0].skill(Action.HOLD_LATERAL)
+    assert hold is not None
+    assert_allclose(number(hold.params["span_m"]), size[1])
+    # F = k m g / (2 mu) with mu = 0.8 x 0.8
+    assert_allclose(number(hold.params["squeeze_force_n"]), 1.5 * mass * 9.81 / 1.28, rtol=1e-12)
+    assert "hard: no one_arm_top: needs a gripper, the robot has flat palms" in actions[0].because
+
+
+def test_flat_palms_refuse_one_arm_grasps_with_the_reason() -> None:
+    hard = assess(_box(0.15, 0.25, 0.10, 0.5, "box"), ROBOT, ReasonerConfig())
+    assert [(r.grasp, r.why) for r in hard.refused] == [
+        (GraspType.ONE_ARM_SIDE, "needs a gripper, the robot has flat palms"),
+        (GraspType.ONE_ARM_TOP, "needs a gripper, the robot has flat palms"),
+    ]
+
+
+def test_nothing_the_palms_can_make_gives_none_naming_every_grasp() -> None:
+    # a 6 cm cube is narrower than the palms' smallest span (0.15 m) and no gripper can close
+    cube = small_box()
+    actions = reason(cube, ROBOT)
+    assert [a.grasp for a in actions] == [GraspType.NONE]
+    assert assess(cube, ROBOT, ReasonerConfig()).no_grasp_reason() == (
+        "two_palm_lateral: faces 0.06 m, 0.06 m apart, outside the palms' span 0.15..0.6 m; "
+        "two_arm_support: 0.06 m across < the palms' smallest span 0.15 m; "
+        "one_arm_side: needs a gripper, the robot has flat palms; "
+        "one_arm_top: needs a gripper, the robot has flat palms"
+    )
+
+
+def test_a_gripper_alone_cannot_make_palm_grasps() -> None:
+    grippers = replace(ROBOT, end_effectors=frozenset({EndEffector.GRIPPER}))
+    hard = assess(parcel(), grippers, ReasonerConfig())
+    assert hard.options == ()
+    assert str(hard.refused[0]) == "two_palm_lateral: needs flat palms, the robot has grippers"
+    # the parcel (0.20 m) is wider than one hand (0.18 m)
+    assert str(hard.refused[2]) == (
+        "one_arm_side: width 0.2 m > one-hand limit 0.18 m (2 x palm width 0.09 m)"
+    )
+
+
+def test_a_rule_file_still_reorders_the_palm_grasps(tmp_path: Path) -> None:
+    rules = tmp_path / "support.yaml"
+    rules.write_text(
+        "version: 1\nrules:\n  - name: support_small\n"
+        "    effects: [{grasp: two_arm_support, weight: 10}]\n"
+    )
+    actions = reason(_box(0.15, 0.25, 0.10, 0.5, "parcel"), ROBOT, rules=rule_set([rules]))
+    assert [a.grasp for a in actions] == [GraspType.TWO_ARM_SUPPORT, GraspType.TWO_PALM_LATERAL]
+
+
+def test_a_rule_file_vetoes_a_grasp_and_says_which_rule(tmp_path: Path) -> None:
+    rules = tmp_path / "veto.yaml"
+    rules.write_text(
+        "version: 1\nrules:\n  - name: no_squeeze\n    when: {mass_kg: {lt: 1.0}}\n"
+        "    effects: [{grasp: two_palm_lateral, veto: true}]\n"
+    )
+    box = _box(0.15, 0.25, 0.10, 0.5, "parcel")
+    actions = reason(box, ROBOT, rules=rule_set([rules]))
+    assert [a.grasp for a in actions] == [GraspType.TWO_ARM_SUPPORT]
+    rules.write_text(
+        "version: 1\nrules:\n  - name: no_palms\n    when: {mass_kg: {lt: 1.0}}\n"
+        "    effects:\n      - {grasp: two_palm_lateral, veto: true}\n"
+        "      - {grasp: two_arm_support, veto: true}\n"
+    )
+    [none] = reason(box, ROBOT, rules=rule_set([rules]))
+    assert none.grasp == GraspType.NONE
+    assert none.because[-2:] == (
+        "rule no_palms vetoes two_palm_lateral: mass_kg 0.5 < 1",
+        "rule no_palms vetoes two_arm_support: mass_kg 0.5 < 1",
+    )

@@ -160,6 +160,14 @@ BAD = [
         r"field 'effects\[0\]\.space': unknown Space 'sideways'",
     ),
     (_doc(_rule(effects=[{"weight": 1}])), r"field 'effects\[0\]': expected exactly one of"),
+    (
+        _doc(_rule(effects=[{"grasp": "two_arm_support", "veto": False}])),
+        r"field 'effects\[0\]\.veto': expected true, got False",
+    ),
+    (
+        _doc(_rule(effects=[{"grasp": "two_arm_support", "veto": True, "weight": 1}])),
+        r"field 'effects\[0\]\.weight': a vetoed grasp has no weight",
+    ),
     ("just text", r"f\.yaml: field '': expected a mapping with 'version' and 'rules'"),
 ]
 

@@ -11,9 +11,11 @@ import pytest
 import yaml
 
 from affordances import AffordanceReasoner
+from skills.vocabulary import EndEffector, GraspType
 from worlds.adapters import object_contexts, robot_capabilities
+from worlds.robots import robot_model_of
 from worlds.sim_world import SimWorld
-from worlds.world_file import load_world
+from worlds.world_file import load_world, world_spec
 
 DEFAULT_WORLD = Path(__file__).resolve().parents[2] / "worlds" / "parcel_pick_place.yaml"
 
@@ -77,3 +79,20 @@ def test_a_mesh_world_builds_from_another_working_directory(
         np.testing.assert_allclose(
             sim.object_pose("parcel").position, world.objects[0].pose.position, atol=0.01
         )
+
+
+@pytest.mark.parametrize("name", ["parcel_pick_place.yaml", "icub_parcel_pick_place.yaml"])
+def test_robots_declare_flat_palms_and_the_reasoner_sees_them(name: str) -> None:
+    world = load_world(DEFAULT_WORLD.parent / name)
+    spec = world_spec(world)
+    assert robot_model_of(spec.scene.robot).end_effectors == {EndEffector.FLAT_PALM}
+    assert robot_capabilities(world).end_effectors == {EndEffector.FLAT_PALM}
+
+
+def test_the_small_box_world_gets_the_lateral_squeeze_first() -> None:
+    world = load_world(DEFAULT_WORLD.parents[1] / "tests" / "data" / "worlds" / "small_box.yaml")
+    ranked = AffordanceReasoner(robot_capabilities(world)).rank_all(object_contexts(world))
+    assert [a.grasp for a in ranked["parcel"]] == [
+        GraspType.TWO_PALM_LATERAL,
+        GraspType.TWO_ARM_SUPPORT,
+    ]

@@ -7,12 +7,13 @@ scene loads its bodies and the controller drives its arms.
 
 from __future__ import annotations
 
+from functools import lru_cache
 from typing import Any
 
 from worlds.robots.icub import icub_model
 from worlds.robots.kuka import kuka_iiwa_model
 from worlds.robots.model import ArmSpec, BodySpec, FloatArray, RobotModel
-from worlds.spec import RobotModelName
+from worlds.spec import RobotModelName, RobotSpec
 
 
 def build_robot_model(model: RobotModelName, **params: Any) -> RobotModel:
@@ -37,4 +38,17 @@ def build_robot_model(model: RobotModelName, **params: Any) -> RobotModel:
     raise ValueError(f"build_robot_model: expected model in {known}, got {model!r}")
 
 
-__all__ = ["ArmSpec", "BodySpec", "FloatArray", "RobotModel", "build_robot_model"]
+@lru_cache(maxsize=8)
+def robot_model_of(spec: RobotSpec) -> RobotModel:
+    """The robot model a world's robot section describes (built once per spec; no PyBullet)."""
+    return build_robot_model(
+        spec.model,
+        base_position=spec.base_position,
+        base_rpy_deg=spec.base_rpy_deg,
+        arm_separation=spec.arm_separation,
+        mount_height=spec.mount_height,
+        palm_size=spec.palm_size,
+    )
+
+
+__all__ = ["ArmSpec", "BodySpec", "FloatArray", "RobotModel", "build_robot_model", "robot_model_of"]

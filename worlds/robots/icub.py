@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from skills import quaternion as quat
-from skills.vocabulary import Arm
+from skills.vocabulary import Arm, EndEffector
 from worlds.robots.cache import cached_urdf
 from worlds.robots.model import ArmSpec, BodySpec, RobotModel
 
@@ -73,6 +73,8 @@ PALM_TOWARDS_THUMB = -0.01
 #: 0.05 rad per cm of lift) in its narrow range (-0.35..0.44 rad); the turn centres it over
 #: the table workspace (at 0.05 rad the start postures sat on the lower limit).
 PALM_TWIST = -0.15
+#: The hands carry a flat palm box and their fingers stay curled: flat palms, no gripper.
+END_EFFECTOR = EndEffector.FLAT_PALM
 #: Gap between the hand's hull and the palm box, m.
 PALM_CLEARANCE = 0.002
 #: Rest posture of an arm, rad: forearm forward, palm facing the robot's midline. The iCub's
@@ -391,6 +393,7 @@ def icub_model(
             upper=upper,
             max_torque=MAX_TORQUE,
             palm_size=palm_size,
+            end_effector=END_EFFECTOR,
         )
     trunk_only = sorted(
         {*trunk_links, "base"} - _arm_link_names("l") - {"palm"}  # everything but the left arm

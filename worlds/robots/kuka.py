@@ -17,7 +17,7 @@ import numpy as np
 import pybullet_data
 
 from skills import quaternion as quat
-from skills.vocabulary import Arm
+from skills.vocabulary import Arm, EndEffector
 from worlds.robots.cache import cached_urdf
 from worlds.robots.model import ArmSpec, BodySpec, RobotModel
 
@@ -33,6 +33,8 @@ MAX_TORQUE = (320.0, 320.0, 176.0, 176.0, 110.0, 40.0, 40.0)
 MOUNT_PITCH_DEG = 9.0
 #: Rest posture of the left arm, rad: palm facing -y with its x axis down, near the parcel.
 LEFT_REST = (0.03, 0.93, -0.07, -1.61, 1.59, -1.51, -0.45)
+#: Each arm ends in a flat palm box: it presses, it cannot close around anything.
+END_EFFECTOR = EndEffector.FLAT_PALM
 
 
 def _iiwa_source() -> Path:
@@ -253,6 +255,7 @@ def kuka_iiwa_model(
             upper=upper,
             max_torque=MAX_TORQUE,
             palm_size=palm_size,
+            end_effector=END_EFFECTOR,
         )
         for index, (arm, rest) in enumerate(((Arm.LEFT, LEFT_REST), (Arm.RIGHT, right_rest)))
     }

@@ -19,7 +19,7 @@ from types import MappingProxyType
 import numpy as np
 from numpy.typing import NDArray
 
-from skills.vocabulary import Arm
+from skills.vocabulary import Arm, EndEffector
 
 FloatArray = NDArray[np.float64]
 
@@ -45,7 +45,7 @@ class BodySpec:
 
 @dataclass(frozen=True)
 class ArmSpec:
-    """One arm of a robot: a chain of revolute joints ending in a flat palm link.
+    """One arm of a robot: a chain of revolute joints ending in an end-effector link.
 
     Attributes
     ----------
@@ -64,6 +64,9 @@ class ArmSpec:
         (n,) joint torque limits, N m.
     palm_size : tuple of float
         (3,) palm box extent along the palm frame's x, y, z axes, m.
+    end_effector : EndEffector
+        What the arm ends in: it fixes the grasps the reasoner may offer
+        (:data:`affordances.physics.GRASP_END_EFFECTOR`).
     """
 
     body: int
@@ -74,6 +77,7 @@ class ArmSpec:
     upper: tuple[float, ...]
     max_torque: tuple[float, ...]
     palm_size: tuple[float, float, float]
+    end_effector: EndEffector
 
     def __post_init__(self) -> None:
         n = len(self.joint_indices)
@@ -137,6 +141,11 @@ class RobotModel:
                     f"but there are {len(self.bodies)} bodies"
                 )
         object.__setattr__(self, "arms", MappingProxyType(dict(self.arms)))
+
+    @property
+    def end_effectors(self) -> frozenset[EndEffector]:
+        """The kinds of end-effector the arms end in."""
+        return frozenset(spec.end_effector for spec in self.arms.values())
 
 
 __all__ = ["ArmSpec", "BodySpec", "FloatArray", "RobotModel"]

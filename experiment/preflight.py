@@ -1,0 +1,93 @@
+"""Before a run: the checks that need no simulation, so a task that cannot work fails at once.
+
+:func:`preflight_problems` gathers the world's feasibility (:mod:`worlds.feasibility`: a grasp
+the robot can make, goals on the table and within reach) and, with a tree, the tree's own checks
+(:mod:`planner.validate`) and its moves against the world's task (:mod:`planner.tree_task`).
+``app.py validate``, ``run`` and ``trials`` call it before anything is simulated.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from pathlib import Path
+
+from planner.default_tree import PICK_AND_PLACE_XML
+from planner.tree_problems import TreeFileError
+from planner.tree_reading import read_tree_document
+from planner.tree_task import check_tree_moves, tree_grasps
+from planner.validate import validate_tree
+from worlds.feasibility import feasibility_problems
+from worlds.world_file import World, WorldFileError, load_world, world_spec, world_summary
+
+
+def bound_object(world: World) -> str | None:
+    """The object a tree's ``{object}`` ports name in a run: the task's first object, as
+    :func:`experiment.episode.run_episode` writes it to ``/object``."""
+    return world.task[0].object if world.task else None
+
+
+def preflight_problems(world: World, world_file: str, tree: Path | None = None) -> list[str]:
+    """Every problem found without simulating, one line each, each naming its file.
+
+    Parameters
+    ----------
+    world : World
+        The validated world.
+    world_file : str
+        The world file as the user named it, for the messages.
+    tree : Path, optional
+        The tree to run: checked itself, its moves against the world's task and its grasps
+        against the objects. Without one, the default tree's grasps are used (its moves
+        follow the world's task).
+
+    Returns
+    -------
+    list of str
+        Empty when the run may start.
+    """
+    import planner.leaves  # noqa: F401  (registers the leaves a tree may use)
+
+    if tree is not None:
+        tree_problems = validate_tree(tree)
+        if tree_problems:
+            return [str(p) for p in tree_problems]
+    try:
+        doc = read_tree_document(tree if tree is not None else PICK_AND_PLACE_XML)
+    except TreeFileError as err:
+        return [str(p) for p in err.problems]
+    lines = [p.format(world_file) for p in feasibility_problems(world, tree_grasps(doc))]
+    if tree is not None:
+        spec = world_spec(world)
+        moves = {step.object: len(spec.moves_of(step.object)) for step in spec.task}
+        lines += [str(p) for p in check_tree_moves(doc, moves, bound_object(world))]
+    return lines
+
+
+def validate_cli(world_file: str, tree: str | None = None) -> int:
+    """``app.py validate WORLD [--tree T.xml]``: 0 and a summary, or 2 and one line per problem.
+
+    Returns 1 on an internal error (message on stderr, never a traceback).
+    """
+    try:
+        world = load_world(world_file)
+        problems = preflight_problems(world, world_file, Path(tree) if tree else None)
+    except WorldFileError as err:
+        print(err, file=sys.stderr)
+        return 2
+    except Exception as exc:  # the command line promises no tracebacks
+        print(
+            f"{world_file}: internal error while validating: {type(exc).__name__}: {exc}",
+            file=sys.stderr,
+        )
+        return 1
+    if problems:
+        for line in problems:
+            print(line, file=sys.stderr)
+        return 2
+    against = f"; tree {os.fspath(tree)} matches its task" if tree else ""
+    print(f"{world_file}: ok: {world_summary(world)}{against}")
+    return 0
+
+
+__all__ = ["bound_object", "preflight_problems", "validate_cli"]

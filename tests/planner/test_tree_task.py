@@ -1,0 +1,87 @@
+"""A tree's moves and grasps against a world's task (no world needed: counts per object)."""
+
+from __future__ import annotations
+
+import pytest
+
+import planner.leaves  # noqa: F401  (registers the leaves the trees use)
+from planner.default_tree import PICK_AND_PLACE_XML
+from planner.tree_reading import read_tree_document, read_tree_document_string
+from planner.tree_task import check_tree_moves, tree_grasps
+from skills.vocabulary import GraspType
+
+TWO_OBJECTS = """<root BTCPP_format="4">
+  <BehaviorTree ID="Main">
+    <Sequence>
+      <SelectSkills name="select_a" object="box_a" plan="{plan}" grasp="two_arm_support"/>
+      <AtGoal name="a_placed" object="box_a" move="1"/>
+      <AtGoal name="b_placed" object="box_b" move="0"/>
+      <AtGoal name="c_placed" object="box_c" move="0"/>
+    </Sequence>
+  </BehaviorTree>
+</root>
+"""
+
+
+def test_a_move_the_world_lacks_names_the_node_and_the_worlds_moves() -> None:
+    doc = read_tree_document(PICK_AND_PLACE_XML)
+    [problem] = check_tree_moves(doc, {"parcel": 2}, "parcel")
+    assert str(problem) == (
+        f'{PICK_AND_PLACE_XML}:32: <SubTree ID="Move" name="move_left">: move 2, '
+        "but the world's task has 2 moves for parcel (indices 0..1)"
+    )
+
+
+def test_a_move_no_node_names_would_be_left_undone() -> None:
+    doc = read_tree_document(PICK_AND_PLACE_XML)
+    [problem] = check_tree_moves(doc, {"parcel": 4}, "parcel")
+    assert str(problem) == (
+        f"{PICK_AND_PLACE_XML}: names moves 0, 1, 2 of parcel, but the world's task has "
+        "4 moves for parcel (indices 0..3): move 3 would be left undone"
+    )
+
+
+def test_the_shipped_tree_matches_a_three_move_task() -> None:
+    doc = read_tree_document(PICK_AND_PLACE_XML)
+    assert check_tree_moves(doc, {"parcel": 3}, "parcel") == []
+    assert check_tree_moves(doc, {"parcel": 2}, None) == []  # {object} unbound: unknown
+
+
+def test_literal_objects_are_checked_against_their_own_moves() -> None:
+    doc = read_tree_document_string(TWO_OBJECTS, source="two.xml")
+    problems = [str(p) for p in check_tree_moves(doc, {"box_a": 2, "box_b": 1}, "box_a")]
+    assert problems == [
+        "two.xml:7: <AtGoal name=\"c_placed\">: object 'box_c' is not in the world's task "
+        "(objects: box_a, box_b)",
+        "two.xml: names moves 1 of box_a, but the world's task has 2 moves for box_a "
+        "(indices 0..1): move 0 would be left undone",
+    ]
+
+
+NO_SELECT = """<root BTCPP_format="4">
+  <BehaviorTree ID="Main"><AtGoal name="placed" object="box_a" move="0"/></BehaviorTree>
+</root>
+"""
+
+
+@pytest.mark.parametrize(
+    ("text", "grasps"),
+    [
+        (TWO_OBJECTS, frozenset({GraspType.TWO_ARM_SUPPORT})),
+        (
+            TWO_OBJECTS.replace(' grasp="two_arm_support"', ""),
+            frozenset({GraspType.TWO_PALM_LATERAL}),
+        ),
+        (TWO_OBJECTS.replace('"two_arm_support"', '"{grasp}"'), None),
+        (NO_SELECT, None),
+    ],
+    ids=["literal", "port default", "blackboard key", "no SelectSkills"],
+)
+def test_tree_grasps_are_what_its_select_skills_ask_for(
+    text: str, grasps: frozenset[GraspType] | None
+) -> None:
+    assert tree_grasps(read_tree_document_string(text)) == grasps
+
+
+def test_the_shipped_tree_makes_the_lateral_grasp() -> None:
+    assert tree_grasps(read_tree_document(PICK_AND_PLACE_XML)) == {GraspType.TWO_PALM_LATERAL}

@@ -1,0 +1,111 @@
+"""Feasibility before simulation: each infeasible world's exact problem, and the reach model."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import pytest
+from numpy.testing import assert_allclose
+
+from skills import quaternion as quat
+from skills.vocabulary import Arm, GraspType
+from worlds.feasibility import check_feasible, feasibility_problems, resting_half_height
+from worlds.robots import robot_model_of
+from worlds.robots.kuka import MOUNT_PITCH_DEG, palm2flange_position
+from worlds.robots.reach import arm_reach
+from worlds.world_file import WorldFileError, load_world, world_spec
+
+ROOT = Path(__file__).resolve().parents[2]
+INFEASIBLE = ROOT / "tests" / "data" / "infeasible_worlds"
+LATERAL = frozenset({GraspType.TWO_PALM_LATERAL})
+
+PROBLEMS = {
+    "goal_off_table.yaml": (
+        "task[0].moves[1].goal.position: expected a goal over the table top "
+        "(x 0.35..0.95 m, y -0.5..0.5 m), got [0.6, -0.65, 0.675]: "
+        "0.15 m beyond the table's edge at y = -0.5 m"
+    ),
+    "goal_in_the_air.yaml": (
+        "task[0].moves[0].goal.position: expected z = 0.675 m within 0.01 m, where parcel "
+        "rests on the table top (0.6 m + half its height 0.075 m), got z = 0.875 m"
+    ),
+    "goal_out_of_reach.yaml": (
+        "task[0].moves[2].goal.position: expected a goal within the arms' reach, got "
+        "two_palm_lateral puts the left palm at [1.45, 0.3, 0.675], 1.42 m from the left "
+        "shoulder [0.0563, 0.35, 0.956]; the arm reaches at most 0.969 m"
+    ),
+    "too_wide.yaml": (
+        "objects[0]: expected a grasp the robot can make, got none for parcel: "
+        "two_palm_lateral: faces 0.7 m, 0.65 m apart, outside the palms' span 0.1..0.6 m; "
+        "two_arm_support: the tree makes only two_palm_lateral; "
+        "one_arm_side: needs a gripper, the robot has flat palms; "
+        "one_arm_top: needs a gripper, the robot has flat palms"
+    ),
+}
+
+
+@pytest.mark.parametrize("name", sorted(PROBLEMS))
+def test_each_infeasible_world_gets_its_one_problem(name: str) -> None:
+    problems = feasibility_problems(load_world(INFEASIBLE / name), LATERAL)
+    assert [p.format("w.yaml") for p in problems] == [f"w.yaml: {PROBLEMS[name]}"]
+
+
+def test_check_feasible_raises_naming_the_file() -> None:
+    path = INFEASIBLE / "goal_off_table.yaml"
+    with pytest.raises(WorldFileError, match=r"^x\.yaml: task\[0\]\.moves\[1\]\.goal\.position"):
+        check_feasible(load_world(path), "x.yaml")
+
+
+@pytest.mark.parametrize(
+    "world",
+    [
+        ROOT / "worlds" / "parcel_pick_place.yaml",
+        ROOT / "worlds" / "icub_parcel_pick_place.yaml",
+        ROOT / "tests" / "data" / "worlds" / "small_box.yaml",
+    ],
+)
+def test_shipped_and_small_box_worlds_are_feasible(world: Path) -> None:
+    assert feasibility_problems(load_world(world), LATERAL) == []
+
+
+def test_a_wide_box_any_tree_could_support_is_feasible_without_a_tree() -> None:
+    # two_arm_support is a palm grasp the reasoner offers; only a tree that cannot make it
+    # turns the box away
+    assert feasibility_problems(load_world(INFEASIBLE / "too_wide.yaml")) == []
+
+
+def test_iiwa_reach_is_its_chain_from_the_second_joint_to_the_palm() -> None:
+    spec = world_spec(load_world(ROOT / "worlds" / "parcel_pick_place.yaml"))
+    reach = arm_reach(robot_model_of(spec.scene.robot))
+    lean = math.radians(MOUNT_PITCH_DEG)
+    # joint 2 sits 0.1575 + 0.2025 m up the leaning base, on joint 1's axis
+    shoulder_up = 0.1575 + 0.2025
+    for arm, side in ((Arm.LEFT, 1.0), (Arm.RIGHT, -1.0)):
+        assert_allclose(
+            reach[arm].shoulder,
+            (shoulder_up * math.sin(lean), side * 0.35, 0.6 + shoulder_up * math.cos(lean)),
+            atol=1e-9,
+        )
+        # joints 3..7 of pybullet_data's iiwa URDF, then the palm centre on the flange
+        links = 0.2045 + 0.2155 + 0.1845 + 0.2155 + 0.081
+        palm = math.hypot(*palm2flange_position((0.12, 0.09, 0.02)))
+        assert_allclose(reach[arm].radius_m, links + palm, rtol=1e-12)
+
+
+def test_icub_reach_is_about_its_arm_length() -> None:
+    spec = world_spec(load_world(ROOT / "worlds" / "icub_parcel_pick_place.yaml"))
+    reach = arm_reach(robot_model_of(spec.scene.robot))
+    # shoulders about 0.24 m apart, an arm of about 0.3 m plus the hand and its palm
+    assert_allclose(reach[Arm.LEFT].shoulder[1] - reach[Arm.RIGHT].shoulder[1], 0.24, atol=0.01)
+    for arm in (Arm.LEFT, Arm.RIGHT):
+        assert 0.35 < reach[arm].radius_m < 0.5
+
+
+def test_resting_height_of_a_box_on_its_side() -> None:
+    obj = world_spec(load_world(ROOT / "worlds" / "parcel_pick_place.yaml")).scene.objects[0]
+    assert_allclose(resting_half_height(obj, (0.0, 0.0, 0.0, 1.0)), 0.075)
+    on_side = quat.as_tuple(quat.from_axis_angle([1.0, 0.0, 0.0], math.pi / 2))
+    assert_allclose(resting_half_height(obj, on_side), 0.15, atol=1e-12)  # the 0.30 m side up
+    turned = quat.as_tuple(quat.from_axis_angle([0.0, 0.0, 1.0], 1.0))
+    assert_allclose(resting_half_height(obj, turned), 0.075, atol=1e-12)

@@ -1,0 +1,186 @@
+"""Can the robot do a world's task at all? Cheap checks before any simulation.
+
+Each check reads only the world's dataclasses (:mod:`worlds.spec`), the reasoner's hard stage
+and the robot's kinematic chain (:mod:`worlds.robots.reach`); none loads PyBullet. They find
+what would otherwise fail only after seconds of simulation:
+
+- an object no grasp the robot can make fits (wider than the palms' span, too heavy for the
+  grip, a one-arm grasp without a gripper): the reasoner's refusals, one per grasp;
+- a goal off the table: the object's centre must be over the table top's footprint (so its
+  weight rests on the table) and at the height where it rests on the top, within
+  :data:`REST_TOLERANCE_M` (lower is inside the table; higher drops it on release);
+- a goal out of reach: each palm of a grasp the reasoner offers, placed at the goal, must lie
+  inside its arm's reach sphere (:func:`worlds.robots.reach.arm_reach`). The palms are taken
+  at the contact faces' centres; the sphere bounds every posture, so a goal it refuses is out
+  of reach for certain.
+
+Problems name the world file's field (``task[0].moves[1].goal.position``, ``objects[0]``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Collection, Mapping
+from dataclasses import replace
+
+import numpy as np
+
+from affordances.actions import GRASP_ORDER
+from affordances.config import ReasonerConfig
+from affordances.physics import GraspOption, HardAssessment, assess
+from skills.vocabulary import Arm, GraspType
+from worlds.adapters import object_contexts, robot_capabilities
+from worlds.robots import robot_model_of
+from worlds.robots.reach import ArmReach, arm_reach
+from worlds.spec import MoveSpec, ObjectSpec, TableSpec, WorldSpec
+from worlds.world_errors import WorldFileError, WorldFileProblem
+from worlds.world_file import World, as_world_spec
+
+#: How far a goal's height may be from the object resting on the table top, m: a centimetre
+#: is half the 2 cm a placement is judged by.
+REST_TOLERANCE_M = 0.01
+
+
+def _fmt(value: float) -> str:
+    return f"{value:.3g}"
+
+
+def _vec(values: tuple[float, ...] | np.ndarray) -> str:
+    return "[" + ", ".join(_fmt(float(v)) for v in values) + "]"
+
+
+def resting_half_height(obj: ObjectSpec, quaternion: tuple[float, float, float, float]) -> float:
+    """Half the object's extent along world z when turned by ``quaternion``, m."""
+    x, y, z, w = quaternion
+    # Third row of the rotation matrix: how much of each body axis points up.
+    row = np.array([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)])
+    return 0.5 * float(np.abs(row) @ np.asarray(obj.shape.extents(), dtype=float))
+
+
+def _table_problem(obj: ObjectSpec, move: MoveSpec, table: TableSpec) -> tuple[str, str] | None:
+    """What the goal should be and what it is, if it is not where the object rests on the
+    table; else None."""
+    gx, gy, gz = move.goal_position
+    tx, ty, top = table.position
+    half_x, half_y = table.size[0] / 2.0, table.size[1] / 2.0
+    x_range, y_range = (tx - half_x, tx + half_x), (ty - half_y, ty + half_y)
+    beyond = []
+    for axis, value, (low, high) in (("x", gx, x_range), ("y", gy, y_range)):
+        if value < low:
+            beyond.append(
+                f"{_fmt(low - value)} m beyond the table's edge at {axis} = {_fmt(low)} m"
+            )
+        elif value > high:
+            beyond.append(
+                f"{_fmt(value - high)} m beyond the table's edge at {axis} = {_fmt(high)} m"
+            )
+    if beyond:
+        return (
+            f"a goal over the table top (x {_fmt(x_range[0])}..{_fmt(x_range[1])} m, "
+            f"y {_fmt(y_range[0])}..{_fmt(y_range[1])} m)",
+            f"{_vec(move.goal_position)}: " + " and ".join(beyond),
+        )
+    half = resting_half_height(obj, move.goal_quaternion)
+    rest = top + half
+    if abs(gz - rest) > REST_TOLERANCE_M:
+        return (
+            f"z = {_fmt(rest)} m within {_fmt(REST_TOLERANCE_M)} m, where {obj.name} rests on "
+            f"the table top ({_fmt(top)} m + half its height {_fmt(half)} m)",
+            f"z = {_fmt(gz)} m",
+        )
+    return None
+
+
+def _out_of_reach(option: GraspOption, reach: Mapping[Arm, ArmReach]) -> str | None:
+    """How a grasp's palms at the goal fall outside their arms' reach, or None."""
+    for arm, palm in zip(option.arms, option.palms, strict=True):
+        sphere = reach[arm]
+        distance = sphere.distance_m(palm)
+        if distance > sphere.radius_m:
+            return (
+                f"{option.grasp.value} puts the {arm.value} palm at {_vec(palm)}, "
+                f"{_fmt(distance)} m from the {arm.value} shoulder {_vec(sphere.shoulder)}; "
+                f"the arm reaches at most {_fmt(sphere.radius_m)} m"
+            )
+    return None
+
+
+def _no_grasp(hard: HardAssessment, grasps: Collection[GraspType] | None) -> str:
+    """Why no grasp is left: the reasoner's refusals, and the feasible ones the tree won't make."""
+    if grasps is None:
+        return hard.no_grasp_reason()
+    made = ", ".join(sorted(g.value for g in grasps))
+    why = {r.grasp: r.why for r in hard.refused}
+    why.update({o.grasp: f"the tree makes only {made}" for o in hard.options})
+    return "; ".join(f"{g.value}: {why[g]}" for g in GRASP_ORDER if g in why)
+
+
+def feasibility_problems(
+    world: World | WorldSpec, grasps: Collection[GraspType] | None = None
+) -> list[WorldFileProblem]:
+    """Every reason the world's task cannot work, found without simulating.
+
+    Parameters
+    ----------
+    world : World or WorldSpec
+        A validated world.
+    grasps : collection of GraspType, optional
+        The grasps the tree that will run makes (its leaves implement); any if None.
+
+    Returns
+    -------
+    list of WorldFileProblem
+        Empty when the checks pass; fields are paths in the world file.
+    """
+    spec = as_world_spec(world)
+    robot = robot_capabilities(spec)
+    config = ReasonerConfig()
+    contexts = {c.name: c for c in object_contexts(spec)}
+    reach = arm_reach(robot_model_of(spec.scene.robot))
+    index = {obj.name: k for k, obj in enumerate(spec.scene.objects)}
+    problems: list[WorldFileProblem] = []
+    graspable: dict[str, bool] = {}
+
+    def usable(options: tuple[GraspOption, ...]) -> list[GraspOption]:
+        return [o for o in options if grasps is None or o.grasp in grasps]
+
+    for k, obj in enumerate(spec.scene.objects):
+        hard = assess(contexts[obj.name], robot, config)
+        graspable[obj.name] = bool(usable(hard.options))
+        if not graspable[obj.name]:
+            problems.append(
+                WorldFileProblem(
+                    f"objects[{k}]",
+                    "a grasp the robot can make",
+                    f"none for {obj.name}: {_no_grasp(hard, grasps)}",
+                )
+            )
+    for i, step in enumerate(spec.task):
+        obj = spec.scene.objects[index[step.object]]
+        for j, move in enumerate(step.moves):
+            field = f"task[{i}].moves[{j}].goal.position"
+            table = _table_problem(obj, move, spec.scene.table)
+            if table is not None:
+                problems.append(WorldFileProblem(field, *table))
+                continue
+            if not graspable[obj.name]:
+                continue
+            at_goal = replace(
+                contexts[obj.name], position=move.goal_position, yaw=move.goal_yaw, goals=()
+            )
+            options = usable(assess(at_goal, robot, config).options)
+            misses = [_out_of_reach(o, reach) for o in options]
+            if options and all(m is not None for m in misses):
+                problems.append(
+                    WorldFileProblem(field, "a goal within the arms' reach", str(misses[0]))
+                )
+    return problems
+
+
+def check_feasible(world: World | WorldSpec, file: str) -> None:
+    """Raise :class:`WorldFileError` naming ``file`` if :func:`feasibility_problems` finds any."""
+    problems = feasibility_problems(world)
+    if problems:
+        raise WorldFileError(file, problems)
+
+
+__all__ = ["REST_TOLERANCE_M", "check_feasible", "feasibility_problems", "resting_half_height"]
