@@ -91,9 +91,44 @@ def _validate_command(args: argparse.Namespace) -> int:
         from planner.validate import tree_cli_validate
 
         return tree_cli_validate(args.file)
-    from worlds.world_file import world_cli_validate
+    from worlds.world_file import load_world, world_cli_validate
 
-    return world_cli_validate(args.file)
+    try:
+        world = load_world(args.file)
+    except Exception:  # world_cli_validate says what is wrong with it
+        return world_cli_validate(args.file)
+    problems = _move_skill_problems(world)
+    for problem in problems:
+        print(problem, file=sys.stderr)
+    return EXIT_BAD_INPUT if problems else world_cli_validate(args.file)
+
+
+def _move_skill_problems(world: Any) -> list[str]:
+    """One line per move whose ``skill`` the world's library cannot carry it with."""
+    from planner.composition import SkillChoiceError, transport_skill
+    from skills.library import LibraryFileError
+    from worlds.world_file import world_spec
+
+    named = [
+        (i, j, move.skill)
+        for i, step in enumerate(world.task)
+        for j, move in enumerate(step.moves)
+        if move.skill is not None
+    ]
+    if not named:
+        return []
+    folder = world_spec(world).skill_library
+    try:
+        library = _load_library(None if folder is None else str(folder))
+    except LibraryFileError as err:
+        return [str(err)]
+    problems = []
+    for i, j, key in named:
+        try:
+            transport_skill(library, key)
+        except SkillChoiceError as err:
+            problems.append(f"{world.source}: task[{i}].moves[{j}].skill: {err}")
+    return problems
 
 
 def _nodes_command(args: argparse.Namespace) -> int:
@@ -186,7 +221,7 @@ def _skills_command(args: argparse.Namespace) -> int:
     for r in rows:
         fit = ", ".join(f"{k}={v:.3g}" for k, v in r["fit"].items())
         demos = ", ".join(r["demonstrations"]) or "none"
-        print(f"  {r['name']:<16} {r['action']:<16} {r['space']:<9} {r['kind']}")
+        print(f"  {r['name']:<16} {r['label']:<16} {r['action']:<16} {r['space']:<9} {r['kind']}")
         print(f"      from {demos}; {r['method']}" + (f"; fit {fit}" if fit else ""))
     return EXIT_OK
 
@@ -196,17 +231,31 @@ def _teach_command(args: argparse.Namespace) -> int:
     from skills.demos.io import DemoFileError, read_demo_csv
     from skills.library import LibraryFileError
     from skills.pose_dmp import fit_pose
-    from skills.recognition import recognise
-    from skills.skill import Provenance, learnt_skill
+    from skills.recognition import DEFAULT_THRESHOLD, recognise
+    from skills.scaling import Scaling
+    from skills.skill import Provenance, check_label, learnt_skill
     from skills.vocabulary import Action, Space
 
     try:
-        action = Action(args.label)
-    except ValueError:
-        known = ", ".join(a.value for a in Action)
-        print(f"--label: expected one of {known}, got {args.label!r}", file=sys.stderr)
+        label = check_label(args.label, "--label")
+    except ValueError as err:
+        print(err, file=sys.stderr)
         return EXIT_BAD_INPUT
     space = Space(args.space)
+    kinds = {a.value: a for a in Action}
+    if args.action is not None:
+        action = kinds[args.action]
+    elif label in kinds:
+        action = kinds[label]
+    elif space is Space.ABSOLUTE:
+        action = Action.TRANSPORT  # an absolute motion of the object: a move can name it
+    else:
+        print(
+            f"--action: expected one of {', '.join(kinds)} for the relative skill {label!r} "
+            "(its label is not an action kind)",
+            file=sys.stderr,
+        )
+        return EXIT_BAD_INPUT
     folder = Path(args.library)
     try:
         demo_file = read_demo_csv(args.demo)
@@ -215,7 +264,14 @@ def _teach_command(args: argparse.Namespace) -> int:
         print(err, file=sys.stderr)
         return EXIT_BAD_INPUT
     demo = demo_file.demonstration
-    match = recognise(library, demo, space, args.threshold)
+    threshold = DEFAULT_THRESHOLD if args.threshold is None else args.threshold
+    if not -1.0 <= threshold <= 1.0:
+        print(
+            f"--threshold: expected a cosine similarity in [-1, 1], got {threshold}",
+            file=sys.stderr,
+        )
+        return EXIT_BAD_INPUT
+    match = recognise(library, demo, space, threshold)
     name = args.name or Path(args.demo).stem
     summary: dict[str, Any] = {
         "closest": match.best,
@@ -242,25 +298,41 @@ def _teach_command(args: argparse.Namespace) -> int:
                 file=sys.stderr,
             )
             return EXIT_BAD_INPUT
+        method = "pose DMP, 50 RBF per dimension, ridge regression"
         try:
-            model = fit_pose(demo)
+            if action is Action.TRANSPORT:
+                # As the shipped carry: turned and scaled about the vertical to any start and
+                # goal, so that a move in another direction is the same shape.
+                model = fit_pose(
+                    demo, position_scaling=Scaling.ROTATION_Z, orientation_scaling=Scaling.NONE
+                )
+                method += "; forcing turned and scaled about the vertical to new starts and goals"
+            else:
+                model = fit_pose(demo)
         except ValueError as err:
             print(f"{args.demo}: {err}", file=sys.stderr)
             return EXIT_BAD_INPUT
-        skill = learnt_skill(
-            name,
-            action,
-            space,
-            model,
-            (),
-            Provenance.now(
-                (Path(args.demo).name,), "pose DMP, 50 RBF per dimension, ridge regression"
-            ),
-        )
+        try:
+            skill = learnt_skill(
+                name,
+                action,
+                space,
+                model,
+                (),
+                Provenance.now((Path(args.demo).name,), method),
+                label,
+            )
+        except ValueError as err:
+            print(f"--name: {err}", file=sys.stderr)
+            return EXIT_BAD_INPUT
         library.add(skill)
         library.save(folder)
         summary["added"] = name
-        print(f"added skill {name!r} ({action.value}, {space.value}) to {folder}")
+        summary["label"] = label
+        summary["action"] = action.value
+        print(
+            f"added skill {name!r} labelled {label!r} ({action.value}, {space.value}) to {folder}"
+        )
     if args.json:
         print(json.dumps(summary))
     return EXIT_OK
@@ -274,6 +346,10 @@ def _run_command(args: argparse.Namespace) -> int:
     from worlds.scene import NoDisplayError
 
     world = _load_world_or_exit(args.world)
+    for problem in (problems := _move_skill_problems(world)):
+        print(problem, file=sys.stderr)
+    if problems:
+        return EXIT_BAD_INPUT
     if args.seed is not None:
         world = world.model_copy(update={"sim": world.sim.model_copy(update={"seed": args.seed})})
     out = Path(args.out)
@@ -389,6 +465,12 @@ def _trials_command(args: argparse.Namespace) -> int:
     return EXIT_OK if summary["successes"] == summary["trials"] else EXIT_FAILURE
 
 
+def _actions() -> list[Any]:
+    from skills.vocabulary import Action
+
+    return list(Action)
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser with one sub-command per job."""
     parser = argparse.ArgumentParser(prog="app.py", description=__doc__.splitlines()[0])
@@ -456,15 +538,25 @@ def build_parser() -> argparse.ArgumentParser:
     skills.set_defaults(handler=_skills_command)
     teach = sub.add_parser("teach", help="learn a skill from a demonstration CSV into a library")
     teach.add_argument("demo", help="CSV with columns t,x,y,z,qx,qy,qz,qw")
-    teach.add_argument("--label", required=True, help="the skill's action label")
+    teach.add_argument(
+        "--label",
+        required=True,
+        help="the skill's label, any identifier (a world's move names it with `skill: LABEL`)",
+    )
     teach.add_argument("--space", required=True, choices=["absolute", "relative"])
+    teach.add_argument(
+        "--action",
+        choices=[a.value for a in _actions()],
+        help="the skill's kind: how the planner uses it (default: the label if it is one, "
+        "else transport for an absolute skill)",
+    )
     teach.add_argument("--library", default="library", help="library folder (default: library)")
     teach.add_argument("--name", help="skill name (default: the file's stem)")
     teach.add_argument(
         "--threshold",
         type=float,
-        default=0.9,
-        help="similarity above which the demo is an existing skill",
+        help="similarity above which the demo is an existing skill "
+        "(default: skills.recognition.DEFAULT_THRESHOLD, derived there)",
     )
     teach.add_argument("--force", action="store_true", help="add even if it matches a skill")
     teach.add_argument("--json", action="store_true", help="print a JSON summary last")

@@ -107,9 +107,11 @@ class SkillLibrary:
         pool = [s for s in self if space is None or s.space is space]
         names = ", ".join(s.name for s in pool) or "none"
         labels = ", ".join(dict.fromkeys(s.label for s in pool)) or "none"
-        where = f" {space.value}" if space is not None else ""
+        which = (
+            f"the library's {space.value} skills" if space is not None else "the library's skills"
+        )
         raise KeyError(
-            f"skill {key!r}: expected the name or label of a{where} skill of the library "
+            f"skill {key!r}: expected the name or label of one of {which} "
             f"(names: {names}; labels: {labels})"
         )
 

@@ -195,9 +195,13 @@ def test_labels_are_identifiers_beside_the_action_kind(tmp_path: Path) -> None:
     assert lib.named("my_wave").name == "wave_1"
     assert lib.named("wave_1") is lib.get("wave_1")
     assert lib.named("transport").name == "pick_place"  # the first so labelled
-    with pytest.raises(KeyError, match=r"skill 'wavy': expected the name or label of a skill"):
+    with pytest.raises(
+        KeyError, match=r"skill .wavy.: expected the name or label of one of the library.s skills"
+    ):
         lib.named("wavy")
-    with pytest.raises(KeyError, match=r"relative skill of the library \(names: hold; labels"):
+    with pytest.raises(
+        KeyError, match=r"one of the library.s relative skills \(names: hold; labels"
+    ):
         lib.named("my_wave", Space.RELATIVE)
     with pytest.raises(ValueError, match=r"skill label: expected an identifier.*got '2wave'"):
         learnt_skill("w", Action.TRANSPORT, Space.ABSOLUTE, wave.pose_model(), (), WHEN, "2wave")
