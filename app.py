@@ -84,10 +84,23 @@ def _demo_command(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _register_leaves(args: argparse.Namespace) -> list[type] | None:
+    """Register the shipped leaves, ``--leaves`` and the installed ``duet.leaves`` entry points;
+    the user's leaf classes, or None (the problem on stderr) if one cannot be registered."""
+    from planner.user_leaves import LeafSourceError, register_leaves
+
+    try:
+        return list(register_leaves(getattr(args, "leaves", None) or ()))
+    except LeafSourceError as err:
+        print(err, file=sys.stderr)
+        return None
+
+
 def _validate_command(args: argparse.Namespace) -> int:
     """Check a world file (YAML or JSON) or a behaviour tree (XML)."""
+    if _register_leaves(args) is None:
+        return EXIT_BAD_INPUT
     if args.file.lower().endswith(".xml"):
-        import planner.leaves  # noqa: F401  (registers the leaves the tree may use)
         from planner.validate import tree_cli_validate
 
         return tree_cli_validate(args.file)
@@ -132,11 +145,13 @@ def _move_skill_problems(world: Any) -> list[str]:
 
 
 def _nodes_command(args: argparse.Namespace) -> int:
-    """Print (or write) a Groot2 TreeNodesModel of the registered leaves."""
-    import planner.leaves  # noqa: F401
+    """Print (or write) a Groot2 TreeNodesModel of the registered leaves, the user's too."""
+    user = _register_leaves(args)
+    if user is None:
+        return EXIT_BAD_INPUT
     from planner.nodes_model import nodes_model_xml
 
-    text = nodes_model_xml()
+    text = nodes_model_xml(packages=("planner", *dict.fromkeys(c.__module__ for c in user)))
     if args.out:
         Path(args.out).write_text(text, encoding="utf-8")
         print(f"wrote {args.out}")
@@ -147,7 +162,8 @@ def _nodes_command(args: argparse.Namespace) -> int:
 
 def _render_tree_command(args: argparse.Namespace) -> int:
     """Render a tree file as ascii, dot or svg."""
-    import planner.leaves  # noqa: F401
+    if _register_leaves(args) is None:
+        return EXIT_BAD_INPUT
     from planner.render import render_cli
 
     return render_cli(args.tree, args.format, args.out)
@@ -346,6 +362,8 @@ def _run_command(args: argparse.Namespace) -> int:
     from worlds.scene import NoDisplayError
 
     world = _load_world_or_exit(args.world)
+    if _register_leaves(args) is None:
+        return EXIT_BAD_INPUT
     for problem in (problems := _move_skill_problems(world)):
         print(problem, file=sys.stderr)
     if problems:
@@ -401,9 +419,10 @@ def _trials_command(args: argparse.Namespace) -> int:
     if args.n < 1 or args.workers < 1:
         print("--n, --workers: expected positive whole numbers", file=sys.stderr)
         return EXIT_BAD_INPUT
+    if _register_leaves(args) is None:
+        return EXIT_BAD_INPUT
     tree = Path(args.tree) if args.tree else None
     if tree is not None:
-        import planner.leaves  # noqa: F401  (registers the leaves the tree may use)
         from planner.loader import TreeFileError, load_tree
 
         try:
@@ -430,7 +449,9 @@ def _trials_command(args: argparse.Namespace) -> int:
         )
 
     try:
-        records = run_campaign(world, args.n, args.seed, out, args.workers, progress, tree)
+        records = run_campaign(
+            world, args.n, args.seed, out, args.workers, progress, tree, leaves=args.leaves
+        )
     except KeyboardInterrupt:
         print(
             f"\ninterrupted: finished trials are in {out / 'results.jsonl'}; "
@@ -471,6 +492,17 @@ def _actions() -> list[Any]:
     return list(Action)
 
 
+def _add_leaves_option(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--leaves",
+        action="append",
+        default=[],
+        metavar="FILE.py|MODULE",
+        help="register the planner.leaves.WorldLeaf subclasses a Python file or module defines "
+        "(repeatable); installed packages' duet.leaves entry points are registered too",
+    )
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser with one sub-command per job."""
     parser = argparse.ArgumentParser(prog="app.py", description=__doc__.splitlines()[0])
@@ -481,14 +513,17 @@ def build_parser() -> argparse.ArgumentParser:
     demo.set_defaults(handler=_demo_command)
     validate = sub.add_parser("validate", help="check a world file or a tree; exit 2 if bad")
     validate.add_argument("file", help="world file (.yaml, .yml, .json) or tree (.xml)")
+    _add_leaves_option(validate)
     validate.set_defaults(handler=_validate_command)
     nodes = sub.add_parser("nodes", help="export a Groot2 TreeNodesModel of our leaves")
     nodes.add_argument("--out", help="write to this file instead of printing")
+    _add_leaves_option(nodes)
     nodes.set_defaults(handler=_nodes_command)
     render = sub.add_parser("render-tree", help="draw a tree file")
     render.add_argument("tree", help="tree XML")
     render.add_argument("--format", choices=["ascii", "dot", "svg"], default="ascii")
     render.add_argument("--out", help="write to this file instead of printing")
+    _add_leaves_option(render)
     render.set_defaults(handler=_render_tree_command)
     schema = sub.add_parser("schema", help="print the world-file JSON Schema (for editors)")
     schema.set_defaults(handler=_schema_command)
@@ -514,6 +549,7 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--gui", action="store_true", help="show PyBullet's window (needs a display)")
     run.add_argument("--no-animation", action="store_true", help="skip the GIF (faster)")
     run.add_argument("--json", action="store_true", help="print a JSON summary as the last line")
+    _add_leaves_option(run)
     run.set_defaults(handler=_run_command)
     trials = sub.add_parser("trials", help="the paper's experiment: many randomised trials")
     trials.add_argument("world", help="world file (robot, table, object, settings)")
@@ -531,6 +567,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     trials.add_argument("--out", default="out/trials", help="folder of results.jsonl")
     trials.add_argument("--json", action="store_true", help="print a JSON summary as the last line")
+    _add_leaves_option(trials)
     trials.set_defaults(handler=_trials_command)
     skills = sub.add_parser("skills", help="list a skill library")
     skills.add_argument("--library", help="library folder (default: learnt from skills/demos)")

@@ -26,7 +26,7 @@ import json
 import math
 import os
 from collections import Counter
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from types import TracebackType
@@ -35,6 +35,7 @@ from typing import Any
 import numpy as np
 import pybullet as pb
 
+from planner.user_leaves import register_leaves
 from worlds.scene import Scene, lateral_grasp_palm_poses
 from worlds.world_file import Region, TrialSettings, World, world_from_data
 
@@ -241,6 +242,9 @@ def run_trial(job: tuple[dict[str, Any], int, int]) -> dict[str, Any]:
     base = world_from_data(base_data["world"], source)
     tree = Path(base_data["tree"]) if base_data["tree"] else None
     try:
+        # The user's leaves the tree may use, registered in this process too (a spawned
+        # worker starts without them; a forked one finds them registered already).
+        register_leaves(base_data.get("leaves", ()))
         world, kinds = draw_trial(base, seed, trial)
         report = run_episode(world, tree, out=None, animation=False)
         record = report.summary()
@@ -312,6 +316,7 @@ def run_campaign(
     workers: int = 1,
     on_result: Callable[[dict[str, Any], int, int], None] | None = None,
     tree: Path | None = None,
+    leaves: Sequence[str] = (),
 ) -> list[dict[str, Any]]:
     """Run trials ``0..n-1`` not yet in ``out/results.jsonl``; append each as it finishes.
 
@@ -331,6 +336,9 @@ def run_campaign(
     tree : Path, optional
         Behaviour tree XML every trial runs (default: the paper's tree built in code).
         Records remember it: a campaign resumes only the trials of the same seed and tree.
+    leaves : sequence of str
+        ``--leaves`` sources (files or modules) of the tree's own leaves; every worker
+        registers them (:func:`planner.user_leaves.register_leaves`).
 
     Returns
     -------
@@ -345,6 +353,7 @@ def run_campaign(
         "world": base.model_dump(mode="json"),
         "source": str(base.source or ""),
         "tree": tree_key(tree),
+        "leaves": [str(Path(s).resolve()) if s.endswith(".py") else s for s in leaves],
     }
     jobs = [(payload, seed, t) for t in pending]
     finished = n - len(pending)
