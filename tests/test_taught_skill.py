@@ -128,3 +128,18 @@ def test_validate_checks_the_moves_skills_against_the_worlds_library(
     bad.write_text(text.replace("SKILL", "'my wave'"), encoding="utf-8")
     assert app.main(["validate", str(bad)]) == 2
     assert "task[0].moves[1].skill: expected a skill name or label" in capsys.readouterr().err
+
+
+@pytest.mark.sim
+def test_a_taught_wave_carries_the_parcel_in_physics(taught: Path, tmp_path: Path) -> None:
+    from experiment.episode import run_episode
+    from worlds.world_file import load_world
+
+    text = (ROOT / "worlds" / "parcel_pick_place.yaml").read_text(encoding="utf-8")
+    text = text.replace("library: default", f"library: {taught}")
+    text = text.replace("obstacles: []", "obstacles: []\n        skill: my_wave")
+    path = tmp_path / "wave.yaml"
+    path.write_text(text, encoding="utf-8")
+    report = run_episode(load_world(path), None, out=None, animation=False)
+    assert report.success, report.failure
+    assert all(e is not None and e < 0.01 for e in report.placement_error_m)
