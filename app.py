@@ -84,9 +84,23 @@ def _demo_command(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _register_leaves(args: argparse.Namespace) -> list[type] | None:
+    """Register the shipped leaves, ``--leaves`` and the installed ``duet.leaves`` entry points;
+    the user's leaf classes, or None (the problem on stderr) if one cannot be registered."""
+    from planner.user_leaves import LeafSourceError, register_leaves
+
+    try:
+        return list(register_leaves(getattr(args, "leaves", None) or ()))
+    except LeafSourceError as err:
+        print(err, file=sys.stderr)
+        return None
+
+
 def _validate_command(args: argparse.Namespace) -> int:
     """Check a world file (YAML or JSON) and what it asks of the robot, optionally with the
     tree to run it (``--tree``); or a behaviour tree (XML) alone."""
+    if _register_leaves(args) is None:
+        return EXIT_BAD_INPUT
     if args.file.lower().endswith(".xml"):
         if args.tree:
             print(
@@ -95,7 +109,6 @@ def _validate_command(args: argparse.Namespace) -> int:
                 file=sys.stderr,
             )
             return EXIT_BAD_INPUT
-        import planner.leaves  # noqa: F401  (registers the leaves the tree may use)
         from planner.validate import tree_cli_validate
 
         return tree_cli_validate(args.file)
@@ -115,11 +128,13 @@ def _preflight_or_exit(world: Any, world_file: str, tree: str | None) -> None:
 
 
 def _nodes_command(args: argparse.Namespace) -> int:
-    """Print (or write) a Groot2 TreeNodesModel of the registered leaves."""
-    import planner.leaves  # noqa: F401
+    """Print (or write) a Groot2 TreeNodesModel of the registered leaves, the user's too."""
+    user = _register_leaves(args)
+    if user is None:
+        return EXIT_BAD_INPUT
     from planner.nodes_model import nodes_model_xml
 
-    text = nodes_model_xml()
+    text = nodes_model_xml(packages=("planner", *dict.fromkeys(c.__module__ for c in user)))
     if args.out:
         Path(args.out).write_text(text, encoding="utf-8")
         print(f"wrote {args.out}")
@@ -130,7 +145,8 @@ def _nodes_command(args: argparse.Namespace) -> int:
 
 def _render_tree_command(args: argparse.Namespace) -> int:
     """Render a tree file as ascii, dot or svg."""
-    import planner.leaves  # noqa: F401
+    if _register_leaves(args) is None:
+        return EXIT_BAD_INPUT
     from planner.render import render_cli
 
     return render_cli(args.tree, args.format, args.out)
@@ -204,7 +220,7 @@ def _skills_command(args: argparse.Namespace) -> int:
     for r in rows:
         fit = ", ".join(f"{k}={v:.3g}" for k, v in r["fit"].items())
         demos = ", ".join(r["demonstrations"]) or "none"
-        print(f"  {r['name']:<16} {r['action']:<16} {r['space']:<9} {r['kind']}")
+        print(f"  {r['name']:<16} {r['label']:<16} {r['action']:<16} {r['space']:<9} {r['kind']}")
         print(f"      from {demos}; {r['method']}" + (f"; fit {fit}" if fit else ""))
     return EXIT_OK
 
@@ -214,17 +230,31 @@ def _teach_command(args: argparse.Namespace) -> int:
     from skills.demos.io import DemoFileError, read_demo_csv
     from skills.library import LibraryFileError
     from skills.pose_dmp import fit_pose
-    from skills.recognition import recognise
-    from skills.skill import Provenance, learnt_skill
+    from skills.recognition import DEFAULT_THRESHOLD, recognise
+    from skills.scaling import Scaling
+    from skills.skill import Provenance, check_label, learnt_skill
     from skills.vocabulary import Action, Space
 
     try:
-        action = Action(args.label)
-    except ValueError:
-        known = ", ".join(a.value for a in Action)
-        print(f"--label: expected one of {known}, got {args.label!r}", file=sys.stderr)
+        label = check_label(args.label, "--label")
+    except ValueError as err:
+        print(err, file=sys.stderr)
         return EXIT_BAD_INPUT
     space = Space(args.space)
+    kinds = {a.value: a for a in Action}
+    if args.action is not None:
+        action = kinds[args.action]
+    elif label in kinds:
+        action = kinds[label]
+    elif space is Space.ABSOLUTE:
+        action = Action.TRANSPORT  # an absolute motion of the object: a move can name it
+    else:
+        print(
+            f"--action: expected one of {', '.join(kinds)} for the relative skill {label!r} "
+            "(its label is not an action kind)",
+            file=sys.stderr,
+        )
+        return EXIT_BAD_INPUT
     folder = Path(args.library)
     try:
         demo_file = read_demo_csv(args.demo)
@@ -233,7 +263,14 @@ def _teach_command(args: argparse.Namespace) -> int:
         print(err, file=sys.stderr)
         return EXIT_BAD_INPUT
     demo = demo_file.demonstration
-    match = recognise(library, demo, space, args.threshold)
+    threshold = DEFAULT_THRESHOLD if args.threshold is None else args.threshold
+    if not -1.0 <= threshold <= 1.0:
+        print(
+            f"--threshold: expected a cosine similarity in [-1, 1], got {threshold}",
+            file=sys.stderr,
+        )
+        return EXIT_BAD_INPUT
+    match = recognise(library, demo, space, threshold)
     name = args.name or Path(args.demo).stem
     summary: dict[str, Any] = {
         "closest": match.best,
@@ -260,25 +297,41 @@ def _teach_command(args: argparse.Namespace) -> int:
                 file=sys.stderr,
             )
             return EXIT_BAD_INPUT
+        method = "pose DMP, 50 RBF per dimension, ridge regression"
         try:
-            model = fit_pose(demo)
+            if action is Action.TRANSPORT:
+                # As the shipped carry: turned and scaled about the vertical to any start and
+                # goal, so that a move in another direction is the same shape.
+                model = fit_pose(
+                    demo, position_scaling=Scaling.ROTATION_Z, orientation_scaling=Scaling.NONE
+                )
+                method += "; forcing turned and scaled about the vertical to new starts and goals"
+            else:
+                model = fit_pose(demo)
         except ValueError as err:
             print(f"{args.demo}: {err}", file=sys.stderr)
             return EXIT_BAD_INPUT
-        skill = learnt_skill(
-            name,
-            action,
-            space,
-            model,
-            (),
-            Provenance.now(
-                (Path(args.demo).name,), "pose DMP, 50 RBF per dimension, ridge regression"
-            ),
-        )
+        try:
+            skill = learnt_skill(
+                name,
+                action,
+                space,
+                model,
+                (),
+                Provenance.now((Path(args.demo).name,), method),
+                label,
+            )
+        except ValueError as err:
+            print(f"--name: {err}", file=sys.stderr)
+            return EXIT_BAD_INPUT
         library.add(skill)
         library.save(folder)
         summary["added"] = name
-        print(f"added skill {name!r} ({action.value}, {space.value}) to {folder}")
+        summary["label"] = label
+        summary["action"] = action.value
+        print(
+            f"added skill {name!r} labelled {label!r} ({action.value}, {space.value}) to {folder}"
+        )
     if args.json:
         print(json.dumps(summary))
     return EXIT_OK
@@ -292,6 +345,8 @@ def _run_command(args: argparse.Namespace) -> int:
     from worlds.scene import NoDisplayError
 
     world = _load_world_or_exit(args.world)
+    if _register_leaves(args) is None:
+        return EXIT_BAD_INPUT
     _preflight_or_exit(world, args.world, args.tree)
     if args.seed is not None:
         world = world.model_copy(update={"sim": world.sim.model_copy(update={"seed": args.seed})})
@@ -345,10 +400,11 @@ def _trials_command(args: argparse.Namespace) -> int:
     if args.n < 1 or args.workers < 1:
         print("--n, --workers: expected positive whole numbers", file=sys.stderr)
         return EXIT_BAD_INPUT
+    if _register_leaves(args) is None:
+        return EXIT_BAD_INPUT
     _preflight_or_exit(world, args.world, args.tree)  # one message now, not one per trial
     tree = Path(args.tree) if args.tree else None
     if tree is not None:
-        import planner.leaves  # noqa: F401  (registers the leaves the tree may use)
         from planner.loader import TreeFileError, load_tree
 
         try:
@@ -383,7 +439,15 @@ def _trials_command(args: argparse.Namespace) -> int:
 
     try:
         records = run_campaign(
-            world, args.n, args.seed, out, args.workers, progress, tree, on_notice=notice
+            world,
+            args.n,
+            args.seed,
+            out,
+            args.workers,
+            progress,
+            tree,
+            on_notice=notice,
+            leaves=args.leaves,
         )
     except ResultsFileError as err:  # a folder that is not one, or another campaign in it
         print(f"\n{err}", file=sys.stderr)
@@ -422,6 +486,23 @@ def _trials_command(args: argparse.Namespace) -> int:
     return EXIT_OK if summary["successes"] == summary["trials"] else EXIT_FAILURE
 
 
+def _actions() -> list[Any]:
+    from skills.vocabulary import Action
+
+    return list(Action)
+
+
+def _add_leaves_option(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--leaves",
+        action="append",
+        default=[],
+        metavar="FILE.py|MODULE",
+        help="register the planner.leaves.WorldLeaf subclasses a Python file or module defines "
+        "(repeatable); installed packages' duet.leaves entry points are registered too",
+    )
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser with one sub-command per job."""
     parser = argparse.ArgumentParser(prog="app.py", description=__doc__.splitlines()[0])
@@ -438,14 +519,17 @@ def build_parser() -> argparse.ArgumentParser:
     validate.add_argument(
         "--tree", help="with a world file: also check this tree XML and its moves against it"
     )
+    _add_leaves_option(validate)
     validate.set_defaults(handler=_validate_command)
     nodes = sub.add_parser("nodes", help="export a Groot2 TreeNodesModel of our leaves")
     nodes.add_argument("--out", help="write to this file instead of printing")
+    _add_leaves_option(nodes)
     nodes.set_defaults(handler=_nodes_command)
     render = sub.add_parser("render-tree", help="draw a tree file")
     render.add_argument("tree", help="tree XML")
     render.add_argument("--format", choices=["ascii", "dot", "svg"], default="ascii")
     render.add_argument("--out", help="write to this file instead of printing")
+    _add_leaves_option(render)
     render.set_defaults(handler=_render_tree_command)
     schema = sub.add_parser("schema", help="print the world-file JSON Schema (for editors)")
     schema.set_defaults(handler=_schema_command)
@@ -471,6 +555,7 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--gui", action="store_true", help="show PyBullet's window (needs a display)")
     run.add_argument("--no-animation", action="store_true", help="skip the GIF (faster)")
     run.add_argument("--json", action="store_true", help="print a JSON summary as the last line")
+    _add_leaves_option(run)
     run.set_defaults(handler=_run_command)
     trials = sub.add_parser("trials", help="the paper's experiment: many randomised trials")
     trials.add_argument("world", help="world file (robot, table, object, settings)")
@@ -488,6 +573,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     trials.add_argument("--out", default="out/trials", help="folder of results.jsonl")
     trials.add_argument("--json", action="store_true", help="print a JSON summary as the last line")
+    _add_leaves_option(trials)
     trials.set_defaults(handler=_trials_command)
     skills = sub.add_parser("skills", help="list a skill library")
     skills.add_argument("--library", help="library folder (default: learnt from skills/demos)")
@@ -495,15 +581,25 @@ def build_parser() -> argparse.ArgumentParser:
     skills.set_defaults(handler=_skills_command)
     teach = sub.add_parser("teach", help="learn a skill from a demonstration CSV into a library")
     teach.add_argument("demo", help="CSV with columns t,x,y,z,qx,qy,qz,qw")
-    teach.add_argument("--label", required=True, help="the skill's action label")
+    teach.add_argument(
+        "--label",
+        required=True,
+        help="the skill's label, any identifier (a world's move names it with `skill: LABEL`)",
+    )
     teach.add_argument("--space", required=True, choices=["absolute", "relative"])
+    teach.add_argument(
+        "--action",
+        choices=[a.value for a in _actions()],
+        help="the skill's kind: how the planner uses it (default: the label if it is one, "
+        "else transport for an absolute skill)",
+    )
     teach.add_argument("--library", default="library", help="library folder (default: library)")
     teach.add_argument("--name", help="skill name (default: the file's stem)")
     teach.add_argument(
         "--threshold",
         type=float,
-        default=0.9,
-        help="similarity above which the demo is an existing skill",
+        help="similarity above which the demo is an existing skill "
+        "(default: skills.recognition.DEFAULT_THRESHOLD, derived there)",
     )
     teach.add_argument("--force", action="store_true", help="add even if it matches a skill")
     teach.add_argument("--json", action="store_true", help="print a JSON summary last")

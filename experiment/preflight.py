@@ -61,7 +61,34 @@ def preflight_problems(world: World, world_file: str, tree: Path | None = None) 
         spec = world_spec(world)
         moves = {step.object: len(spec.moves_of(step.object)) for step in spec.task}
         lines += [str(p) for p in check_tree_moves(doc, moves, bound_object(world))]
-    return lines
+    return lines + move_skill_problems(world, world_file)
+
+
+def move_skill_problems(world: World, world_file: str) -> list[str]:
+    """One line per move whose ``skill`` the world's library cannot carry it with."""
+    from experiment.episode import load_library
+    from planner.composition import SkillChoiceError, transport_skill
+    from skills.library import LibraryFileError
+
+    named = [
+        (i, j, move.skill)
+        for i, step in enumerate(world.task)
+        for j, move in enumerate(step.moves)
+        if move.skill is not None
+    ]
+    if not named:
+        return []
+    try:
+        library = load_library(world)
+    except LibraryFileError as err:
+        return [str(err)]
+    problems = []
+    for i, j, key in named:
+        try:
+            transport_skill(library, key)
+        except SkillChoiceError as err:
+            problems.append(f"{world_file}: task[{i}].moves[{j}].skill: {err}")
+    return problems
 
 
 def validate_cli(world_file: str, tree: str | None = None) -> int:
@@ -90,4 +117,4 @@ def validate_cli(world_file: str, tree: str | None = None) -> int:
     return 0
 
 
-__all__ = ["bound_object", "preflight_problems", "validate_cli"]
+__all__ = ["bound_object", "move_skill_problems", "preflight_problems", "validate_cli"]

@@ -28,7 +28,7 @@ import math
 import os
 import signal
 from collections import Counter
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from types import TracebackType
@@ -43,6 +43,7 @@ from experiment.results import (
     read_results,
     repair_tail,
 )
+from planner.user_leaves import register_leaves
 from worlds.scene import Scene, lateral_grasp_palm_poses
 from worlds.world_file import Region, TrialSettings, World, world_from_data
 
@@ -249,6 +250,9 @@ def run_trial(job: tuple[dict[str, Any], int, int]) -> dict[str, Any]:
     base = world_from_data(base_data["world"], source)
     tree = Path(base_data["tree"]) if base_data["tree"] else None
     try:
+        # The user's leaves the tree may use, registered in this process too (a spawned
+        # worker starts without them; a forked one finds them registered already).
+        register_leaves(base_data.get("leaves", ()))
         world, kinds = draw_trial(base, seed, trial)
         report = run_episode(world, tree, out=None, animation=False)
         record = report.summary()
@@ -324,6 +328,7 @@ def run_campaign(
     on_result: Callable[[dict[str, Any], int, int], None] | None = None,
     tree: Path | None = None,
     on_notice: Callable[[str], None] | None = None,
+    leaves: Sequence[str] = (),
 ) -> list[dict[str, Any]]:
     """Run trials ``0..n-1`` not yet in ``out/results.jsonl``; append each as it finishes.
 
@@ -345,6 +350,9 @@ def run_campaign(
         Records remember it: a campaign resumes only the trials of the same seed and tree.
     on_notice : callable (text), optional
         Told of what was repaired or skipped in an earlier ``results.jsonl``.
+    leaves : sequence of str
+        ``--leaves`` sources (files or modules) of the tree's own leaves; every worker
+        registers them (:func:`planner.user_leaves.register_leaves`).
 
     Returns
     -------
@@ -363,7 +371,9 @@ def run_campaign(
     except OSError as err:
         raise ResultsFileError(f"{out}: cannot make the folder: {err.strerror or err}") from None
     with campaign_lock(out):
-        return _run_locked(base, n, seed, out, workers, on_result, tree, on_notice or _quiet)
+        return _run_locked(
+            base, n, seed, out, workers, on_result, tree, on_notice or _quiet, leaves
+        )
 
 
 def _quiet(text: str) -> None:
@@ -379,6 +389,7 @@ def _run_locked(
     on_result: Callable[[dict[str, Any], int, int], None] | None,
     tree: Path | None,
     on_notice: Callable[[str], None],
+    leaves: Sequence[str],
 ) -> list[dict[str, Any]]:
     results = out / "results.jsonl"
     cut = repair_tail(results)
@@ -396,6 +407,7 @@ def _run_locked(
         "world": base.model_dump(mode="json"),
         "source": str(base.source or ""),
         "tree": tree_key(tree),
+        "leaves": [str(Path(s).resolve()) if s.endswith(".py") else s for s in leaves],
     }
     jobs = [(payload, seed, t) for t in pending]
     finished = n - len(pending)

@@ -135,7 +135,40 @@ def _param(selection: SkillSelection, key: str, default: float) -> float:
     return float(value) if isinstance(value, int | float) else default
 
 
-def _skill_for(library: SkillLibrary, selection: SkillSelection) -> Skill:
+class SkillChoiceError(ValueError):
+    """A move or a port names a skill the library cannot carry a move with."""
+
+
+def transport_skill(library: SkillLibrary, key: str) -> Skill:
+    """The absolute learnt skill called (or labelled) ``key``, to carry a move with.
+
+    Raises
+    ------
+    SkillChoiceError
+        Naming ``key`` and the library's skills, when none is called so, or it is not a
+        learnt motion.
+    """
+    try:
+        skill = library.named(key, Space.ABSOLUTE)
+    except KeyError as err:
+        raise SkillChoiceError(str(err.args[0])) from None
+    if skill.kind is not SkillKind.LEARNT_DMP:
+        learnt = ", ".join(
+            s.name for s in library if s.kind is SkillKind.LEARNT_DMP and s.space is Space.ABSOLUTE
+        )
+        raise SkillChoiceError(
+            f"skill {key!r}: expected a learnt motion ({SkillKind.LEARNT_DMP.value}) to carry "
+            f"the move, got {skill.name!r} ({skill.kind.value}); the library's learnt motions: "
+            f"{learnt or 'none'}"
+        )
+    return skill
+
+
+def _skill_for(
+    library: SkillLibrary, selection: SkillSelection, transport: Skill | None = None
+) -> Skill:
+    if transport is not None and selection.action is Action.TRANSPORT:
+        return transport
     return library.first(selection.action, selection.space)
 
 
@@ -145,6 +178,7 @@ def absolute_terms(
     world: WorldPort,
     name: str,
     points_object: np.ndarray,
+    transport: Skill | None = None,
 ) -> list[tuple[CouplingTerm, float]]:
     """Coupling terms and weights of the plan's absolute skills.
 
@@ -159,8 +193,13 @@ def absolute_terms(
     points_object : ndarray, shape (M, 3)
         Points attached to the object (its own surface), object frame, for link-level
         avoidance; the arms' link points come through the field's query (:class:`ArmLinks`).
+    transport : Skill, optional
+        The learnt motion to carry the object with instead of the library's first transport
+        skill (weight 1 if the plan selects no transport).
     """
     terms: list[tuple[CouplingTerm, float]] = []
+    if transport is not None and plan.skill(Action.TRANSPORT) is None:
+        terms.append((LearntForcing(transport.pose_model()), 1.0))
     # The centre-based steering sees the object as a sphere; the smallest half-extent keeps it
     # from treating a flat box as a ball (its faces are covered by the potential field).
     radius = float(np.min(world.object_extents(name)) / 2.0)
@@ -169,7 +208,7 @@ def absolute_terms(
             continue
         if sel.action in (Action.APPROACH, Action.RETREAT):
             continue
-        skill = _skill_for(library, sel)
+        skill = _skill_for(library, sel, transport)
         if skill.kind is SkillKind.LEARNT_DMP:
             terms.append((LearntForcing(skill.pose_model()), sel.weight))
         elif skill.kind is SkillKind.OBSTACLE_STEERING:
@@ -318,13 +357,17 @@ def transport_composition(
     settings: TransportSettings | None = None,
     avoid_gain: float = 1.0,
     transport_weight: float = 1.0,
+    skill: str | None = None,
 ) -> DualArmComposer:
     """The simultaneous composition of one move, starting from the handed-over state.
 
     ``squeeze_force_n`` is the grip's force per palm, N, which bounds what avoidance may ask.
     ``avoid_gain`` multiplies the weights of obstacle steering and link-level avoidance;
     ``transport_weight`` multiplies the learnt pick-and-place's (a lower carry). A tree tries
-    such variants when a predicted path is not clear.
+    such variants when a predicted path is not clear. ``skill`` names the learnt motion to
+    carry the object with (a port's choice), else the move's ``skill``, else the plan's
+    transport skill (:func:`transport_skill`; SkillChoiceError if the library has none so
+    called).
     """
     s = settings or TransportSettings()
     sel = plan.skill(Action.TRANSPORT)
@@ -333,8 +376,10 @@ def transport_composition(
     tau = move_duration(state.object.position, move.goal.position, s)
     geometry = held_geometry(state, lateral_geometry(world, name))
     points = box_points(world.object_extents(name))
+    key = skill or move.skill
+    carry = transport_skill(library, key) if key else None
     terms = absolute_terms(
-        reweight(plan, avoid_gain, transport_weight), library, world, name, points
+        reweight(plan, avoid_gain, transport_weight), library, world, name, points, carry
     )
     absolute = saturate_avoidance(terms, grip_acceleration_limit(world, name, squeeze_force_n))
     # The handed-over palm poses are the squeezed grip already: hold them as they are.
@@ -365,6 +410,8 @@ class MovePlan:
         The grip's force per palm the composition was bounded by, N.
     avoid_gain, transport_weight : float
         The variant of the plan composed (see :func:`transport_composition`).
+    skill : str or None
+        The skill asked for by name (a port's; None: the move's or the plan's).
     from_state : DualArmState
         The handed-over state it was composed from.
     composer : DualArmComposer
@@ -381,6 +428,7 @@ class MovePlan:
     transport_weight: float
     from_state: DualArmState
     composer: DualArmComposer
+    skill: str | None = None
     start: DualArmState = field(init=False)
 
     def __post_init__(self) -> None:
@@ -401,6 +449,7 @@ def compose_move(
     squeeze_force_n: float,
     avoid_gain: float = 1.0,
     transport_weight: float = 1.0,
+    skill: str | None = None,
 ) -> MovePlan:
     """Activate move ``index``'s obstacles and compose it from ``state``.
 
@@ -420,9 +469,10 @@ def compose_move(
         squeeze_force_n,
         avoid_gain=avoid_gain,
         transport_weight=transport_weight,
+        skill=skill,
     )
     return MovePlan(
-        name, index, move, squeeze_force_n, avoid_gain, transport_weight, state, composer
+        name, index, move, squeeze_force_n, avoid_gain, transport_weight, state, composer, skill
     )
 
 

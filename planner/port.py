@@ -61,10 +61,14 @@ class Move:
         Goal pose of the object's centre.
     obstacles : tuple of str
         Names of the obstacles present during this move.
+    skill : str or None
+        Name or label of the library skill the move is carried with (the world file's
+        ``skill``); None for the plan's transport skill.
     """
 
     goal: Pose
     obstacles: tuple[str, ...] = ()
+    skill: str | None = None
 
 
 @dataclass(frozen=True)

@@ -107,11 +107,13 @@ class _Checker:
             t for t, e in self.registry.items() if (c := registry_class(e)) and not _is_parent(c)
         )
         known = leaves + list(COMPOSITES) + ["Fallback", "SubTree"] + sorted(_BUILTIN_DECORATORS)
-        guess = difflib.get_close_matches(elem.tag, known, n=1)
-        hint = f"did you mean '{guess[0]}'? " if guess else ""
+        guesses = difflib.get_close_matches(elem.tag, known, n=3)
+        hint = f"did you mean {' or '.join(repr(g) for g in guesses)}? " if guesses else ""
         self.add(
             elem,
-            f"unknown node type '{elem.tag}'; {hint}expected a registered leaf "
+            f"unknown node type '{elem.tag}': {hint}register it with --leaves my_leaves.py "
+            f"(a module defining a planner.leaves.WorldLeaf subclass named {elem.tag}), or an "
+            "installed package's duet.leaves entry point; expected a registered leaf "
             f"({one_of(leaves)}), a control node (Sequence, Fallback/Selector, Parallel, "
             "a decorator) or <SubTree ID=...>",
         )

@@ -1,10 +1,15 @@
 """The skill library: add, find by label, list; save and load as a versioned directory.
 
 On disk a library is a folder with ``library.json`` (format name, version, and per skill its
-labels, kind, scalar parameters, array names and provenance) and ``arrays.npz`` (arrays keyed
+label, action kind, affordance elements, representation, scalar parameters, array names and
+provenance) and ``arrays.npz`` (arrays keyed
 ``<skill>/<array>``). Saving writes a new folder beside the target and swaps it in, so a crash
 never leaves half a library; loading validates every field and names the file, the field and
 what was expected.
+
+Versions: 2 gives each skill a ``label`` (any identifier, what a world's move names) beside
+its ``action`` kind; version 1 files, whose skills had only an action, still load, each skill
+labelled with its action's value.
 """
 
 from __future__ import annotations
@@ -20,12 +25,14 @@ from typing import Any
 
 import numpy as np
 
-from skills.skill import Provenance, Skill, SkillKind, model_from_data
+from skills.skill import Provenance, Skill, SkillKind, check_label, model_from_data
 from skills.types import Array
 from skills.vocabulary import Action, AffordanceElement, Space
 
 FORMAT = "duet-skill-library"
-VERSION = 1
+VERSION = 2
+#: Versions :meth:`SkillLibrary.load` reads (1: no labels; each skill's label is its action).
+READABLE_VERSIONS = (1, 2)
 META_FILE = "library.json"
 ARRAYS_FILE = "arrays.npz"
 
@@ -83,6 +90,31 @@ class SkillLibrary:
             raise KeyError(f"skill library: expected a skill for action {action.value!r}, got none")
         return found[0]
 
+    def named(self, key: str, space: Space | None = None) -> Skill:
+        """The skill called ``key``, else the first labelled ``key`` (in ``space`` if given).
+
+        Raises
+        ------
+        KeyError
+            Naming ``key`` and the library's skill names and labels.
+        """
+        skill = self._skills.get(key)
+        if skill is not None and (space is None or skill.space is space):
+            return skill
+        for s in self:
+            if s.label == key and (space is None or s.space is space):
+                return s
+        pool = [s for s in self if space is None or s.space is space]
+        names = ", ".join(s.name for s in pool) or "none"
+        labels = ", ".join(dict.fromkeys(s.label for s in pool)) or "none"
+        which = (
+            f"the library's {space.value} skills" if space is not None else "the library's skills"
+        )
+        raise KeyError(
+            f"skill {key!r}: expected the name or label of one of {which} "
+            f"(names: {names}; labels: {labels})"
+        )
+
     def serving(self, element: AffordanceElement) -> tuple[Skill, ...]:
         """Skills labelled with affordance ``element``."""
         return tuple(s for s in self if s.serves(element))
@@ -96,6 +128,7 @@ class SkillLibrary:
         return [
             {
                 "name": s.name,
+                "label": s.label,
                 "action": s.action.value,
                 "space": s.space.value,
                 "kind": s.kind.value,
@@ -131,6 +164,7 @@ class SkillLibrary:
         return [
             {
                 "name": s.name,
+                "label": s.label,
                 "action": s.action.value,
                 "space": s.space.value,
                 "kind": s.kind.value,
@@ -232,8 +266,10 @@ def _parse_metadata(
         raise LibraryFileError(file, "", "a JSON object", type(meta).__name__)
     if meta.get("format") != FORMAT:
         raise LibraryFileError(file, "format", repr(FORMAT), repr(meta.get("format")))
-    if meta.get("version") != VERSION:
-        raise LibraryFileError(file, "version", str(VERSION), repr(meta.get("version")))
+    version = meta.get("version")
+    if isinstance(version, bool) or version not in READABLE_VERSIONS:
+        known = " or ".join(str(v) for v in READABLE_VERSIONS)
+        raise LibraryFileError(file, "version", known, repr(version))
     unknown = sorted(set(meta) - {"format", "version", "skills"})
     if unknown:
         raise LibraryFileError(file, unknown[0], "only format, version and skills", "unknown key")
@@ -241,6 +277,8 @@ def _parse_metadata(
     if not isinstance(entries, list):
         raise LibraryFileError(file, "skills", "a list of skills", repr(entries))
     keys = {"name", "action", "space", "kind", "elements", "params", "arrays", "provenance"}
+    if version >= 2:
+        keys.add("label")
     skills = []
     for i, entry in enumerate(entries):
         field = f"skills[{i}]"
@@ -253,6 +291,15 @@ def _parse_metadata(
         action = _enum(
             _need(entry, "action", str, file, field, "an action"), Action, file, f"{field}.action"
         )
+        label = action.value
+        if version >= 2:
+            label = _need(entry, "label", str, file, field, "a skill label (an identifier)")
+            try:
+                check_label(label)
+            except ValueError:
+                raise LibraryFileError(
+                    file, f"{field}.label", "an identifier ([A-Za-z_][A-Za-z0-9_]*)", repr(label)
+                ) from None
         space = _enum(
             _need(entry, "space", str, file, field, "a space"), Space, file, f"{field}.space"
         )
@@ -284,7 +331,7 @@ def _parse_metadata(
             dict(_need(prov, "fit", dict, file, f"{field}.provenance", "an object")),
         )
         try:
-            skill = Skill(name, action, space, kind, elements, params, own, provenance)
+            skill = Skill(name, action, space, kind, elements, params, own, provenance, label)
             if kind is SkillKind.LEARNT_DMP:
                 model_from_data(params, own)
         except (ValueError, KeyError, TypeError) as err:

@@ -8,6 +8,7 @@ by :mod:`skills.runtime`.
 
 from __future__ import annotations
 
+import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
@@ -37,6 +38,19 @@ class SkillKind(StrEnum):
 
 
 Scalar = float | int | str | bool
+
+#: What a skill label must look like: an identifier, so that world files and trees can name it.
+LABEL_PATTERN = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+
+
+def check_label(label: str, field_name: str = "skill label") -> str:
+    """``label`` if it is an identifier (``[A-Za-z_][A-Za-z0-9_]*``); ValueError otherwise."""
+    if not isinstance(label, str) or LABEL_PATTERN.fullmatch(label) is None:
+        raise ValueError(
+            f"{field_name}: expected an identifier (a letter or '_', then letters, digits "
+            f"or '_'), got {label!r}"
+        )
+    return label
 
 
 @dataclass(frozen=True)
@@ -81,7 +95,8 @@ class Skill:
     name : str
         Unique within a library.
     action : Action
-        What it does (``transport``, ``rotate_z``, ``avoid_obstacle``, ``hold_lateral``, ...).
+        Its kind: how the planner uses it (``transport``, ``rotate_z``, ``avoid_obstacle``,
+        ``hold_lateral``, ...).
     space : Space
         Absolute (the object's pose) or relative (each palm in the object frame).
     kind : SkillKind
@@ -93,6 +108,9 @@ class Skill:
     arrays : Mapping[str, ndarray]
         Array parameters (DMP weights, reference displacements, ...).
     provenance : Provenance
+    label : str
+        What a user calls it, an identifier (a taught ``my_wave``); a world's move or a
+        Transport port can name it. Defaults to the action's value (``transport``).
     """
 
     name: str
@@ -103,10 +121,12 @@ class Skill:
     params: Mapping[str, Scalar]
     arrays: Mapping[str, Array]
     provenance: Provenance
+    label: str = ""
 
     def __post_init__(self) -> None:
         if not self.name or not self.name.replace("_", "").replace("-", "").isalnum():
             raise ValueError(f"skill name: expected letters, digits, '_' or '-', got {self.name!r}")
+        object.__setattr__(self, "label", check_label(self.label or self.action.value))
         object.__setattr__(self, "params", MappingProxyType(dict(self.params)))
         object.__setattr__(
             self, "arrays", MappingProxyType({k: np.asarray(v) for k, v in self.arrays.items()})
@@ -216,7 +236,10 @@ def learnt_skill(
     model: PoseModel,
     elements: tuple[AffordanceElement, ...],
     provenance: Provenance,
+    label: str = "",
 ) -> Skill:
-    """A ``LEARNT_DMP`` skill holding ``model``."""
+    """A ``LEARNT_DMP`` skill holding ``model`` (``label`` defaults to the action's value)."""
     params, arrays = model_to_data(model)
-    return Skill(name, action, space, SkillKind.LEARNT_DMP, elements, params, arrays, provenance)
+    return Skill(
+        name, action, space, SkillKind.LEARNT_DMP, elements, params, arrays, provenance, label
+    )

@@ -229,7 +229,7 @@ class SimWorld:
     def task_moves(self, name: str) -> tuple[Move, ...]:
         """The world file's moves for ``name``."""
         return tuple(
-            Move(Pose.of(m.goal_position, m.goal_quaternion), m.obstacles)
+            Move(Pose.of(m.goal_position, m.goal_quaternion), m.obstacles, m.skill)
             for m in self.spec.moves_of(name)
         )
 

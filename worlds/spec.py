@@ -328,12 +328,16 @@ class MoveSpec:
         Goal rotation about world z as the file gives it, rad.
     obstacles : tuple of str
         Names of the obstacles present during the move.
+    skill : str or None
+        Name or label of the library's absolute skill the move is carried with; None for the
+        plan's transport skill.
     """
 
     goal_position: Vec3
     goal_quaternion: Quat
     goal_yaw: float
     obstacles: tuple[str, ...] = ()
+    skill: str | None = None
 
 
 @dataclass(frozen=True)

@@ -1,27 +1,89 @@
-"""Pytest fixture for testing a leaf against a real PyBullet world (DIRECT mode).
+"""Pytest plugin: leaves tested against a real PyBullet world (DIRECT mode), any world file.
 
-``pytest_plugins = ["planner.testing.fixtures", "worlds.testing"]``, then::
+Installed, the package registers it (and :mod:`planner.testing.fixtures`) as a pytest plugin
+through its ``pytest11`` entry points; without installing, load both with ``-p
+planner.testing.fixtures -p worlds.testing`` or ``pytest_plugins = [...]`` in a conftest.
+PyBullet is imported only when a test uses one of the fixtures below. Then::
 
     @pytest.mark.sim
-    def test_grasp_in_physics(sim_world, tick_leaf):
+    def test_grasp_in_physics(sim_world, tick_leaf):  # the shipped parcel world
         log = tick_leaf(Grasp("grasp"), sim_world, object="parcel", state="{state}")
+
+    @pytest.mark.sim
+    @pytest.mark.world("my_world.yaml")  # relative to the test file's folder
+    def test_in_my_world(sim_world): ...
+
+    def test_two_worlds(make_sim_world):
+        a, b = make_sim_world("a.yaml"), make_sim_world("b.yaml")
+
+A suite can also override the ``sim_world_file`` fixture to choose the world of every test.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import pytest
 
-from worlds.sim_world import SimWorld
-from worlds.world_file import load_world
+if TYPE_CHECKING:
+    from worlds.sim_world import SimWorld
 
-SMALL_WORLD = Path(__file__).resolve().parent / "parcel_pick_place.yaml"
+#: The world ``sim_world`` loads unless told otherwise.
+DEFAULT_WORLD = Path(__file__).resolve().parent / "parcel_pick_place.yaml"
+WORLD_MARKER = "world(path): the world file sim_world loads (relative to the test file's folder)"
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    """Register the ``world`` marker (``sim`` is planner.testing.fixtures', which this needs)."""
+    config.addinivalue_line("markers", WORLD_MARKER)
+
+
+def _open(path: str | Path, base: Path) -> SimWorld:
+    from worlds.sim_world import SimWorld
+    from worlds.world_file import load_world
+
+    file = Path(path)
+    return SimWorld(load_world(file if file.is_absolute() else base / file))
 
 
 @pytest.fixture
-def sim_world(clean_blackboard: None) -> Iterator[SimWorld]:
-    """The default world (parcel, table, two arms) in PyBullet DIRECT mode."""
-    with SimWorld(load_world(SMALL_WORLD)) as world:
+def sim_world_file(request: pytest.FixtureRequest) -> Path:
+    """The world file ``sim_world`` loads: the test's ``@pytest.mark.world(path)``, else the
+    shipped parcel world. Override it in a conftest to choose another for a whole suite."""
+    marker = request.node.get_closest_marker("world")
+    if marker is None:
+        return DEFAULT_WORLD
+    if len(marker.args) != 1 or not isinstance(marker.args[0], str | Path):
+        raise pytest.UsageError(
+            f"{request.node.nodeid}: @pytest.mark.world: expected one world file path, "
+            f"got {marker.args!r}"
+        )
+    path = Path(marker.args[0])
+    return path if path.is_absolute() else Path(request.path).parent / path
+
+
+@pytest.fixture
+def sim_world(clean_blackboard: None, sim_world_file: Path) -> Iterator[SimWorld]:
+    """The world of ``sim_world_file`` in PyBullet DIRECT mode, closed after the test."""
+    with _open(sim_world_file, Path.cwd()) as world:
         yield world
+
+
+@pytest.fixture
+def make_sim_world(
+    clean_blackboard: None, request: pytest.FixtureRequest
+) -> Iterator[Callable[[str | Path], Any]]:
+    """``make_sim_world(path)``: a SimWorld of any world file (relative paths from the test
+    file's folder), each closed after the test."""
+    opened: list[SimWorld] = []
+
+    def make(path: str | Path) -> SimWorld:
+        world = _open(path, Path(request.path).parent)
+        opened.append(world)
+        return world
+
+    yield make
+    for world in opened:
+        world.close()

@@ -276,6 +276,7 @@ def _move_spec(move: MoveEntry) -> MoveSpec:
         goal_quaternion=move.goal.quaternion_xyzw(),
         goal_yaw=math.radians(move.goal.rpy_deg[2]),
         obstacles=tuple(move.obstacles),
+        skill=move.skill,
     )
 
 

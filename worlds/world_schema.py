@@ -13,6 +13,7 @@ resolved against the folder of the world file.
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Annotated, Any, Literal
@@ -80,6 +81,8 @@ _PositiveInt = Annotated[int, Field(strict=True, gt=0)]
 _NonNegativeInt = Annotated[int, Field(strict=True, ge=0)]
 _Name = Annotated[str, Field(strict=True, min_length=1)]
 _Text = Annotated[str, Field(strict=True)]
+#: A skill's name or label in a library: letters, digits, '_' or '-', not starting with a digit.
+_SKILL_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_-]*")
 
 Vector3 = Annotated[tuple[_Finite, _Finite, _Finite], BeforeValidator(_vector3)]
 """Three finite numbers ``[x, y, z]``."""
@@ -309,6 +312,18 @@ class MoveEntry(_FileModel):
     obstacles: tuple[_Name, ...] = Field(
         default=(), description="names of the obstacles present during this move"
     )
+    skill: _Name | None = Field(
+        default=None,
+        description="name or label of the library's absolute skill this move is carried with "
+        "(a taught skill's label); default: the plan's transport skill",
+    )
+
+    @field_validator("skill")
+    @classmethod
+    def _skill_is_a_name(cls, skill: str | None) -> str | None:
+        if skill is not None and _SKILL_NAME.fullmatch(skill) is None:
+            raise field_problem("a skill name or label (letters, digits, '_' or '-')", skill)
+        return skill
 
 
 class TaskStep(_FileModel):

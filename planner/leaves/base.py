@@ -120,6 +120,12 @@ def composition_ports() -> dict[str, PortInformation]:
             default_value=1.0,
             description="multiplies the pick-and-place skill's weight (a lower carry)",
         ),
+        "skill": PortInformation(
+            str,
+            required=False,
+            description="name or label of the learnt skill to carry the object with; "
+            "default: the world's move's skill, else the plan's transport skill",
+        ),
     }
 
 

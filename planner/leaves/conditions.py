@@ -9,7 +9,7 @@ from py_trees.common import Status
 from py_trees.ports import PortInformation
 
 from affordances import SemanticAction
-from planner.composition import MovePlan, compose_move, goal_error
+from planner.composition import MovePlan, SkillChoiceError, compose_move, goal_error
 from planner.leaves.base import WorldLeaf, composition_ports
 from planner.leaves.grasp import squeeze_force
 from planner.port import ObjectSensing, ObstacleScene, PalmControl
@@ -138,17 +138,21 @@ class PathClear(WorldLeaf):
         if not 0 <= index < len(moves):
             return self.fail(f"move {index}: expected an index below {len(moves)}")
         plan: SemanticAction = self.get_input("plan")
-        checked = compose_move(
-            plan,
-            self.library,
-            world,
-            name,
-            index,
-            self.get_input("from_state"),
-            squeeze_force(plan, float(self.get_input("force_n"))),
-            avoid_gain=float(self.get_input("avoid_gain")),
-            transport_weight=float(self.get_input("transport_weight")),
-        )
+        try:
+            checked = compose_move(
+                plan,
+                self.library,
+                world,
+                name,
+                index,
+                self.get_input("from_state"),
+                squeeze_force(plan, float(self.get_input("force_n"))),
+                avoid_gain=float(self.get_input("avoid_gain")),
+                transport_weight=float(self.get_input("transport_weight")),
+                skill=self.optional_input("skill"),
+            )
+        except SkillChoiceError as err:
+            return self.fail(str(err))
         n = int(np.ceil((checked.composer.target.tau + 0.5) / self.control_dt))
         path = checked.fresh().rollout(n, self.control_dt)
         obj_p = path.object_positions

@@ -9,7 +9,7 @@ from py_trees.common import Status
 from py_trees.ports import PortInformation
 
 from affordances import SemanticAction
-from planner.composition import MovePlan, compose_move, goal_error
+from planner.composition import MovePlan, SkillChoiceError, compose_move, goal_error
 from planner.leaves.base import MotionLeaf, composition_ports
 from planner.leaves.grasp import squeeze_force
 from planner.move_result import MoveResult, publish_move_result
@@ -82,19 +82,25 @@ class Transport(MotionLeaf):
         state: DualArmState = self.get_input("from_state")
         avoid_gain = float(self.get_input("avoid_gain"))
         transport_weight = float(self.get_input("transport_weight"))
+        skill: str | None = self.optional_input("skill")
         checked: MovePlan | None = self.optional_input("composition")
         if checked is None:
-            checked = compose_move(
-                plan,
-                self.library,
-                world,
-                name,
-                index,
-                state,
-                force,
-                avoid_gain=avoid_gain,
-                transport_weight=transport_weight,
-            )
+            try:
+                checked = compose_move(
+                    plan,
+                    self.library,
+                    world,
+                    name,
+                    index,
+                    state,
+                    force,
+                    avoid_gain=avoid_gain,
+                    transport_weight=transport_weight,
+                    skill=skill,
+                )
+            except SkillChoiceError as err:
+                self.problem = str(err)
+                return
         else:
             ours = {
                 "object": name,
@@ -102,6 +108,7 @@ class Transport(MotionLeaf):
                 "force_n": force,
                 "avoid_gain": avoid_gain,
                 "transport_weight": transport_weight,
+                "skill": skill,
             }
             theirs = (
                 checked.object,
@@ -109,6 +116,7 @@ class Transport(MotionLeaf):
                 checked.squeeze_force_n,
                 checked.avoid_gain,
                 checked.transport_weight,
+                checked.skill,
             )
             wrong = [
                 f"{port} {value!r}, checked with {other!r}"

@@ -1,6 +1,9 @@
-"""Pytest fixtures for testing one leaf against the in-memory world.
+"""Pytest plugin: fixtures for testing one leaf against the in-memory world, and the ``sim``
+marker.
 
-Use them from a test suite with ``pytest_plugins = ["planner.testing.fixtures"]``::
+Installed, the package registers it through its ``pytest11`` entry point; otherwise load it
+with ``-p planner.testing.fixtures`` or ``pytest_plugins = ["planner.testing.fixtures"]``.
+It imports no simulator (:mod:`worlds.testing` is the PyBullet half)::
 
     def test_my_leaf(fake_world, library, tick_leaf):
         log = tick_leaf(MyLeaf("mine"), fake_world, object="parcel")
@@ -25,6 +28,15 @@ from skills.default_library import build_default_library
 from skills.library import SkillLibrary
 
 CONTROL_DT = 1.0 / 60.0
+#: The marker of tests that run PyBullet (``-m "not sim"`` skips them).
+SIM_MARKER = "sim: runs PyBullet in DIRECT mode (slower)"
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    """Register the ``sim`` marker, unless the suite's ini file declares it already."""
+    declared = {str(line).split(":", 1)[0].strip() for line in config.getini("markers")}
+    if "sim" not in declared:
+        config.addinivalue_line("markers", SIM_MARKER)
 
 
 def paper_moves() -> dict[str, tuple[Move, ...]]:

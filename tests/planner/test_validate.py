@@ -33,7 +33,7 @@ def test_good_trees_have_no_problems(name: str) -> None:
 @pytest.mark.parametrize(
     ("name", "expected"),
     [
-        ("bad_unknown_tag.xml", [(5, '<StubGrsp name="typo">', "did you mean 'StubGrasp'?")]),
+        ("bad_unknown_tag.xml", [(5, '<StubGrsp name="typo">', "did you mean 'StubGrasp'")]),
         ("bad_missing_port.xml", [(4, '<StubCounter name="count">', "missing required input")]),
         ("bad_unknown_port.xml", [(4, '<StubGrasp name="grip">', "unknown port 'forse'")]),
         (

@@ -29,3 +29,15 @@ def pick_place_demo(n: int = 1000, duration: float = 2.0) -> Demonstration:
 @pytest.fixture
 def demo() -> Demonstration:
     return pick_place_demo()
+
+
+def waved_carry(amplitude_m: float, seed: int = 0, cycles: float = 3.0) -> Demonstration:
+    """The shipped pick-and-place teacher's motion (another seed: other tremor) with a lateral
+    wave of ``amplitude_m`` laid over it, ``cycles`` cycles, fading in and out like a hand's."""
+    from skills.demos.generate import pick_place
+
+    t, positions, orientations = pick_place(np.random.default_rng(seed))
+    u = (t - t[0]) / (t[-1] - t[0])
+    waved = positions.copy()
+    waved[:, 0] += amplitude_m * np.sin(2.0 * np.pi * cycles * u) * np.sin(np.pi * u)
+    return Demonstration.create(t, waved, orientations, name=f"wave {amplitude_m} m")

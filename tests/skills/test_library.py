@@ -120,7 +120,7 @@ def _corrupt(tmp_path: Path, edit: object) -> Path:
 @pytest.mark.parametrize(
     ("edit", "match"),
     [
-        (lambda m: m.update(version=7), r"library.json: version: expected 1, got 7"),
+        (lambda m: m.update(version=7), r"library.json: version: expected 1 or 2, got 7"),
         (lambda m: m["skills"][1].update(action="fly"), r"skills\[1\]\.action: expected one of"),
         (
             lambda m: m["skills"][0].pop("space"),
@@ -177,3 +177,48 @@ def test_recognition_matches_the_same_motion_elsewhere_and_rejects_a_new_one() -
     circle = np.stack((0.1 * np.cos(np.pi * t), 0.1 * np.sin(np.pi * t), 0 * t), axis=1)
     r3 = recognise(lib, Demonstration.create(t, circle, np.tile(quat.IDENTITY, (500, 1))))
     assert not r3.matched and r3.similarity < 0.9
+
+
+def test_labels_are_identifiers_beside_the_action_kind(tmp_path: Path) -> None:
+    lib = small_library()
+    assert [s.label for s in lib] == ["transport", "rotate_z", "hold_lateral"]
+    wave = learnt_skill(
+        "wave_1",
+        Action.TRANSPORT,
+        Space.ABSOLUTE,
+        lib.get("pick_place").pose_model(),
+        (),
+        WHEN,
+        label="my_wave",
+    )
+    lib.add(wave)
+    assert lib.named("my_wave").name == "wave_1"
+    assert lib.named("wave_1") is lib.get("wave_1")
+    assert lib.named("transport").name == "pick_place"  # the first so labelled
+    with pytest.raises(
+        KeyError, match=r"skill .wavy.: expected the name or label of one of the library.s skills"
+    ):
+        lib.named("wavy")
+    with pytest.raises(
+        KeyError, match=r"one of the library.s relative skills \(names: hold; labels"
+    ):
+        lib.named("my_wave", Space.RELATIVE)
+    with pytest.raises(ValueError, match=r"skill label: expected an identifier.*got '2wave'"):
+        learnt_skill("w", Action.TRANSPORT, Space.ABSOLUTE, wave.pose_model(), (), WHEN, "2wave")
+    lib.save(tmp_path / "lib")
+    back = SkillLibrary.load(tmp_path / "lib")
+    assert back.named("my_wave").name == "wave_1" and back.describe() == lib.describe()
+
+
+def test_a_version_1_library_loads_with_its_actions_as_labels(tmp_path: Path) -> None:
+    folder = _corrupt(
+        tmp_path, lambda m: [m.update(version=1), *(s.pop("label") for s in m["skills"])]
+    )
+    back = SkillLibrary.load(folder)
+    assert [s.label for s in back] == ["transport", "rotate_z", "hold_lateral"]
+    bad = _corrupt(tmp_path / "b", lambda m: m["skills"][0].update(label="my wave"))
+    with pytest.raises(LibraryFileError, match=r"skills\[0\]\.label: expected an identifier"):
+        SkillLibrary.load(bad)
+    old = _corrupt(tmp_path / "c", lambda m: m.update(version=1))
+    with pytest.raises(LibraryFileError, match=r"skills\[0\]\.label: expected a known key"):
+        SkillLibrary.load(old)

@@ -1,0 +1,219 @@
+"""A user's own leaves: registered from a file, a module or an installed package's entry point.
+
+A leaf is a :class:`planner.leaves.WorldLeaf` subclass with ``INPUT_PORTS``, ``OUTPUT_PORTS``
+and ``update()`` (the README's leaf API). Defining one registers it in py_trees' ports
+registry under its class name, which is what the XML loader builds from; this module brings
+the definitions in:
+
+- ``--leaves my_leaves.py`` (a file) or ``--leaves my_package.leaves`` (an importable module):
+  every ``WorldLeaf`` subclass *defined in* that module is registered by its class name;
+- every entry point of the group ``duet.leaves`` of the installed distributions, e.g. in a
+  package's ``pyproject.toml``::
+
+      [project.entry-points."duet.leaves"]
+      my_leaves = "my_package.leaves"
+
+  names a module (all its ``WorldLeaf`` subclasses) or one ``WorldLeaf`` subclass.
+
+Problems raise :class:`LeafSourceError`, naming the file, module or entry point and what was
+expected. The registration is global to the process: a worker process of a campaign calls
+:func:`register_leaves` again with the same sources (a forked one inherits it anyway).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import importlib
+import importlib.util
+import inspect
+import re
+import sys
+import traceback
+import warnings
+from collections.abc import Iterable, Sequence
+from importlib.metadata import EntryPoint, entry_points
+from pathlib import Path
+from types import ModuleType
+
+from py_trees.ports import get_ports_registry, register_ports_class
+
+from planner.leaves import WorldLeaf
+
+#: The entry-point group an installed package ships leaves in.
+ENTRY_POINT_GROUP = "duet.leaves"
+
+_MODULE_PATH = re.compile(r"[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)*")
+_EXPECTED = "a Python file or module defining planner.leaves.WorldLeaf subclasses"
+
+
+class LeafSourceError(ValueError):
+    """A leaf source (file, module, entry point) that cannot be registered; says why."""
+
+
+def register_leaves(
+    sources: Sequence[str] = (), *, entry_point_group: str | None = ENTRY_POINT_GROUP
+) -> list[type[WorldLeaf]]:
+    """Register the leaves of ``sources`` and of the installed ``duet.leaves`` entry points.
+
+    Parameters
+    ----------
+    sources : sequence of str
+        Each a ``.py`` file (a path) or a dotted module path.
+    entry_point_group : str or None
+        The entry-point group to load as well; None for none.
+
+    Returns
+    -------
+    list of type
+        The leaf classes registered, sources first, in definition order.
+
+    Raises
+    ------
+    LeafSourceError
+        A file missing, a module that does not import (with its error), a source defining
+        no leaf, a leaf without ports, or a leaf whose name a shipped leaf already has.
+    """
+    registered: list[type[WorldLeaf]] = []
+    for source in sources:
+        before = get_ports_registry()
+        with warnings.catch_warnings():  # a clash is refused below, with its reason
+            warnings.simplefilter("ignore")
+            module = _import_source(source)
+        registered += _register(_leaves_defined_in(module), f"--leaves {source}", before)
+    if entry_point_group is not None:
+        for ep in entry_points(group=entry_point_group):
+            before = get_ports_registry()
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                leaves = _leaves_of_entry_point(ep)
+            registered += _register(leaves, _entry_point_label(ep), before)
+    return registered
+
+
+def _import_source(source: str) -> ModuleType:
+    path = Path(source)
+    if source.endswith(".py") or path.is_file() or "/" in source or "\\" in source:
+        return _import_file(source, path)
+    if _MODULE_PATH.fullmatch(source) is None:
+        raise LeafSourceError(
+            f"--leaves {source}: expected {_EXPECTED} (a path ending in .py or a dotted "
+            "module path), got neither"
+        )
+    try:
+        return importlib.import_module(source)
+    except ModuleNotFoundError as err:
+        if err.name is not None and source.startswith(err.name):
+            raise LeafSourceError(
+                f"--leaves {source}: expected {_EXPECTED}, got no module named {err.name!r} "
+                "(a file needs its .py)"
+            ) from None
+        raise LeafSourceError(f"--leaves {source}: cannot import it: {_describe(err)}") from None
+    except Exception as err:  # a user's module may raise anything while importing
+        raise LeafSourceError(f"--leaves {source}: cannot import it: {_describe(err)}") from None
+
+
+def _import_file(source: str, path: Path) -> ModuleType:
+    if not path.is_file():
+        what = "a folder" if path.is_dir() else "no such file"
+        raise LeafSourceError(f"--leaves {source}: expected {_EXPECTED}, got {what}")
+    resolved = path.resolve()
+    # One module per file, named after its path: importing it again (another command, a
+    # worker) finds the same module and the same classes.
+    digest = hashlib.sha1(str(resolved).encode()).hexdigest()[:10]
+    stem = re.sub(r"\W", "_", resolved.stem)
+    name = f"duet_user_leaves.{stem}_{digest}"
+    if name in sys.modules:
+        return sys.modules[name]
+    spec = importlib.util.spec_from_file_location(name, resolved)
+    if spec is None or spec.loader is None:
+        raise LeafSourceError(
+            f"--leaves {source}: expected {_EXPECTED}, got a file Python cannot load"
+        )
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    try:
+        spec.loader.exec_module(module)
+    except Exception as err:  # a user's file may raise anything while importing
+        del sys.modules[name]
+        raise LeafSourceError(
+            f"--leaves {source}: cannot import it: {_describe(err, resolved)}"
+        ) from None
+    return module
+
+
+def _describe(err: BaseException, file: Path | None = None) -> str:
+    """``SyntaxError: invalid syntax (line 3)``: the error and where in the user's file."""
+    line = getattr(err, "lineno", None) if isinstance(err, SyntaxError) else None
+    if line is None and file is not None:
+        frames = [f for f in traceback.extract_tb(err.__traceback__) if Path(f.filename) == file]
+        line = frames[-1].lineno if frames else None
+    message = getattr(err, "msg", None) if isinstance(err, SyntaxError) else str(err)
+    where = f" (line {line})" if line is not None else ""
+    return f"{type(err).__name__}: {message}{where}"
+
+
+def _leaves_defined_in(module: ModuleType) -> list[type[WorldLeaf]]:
+    return [
+        cls
+        for _, cls in inspect.getmembers(module, inspect.isclass)
+        if issubclass(cls, WorldLeaf) and cls.__module__ == module.__name__
+    ]
+
+
+def _leaves_of_entry_point(ep: EntryPoint) -> list[type[WorldLeaf]]:
+    label = _entry_point_label(ep)
+    try:
+        target = ep.load()
+    except Exception as err:  # an installed package may raise anything while importing
+        raise LeafSourceError(f"{label}: cannot load it: {_describe(err)}") from None
+    if isinstance(target, ModuleType):
+        return _leaves_defined_in(target)
+    if inspect.isclass(target) and issubclass(target, WorldLeaf):
+        return [target]
+    raise LeafSourceError(
+        f"{label}: expected a module or a planner.leaves.WorldLeaf subclass, got {target!r}"
+    )
+
+
+def _entry_point_label(ep: EntryPoint) -> str:
+    dist = getattr(ep, "dist", None)
+    package = f" of {dist.name}" if dist is not None else ""
+    return f"entry point {ep.name} = {ep.value!r}{package} ({ENTRY_POINT_GROUP})"
+
+
+def _register(
+    leaves: Iterable[type[WorldLeaf]], label: str, before: dict[str, type]
+) -> list[type[WorldLeaf]]:
+    """Register the concrete leaves (those with ports) under their class names.
+
+    ``before`` is the registry as it was before the source was imported (defining a leaf
+    registers it at once): a name that was another class's is restored and refused.
+    """
+    found = list(leaves)
+    concrete = [c for c in found if _has_ports(c)]
+    if not concrete:
+        abstract = f" ({', '.join(c.__name__ for c in found)} declare no ports)" if found else ""
+        raise LeafSourceError(
+            f"{label}: expected at least one planner.leaves.WorldLeaf subclass with "
+            f"INPUT_PORTS and OUTPUT_PORTS defined in it, got none{abstract}"
+        )
+    for cls in concrete:
+        name = cls.__name__
+        other = before.get(name)
+        if other is not None and other is not cls:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                register_ports_class(name, other)
+            raise LeafSourceError(
+                f"{label}: leaf {name}: expected a name no registered leaf has, got that of "
+                f"{other.__module__}.{other.__qualname__}"
+            )
+        if get_ports_registry().get(name) is not cls:
+            register_ports_class(name, cls)
+    return concrete
+
+
+def _has_ports(cls: type) -> bool:
+    return isinstance(getattr(cls, "INPUT_PORTS", None), dict) and isinstance(
+        getattr(cls, "OUTPUT_PORTS", None), dict
+    )

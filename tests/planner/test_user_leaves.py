@@ -1,0 +1,225 @@
+"""A user's own leaf, from a file or module outside the project: registered, validated, run."""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Iterator
+from importlib.metadata import EntryPoint
+from pathlib import Path
+
+import numpy as np
+import py_trees
+import pytest
+from py_trees.common import Status
+from py_trees.ports import get_ports_registry
+
+import app
+import planner.user_leaves as user_leaves
+from planner.loader import TreeFileError, load_tree
+from planner.port import Move, Pose
+from planner.testing import FakeObject, FakeWorld, tick_until
+from planner.user_leaves import LeafSourceError, register_leaves
+from skills.library import SkillLibrary
+
+LEAF = '''
+from py_trees.common import Status
+from py_trees.ports import PortInformation
+
+from planner.leaves import WorldLeaf
+
+
+class HeightAtLeast(WorldLeaf):
+    """The object's centre is at least ``min_height_m`` high."""
+
+    NODE_TYPE = "Condition"
+    INPUT_PORTS = {
+        "object": PortInformation(str, description="the object"),
+        "min_height_m": PortInformation(
+            float, required=False, default_value=0.5, description="lowest height, m"
+        ),
+    }
+    OUTPUT_PORTS = {"height_m": PortInformation(float, description="its height, m")}
+
+    def update(self) -> Status:
+        z = float(self.world.object_pose(self.get_input("object")).position[2])
+        self._set_output("height_m", z)
+        if z >= float(self.get_input("min_height_m")):
+            return self.succeed(f"at {z:.3f} m")
+        return self.fail(f"at {z:.3f} m, below {self.get_input('min_height_m')} m")
+'''
+
+TREE = """<root BTCPP_format="4" main_tree_to_execute="Main">
+  <BehaviorTree ID="Main">
+    <Sequence name="check">
+      <HeightAtLeast name="high" object="parcel" min_height_m="{low}" height_m="{z}"/>
+    </Sequence>
+  </BehaviorTree>
+</root>
+"""
+
+
+@pytest.fixture
+def registry_restored(clean_blackboard: None) -> Iterator[None]:
+    """py_trees' ports registry and sys.modules are global: undo what a test registers."""
+    before, modules = get_ports_registry(), set(sys.modules)
+    yield
+    registry = py_trees.ports._REGISTRY
+    registry.clear()
+    registry.update(before)
+    for name in set(sys.modules) - modules:
+        if name.startswith("duet_user_leaves") or name.startswith("tmp_leaves"):
+            del sys.modules[name]
+
+
+@pytest.fixture
+def leaf_file(tmp_path: Path, registry_restored: None) -> Path:
+    path = tmp_path / "my_leaves.py"
+    path.write_text(LEAF, encoding="utf-8")
+    (tmp_path / "tree.xml").write_text(TREE.replace("{low}", "0.6"), encoding="utf-8")
+    return path
+
+
+def test_a_leaf_from_a_file_is_validated_and_runs_on_the_fake_world(
+    leaf_file: Path, library: SkillLibrary
+) -> None:
+    tree_file = leaf_file.parent / "tree.xml"
+    with pytest.raises(TreeFileError, match=r"unknown node type 'HeightAtLeast': register it"):
+        load_tree(tree_file)
+    (cls,) = register_leaves([str(leaf_file)])
+    assert cls.__name__ == "HeightAtLeast" and get_ports_registry()["HeightAtLeast"] is cls
+    root = load_tree(tree_file)
+    world = FakeWorld(
+        objects=[FakeObject("parcel", np.array([0.20, 0.30, 0.15]))],
+        moves={"parcel": (Move(Pose.of([0.6, 0.0, 0.675])),)},
+    )
+    tree = py_trees.trees.BehaviourTree(root)
+    tree.setup(world=world, library=library)
+    log = tick_until(tree.root, world)
+    z = float(world.object_pose("parcel").position[2])
+    assert log.final == Status.SUCCESS, log.feedback
+    assert py_trees.blackboard.Blackboard.get("/z") == pytest.approx(z)
+    # Registering the same file again is the same class (a worker, a second command).
+    assert register_leaves([str(leaf_file)]) == [cls]
+
+
+def test_app_validate_and_nodes_take_leaves(
+    leaf_file: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    tree = str(leaf_file.parent / "tree.xml")
+    assert app.main(["validate", tree]) == app.EXIT_BAD_INPUT
+    err = capsys.readouterr().err
+    assert (
+        "unknown node type 'HeightAtLeast': register it with --leaves my_leaves.py (a module "
+        "defining a planner.leaves.WorldLeaf subclass named HeightAtLeast), or an installed "
+        "package's duet.leaves entry point"
+    ) in err
+    assert app.main(["validate", tree, "--leaves", str(leaf_file)]) == app.EXIT_OK
+    assert "ok (main tree 'Main'" in capsys.readouterr().out
+    assert app.main(["nodes", "--leaves", str(leaf_file)]) == app.EXIT_OK
+    model = capsys.readouterr().out
+    assert '<Condition ID="HeightAtLeast">' in model
+    assert '<input_port name="min_height_m" type="float" default="0.5">lowest height' in model
+    assert '<output_port name="height_m" type="float">its height, m</output_port>' in model
+    assert '<Action ID="Transport">' in model  # the shipped leaves are still there
+    assert app.main(["render-tree", tree, "--leaves", str(leaf_file)]) == app.EXIT_OK
+    assert "--> check.high" in capsys.readouterr().out
+
+
+def test_a_module_path_registers_its_leaves(
+    tmp_path: Path, registry_restored: None, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    package = tmp_path / "tmp_leaves_pkg"
+    package.mkdir()
+    (package / "__init__.py").write_text("")
+    (package / "checks.py").write_text(LEAF)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    (cls,) = register_leaves(["tmp_leaves_pkg.checks"])
+    assert cls.__module__ == "tmp_leaves_pkg.checks"
+
+
+def test_an_installed_entry_point_registers_its_leaves(
+    tmp_path: Path, registry_restored: None, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    (tmp_path / "tmp_leaves_ep.py").write_text(LEAF)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    shipped = [EntryPoint("height", "tmp_leaves_ep", "duet.leaves")]
+    seen: list[str] = []
+
+    def fake_entry_points(group: str) -> list[EntryPoint]:
+        seen.append(group)
+        return shipped
+
+    monkeypatch.setattr(user_leaves, "entry_points", fake_entry_points)
+    (cls,) = register_leaves()
+    assert seen == ["duet.leaves"] and cls.__name__ == "HeightAtLeast"
+    shipped[:] = [EntryPoint("one", "tmp_leaves_ep:HeightAtLeast", "duet.leaves")]
+    assert register_leaves() == [cls]
+    shipped[:] = [EntryPoint("broken", "tmp_leaves_nowhere", "duet.leaves")]
+    with pytest.raises(LeafSourceError, match=r"entry point broken = 'tmp_leaves_nowhere'.*"):
+        register_leaves()
+
+
+@pytest.mark.parametrize(
+    ("text", "name", "match"),
+    [
+        (
+            None,
+            "missing.py",
+            r"--leaves .*missing.py: expected a Python file or module .*got no such file",
+        ),
+        (
+            "x = (",
+            "syntax.py",
+            r"--leaves .*syntax.py: cannot import it: SyntaxError: .*\(line 1\)",
+        ),
+        (
+            "import math\n\nraise RuntimeError('no robot here')\n",
+            "raises.py",
+            r"cannot import it: RuntimeError: no robot here \(line 3\)",
+        ),
+        (
+            "X = 1\n",
+            "empty.py",
+            r"empty.py: expected at least one planner.leaves.WorldLeaf subclass with INPUT_PORTS "
+            r"and OUTPUT_PORTS defined in it, got none$",
+        ),
+        (
+            "from planner.leaves import WorldLeaf\n\n\nclass Half(WorldLeaf):\n    pass\n",
+            "abstract.py",
+            r"got none \(Half declare no ports\)",
+        ),
+        (
+            LEAF.replace("HeightAtLeast", "Transport"),
+            "clash.py",
+            r"leaf Transport: expected a name no registered leaf has, got that of "
+            r"planner.leaves.transport.Transport",
+        ),
+    ],
+)
+def test_bad_leaf_sources_exit_2_naming_the_file(
+    tmp_path: Path,
+    registry_restored: None,
+    capsys: pytest.CaptureFixture[str],
+    text: str | None,
+    name: str,
+    match: str,
+) -> None:
+    path = tmp_path / name
+    if text is not None:
+        path.write_text(text, encoding="utf-8")
+    with pytest.raises(LeafSourceError, match=match):
+        register_leaves([str(path)])
+    from planner.leaves import Transport
+
+    assert get_ports_registry()["Transport"] is Transport  # a clash leaves the shipped leaf
+    tree = Path(__file__).resolve().parents[2] / "planner" / "trees" / "pick_and_place.xml"
+    assert app.main(["validate", str(tree), "--leaves", str(path)]) == app.EXIT_BAD_INPUT
+    assert str(path) in capsys.readouterr().err
+
+
+def test_a_module_that_is_not_there_is_named(registry_restored: None) -> None:
+    with pytest.raises(
+        LeafSourceError,
+        match=r"--leaves no_such_pkg.leaves: expected .*no module named 'no_such_pkg'",
+    ):
+        register_leaves(["no_such_pkg.leaves"])

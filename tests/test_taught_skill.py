@@ -1,0 +1,145 @@
+"""A skill taught from a CSV, by label, is the one a move names and Transport carries it with."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import py_trees
+import pytest
+from py_trees.common import Status
+
+import app
+from planner.leaves import Approach, Grasp, SelectSkills, Transport
+from planner.port import Move, Pose
+from planner.testing import FakeObject, FakeWorld, tick_until
+from planner.wiring import wire
+from skills.demos.io import write_demo_csv
+from skills.library import SkillLibrary
+from tests.skills.conftest import waved_carry
+
+ROOT = Path(__file__).resolve().parents[1]
+DT = 1.0 / 60.0
+GOAL = Pose.of([0.55, -0.25, 0.675])  # a carry along -y, as the teacher's
+
+
+@pytest.fixture(scope="module")
+def taught(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A library folder: the default skills and ``my_wave``, taught by the command line."""
+    folder = tmp_path_factory.mktemp("taught")
+    demo = waved_carry(0.03, seed=1)
+    assert demo.orientations is not None
+    csv = write_demo_csv(folder / "wave.csv", demo.t, demo.positions, demo.orientations)
+    argv = ["teach", str(csv), "--label", "my_wave", "--space", "absolute"]
+    assert app.main([*argv, "--library", str(folder / "lib"), "--json"]) == app.EXIT_OK
+    return folder / "lib"
+
+
+def test_teach_takes_any_identifier_and_records_it(
+    taught: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    lib = SkillLibrary.load(taught)
+    wave = lib.named("my_wave")
+    assert (wave.name, wave.label, wave.action.value) == ("wave", "my_wave", "transport")
+    argv = ["teach", str(taught.parent / "wave.csv"), "--space", "absolute"]
+    assert app.main([*argv, "--label", "my-wave", "--library", str(taught)]) == 2
+    assert "--label: expected an identifier" in capsys.readouterr().err
+    # Taught again, it is recognised as the skill it now is.
+    assert app.main([*argv, "--label", "again", "--library", str(taught)]) == 0
+    assert "not added: it is the skill 'wave' already" in capsys.readouterr().out
+    assert app.main([*argv, "--label", "again", "--force", "--library", str(taught)]) == 2
+    assert "--name: expected a new skill name, got 'wave'" in capsys.readouterr().err
+
+
+def carry(library: SkillLibrary, move: Move, **ports: object) -> tuple[Status, str, np.ndarray]:
+    """Select, approach, grasp and carry on a fresh fake world; the object's path, (N, 3)."""
+    py_trees.blackboard.Blackboard.clear()
+    world = FakeWorld(
+        objects=[FakeObject("parcel", np.array([0.20, 0.30, 0.15]))], moves={"parcel": (move,)}
+    )
+    for leaf, wiring in (
+        (SelectSkills("select"), {"plan": "{plan}"}),
+        (Approach("approach"), {}),
+        (Grasp("grasp"), {"plan": "{plan}", "state": "{state}"}),
+    ):
+        wire(leaf, object="parcel", **wiring)  # type: ignore[arg-type]
+        leaf.setup(world=world, library=library, control_dt=DT)
+        assert tick_until(leaf, world, DT).final == Status.SUCCESS
+    leaf = Transport("carry")
+    wire(leaf, object="parcel", move=0, plan="{plan}", from_state="{state}", **ports)  # type: ignore[arg-type]
+    leaf.setup(world=world, library=library, control_dt=DT)
+    path = []
+    status = Status.RUNNING
+    for _ in range(3000):
+        leaf.tick_once()
+        status = leaf.status
+        path.append(world.object_pose("parcel").position.copy())
+        if status != Status.RUNNING:
+            break
+        world.advance(DT)
+    return status, leaf.feedback_message, np.array(path)
+
+
+def reversals(lateral: np.ndarray) -> int:
+    """How often a lateral offset, read at 5 mm resolution (past the learnt tremor), turns back."""
+    steps = np.diff(np.round((lateral - lateral[0]) / 0.005))
+    signs = np.sign(steps[steps != 0])
+    return int(np.count_nonzero(np.diff(signs)))
+
+
+def test_a_move_naming_the_taught_skill_is_carried_with_it(taught: Path) -> None:
+    lib = SkillLibrary.load(taught)
+    plain = carry(lib, Move(GOAL))
+    waved = carry(lib, Move(GOAL, skill="my_wave"))
+    for status, feedback, _ in (plain, waved):
+        assert status == Status.SUCCESS, feedback
+    # The carry goes along -y: the wave is in x, the teacher's 3 cm, three cycles.
+    assert np.ptp(plain[2][:, 0]) < 0.005 and reversals(plain[2][:, 0]) == 0
+    assert np.ptp(waved[2][:, 0]) == pytest.approx(0.049, abs=0.01)
+    assert reversals(waved[2][:, 0]) >= 4
+    # The port wins over the move: pick_and_place by name is the plain carry again.
+    ported = carry(lib, Move(GOAL, skill="my_wave"), skill="pick_and_place")
+    assert ported[0] == Status.SUCCESS
+    np.testing.assert_allclose(ported[2], plain[2], atol=1e-9)
+
+
+def test_an_unknown_skill_fails_naming_it_and_the_library(taught: Path) -> None:
+    lib = SkillLibrary.load(taught)
+    status, feedback, _ = carry(lib, Move(GOAL, skill="my_wav"))
+    assert status == Status.FAILURE
+    assert feedback.startswith("skill 'my_wav': expected the name or label of one of the library")
+    assert "labels: transport" in feedback and "my_wave" in feedback
+
+
+def test_validate_checks_the_moves_skills_against_the_worlds_library(
+    taught: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    text = (ROOT / "worlds" / "parcel_pick_place.yaml").read_text(encoding="utf-8")
+    text = text.replace("library: default", f"library: {taught}")
+    text = text.replace("obstacles: [ball_right]", "obstacles: [ball_right]\n        skill: SKILL")
+    for skill, code in (("my_wave", 0), ("wave", 0), ("my_wav", 2), ("avoid_obstacle", 2)):
+        world = tmp_path / f"{skill}.yaml"
+        world.write_text(text.replace("SKILL", skill), encoding="utf-8")
+        assert app.main(["validate", str(world)]) == code, skill
+    err = capsys.readouterr().err
+    assert f"{tmp_path / 'my_wav.yaml'}: task[0].moves[1].skill: skill 'my_wav': expected" in err
+    assert "got 'avoid_obstacle' (obstacle_steering); the library's learnt motions" in err
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(text.replace("SKILL", "'my wave'"), encoding="utf-8")
+    assert app.main(["validate", str(bad)]) == 2
+    assert "task[0].moves[1].skill: expected a skill name or label" in capsys.readouterr().err
+
+
+@pytest.mark.sim
+def test_a_taught_wave_carries_the_parcel_in_physics(taught: Path, tmp_path: Path) -> None:
+    from experiment.episode import run_episode
+    from worlds.world_file import load_world
+
+    text = (ROOT / "worlds" / "parcel_pick_place.yaml").read_text(encoding="utf-8")
+    text = text.replace("library: default", f"library: {taught}")
+    text = text.replace("obstacles: []", "obstacles: []\n        skill: my_wave")
+    path = tmp_path / "wave.yaml"
+    path.write_text(text, encoding="utf-8")
+    report = run_episode(load_world(path), None, out=None, animation=False)
+    assert report.success, report.failure
+    assert all(e is not None and e < 0.01 for e in report.placement_error_m)
