@@ -139,6 +139,18 @@ def _skill_for(library: SkillLibrary, selection: SkillSelection) -> Skill:
     return library.first(selection.action, selection.space)
 
 
+def transport_skill(plan: SemanticAction, library: SkillLibrary) -> str | None:
+    """Name of the library skill the plan's transport selection composes, None without one.
+
+    The same lookup :func:`absolute_terms` composes with, so a move's record names the skill
+    (and so the demonstration) it actually ran.
+    """
+    sel = plan.skill(Action.TRANSPORT)
+    if sel is None or sel.space is not Space.ABSOLUTE or sel.weight == 0.0:
+        return None
+    return _skill_for(library, sel).name
+
+
 def absolute_terms(
     plan: SemanticAction,
     library: SkillLibrary,
@@ -369,6 +381,8 @@ class MovePlan:
         The handed-over state it was composed from.
     composer : DualArmComposer
         The composition as built; never stepped itself (use :meth:`fresh`).
+    skill : str or None
+        The learnt transport skill composed (:func:`transport_skill`), None without one.
     start : DualArmState
         The composer's first state (``from_state`` with the phase restarted).
     """
@@ -381,6 +395,7 @@ class MovePlan:
     transport_weight: float
     from_state: DualArmState
     composer: DualArmComposer
+    skill: str | None = None
     start: DualArmState = field(init=False)
 
     def __post_init__(self) -> None:
@@ -422,7 +437,15 @@ def compose_move(
         transport_weight=transport_weight,
     )
     return MovePlan(
-        name, index, move, squeeze_force_n, avoid_gain, transport_weight, state, composer
+        name,
+        index,
+        move,
+        squeeze_force_n,
+        avoid_gain,
+        transport_weight,
+        state,
+        composer,
+        transport_skill(reweight(plan, avoid_gain, transport_weight), library),
     )
 
 
