@@ -120,7 +120,7 @@ def shape_points(shape: ShapeSpec) -> Array:
 
 
 @dataclass(frozen=True)
-class _View:
+class View:
     """An orthographic view: world points to the plot's (horizontal, vertical) axes."""
 
     name: str
@@ -129,24 +129,35 @@ class _View:
     labels: tuple[str, str]
     #: The horizontal axis grows to the left.
     mirrored: bool = False
+    #: Draw the object's heading (its x-axis) along the path.
+    heading: bool = False
+    #: Mark obstacles off the plotted plane with their distance from it (a side view).
+    marks_depth: bool = False
 
     def project(self, points: ArrayLike) -> Array:
         """(N, 3) world points to (N, 2) plot coordinates."""
         return (np.atleast_2d(np.asarray(points, dtype=float)) - self.origin) @ self.axes.T
 
+    def depth(self, point: ArrayLike) -> float:
+        """How far beyond the plotted plane a point is, seen by the viewer, m (negative:
+        nearer the viewer, who looks along ``-cross(horizontal, vertical)``)."""
+        toward_viewer = np.cross(self.axes[0], self.axes[1])
+        return -float((np.asarray(point, dtype=float) - self.origin) @ toward_viewer)
 
-def _top_view() -> _View:
-    # As the paper draws it: x up the page, y across, +y (the robot's left) on the left.
-    return _View(
+
+def top_view() -> View:
+    """From above, as the paper draws it: x up the page, +y (the robot's left) to the left."""
+    return View(
         "top view",
         np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0]]),
         np.zeros(3),
         ("y (m)", "x (m)"),
-        True,
+        mirrored=True,
+        heading=True,
     )
 
 
-def _side_view(start: Array, goal: Array) -> _View:
+def side_view(start: Array, goal: Array) -> View:
     """The vertical plane through the move's start and goal, seen from its right.
 
     Horizontal: distance along the move's horizontal direction from the start; a move with no
@@ -156,15 +167,16 @@ def _side_view(start: Array, goal: Array) -> _View:
     n = float(np.linalg.norm(d))
     u = d / n if n > 1e-3 else np.array([0.0, 1.0, 0.0])
     heading = round(float(np.degrees(np.arctan2(u[1], u[0]))))
-    return _View(
-        f"side view along the move, {heading + 0:d} deg from +x",
+    return View(
+        f"side view, heading {heading + 0:d} deg",
         np.array([u, [0.0, 0.0, 1.0]]),
         np.array([start[0], start[1], 0.0]),
         ("along the move (m)", "z (m)"),
+        marks_depth=True,
     )
 
 
-def _outline(shape: ShapeSpec, position: ArrayLike, orientation: ArrayLike, view: _View) -> Array:
+def outline(shape: ShapeSpec, position: ArrayLike, orientation: ArrayLike, view: View) -> Array:
     """The shape's silhouette in a view, a closed polygon (M, 2) (a sphere's: its circle)."""
     body = shape_points(shape)
     world = np.asarray(position, dtype=float) + quat.rotate(np.asarray(orientation, float), body)
@@ -173,34 +185,42 @@ def _outline(shape: ShapeSpec, position: ArrayLike, orientation: ArrayLike, view
     return flat[hull.vertices]
 
 
-def _heading(orientations: Array, view: _View) -> Array:
+def headings(orientations: Array, view: View) -> Array:
     """The object's x-axis per orientation, in the view's axes, (N, 2)."""
     x_axis = quat.rotate(orientations, np.array([1.0, 0.0, 0.0]))
     return np.atleast_2d(x_axis) @ view.axes.T
 
 
-def _draw(ax: Any, tr: MoveTrace, view: _View) -> list[Array]:
+def draw_move(ax: Any, tr: MoveTrace, view: View) -> list[Array]:
     """Draw one move in one view; returns the plotted points (for the limits)."""
     from matplotlib.patches import Circle, Polygon
 
     drawn: list[Array] = []
     for ob in tr.obstacles:
+        # A side view flattens depth: an obstacle beside the move's plane is drawn pale and
+        # says how far beside it is, so a path drawn across it is not read as a collision.
+        off = view.depth(ob.position)
+        beside = view.marks_depth and abs(off) > 0.5 * float(min(ob.shape.extents()))
+        alpha = 0.35 if beside else 0.8
+        c = view.project(ob.position)[0]
         if ob.shape.kind is Shape.SPHERE:
-            c = view.project(ob.position)[0]
             ax.add_patch(
-                Circle(tuple(c), ob.shape.radius, color="red", alpha=0.8, label="obstacle")
+                Circle(tuple(c), ob.shape.radius, color="red", alpha=alpha, label="obstacle")
             )
             drawn.append(c + ob.shape.radius * np.array([[1, 1], [-1, -1]]))
         else:
-            poly = _outline(ob.shape, ob.position, quat.IDENTITY, view)
-            ax.add_patch(Polygon(poly, closed=True, color="red", alpha=0.8, label="obstacle"))
+            poly = outline(ob.shape, ob.position, quat.IDENTITY, view)
+            ax.add_patch(Polygon(poly, closed=True, color="red", alpha=alpha, label="obstacle"))
             drawn.append(poly)
+        if beside:
+            side = "farther" if off > 0 else "nearer"
+            ax.text(*c, f"{abs(off) * 100:.0f} cm\n{side}", ha="center", va="center", fontsize=6)
     if tr.shape is not None:
         for where, q, style, what in (
             (tr.start, tr.start_orientation, dict(ls="--", lw=1.0, ec="0.45"), "at the start"),
             (tr.goal, tr.goal_orientation, dict(ls="-", lw=1.2, ec="black"), "at the goal"),
         ):
-            poly = _outline(tr.shape, where, q, view)
+            poly = outline(tr.shape, where, q, view)
             ax.add_patch(Polygon(poly, closed=True, fill=False, label=f"object {what}", **style))
             drawn.append(poly)
     if tr.demonstrated is not None:
@@ -211,11 +231,11 @@ def _draw(ax: Any, tr: MoveTrace, view: _View) -> list[Array]:
         path = view.project(tr.path)
         ax.plot(*path.T, color="tab:blue", lw=1.8, label="executed")
         drawn.append(path)
-        if view.name == "top view" and len(tr.orientations) == len(tr.path):
+        if view.heading and len(tr.orientations) == len(tr.path):
             # Heading: the object's x-axis, from its executed orientations.
             picks = np.unique(np.linspace(0, len(path) - 1, HEADING_ARROWS).round().astype(int))
             length = 0.35 * float(tr.shape.extents()[0]) if tr.shape is not None else 0.05
-            arrows = _heading(tr.orientations[picks], view) * length
+            arrows = headings(tr.orientations[picks], view) * length
             ax.quiver(
                 *path[picks].T,
                 *arrows.T,
@@ -244,19 +264,19 @@ def trajectory_figure(traces: Sequence[MoveTrace], path: Path, title: str) -> Pa
     cols = min(n, COLUMNS)
     rows = -(-n // cols)
     fig, axes = plt.subplots(2 * rows, cols, figsize=(4.4 * cols, 7.8 * rows), squeeze=False)
-    top = _top_view()
+    top = top_view()
     tops: list[tuple[Any, list[Array]]] = []
     sides: list[tuple[Any, list[Array]]] = []
     for k, tr in enumerate(traces):
         r, c = divmod(k, cols)
         ax_top, ax_side = axes[2 * r, c], axes[2 * r + 1, c]
-        side = _side_view(tr.start, tr.goal)
-        tops.append((ax_top, _draw(ax_top, tr, top)))
-        sides.append((ax_side, _draw(ax_side, tr, side)))
+        side = side_view(tr.start, tr.goal)
+        tops.append((ax_top, draw_move(ax_top, tr, top)))
+        sides.append((ax_side, draw_move(ax_side, tr, side)))
         for ax, view in ((ax_top, top), (ax_side, side)):
             ax.set_xlabel(view.labels[0])
             ax.set_ylabel(view.labels[1])
-            ax.set_title(f"{tr.label}: {view.name}", fontsize=9)
+            ax.set_title(f"{tr.label}: {view.name}", fontsize=8)
             if view.mirrored:
                 ax.invert_xaxis()
             ax.grid(alpha=0.3)
