@@ -339,7 +339,7 @@ def _teach_command(args: argparse.Namespace) -> int:
 
 def _run_command(args: argparse.Namespace) -> int:
     """Run a world's task in PyBullet, show progress, judge it and write what it shows."""
-    from experiment.episode import run_episode
+    from experiment.episode import move_labels, run_episode
     from planner.loader import TreeFileError
     from skills.library import LibraryFileError
     from worlds.scene import NoDisplayError
@@ -370,11 +370,14 @@ def _run_command(args: argparse.Namespace) -> int:
     s = report.summary()
     verdict = "SUCCESS" if report.success else f"FAILURE ({report.failure})"
     print(f"{world.name}: {verdict}")
-    for i, (e, d) in enumerate(
-        zip(report.placement_error_m, report.placement_error_deg, strict=True)
+    for label, e, d in zip(
+        move_labels(report.placement_objects),
+        report.placement_error_m,
+        report.placement_error_deg,
+        strict=True,
     ):
-        placed = "not placed" if e is None else f"{e * 1000:.1f} mm, {d:.1f} deg"
-        print(f"  move {i + 1}: {placed}")
+        placed = "not placed" if e is None or d is None else f"{e * 1000:.1f} mm, {d:.1f} deg"
+        print(f"  {label}: {placed}")
     dist = s["min_obstacle_distance_m"]
     print(
         f"  closest approach to an obstacle: "

@@ -1,10 +1,11 @@
 """One run of a world: build the scene, run the tree, judge it, write what it shows.
 
 Used by ``app.py run`` (one episode with all its outputs) and ``app.py trials`` (many, lean).
-A run succeeds only if the tree succeeds and every criterion of the paper's experiment holds:
-each placement within 2 cm and 10 degrees of its goal, the parcel never dropped, no robot link
-and no part of the parcel touching an obstacle (PyBullet contacts and FCL distance), and the
-arms never touching each other.
+A run succeeds only if the tree succeeds and every criterion of the paper's experiment holds,
+for every object of the world's task: each of its moves placed (a move without a placement
+fails the run, naming the object and move), within 2 cm and 10 degrees of its goal as
+measured, no object ever dropped, no robot link and no object touching an obstacle (PyBullet
+contacts and FCL distance), and the arms never touching each other.
 """
 
 from __future__ import annotations
@@ -20,15 +21,14 @@ import py_trees
 from py_trees.common import Status
 
 import planner.leaves  # noqa: F401  (registers the leaves for the XML loader)
-from experiment.figures import Animation, MoveTrace, trajectory_figure
-from planner.default_tree import default_tree
+from experiment.figures import Animation, MoveTrace, demonstrated_path, trajectory_figure
+from planner.default_tree import TaskStep, default_tree
 from planner.loader import load_tree
 from planner.move_result import move_results
 from planner.render import render_tree
 from planner.runlog import RunLog
 from planner.runner import RunResult, run_tree
-from skills.default_library import DEMOS_DIR, build_default_library
-from skills.demos.io import read_demo_csv
+from skills.default_library import build_default_library
 from skills.library import SkillLibrary
 from worlds.sim_world import SimWorld
 from worlds.world_file import World
@@ -44,6 +44,7 @@ class EpisodeReport:
     success: bool
     tree_status: str
     reason: str
+    #: One entry per move of the task, over all its objects, in task order; None: not placed.
     placement_error_m: list[float | None]
     placement_error_deg: list[float | None]
     min_obstacle_distance_m: float
@@ -58,6 +59,10 @@ class EpisodeReport:
     #: "avoid_gain": g}`` of the Transport leaf that succeeded (its published
     #: :class:`planner.move_result.MoveResult`), or None if none did.
     compositions: list[dict[str, float] | None] = field(default_factory=list)
+    #: Per move, the object it moves (parallel to ``placement_error_m``).
+    placement_objects: list[str] = field(default_factory=list)
+    #: Per move, the learnt transport skill its Transport ran (``MoveResult.skill``), or None.
+    skills: list[str | None] = field(default_factory=list)
 
     def summary(self) -> dict[str, Any]:
         """Plain JSON-safe dictionary (infinite distances as None)."""
@@ -69,6 +74,7 @@ class EpisodeReport:
             "reason": self.reason,
             "placement_error_m": self.placement_error_m,
             "placement_error_deg": self.placement_error_deg,
+            "placement_objects": self.placement_objects,
             "min_obstacle_distance_m": None if math.isinf(d) else round(d, 5),
             "obstacle_contacts": self.obstacle_contacts,
             "arm_contacts": self.arm_contacts,
@@ -76,6 +82,7 @@ class EpisodeReport:
             "sim_time_s": round(self.sim_time_s, 3),
             "wall_time_s": round(self.wall_time_s, 3),
             "compositions": self.compositions,
+            "skills": self.skills,
             "outputs": self.outputs,
         }
 
@@ -87,86 +94,164 @@ def load_library(world: World) -> SkillLibrary:
     return SkillLibrary.load(world.resolve_path(world.skills.library))
 
 
+def move_labels(objects: list[str]) -> list[str]:
+    """``"<object> move <n>"`` per move of the task, numbered from 1 within each object."""
+    count: dict[str, int] = {}
+    labels = []
+    for name in objects:
+        count[name] = count.get(name, 0) + 1
+        labels.append(f"{name} move {count[name]}")
+    return labels
+
+
 def judge(
-    result: RunResult, sim: SimWorld, errors_m: list[float | None], errors_deg: list[float | None]
+    result: RunResult,
+    sim: SimWorld,
+    objects: list[str],
+    errors_m: list[float | None],
+    errors_deg: list[float | None],
 ) -> tuple[bool, str]:
-    """Success and the first failure reason, in the order the paper's criteria are listed."""
+    """Success and the first failure reason, in the order the paper's criteria are listed.
+
+    ``objects``, ``errors_m`` and ``errors_deg`` hold one entry per move of the task, in task
+    order: a move without a placement is a failure naming its object and move, whatever the
+    tree said.
+    """
     s = sim.safety
     if s.dropped:
-        return False, "dropped"
+        return False, f"dropped {s.dropped_object}" if s.dropped_object else "dropped"
     if s.obstacle_contacts:
         return False, "obstacle contact: " + ", ".join(sorted(s.obstacle_contacts))
     if s.arm_contacts:
         return False, "arms touched"
     if not result.success:
         return False, f"tree {result.status.value.lower()}: {result.reason}"
-    for i, (e, d) in enumerate(zip(errors_m, errors_deg, strict=True)):
-        if e is None or d is None:
-            return False, f"move {i + 1} not placed"
+    labels = move_labels(objects)
+    undone = [
+        label
+        for label, e, d in zip(labels, errors_m, errors_deg, strict=True)
+        if e is None or d is None
+    ]
+    if undone:
+        return False, "not placed: " + ", ".join(undone)
+    for label, e, d in zip(labels, errors_m, errors_deg, strict=True):
+        assert e is not None and d is not None
         if e > PLACE_TOLERANCE_M or d > PLACE_TOLERANCE_DEG:
-            return False, f"move {i + 1} placed {e * 100:.1f} cm, {d:.1f} deg from its goal"
+            return False, f"{label} placed {e * 100:.1f} cm, {d:.1f} deg from its goal"
     return True, ""
 
 
+def task_steps(world: World) -> list[TaskStep]:
+    """The world's task for :func:`planner.default_tree.default_tree`: per step, its object,
+    number of moves and the index of its first move among that object's moves."""
+    done: dict[str, int] = {}
+    steps = []
+    for step in world.task:
+        first = done.get(step.object, 0)
+        steps.append(TaskStep(step.object, len(step.moves), first))
+        done[step.object] = first + len(step.moves)
+    return steps
+
+
+def task_moves(world: World) -> list[tuple[str, int]]:
+    """Every move of the task as ``(object, index among the object's moves)``, in task order."""
+    return [(s.object, s.first_move + i) for s in task_steps(world) for i in range(s.moves)]
+
+
+@dataclass
+class _Track:
+    """What the recorder keeps of one move."""
+
+    positions: list[np.ndarray] = field(default_factory=list)
+    orientations: list[np.ndarray] = field(default_factory=list)
+    start: tuple[np.ndarray, np.ndarray] | None = None
+    obstacles: tuple[str, ...] = ()
+    error_m: float | None = None
+    error_deg: float | None = None
+    composition: dict[str, float] | None = None
+    skill: str | None = None
+
+
 class _Recorder:
-    """Post-tick bookkeeping: object path per move and each move's placement error.
+    """Post-tick bookkeeping: each move's object path and placement error, for every object.
 
     It reads the moves' published results (:func:`planner.move_result.move_results`,
     written by the Transport leaves), not the leaves: while a move's latest result is RUNNING
-    the object's position is sampled into that move's path; when it turns SUCCESS the move's
-    placement error and composition are kept.
+    the carried object's measured pose is sampled into that move's path; when it turns
+    SUCCESS the move's placement error, composition and skill are kept.
     """
 
-    def __init__(self, sim: SimWorld, name: str, n_moves: int) -> None:
-        self.sim, self.name = sim, name
-        self.moves = sim.task_moves(name)
-        self.paths: list[list[np.ndarray]] = [[] for _ in range(n_moves)]
-        self.starts: list[np.ndarray | None] = [None] * n_moves
-        self.obstacles: list[tuple[Any, ...]] = [() for _ in range(n_moves)]
-        self.errors_m: list[float | None] = [None] * n_moves
-        self.errors_deg: list[float | None] = [None] * n_moves
-        self.compositions: list[dict[str, float] | None] = [None] * n_moves
-        self.current: int | None = None
-        self.tip_name = ""
+    def __init__(self, sim: SimWorld, moves: list[tuple[str, int]]) -> None:
+        self.sim = sim
+        self.order = {key: i for i, key in enumerate(moves)}
+        self.tracks = {key: _Track() for key in moves}
+        self.current: tuple[str, int] | None = None
 
     def __call__(self, tree: py_trees.trees.BehaviourTree) -> None:
-        pose = self.sim.object_pose(self.name)
-        # In move order, as a move that ends and the next that starts share a tick.
-        for (obj, index), result in sorted(move_results().items(), key=lambda kv: kv[0][1]):
-            if obj != self.name or not 0 <= index < len(self.moves):
-                continue
+        # In task order, as a move that ends and the next that starts share a tick.
+        results = [(k, r) for k, r in move_results().items() if k in self.order]
+        for key, result in sorted(results, key=lambda kr: self.order[kr[0]]):
+            track = self.tracks[key]
+            pose = self.sim.object_pose(key[0])
             if result.status == Status.RUNNING:
-                if self.starts[index] is None:
-                    self.starts[index] = pose.position.copy()
-                    self.obstacles[index] = self.sim.obstacles()
-                self.paths[index].append(pose.position.copy())
-                self.current = index
-            elif result.status == Status.SUCCESS and self.current == index:
+                if track.start is None:
+                    track.start = (pose.position.copy(), pose.orientation.copy())
+                    track.obstacles = tuple(o.name for o in self.sim.obstacles())
+                track.positions.append(pose.position.copy())
+                track.orientations.append(pose.orientation.copy())
+                self.current = key
+            elif result.status == Status.SUCCESS and self.current == key:
                 assert result.placement_error_m is not None
                 assert result.placement_error_rad is not None
-                self.errors_m[index] = result.placement_error_m
-                self.errors_deg[index] = float(np.degrees(result.placement_error_rad))
-                self.paths[index].append(pose.position.copy())
-                self.compositions[index] = {
+                track.error_m = result.placement_error_m
+                track.error_deg = float(np.degrees(result.placement_error_rad))
+                track.positions.append(pose.position.copy())
+                track.orientations.append(pose.orientation.copy())
+                track.composition = {
                     "transport_weight": result.transport_weight,
                     "avoid_gain": result.avoid_gain,
                 }
+                track.skill = result.skill
                 self.current = None
-        tip = tree.tip()
-        self.tip_name = tip.name if tip is not None else ""
 
-    def traces(self) -> list[MoveTrace]:
+    def column(self, what: str) -> list[Any]:
+        """One attribute of every move's track, in task order."""
+        return [getattr(self.tracks[key], what) for key in self.order]
+
+    def traces(self, library: SkillLibrary) -> list[MoveTrace]:
+        """Every move of the task as the figure draws it."""
+        spec = self.sim.spec
+        shapes = {o.name: o.shape for o in spec.scene.objects}
+        obstacles = {o.name: o for o in spec.scene.obstacles}
+        goals = {name: spec.moves_of(name) for name, _ in self.order}
         out = []
-        for i, move in enumerate(self.moves):
-            start = self.starts[i]
-            path = np.array(self.paths[i]) if self.paths[i] else np.zeros((0, 3))
+        for label, key in zip(move_labels([k[0] for k in self.order]), self.order, strict=True):
+            track = self.tracks[key]
+            goal = goals[key[0]][key[1]]
+            goal_q = np.asarray(goal.goal_quaternion, dtype=float)
+            start = track.start or (np.asarray(goal.goal_position, dtype=float), goal_q)
+            skill = (
+                library.get(track.skill)
+                if track.skill is not None and track.skill in library
+                else None
+            )
             out.append(
                 MoveTrace(
-                    i,
-                    start if start is not None else move.goal.position,
-                    move.goal.position,
-                    path,
-                    self.obstacles[i],
+                    label,
+                    start[0],
+                    np.asarray(goal.goal_position, dtype=float),
+                    np.array(track.positions).reshape(-1, 3),
+                    tuple(obstacles[n] for n in track.obstacles),
+                    start_orientation=start[1],
+                    goal_orientation=goal_q,
+                    orientations=np.array(track.orientations).reshape(-1, 4),
+                    shape=shapes[key[0]],
+                    skill=track.skill,
+                    demonstrated=(
+                        demonstrated_path(skill, start[0], start[1], goal.goal_position, goal_q)
+                        if skill is not None
+                        else None
+                    ),
                 )
             )
         return out
@@ -187,8 +272,10 @@ def run_episode(
     ----------
     world : World
     tree_path : Path, optional
-        Behaviour tree XML; default: :func:`planner.default_tree.default_tree` for the first
-        task object's number of moves (``planner/trees/pick_and_place.xml`` for three).
+        Behaviour tree XML; default: :func:`planner.default_tree.default_tree` for the
+        world's task (``planner/trees/pick_and_place.xml`` with one PickAndPlace per step of
+        the task, each with its moves). The blackboard's ``/object`` names the task's first
+        object, for trees that read it.
     library : SkillLibrary, optional
         Default: the world's.
     out : Path, optional
@@ -206,15 +293,14 @@ def run_episode(
     planner.loader.TreeFileError, skills.library.LibraryFileError
         On bad input files (the caller turns them into exit code 2).
     """
-    name = world.task[0].object
-    n_moves = sum(len(s.moves) for s in world.task if s.object == name)
+    moves = task_moves(world)
     # The loader writes constant port values to the blackboard: clear it first, not after.
     py_trees.blackboard.Blackboard.clear()
-    # Without a tree file, the shipped tree (its Move subtree once per move of the task).
-    root = load_tree(tree_path) if tree_path is not None else default_tree(n_moves)
+    # Without a tree file, the shipped tree for the world's task.
+    root = load_tree(tree_path) if tree_path is not None else default_tree(task_steps(world))
     lib = library if library is not None else load_library(world)
-    with SimWorld(world, name, gui=gui) as sim:
-        recorder = _Recorder(sim, name, n_moves)
+    with SimWorld(world, gui=gui) as sim:
+        recorder = _Recorder(sim, moves)
         hooks: list[Callable[[py_trees.trees.BehaviourTree], Any]] = [
             lambda tree: tree.add_post_tick_handler(recorder)
         ]
@@ -248,20 +334,22 @@ def run_episode(
                 lib,
                 1.0 / world.sim.control_hz,
                 world.sim.max_sim_time_s,
-                {"/object": name},
+                {"/object": world.task[0].object},
                 on_tick=on_tick,
                 attach=tuple(hooks),
             )
         finally:
             if log is not None:
                 log.close()
-        ok, failure = judge(result, sim, recorder.errors_m, recorder.errors_deg)
+        objects = [name for name, _ in moves]
+        errors_m, errors_deg = recorder.column("error_m"), recorder.column("error_deg")
+        ok, failure = judge(result, sim, objects, errors_m, errors_deg)
         report = EpisodeReport(
             ok,
             result.status.value,
             result.reason,
-            recorder.errors_m,
-            recorder.errors_deg,
+            errors_m,
+            errors_deg,
             sim.safety.min_obstacle_distance_m,
             dict(sim.safety.obstacle_contacts),
             sim.safety.arm_contacts,
@@ -269,14 +357,15 @@ def run_episode(
             result.sim_time,
             result.wall_time,
             failure,
-            compositions=recorder.compositions,
+            compositions=recorder.column("composition"),
+            placement_objects=objects,
+            skills=recorder.column("skill"),
         )
         if out is not None:
             report.outputs["run_log"] = str(out / "run.jsonl")
-            demo = read_demo_csv(DEMOS_DIR / "pick_place.csv").demonstration.positions
             title = f"{world.name}: {'success' if ok else 'failure: ' + failure}"
             report.outputs["trajectories"] = str(
-                trajectory_figure(recorder.traces(), demo, out / "trajectories.png", title)
+                trajectory_figure(recorder.traces(lib), out / "trajectories.png", title)
             )
             if anim is not None:
                 gif = anim.save_gif(out / "animation.gif")

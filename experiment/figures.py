@@ -1,23 +1,37 @@
 """What a run shows a person: the trajectory figure and the animation.
 
-- :func:`trajectory_figure`: in the style of the paper's Fig. 3, per move the demonstrated
-  pick-and-place (green, carried to the move's start and goal as the skill generalises it),
-  the executed path of the object (blue) and the obstacles (red), top and side views.
+- :func:`trajectory_figure`: in the style of the paper's Fig. 3, per move of every object:
+  the learnt transport skill the move actually ran, alone from the move's start to its goal
+  (green: its demonstration as the skill generalises it), the executed path of the object
+  (blue) with its heading (arrows of its x-axis), its footprint to scale at the start (dashed)
+  and the goal (solid), and the obstacles in their own shapes (red), in a top view and a side
+  view along the move's own direction, both at equal axis scales.
 - :class:`Animation`: frames from PyBullet's CPU renderer (TinyRenderer) written as a GIF.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pybullet as pb
+from numpy.typing import ArrayLike
+from scipy.spatial import ConvexHull
 
-from planner.port import ObstacleInfo
-from skills.scaling import Scaling, scaling_matrix
+from skills import quaternion as quat
+from skills.pose_dmp import pose_rollout
+from skills.skill import Skill, SkillKind
+from skills.state import PoseState
 from skills.types import Array
+from worlds.spec import ObstacleSpec, Shape, ShapeSpec
+
+#: Heading arrows drawn along each executed path.
+HEADING_ARROWS = 8
+#: Moves per row of the figure (a row is a top view above a side view).
+COLUMNS = 4
 
 
 @dataclass(frozen=True)
@@ -26,88 +40,291 @@ class MoveTrace:
 
     Attributes
     ----------
-    index : int
+    label : str
+        What the move is, e.g. ``"parcel move 1"``.
     start, goal : ndarray, shape (3,)
         Object centre at the start and the goal, m.
     path : ndarray, shape (N, 3)
-        Executed object centre positions, m.
-    obstacles : tuple of ObstacleInfo
+        Executed (measured) object centre positions, m.
+    obstacles : tuple of ObstacleSpec
+        The obstacles present during the move, with their shapes.
+    start_orientation, goal_orientation : ndarray, shape (4,)
+        Object orientation at the start and the goal, ``(x, y, z, w)``.
+    orientations : ndarray, shape (N, 4)
+        Executed (measured) object orientations along ``path``.
+    shape : ShapeSpec or None
+        The object's shape, for its footprint.
+    skill : str or None
+        The learnt transport skill the move ran.
+    demonstrated : ndarray, shape (K, 3), or None
+        That skill alone from ``start`` to ``goal`` (:func:`demonstrated_path`); None when the
+        move was never carried.
     """
 
-    index: int
+    label: str
     start: Array
     goal: Array
     path: Array
-    obstacles: tuple[ObstacleInfo, ...]
+    obstacles: tuple[ObstacleSpec, ...]
+    start_orientation: Array = field(default_factory=lambda: quat.IDENTITY.copy())
+    goal_orientation: Array = field(default_factory=lambda: quat.IDENTITY.copy())
+    orientations: Array = field(default_factory=lambda: np.zeros((0, 4)))
+    shape: ShapeSpec | None = None
+    skill: str | None = None
+    demonstrated: Array | None = None
 
 
-def demonstration_for(demo_positions: Array, start: Array, goal: Array) -> Array:
-    """The demonstrated path carried to a new start and goal, turned about the vertical.
+def demonstrated_path(
+    skill: Skill,
+    start: ArrayLike,
+    start_orientation: ArrayLike,
+    goal: ArrayLike,
+    goal_orientation: ArrayLike,
+    dt: float = 0.01,
+) -> Array | None:
+    """A learnt skill's own motion from ``start`` to ``goal``: its demonstration generalised.
 
-    The same mapping the pick-and-place skill's forcing uses (``Scaling.ROTATION_Z``), so the
-    green path is what the demonstration means for this move.
+    The skill's pose DMP rolled out alone (no coupling terms) over 1.5 times its demonstrated
+    duration, so the path is what the demonstration means for this move, (K, 3), m. None for
+    a skill that is not a learnt DMP.
     """
-    ref = demo_positions[-1] - demo_positions[0]
-    m = scaling_matrix(Scaling.ROTATION_Z, goal - start, ref)
-    out = start + (demo_positions - demo_positions[0]) @ m.T
-    # The end point follows the vertical difference the skill's attractor adds.
-    blend = np.linspace(0.0, 1.0, len(out))[:, None]
-    out[:, 2] += blend[:, 0] * ((goal - start)[2] - (ref[2]))
-    return out
+    if skill.kind is not SkillKind.LEARNT_DMP:
+        return None
+    model = skill.pose_model()
+    target = model.target(start, start_orientation, goal, goal_orientation)
+    return pose_rollout(model, target, PoseState.at_rest(start, start_orientation), dt).positions
 
 
-def trajectory_figure(
-    traces: Sequence[MoveTrace], demo_positions: Array, path: Path, title: str
-) -> Path:
-    """Write the top and side views of every move to ``path`` (PNG)."""
+def shape_points(shape: ShapeSpec) -> Array:
+    """Points whose convex hull is the shape (not a sphere), body frame, (M, 3), m."""
+    if shape.kind is Shape.BOX:
+        half = np.asarray(shape.size) / 2.0
+        corners = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)])
+        return corners * half
+    if shape.kind is Shape.CYLINDER:
+        a = np.linspace(0.0, 2.0 * np.pi, 48, endpoint=False)
+        ring = np.column_stack((shape.radius * np.cos(a), shape.radius * np.sin(a)))
+        h = shape.height / 2.0
+        return np.vstack([np.column_stack((ring, np.full(len(a), z))) for z in (-h, h)])
+    if shape.kind is Shape.SPHERE:
+        a = np.linspace(0.0, 2.0 * np.pi, 48, endpoint=False)
+        r = shape.radius
+        return np.vstack(
+            [
+                np.column_stack((r * np.cos(a), r * np.sin(a), np.zeros_like(a))),
+                np.column_stack((r * np.cos(a), np.zeros_like(a), r * np.sin(a))),
+                np.column_stack((np.zeros_like(a), r * np.cos(a), r * np.sin(a))),
+            ]
+        )
+    return shape.mesh_vertices()
+
+
+@dataclass(frozen=True)
+class View:
+    """An orthographic view: world points to the plot's (horizontal, vertical) axes."""
+
+    name: str
+    axes: Array  # (2, 3): horizontal and vertical unit vectors, world frame
+    origin: Array  # (3,): world point at the plot's (0, 0)
+    labels: tuple[str, str]
+    #: The horizontal axis grows to the left.
+    mirrored: bool = False
+    #: Draw the object's heading (its x-axis) along the path.
+    heading: bool = False
+    #: Mark obstacles off the plotted plane with their distance from it (a side view).
+    marks_depth: bool = False
+
+    def project(self, points: ArrayLike) -> Array:
+        """(N, 3) world points to (N, 2) plot coordinates."""
+        return (np.atleast_2d(np.asarray(points, dtype=float)) - self.origin) @ self.axes.T
+
+    def depth(self, point: ArrayLike) -> float:
+        """How far beyond the plotted plane a point is, seen by the viewer, m (negative:
+        nearer the viewer, who looks along ``-cross(horizontal, vertical)``)."""
+        toward_viewer = np.cross(self.axes[0], self.axes[1])
+        return -float((np.asarray(point, dtype=float) - self.origin) @ toward_viewer)
+
+
+def top_view() -> View:
+    """From above, as the paper draws it: x up the page, +y (the robot's left) to the left."""
+    return View(
+        "top view",
+        np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0]]),
+        np.zeros(3),
+        ("y (m)", "x (m)"),
+        mirrored=True,
+        heading=True,
+    )
+
+
+def side_view(start: Array, goal: Array) -> View:
+    """The vertical plane through the move's start and goal, seen from its right.
+
+    Horizontal: distance along the move's horizontal direction from the start; a move with no
+    horizontal travel is seen along y.
+    """
+    d = np.array([goal[0] - start[0], goal[1] - start[1], 0.0])
+    n = float(np.linalg.norm(d))
+    u = d / n if n > 1e-3 else np.array([0.0, 1.0, 0.0])
+    heading = round(float(np.degrees(np.arctan2(u[1], u[0]))))
+    return View(
+        f"side view, heading {heading + 0:d} deg",
+        np.array([u, [0.0, 0.0, 1.0]]),
+        np.array([start[0], start[1], 0.0]),
+        ("along the move (m)", "z (m)"),
+        marks_depth=True,
+    )
+
+
+def outline(shape: ShapeSpec, position: ArrayLike, orientation: ArrayLike, view: View) -> Array:
+    """The shape's silhouette in a view, a closed polygon (M, 2) (a sphere's: its circle)."""
+    body = shape_points(shape)
+    world = np.asarray(position, dtype=float) + quat.rotate(np.asarray(orientation, float), body)
+    flat = view.project(world)
+    hull = ConvexHull(flat)
+    return flat[hull.vertices]
+
+
+def headings(orientations: Array, view: View) -> Array:
+    """The object's x-axis per orientation, in the view's axes, (N, 2)."""
+    x_axis = quat.rotate(orientations, np.array([1.0, 0.0, 0.0]))
+    return np.atleast_2d(x_axis) @ view.axes.T
+
+
+def draw_move(ax: Any, tr: MoveTrace, view: View) -> list[Array]:
+    """Draw one move in one view; returns the plotted points (for the limits)."""
+    from matplotlib.patches import Circle, Polygon
+
+    drawn: list[Array] = []
+    for ob in tr.obstacles:
+        # A side view flattens depth: an obstacle beside the move's plane is drawn pale and
+        # says how far beside it is, so a path drawn across it is not read as a collision.
+        off = view.depth(ob.position)
+        beside = view.marks_depth and abs(off) > 0.5 * float(min(ob.shape.extents()))
+        alpha = 0.35 if beside else 0.8
+        c = view.project(ob.position)[0]
+        if ob.shape.kind is Shape.SPHERE:
+            ax.add_patch(
+                Circle(tuple(c), ob.shape.radius, color="red", alpha=alpha, label="obstacle")
+            )
+            drawn.append(c + ob.shape.radius * np.array([[1, 1], [-1, -1]]))
+        else:
+            poly = outline(ob.shape, ob.position, quat.IDENTITY, view)
+            ax.add_patch(Polygon(poly, closed=True, color="red", alpha=alpha, label="obstacle"))
+            drawn.append(poly)
+        if beside:
+            side = "farther" if off > 0 else "nearer"
+            ax.text(*c, f"{abs(off) * 100:.0f} cm\n{side}", ha="center", va="center", fontsize=6)
+    if tr.shape is not None:
+        for where, q, style, what in (
+            (tr.start, tr.start_orientation, dict(ls="--", lw=1.0, ec="0.45"), "at the start"),
+            (tr.goal, tr.goal_orientation, dict(ls="-", lw=1.2, ec="black"), "at the goal"),
+        ):
+            poly = outline(tr.shape, where, q, view)
+            ax.add_patch(Polygon(poly, closed=True, fill=False, label=f"object {what}", **style))
+            drawn.append(poly)
+    if tr.demonstrated is not None:
+        demo = view.project(tr.demonstrated)
+        ax.plot(*demo.T, color="green", lw=2.2, label=f"demonstrated: {tr.skill}")
+        drawn.append(demo)
+    if len(tr.path):
+        path = view.project(tr.path)
+        ax.plot(*path.T, color="tab:blue", lw=1.8, label="executed")
+        drawn.append(path)
+        if view.heading and len(tr.orientations) == len(tr.path):
+            # Heading: the object's x-axis, from its executed orientations.
+            picks = np.unique(np.linspace(0, len(path) - 1, HEADING_ARROWS).round().astype(int))
+            length = 0.35 * float(tr.shape.extents()[0]) if tr.shape is not None else 0.05
+            arrows = headings(tr.orientations[picks], view) * length
+            ax.quiver(
+                *path[picks].T,
+                *arrows.T,
+                angles="xy",
+                scale_units="xy",
+                scale=1.0,
+                width=0.006,
+                color="tab:purple",
+                label="heading (object x-axis)",
+            )
+    start, goal = view.project(tr.start)[0], view.project(tr.goal)[0]
+    ax.plot(*start, "ko", ms=4)
+    ax.plot(*goal, "k+", ms=10, mew=2)
+    drawn += [start[None], goal[None]]
+    return drawn
+
+
+def trajectory_figure(traces: Sequence[MoveTrace], path: Path, title: str) -> Path:
+    """Write the top and side views of every move to ``path`` (PNG); see the module's doc."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    from matplotlib.patches import Circle
 
-    # One frame for every panel, around all the paths, goals and obstacles, so moves compare.
-    pts = [demo_positions[:1]]
-    for tr in traces:
-        pts += [tr.path.reshape(-1, 3), tr.start[None], tr.goal[None]]
-        pts += [demonstration_for(demo_positions, tr.start, tr.goal)]
-        pts += [np.atleast_2d(ob.position) + ob.radius * np.eye(3) for ob in tr.obstacles]
-        pts += [np.atleast_2d(ob.position) - ob.radius * np.eye(3) for ob in tr.obstacles]
-    allp = np.concatenate([p for p in pts if len(p)])
-    lo, hi = allp.min(axis=0) - 0.04, allp.max(axis=0) + 0.04
-    limits = list(zip(lo, hi, strict=True))
-    fig, axes = plt.subplots(
-        2, max(1, len(traces)), figsize=(4.2 * max(1, len(traces)), 7.5), squeeze=False
-    )
-    for col, tr in enumerate(traces):
-        top, side = axes[0, col], axes[1, col]
-        demo = demonstration_for(demo_positions, tr.start, tr.goal)
-        for ax, (i, j), name in ((top, (1, 0), "top view"), (side, (1, 2), "side view")):
-            ax.plot(demo[:, i], demo[:, j], color="green", lw=2.2, label="demonstrated")
-            if len(tr.path):
-                ax.plot(tr.path[:, i], tr.path[:, j], color="tab:blue", lw=1.8, label="executed")
-            for ob in tr.obstacles:
-                ax.add_patch(
-                    Circle((ob.position[i], ob.position[j]), ob.radius, color="red", alpha=0.8)
-                )
-            ax.plot(*tr.start[[i, j]], "ko", ms=4)
-            ax.plot(*tr.goal[[i, j]], "k+", ms=10, mew=2)
-            ax.set_xlim(*limits[i])
-            ax.set_ylim(*limits[j])
-            ax.set_aspect("equal")
-            ax.invert_xaxis()
-            ax.set_xlabel("y (m)")
-            ax.set_ylabel("x (m)" if name == "top view" else "z (m)")
-            ax.set_title(f"move {tr.index + 1}: {name}")
+    n = max(1, len(traces))
+    cols = min(n, COLUMNS)
+    rows = -(-n // cols)
+    fig, axes = plt.subplots(2 * rows, cols, figsize=(4.4 * cols, 7.8 * rows), squeeze=False)
+    top = top_view()
+    tops: list[tuple[Any, list[Array]]] = []
+    sides: list[tuple[Any, list[Array]]] = []
+    for k, tr in enumerate(traces):
+        r, c = divmod(k, cols)
+        ax_top, ax_side = axes[2 * r, c], axes[2 * r + 1, c]
+        side = side_view(tr.start, tr.goal)
+        tops.append((ax_top, draw_move(ax_top, tr, top)))
+        sides.append((ax_side, draw_move(ax_side, tr, side)))
+        for ax, view in ((ax_top, top), (ax_side, side)):
+            ax.set_xlabel(view.labels[0])
+            ax.set_ylabel(view.labels[1])
+            ax.set_title(f"{tr.label}: {view.name}", fontsize=8)
+            if view.mirrored:
+                ax.invert_xaxis()
             ax.grid(alpha=0.3)
-        if col == 0:
-            top.legend(loc="best", fontsize=8)
+        if tr.demonstrated is None:
+            ax_top.text(0.02, 0.02, "never carried", transform=ax_top.transAxes, fontsize=8)
+    for k in range(len(traces), rows * cols):
+        r, c = divmod(k, cols)
+        axes[2 * r, c].set_visible(False)
+        axes[2 * r + 1, c].set_visible(False)
+    # Top views share one frame, so moves compare; side views share their heights. Both are
+    # drawn to scale (equal axes), so sizes and clearances read off the figure.
+    _frame(tops, share=(True, True))
+    _frame(sides, share=(False, True))
+    # One legend for the figure: every kind of mark once (demonstrations by skill).
+    legend: dict[str, Any] = {}
+    for ax, _ in tops:
+        handles, labels = ax.get_legend_handles_labels()
+        legend.update({lab: h for h, lab in zip(handles, labels, strict=True) if lab not in legend})
+    if legend:
+        fig.legend(
+            legend.values(), legend.keys(), loc="lower center", ncol=min(len(legend), 6), fontsize=8
+        )
     fig.suptitle(title)
-    fig.tight_layout()
+    fig.tight_layout(rect=(0.0, 0.05 / rows, 1.0, 1.0))
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return path
+
+
+def _frame(panels: list[tuple[Any, list[Array]]], share: tuple[bool, bool]) -> None:
+    """Set limits around what each panel drew (shared over panels per axis) and equal scales."""
+    if not panels:
+        return
+    bounds = []
+    for _, drawn in panels:
+        pts = np.concatenate([np.atleast_2d(d) for d in drawn if len(d)])
+        bounds.append((pts.min(axis=0) - 0.03, pts.max(axis=0) + 0.03))
+    lo_all = np.min([b[0] for b in bounds], axis=0)
+    hi_all = np.max([b[1] for b in bounds], axis=0)
+    for (ax, _), (lo, hi) in zip(panels, bounds, strict=True):
+        for axis in (0, 1):
+            a, b = (lo_all[axis], hi_all[axis]) if share[axis] else (lo[axis], hi[axis])
+            if axis == 0:
+                ax.set_xlim(*((b, a) if ax.xaxis_inverted() else (a, b)))
+            else:
+                ax.set_ylim(a, b)
+        ax.set_aspect("equal")
 
 
 class Animation:

@@ -172,6 +172,21 @@ def _skill_for(
     return library.first(selection.action, selection.space)
 
 
+def carried_skill(
+    plan: SemanticAction, library: SkillLibrary, key: str | None = None
+) -> str | None:
+    """Name of the learnt skill a move is carried with: the one called ``key`` (a port's or
+    the move's choice), else the plan's transport selection; None when the plan composes no
+    transport. The same lookups :func:`transport_composition` composes with, so a move's
+    record names the skill (and so the demonstration) it actually ran."""
+    sel = plan.skill(Action.TRANSPORT)
+    if sel is None or sel.space is not Space.ABSOLUTE or sel.weight == 0.0:
+        return None
+    if key:
+        return transport_skill(library, key).name
+    return _skill_for(library, sel).name
+
+
 def absolute_terms(
     plan: SemanticAction,
     library: SkillLibrary,
@@ -410,12 +425,14 @@ class MovePlan:
         The grip's force per palm the composition was bounded by, N.
     avoid_gain, transport_weight : float
         The variant of the plan composed (see :func:`transport_composition`).
-    skill : str or None
-        The skill asked for by name (a port's; None: the move's or the plan's).
     from_state : DualArmState
         The handed-over state it was composed from.
     composer : DualArmComposer
         The composition as built; never stepped itself (use :meth:`fresh`).
+    requested_skill : str or None
+        The skill a port asked for by name (None: the move's or the plan's).
+    skill : str or None
+        The learnt transport skill composed (:func:`carried_skill`), None without one.
     start : DualArmState
         The composer's first state (``from_state`` with the phase restarted).
     """
@@ -428,6 +445,7 @@ class MovePlan:
     transport_weight: float
     from_state: DualArmState
     composer: DualArmComposer
+    requested_skill: str | None = None
     skill: str | None = None
     start: DualArmState = field(init=False)
 
@@ -472,7 +490,16 @@ def compose_move(
         skill=skill,
     )
     return MovePlan(
-        name, index, move, squeeze_force_n, avoid_gain, transport_weight, state, composer, skill
+        name,
+        index,
+        move,
+        squeeze_force_n,
+        avoid_gain,
+        transport_weight,
+        state,
+        composer,
+        skill,
+        carried_skill(reweight(plan, avoid_gain, transport_weight), library, skill or move.skill),
     )
 
 

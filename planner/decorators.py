@@ -96,9 +96,16 @@ class SimTimeout(PortsMixin, py_trees.decorators.Decorator, register=False):
         child_status = self.decorated.status
         elapsed = self.elapsed()
         if child_status == Status.RUNNING and elapsed >= self.duration:
+            # What the running leaf last said is lost with the halt: keep it in the reason.
+            tip = self.decorated.tip()
+            said = (
+                f" while {tip.name.rsplit('.', 1)[-1]} said: {tip.feedback_message}"
+                if tip is not None and tip.feedback_message
+                else ""
+            )
             self.feedback_message = (
                 f"timed out after {elapsed:.3f} s (allowed {self.duration:.3f} s); halted "
-                f"'{self.decorated.name}'"
+                f"'{self.decorated.name}'{said}"
             )
             self.decorated.stop(Status.INVALID)
             return Status.FAILURE

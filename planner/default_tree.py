@@ -1,15 +1,37 @@
 """The default tree: the shipped ``planner/trees/pick_and_place.xml``, the one source of it.
 
-For the paper's task (one object, three moves) it is the file as shipped. A task of another
-number of moves gets the same document with its main tree's ``Move`` subtree instantiated
-once per move (the subtrees, compositions and guards are the file's own), so no tree is ever
-built a second way in code.
+The file's structure, which every task's tree keeps::
+
+    Task (main tree)                     Sequence "task": one PickAndPlace per task step
+      SubTree PickAndPlace  object=...   select skills, grasp, the step's moves, release, retreat
+        SubTree Move  move=<index>       hold or regrasp, choose a composition, AtGoal
+          SubTree CarryIfClear ...       PathClear then Transport, per composition variant
+
+As shipped, the main tree has one PickAndPlace, for the object named by ``{object}`` on the
+blackboard, with the paper's three moves. For a world's task, :func:`task_xml` rewrites the
+same document: the main tree gets one PickAndPlace instance per step of the task, in the
+task's order, named after its object (``parcel``; a later step of the same object
+``parcel_2``), with the object as a constant port, so that each instance has its own
+blackboard keys (``/parcel/plan``, ``/parcel/state`` ...). Each instance runs its own copy of
+the file's PickAndPlace (``PickAndPlace_<first>_<count>``) whose Move subtrees are the file's
+Move instance repeated once per move of the step, with the object's move indices (a step that
+follows another of the same object goes on from that one's last move). The moves keep the
+file's names (``move_centre``, ``move_right``, ``move_left``) and further ones are
+``move_<n>`` (from 1). Nothing of a tree is built in code: subtrees, compositions, guards and
+timeouts are the file's.
+
+To change what a step does (e.g. regrasp between moves), change the file's PickAndPlace or
+Move subtree; to change what runs per move, the Move subtree. :class:`TaskStep` is the only
+input: which object, how many moves, from which of its moves.
 """
 
 from __future__ import annotations
 
 import copy
+import re
 import xml.etree.ElementTree as ET
+from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 from py_trees.behaviour import Behaviour
@@ -17,18 +39,122 @@ from py_trees.behaviour import Behaviour
 import planner.leaves  # noqa: F401  (registers the leaves the file uses)
 from planner.loader import load_tree, load_tree_string
 
-__all__ = ["PICK_AND_PLACE_XML", "default_tree", "pick_and_place_xml"]
+__all__ = ["PICK_AND_PLACE_XML", "TaskStep", "default_tree", "pick_and_place_xml", "task_xml"]
 
 #: The shipped tree of the paper's task.
 PICK_AND_PLACE_XML = Path(__file__).resolve().parent / "trees" / "pick_and_place.xml"
 
-#: The shipped file's names for its three moves; further moves are ``move_<i>``.
-_MOVE_NAMES = ("move_centre", "move_right", "move_left")
-_SHIPPED_MOVES = len(_MOVE_NAMES)
+#: The file's per-object subtree and the per-move subtree it repeats.
+_STEP_TREE, _MOVE_TREE = "PickAndPlace", "Move"
+#: The object port of the file's PickAndPlace instance: read from the blackboard.
+_FROM_BLACKBOARD = "{object}"
+
+
+@dataclass(frozen=True)
+class TaskStep:
+    """One step of a task: ``moves`` moves of ``object``, from its move ``first_move``.
+
+    Attributes
+    ----------
+    object : str
+        The object's name, or ``"{object}"`` to read it from the blackboard key ``/object``.
+    moves : int
+        Number of moves, at least 1.
+    first_move : int
+        Index of the step's first move among the object's moves (``task_moves``), from 0.
+    """
+
+    object: str
+    moves: int
+    first_move: int = 0
+
+    def __post_init__(self) -> None:
+        if self.moves < 1:
+            raise ValueError(
+                f"TaskStep {self.object!r}: expected at least 1 move, got {self.moves}"
+            )
+        if self.first_move < 0:
+            raise ValueError(
+                f"TaskStep {self.object!r}: expected first_move >= 0, got {self.first_move}"
+            )
+
+
+def _shipped() -> tuple[ET.Element, ET.Element, ET.Element, ET.Element]:
+    """The document, its main Sequence, its PickAndPlace instance and definition."""
+    root = ET.parse(PICK_AND_PLACE_XML).getroot()
+    main = root.find(f"BehaviorTree[@ID='{root.get('main_tree_to_execute')}']")
+    sequence = main[0] if main is not None and len(main) else None
+    assert sequence is not None, f"{PICK_AND_PLACE_XML}: expected a main tree with a Sequence"
+    instance = next(e for e in sequence if e.tag == "SubTree" and e.get("ID") == _STEP_TREE)
+    definition = root.find(f"BehaviorTree[@ID='{_STEP_TREE}']")
+    assert definition is not None, f"{PICK_AND_PLACE_XML}: expected a {_STEP_TREE} tree"
+    return root, sequence, instance, definition
+
+
+def _with_moves(definition: ET.Element, tree_id: str, step: TaskStep) -> ET.Element:
+    """A copy of the PickAndPlace definition running ``step``'s moves."""
+    out = copy.deepcopy(definition)
+    out.set("ID", tree_id)
+    body = out[0]
+    shipped = [e for e in body if e.tag == "SubTree" and e.get("ID") == _MOVE_TREE]
+    names = [e.get("name") or "" for e in shipped]
+    at = list(body).index(shipped[0])
+    for element in shipped:
+        body.remove(element)
+    for i in range(step.moves):
+        index = step.first_move + i
+        element = copy.deepcopy(shipped[0])
+        element.set("name", names[index] if index < len(names) else f"move_{index + 1}")
+        element.set("move", str(index))
+        body.insert(at + i, element)
+    return out
+
+
+def _instance_name(name: str, used: set[str]) -> str:
+    """A node name (and blackboard namespace) for an object: identifier characters, unique."""
+    base = re.sub(r"\W", "_", name) or "object"
+    candidate, k = base, 1
+    while candidate in used:
+        k += 1
+        candidate = f"{base}_{k}"
+    used.add(candidate)
+    return candidate
+
+
+def task_xml(steps: Sequence[TaskStep]) -> str:
+    """The shipped document running ``steps`` in order, as XML text (see the module's doc).
+
+    Raises
+    ------
+    ValueError
+        If ``steps`` is empty.
+    """
+    if not steps:
+        raise ValueError("task_xml: expected at least 1 task step, got none")
+    root, sequence, instance, definition = _shipped()
+    at = list(sequence).index(instance)
+    sequence.remove(instance)
+    root.remove(definition)
+    defined: dict[tuple[int, int], str] = {}
+    used: set[str] = set()
+    for k, step in enumerate(steps):
+        key = (step.first_move, step.moves)
+        if key not in defined:
+            defined[key] = f"{_STEP_TREE}_{step.first_move}_{step.moves}"
+            root.append(_with_moves(definition, defined[key], step))
+        element = copy.deepcopy(instance)
+        element.set("ID", defined[key])
+        if step.object == _FROM_BLACKBOARD:
+            used.add(instance.get("name") or "")
+        else:
+            element.set("name", _instance_name(step.object, used))
+        element.set("object", step.object)
+        sequence.insert(at + k, element)
+    return ET.tostring(root, encoding="unicode")
 
 
 def pick_and_place_xml(moves: int) -> str:
-    """The shipped document with ``moves`` instances of its ``Move`` subtree, as XML text.
+    """The shipped document with ``moves`` moves of the blackboard's ``{object}``, as XML text.
 
     Raises
     ------
@@ -37,30 +163,29 @@ def pick_and_place_xml(moves: int) -> str:
     """
     if moves < 1:
         raise ValueError(f"pick_and_place_xml: expected at least 1 move, got {moves}")
-    root = ET.parse(PICK_AND_PLACE_XML).getroot()
-    main = root.find(f"BehaviorTree[@ID='{root.get('main_tree_to_execute')}']")
-    sequence = main[0] if main is not None and len(main) else None
-    assert sequence is not None, f"{PICK_AND_PLACE_XML}: expected a main tree with a Sequence"
-    shipped = [e for e in sequence if e.tag == "SubTree" and e.get("ID") == "Move"]
-    at = list(sequence).index(shipped[0])
-    for element in shipped:
-        sequence.remove(element)
-    for i in range(moves):
-        element = copy.deepcopy(shipped[0])
-        element.set("name", _MOVE_NAMES[i] if i < _SHIPPED_MOVES else f"move_{i}")
-        element.set("move", str(i))
-        sequence.insert(at + i, element)
-    return ET.tostring(root, encoding="unicode")
+    return task_xml([TaskStep(_FROM_BLACKBOARD, moves)])
 
 
-def default_tree(moves: int = _SHIPPED_MOVES) -> Behaviour:
-    """The tree ``app.py run`` and ``trials`` run without ``--tree``, for ``moves`` moves.
+def default_tree(task: int | Sequence[TaskStep] = 3) -> Behaviour:
+    """The tree ``app.py run`` and ``trials`` run without ``--tree``.
 
-    Returns the root of ``planner/trees/pick_and_place.xml`` as loaded by
-    :func:`planner.loader.load_tree` (three moves), or of :func:`pick_and_place_xml`.
+    Parameters
+    ----------
+    task : int or sequence of TaskStep
+        A number of moves of the blackboard's ``/object`` (3: the shipped file as it is), or
+        a world's task, step by step (:func:`task_xml`).
+
+    Returns
+    -------
+    Behaviour
+        The root as loaded by :func:`planner.loader.load_tree`; not set up.
     """
-    if moves == _SHIPPED_MOVES:
-        return load_tree(PICK_AND_PLACE_XML)
-    return load_tree_string(
-        pick_and_place_xml(moves), source=f"{PICK_AND_PLACE_XML} ({moves} moves)"
-    )
+    if isinstance(task, int):
+        if task == 3:
+            return load_tree(PICK_AND_PLACE_XML)
+        return load_tree_string(
+            pick_and_place_xml(task), source=f"{PICK_AND_PLACE_XML} ({task} moves)"
+        )
+    steps = list(task)
+    what = ", ".join(f"{s.object} {s.moves} move{'s' * (s.moves != 1)}" for s in steps)
+    return load_tree_string(task_xml(steps), source=f"{PICK_AND_PLACE_XML} (task: {what})")

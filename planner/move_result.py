@@ -42,6 +42,9 @@ class MoveResult:
         Object position's distance from the goal at SUCCESS, m; None otherwise.
     placement_error_rad : float or None
         Object orientation's angle from the goal at SUCCESS, rad; None otherwise.
+    skill : str or None
+        Name of the learnt transport skill the composition ran (its demonstration is the one
+        the move generalised), None if it composed none.
     """
 
     object: str
@@ -51,6 +54,7 @@ class MoveResult:
     status: Status
     placement_error_m: float | None = None
     placement_error_rad: float | None = None
+    skill: str | None = None
 
 
 def publish_move_result(result: MoveResult, writer: str) -> None:

@@ -32,7 +32,8 @@ class RunResult:
         Wall-clock seconds.
     ticks : int
     reason : str
-        The deepest failing or running leaf's explanation, or "".
+        Why the run failed or was stopped (:func:`explain`: the node where it happened and what
+        it said); "" after a success.
     """
 
     status: Status
@@ -55,14 +56,45 @@ def seed_blackboard(values: Mapping[str, Any]) -> None:
         client.set(key, value)
 
 
+def status_chain(root: py_trees.behaviour.Behaviour) -> list[py_trees.behaviour.Behaviour]:
+    """The nodes that gave ``root`` its status, from ``root`` down to the deepest.
+
+    A composite's status comes from its current child (a sequence's failing child, a
+    fallback's last one tried), a decorator's from its child: each step goes to the child
+    with the parent's status, so the chain of a failed root ends at the node where the failure
+    started (a leaf that failed, or a Timeout that halted a child still running).
+    """
+    chain = [root]
+    node = root
+    while node.children:
+        current = getattr(node, "current_child", None)
+        if current is not None and current in node.children and current.status == node.status:
+            node = current
+        else:
+            same = [c for c in node.children if c.status == node.status]
+            if not same:
+                break
+            node = same[-1]
+        chain.append(node)
+    return chain
+
+
 def explain(root: py_trees.behaviour.Behaviour) -> str:
-    """The feedback of the deepest leaf that failed (or is running), with its name."""
-    deepest = ""
-    for node in root.iterate():
-        if not node.children and node.status in (Status.FAILURE, Status.RUNNING):
-            if node.feedback_message:
-                deepest = f"{node.name}: {node.feedback_message}"
-    return deepest
+    """Why ``root`` has its status: the deepest node of :func:`status_chain`, named, and what it
+    said; never empty.
+
+    A node that says nothing is still named, with its status and what the nearest node above it
+    said (e.g. a Retry's count), so a failure always names where it happened.
+    """
+    chain = status_chain(root)
+    deepest = chain[-1]
+    if deepest.feedback_message:
+        return f"{deepest.name}: {deepest.feedback_message}"
+    text = f"{deepest.name}: {deepest.status.value.lower()} without a feedback message"
+    above = [n for n in chain[:-1] if n.feedback_message]
+    if above:
+        text += f" (under {above[-1].name}: {above[-1].feedback_message})"
+    return text
 
 
 def run_tree(

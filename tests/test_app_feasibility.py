@@ -14,6 +14,14 @@ from tests.worlds.test_feasibility import INFEASIBLE, PROBLEMS
 SMALL_BOX = ROOT / "tests" / "data" / "worlds" / "small_box.yaml"
 
 
+#: The line of the shipped tree's third move (the one a two-move world lacks).
+MOVE_LEFT_LINE = next(
+    i
+    for i, line in enumerate(PICK_AND_PLACE_XML.read_text(encoding="utf-8").splitlines(), 1)
+    if 'name="move_left"' in line
+)
+
+
 def two_move_world(tmp_path: Path) -> Path:
     """The default world without its third move."""
     text = Path(DEFAULT).read_text(encoding="utf-8")
@@ -46,7 +54,7 @@ def test_validate_a_tree_against_a_world_with_fewer_moves(
     world = str(two_move_world(tmp_path))
     tree = str(PICK_AND_PLACE_XML)
     expected = (
-        f'{tree}:32: <SubTree ID="Move" name="move_left">: move 2, '
+        f'{tree}:{MOVE_LEFT_LINE}: <SubTree ID="Move" name="move_left">: move 2, '
         "but the world's task has 2 moves for parcel (indices 0..1)\n"
     )
     assert exit_code(["validate", world]) == app.EXIT_OK  # the default tree follows the task

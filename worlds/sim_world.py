@@ -60,8 +60,10 @@ class SafetyRecord:
     closest : str
         What came closest to what.
     dropped : bool
-        The object fell: above the table and touched by neither palm while moving down.
+        An object fell: above the table and touched by neither palm while moving down.
     drop_time : float or None
+    dropped_object : str
+        The object that fell first ("" if none did).
     """
 
     obstacle_contacts: dict[str, int] = field(default_factory=dict)
@@ -70,6 +72,7 @@ class SafetyRecord:
     closest: str = ""
     dropped: bool = False
     drop_time: float | None = None
+    dropped_object: str = ""
 
 
 class SimWorld:
@@ -80,7 +83,7 @@ class SimWorld:
     world : WorldSpec or World
         The world; a validated world file is converted here, once.
     object_name : str, optional
-        The object the monitor watches for drops (default: the first task's object).
+        The one object the monitor watches for drops; default: every object of the task.
     gains : ImpedanceGains, optional
         Palm impedance gains.
     """
@@ -96,8 +99,9 @@ class SimWorld:
         self.scene = Scene(spec.scene, gains=gains, gui=gui)
         self.gains = self.scene.controller.gains(Arm.LEFT)
         self.collision = CollisionWorld(self.scene)
-        self.watched = object_name or (
-            spec.task[0].object if spec.task else spec.scene.objects[0].name
+        task_objects = tuple(dict.fromkeys(step.object for step in spec.task))
+        self.watched: tuple[str, ...] = (
+            (object_name,) if object_name else task_objects or (spec.scene.objects[0].name,)
         )
         self.safety = SafetyRecord()
         self._rest = self._rest_poses()
@@ -179,14 +183,15 @@ class SimWorld:
                 self.safety.closest = f"{prox.element_a} ~ {prox.element_b}"
 
     def _watch_drop(self) -> None:
-        name = self.watched
-        pos, _ = self.scene.object_pose(name)
-        vel, _ = self.scene.object_velocity(name)
-        lifted = pos[2] > self._rest_z[name] + 0.01
-        touched = any(self.scene.palm_contact_force(a, name) > 0.5 for a in ARMS)
-        if lifted and not touched and vel[2] < -0.2 and not self.safety.dropped:
-            self.safety.dropped = True
-            self.safety.drop_time = self.time()
+        for name in self.watched:
+            pos, _ = self.scene.object_pose(name)
+            vel, _ = self.scene.object_velocity(name)
+            lifted = pos[2] > self._rest_z[name] + 0.01
+            touched = any(self.scene.palm_contact_force(a, name) > 0.5 for a in ARMS)
+            if lifted and not touched and vel[2] < -0.2 and not self.safety.dropped:
+                self.safety.dropped = True
+                self.safety.drop_time = self.time()
+                self.safety.dropped_object = name
 
     # -- objects and task --------------------------------------------------------------------
     def object_pose(self, name: str) -> Pose:

@@ -100,7 +100,7 @@ class ShapeSpec:
             return self.radius
         if self.kind == Shape.CYLINDER:
             return float(np.hypot(self.radius, self.height / 2.0))
-        return float(np.max(np.linalg.norm(self._mesh_vertices(), axis=1)))
+        return float(np.max(np.linalg.norm(self.mesh_vertices(), axis=1)))
 
     def extents(self) -> Vec3:
         """Full extents of the shape's bounding box along its own x, y, z, m (meshes: of their
@@ -113,11 +113,11 @@ class ShapeSpec:
         if self.kind == Shape.CYLINDER:
             d = 2.0 * self.radius
             return (d, d, self.height)
-        vertices = self._mesh_vertices()
+        vertices = self.mesh_vertices()
         x, y, z = (float(v) for v in vertices.max(axis=0) - vertices.min(axis=0))
         return (x, y, z)
 
-    def _mesh_vertices(self) -> np.ndarray:
+    def mesh_vertices(self) -> np.ndarray:
         """Scaled mesh vertices (V, 3), m."""
         import trimesh  # lazily: only worlds with meshes pay for it
 

@@ -25,6 +25,11 @@ class Transport(MotionLeaf):
     link-level potential-field avoidance, on one transformation system towards the goal.
     Relative: grasp maintenance on each palm, squeezing. Starts from the handed-over full
     state and hands its own on. Fails, explaining why, if the grip is lost on the way.
+
+    Succeeds once the composition has arrived (its commanded object at the goal and still,
+    after ``tau``) or ``settle_s`` later, and only if the object *as measured* is still and
+    within ``tolerance_m`` and ``tolerance_deg`` of the goal (the judge's 2 cm and 10 degrees
+    by default); an object that came to rest outside them fails the move, saying where.
     Publishes the move's composition and outcome as a :class:`~planner.move_result.MoveResult`
     when it starts and when it ends.
 
@@ -57,6 +62,18 @@ class Transport(MotionLeaf):
             required=False,
             default_value=1.0,
             description="time allowed after tau to settle, s",
+        ),
+        "tolerance_m": PortInformation(
+            float,
+            required=False,
+            default_value=0.02,
+            description="largest distance of the measured object from the goal, m",
+        ),
+        "tolerance_deg": PortInformation(
+            float,
+            required=False,
+            default_value=10.0,
+            description="largest angle of the measured object from the goal, degrees",
         ),
     }
     OUTPUT_PORTS = {
@@ -116,7 +133,7 @@ class Transport(MotionLeaf):
                 checked.squeeze_force_n,
                 checked.avoid_gain,
                 checked.transport_weight,
-                checked.skill,
+                checked.requested_skill,
             )
             wrong = [
                 f"{port} {value!r}, checked with {other!r}"
@@ -129,6 +146,7 @@ class Transport(MotionLeaf):
                 self.problem = "not the composition of this move: " + "; ".join(wrong)
                 return
         self.move: Move = checked.move
+        self.skill = checked.skill
         self.composer = checked.fresh()
         self.started = world.time()
         self.weak_ticks = 0
@@ -155,21 +173,32 @@ class Transport(MotionLeaf):
             self.weak_ticks = 0
         elapsed = world.time() - self.started
         tau = self.composer.target.tau
-        obj = self.composer.state.object
-        near = np.linalg.norm(obj.position - self.move.goal.position) < 2e-3
-        still = np.linalg.norm(obj.velocity) < 5e-3
-        if elapsed >= tau and near and still:
-            self._set_output("to_state", self.composer.state)
+        # The composition has arrived when its commanded object is at the goal and still ...
+        commanded = self.composer.state.object
+        arrived = (
+            elapsed >= tau
+            and np.linalg.norm(commanded.position - self.move.goal.position) < 2e-3
+            and np.linalg.norm(commanded.velocity) < 5e-3
+        )
+        settled = elapsed > tau + float(self.get_input("settle_s"))
+        if arrived or settled:
+            # ... but the move is judged on the object as measured: a held object hangs below
+            # its commanded pose, and only the measured pose is where it was put.
+            twist = world.object_twist(name)
+            still = np.linalg.norm(twist[:3]) < 5e-3 and np.linalg.norm(twist[3:]) < 0.05
             err_m, err_rad = goal_error(world, name, self.move.goal)
-            return self.succeed(
-                f"placed {err_m * 1000:.1f} mm, {np.degrees(err_rad):.1f} deg from the goal"
+            tol_m, tol_deg = (
+                float(self.get_input("tolerance_m")),
+                float(self.get_input("tolerance_deg")),
             )
-        if elapsed > tau + float(self.get_input("settle_s")) and still:
-            err_m, err_rad = goal_error(world, name, self.move.goal)
-            if err_m <= 0.01:
+            within = err_m <= tol_m and np.degrees(err_rad) <= tol_deg
+            off = f"{err_m * 1000:.1f} mm, {np.degrees(err_rad):.1f} deg from the goal"
+            if still and within:
                 self._set_output("to_state", self.composer.state)
-                return self.succeed(
-                    f"settled {err_m * 1000:.1f} mm, {np.degrees(err_rad):.1f} deg from the goal"
+                return self.succeed(f"{'placed' if arrived else 'settled'} {off}")
+            if settled and still:
+                return self.fail(
+                    f"came to rest {off} (tolerance {tol_m * 1000:.0f} mm, {tol_deg:g} deg)"
                 )
         return self.running(f"move {self.get_input('move')}: {elapsed:.1f} of {tau:.1f} s")
 
@@ -196,6 +225,7 @@ class Transport(MotionLeaf):
                 status,
                 err_m,
                 err_rad,
+                self.skill,
             ),
             self.name,
         )

@@ -5,7 +5,13 @@ from __future__ import annotations
 import py_trees
 import pytest
 
-from planner.default_tree import PICK_AND_PLACE_XML, default_tree, pick_and_place_xml
+from planner.default_tree import (
+    PICK_AND_PLACE_XML,
+    TaskStep,
+    default_tree,
+    pick_and_place_xml,
+    task_xml,
+)
 from planner.loader import load_tree
 
 
@@ -48,3 +54,58 @@ def test_another_number_of_moves_repeats_the_files_move_subtree(moves: int) -> N
 def test_fewer_than_one_move_is_refused() -> None:
     with pytest.raises(ValueError, match="expected at least 1 move, got 0"):
         pick_and_place_xml(0)
+
+
+def test_the_shipped_file_runs_one_object_per_pick_and_place_subtree() -> None:
+    # The same nodes as the file, for one step of three moves of a named object.
+    named = default_tree([TaskStep("parcel", 3)])
+    assert [(k, n.replace("task.parcel.", "task.first_object.")) for k, n in outline(named)] == (
+        outline(default_tree())
+    )
+
+
+def test_each_object_of_the_task_gets_its_own_subtree_in_task_order() -> None:
+    steps = [TaskStep("left box", 2), TaskStep("right", 2), TaskStep("left box", 1, first_move=2)]
+    root = default_tree(steps)
+    names = [n.name for n in root.iterate()]
+    assert len(names) == len(set(names))  # every node's name is its path: unique
+    selects = [n.name for n in root.iterate() if type(n).__name__ == "SelectSkills"]
+    assert selects == [
+        "task.left_box.pick_and_place.select_skills",
+        "task.right.pick_and_place.select_skills",
+        "task.left_box_2.pick_and_place.select_skills",
+    ]
+    # Each instance runs its step's moves, with the object's own move indices.
+    moves = [
+        (n.name.split(".")[1], int(n.get_input("move")))
+        for n in transports(root)
+        if n.name.endswith("careful_transport")
+    ]
+    assert moves == [
+        ("left_box", 0),
+        ("left_box", 1),
+        ("right", 0),
+        ("right", 1),
+        ("left_box_2", 2),
+    ]
+    objects = {n.name.split(".")[1]: n.get_input("object") for n in transports(root)}
+    assert objects == {"left_box": "left box", "right": "right", "left_box_2": "left box"}
+
+
+def test_each_object_has_its_own_blackboard_keys() -> None:
+    root = default_tree([TaskStep("a", 1), TaskStep("b", 1)])
+    grasps = [n for n in root.iterate() if type(n).__name__ == "Grasp"]
+    keys = {
+        n.name.split(".")[1]: sorted(
+            k for k in set(n.blackboard_client.remappings.values()) if k.count("/") == 2
+        )
+        for n in grasps
+    }
+    assert keys == {"a": ["/a/plan", "/a/state"], "b": ["/b/plan", "/b/state"]}
+
+
+def test_a_task_without_steps_or_moves_is_refused() -> None:
+    with pytest.raises(ValueError, match="expected at least 1 task step, got none"):
+        task_xml([])
+    with pytest.raises(ValueError, match="TaskStep 'parcel': expected at least 1 move, got 0"):
+        TaskStep("parcel", 0)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import py_trees
 import pytest
@@ -23,6 +25,8 @@ from planner.leaves import (
 from planner.move_result import MoveResult, move_results
 from planner.port import Pose
 from planner.testing import FakeWorld, tick_until
+from planner.testing.fake_world import FakeObject
+from planner.testing.fixtures import paper_moves
 from planner.wiring import wire
 from skills import quaternion as quat
 from skills.library import SkillLibrary
@@ -163,7 +167,7 @@ def test_transport_publishes_its_moves_composition_and_placement(
     assert move_results() == {}
     leaf.tick_once()
     running = move_results()[("parcel", 1)]
-    assert running == MoveResult("parcel", 1, 0.25, 0.0, Status.RUNNING)
+    assert running == MoveResult("parcel", 1, 0.25, 0.0, Status.RUNNING, skill="pick_and_place")
     log = tick_until(leaf, fake_world, DT, max_ticks=3000)
     assert log.final == Status.SUCCESS, log.feedback
     done = move_results()[("parcel", 1)]
@@ -177,6 +181,71 @@ def test_transport_publishes_its_moves_composition_and_placement(
     assert running.status == Status.RUNNING  # a published result is never changed after
     leaf.stop(Status.INVALID)  # a parent resetting the finished leaf is not a new result
     assert move_results()[("parcel", 1)] == done
+
+
+class SaggingWorld(FakeWorld):
+    """A held object measured ``sag_m`` below where the palms carry it (as a real grip lets a
+    heavy box slide down), once ``sag_m`` is set."""
+
+    sag_m = 0.0
+
+    def object_pose(self, name: str) -> Pose:
+        pose = super().object_pose(name)
+        if min(self.contact_force(arm, name) for arm in ARMS) > 0.0:
+            return Pose(pose.position - np.array([0.0, 0.0, self.sag_m]), pose.orientation)
+        return pose
+
+
+def sagging_world() -> SaggingWorld:
+    return SaggingWorld(
+        objects=[FakeObject("parcel", np.array([0.20, 0.30, 0.15]))], moves=paper_moves()
+    )
+
+
+def carry_sagging(library: SkillLibrary, sag_m: float) -> tuple[Status, str, SaggingWorld]:
+    world = sagging_world()
+    select(world, library)
+    approach_and_grasp(world, library)
+    world.sag_m = sag_m
+    leaf = ready(
+        Transport("move0"),
+        world,
+        library,
+        object="parcel",
+        move=0,
+        plan="{plan}",
+        from_state="{state}",
+        to_state="{state}",
+    )
+    log = tick_until(leaf, world, DT, max_ticks=3000)
+    return log.final, leaf.feedback_message, world
+
+
+def test_transport_judges_the_measured_object_not_its_commanded_path(
+    library: SkillLibrary,
+) -> None:
+    # The commanded object arrives exactly, but the object hangs 45 mm below it: not placed.
+    status, feedback, _ = carry_sagging(library, 0.045)
+    assert status == Status.FAILURE
+    # (the kinematic fake carries to within a millimetre of the commanded goal)
+    assert re.fullmatch(
+        r"came to rest 4[45]\.\d mm, 0\.0 deg from the goal \(tolerance 20 mm, 10 deg\)", feedback
+    ), feedback
+    done = move_results()[("parcel", 0)]
+    assert done.status == Status.FAILURE and done.placement_error_m is None
+
+
+def test_transport_reports_the_measured_placement_within_tolerance(
+    library: SkillLibrary,
+) -> None:
+    status, feedback, world = carry_sagging(library, 0.011)
+    assert status == Status.SUCCESS, feedback
+    assert re.fullmatch(r"placed 1[01]\.\d mm, 0\.0 deg from the goal", feedback), feedback
+    done = move_results()[("parcel", 0)]
+    assert done.placement_error_m == pytest.approx(0.011, abs=1e-3)  # what it measures
+    pose = world.object_pose("parcel")
+    goal = world.task_moves("parcel")[0].goal
+    assert done.placement_error_m == pytest.approx(np.linalg.norm(pose.position - goal.position))
 
 
 def test_transport_lifts_the_parcel_on_the_way(

@@ -1,0 +1,171 @@
+"""The trajectory figure draws any task to scale: views, footprints, headings, obstacles and
+the demonstration each move actually ran."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+from py_trees.common import Status
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+from matplotlib.patches import Circle, Polygon
+
+from experiment.figures import (
+    MoveTrace,
+    demonstrated_path,
+    draw_move,
+    headings,
+    outline,
+    side_view,
+    top_view,
+    trajectory_figure,
+)
+from planner.leaves import Transport
+from planner.move_result import move_results
+from planner.testing import FakeWorld, tick_until
+from skills import quaternion as quat
+from skills.default_library import build_default_library
+from skills.demonstration import Demonstration
+from skills.library import SkillLibrary
+from skills.pose_model import fit_pose
+from skills.skill import Provenance, Skill, learnt_skill
+from skills.vocabulary import Action, Space
+from tests.planner.test_leaves_fake import DT, approach_and_grasp, ready, select
+from worlds.spec import ObstacleSpec, ShapeSpec
+
+PARCEL = ShapeSpec.box([0.20, 0.30, 0.15])
+YAW_90 = quat.from_axis_angle([0, 0, 1], np.pi / 2)
+
+
+def wave_skill() -> Skill:
+    """A taught transport that swings 8 cm sideways on the way and never lifts."""
+    t = np.linspace(0.0, 2.0, 201)
+    r = t / t[-1]
+    s = r**3 * (10.0 - 15.0 * r + 6.0 * r**2)  # minimum jerk: from rest to rest
+    positions = np.column_stack((0.3 * s, 0.08 * np.sin(np.pi * s), np.zeros_like(s)))
+    orientations = np.tile(quat.IDENTITY, (len(t), 1))
+    model = fit_pose(Demonstration.create(t, positions, orientations, name="wave"))
+    return learnt_skill(
+        "wave", Action.TRANSPORT, Space.ABSOLUTE, model, (), Provenance.now(("wave",), "test")
+    )
+
+
+def test_the_side_view_is_the_vertical_plane_of_the_moves_own_direction() -> None:
+    start, goal = np.array([0.6, 0.15, 0.675]), np.array([0.6, -0.15, 0.675])
+    view = side_view(start, goal)  # a move along -y
+    assert_allclose(view.project(goal), [[0.30, 0.675]], atol=1e-12)
+    # Orthographic: a point off the plane shows where its foot in the plane does.
+    assert_allclose(view.project([0.7, 0.0, 0.8]), view.project([0.6, 0.0, 0.8]), atol=1e-12)
+    # ... and says how far off it is: seen from -x, a point at larger x is farther.
+    assert view.depth([0.7, 0.0, 0.8]) == pytest.approx(0.1)
+    assert view.depth([0.6, -0.3, 0.9]) == pytest.approx(0.0)
+    diagonal = side_view(np.zeros(3), np.array([0.1, 0.1, 0.0]))
+    assert_allclose(diagonal.project([0.1, 0.1, 0.2]), [[np.hypot(0.1, 0.1), 0.2]], atol=1e-12)
+    assert "heading 45 deg" in diagonal.name
+    upright = side_view(np.zeros(3), np.array([0.0, 0.0, 0.2]))  # no travel across: along y
+    assert_allclose(upright.axes[0], [0.0, 1.0, 0.0])
+
+
+def test_footprints_are_to_scale_and_turned_with_the_object() -> None:
+    def span(poly: np.ndarray) -> np.ndarray:
+        return poly.max(axis=0) - poly.min(axis=0)
+
+    top = top_view()  # (y, x)
+    assert_allclose(span(outline(PARCEL, [0.5, 0.0, 0.7], quat.IDENTITY, top)), [0.30, 0.20])
+    assert_allclose(span(outline(PARCEL, [0.5, 0.0, 0.7], YAW_90, top)), [0.20, 0.30])
+    along_45 = side_view(np.zeros(3), np.array([1.0, 1.0, 0.0]))
+    assert_allclose(
+        span(outline(PARCEL, [0.5, 0.0, 0.7], quat.IDENTITY, along_45)),
+        [(0.20 + 0.30) / np.sqrt(2.0), 0.15],
+    )
+
+
+def test_the_heading_is_the_objects_x_axis() -> None:
+    arrows = headings(np.array([quat.IDENTITY, YAW_90]), top_view())
+    assert_allclose(arrows, [[0.0, 1.0], [1.0, 0.0]], atol=1e-12)  # (y, x) of its x-axis
+
+
+def test_obstacles_are_drawn_in_their_own_shapes_and_sizes() -> None:
+    trace = MoveTrace(
+        "box move 1",
+        np.array([0.5, 0.0, 0.675]),
+        np.array([0.6, 0.0, 0.675]),
+        np.zeros((0, 3)),
+        (
+            ObstacleSpec("ball", ShapeSpec.sphere(0.04), (0.55, -0.2, 0.8)),
+            ObstacleSpec("post", ShapeSpec.box([0.06, 0.10, 0.20]), (0.8, 0.1, 0.7)),
+        ),
+    )
+    fig, (top, side) = plt.subplots(1, 2)
+    draw_move(top, trace, top_view())
+    draw_move(side, trace, side_view(trace.start, trace.goal))
+    for ax, box_span in ((top, [0.10, 0.06]), (side, [0.06, 0.20])):
+        circles = [p for p in ax.patches if isinstance(p, Circle)]
+        assert [c.get_radius() for c in circles] == [0.04]
+        (box,) = [p for p in ax.patches if isinstance(p, Polygon)]
+        xy = box.get_xy()
+        assert_allclose(xy.max(axis=0) - xy.min(axis=0), box_span, atol=1e-12)
+    plt.close(fig)
+
+
+def test_the_demonstration_drawn_is_the_skill_the_move_ran() -> None:
+    library = build_default_library()
+    start, goal = np.array([0.55, 0.0, 0.675]), np.array([0.85, 0.0, 0.675])
+    lift = demonstrated_path(
+        library.get("pick_and_place"), start, quat.IDENTITY, goal, quat.IDENTITY
+    )
+    wave = demonstrated_path(wave_skill(), start, quat.IDENTITY, goal, quat.IDENTITY)
+    assert lift is not None and wave is not None
+    assert lift[:, 2].max() - start[2] == pytest.approx(0.12, abs=0.02)  # the demonstrated lift
+    assert abs(lift[:, 1]).max() < 0.005
+    assert abs(wave[:, 2] - start[2]).max() < 0.005  # the wave never lifts ...
+    assert wave[:, 1].max() == pytest.approx(0.08, abs=0.01)  # ... but swings sideways
+    assert_allclose(wave[-1], goal, atol=2e-3)
+
+
+def test_a_move_records_the_taught_skill_its_transport_ran(fake_world: FakeWorld) -> None:
+    library = SkillLibrary([wave_skill(), *build_default_library()])  # the first transport
+    select(fake_world, library)
+    approach_and_grasp(fake_world, library)
+    leaf = ready(
+        Transport("move0"),
+        fake_world,
+        library,
+        object="parcel",
+        move=0,
+        plan="{plan}",
+        from_state="{state}",
+        to_state="{state}",
+    )
+    assert tick_until(leaf, fake_world, DT, max_ticks=3000).final == Status.SUCCESS
+    assert move_results()[("parcel", 0)].skill == "wave"
+
+
+def test_the_figure_is_written_for_moves_of_several_objects(tmp_path: Path) -> None:
+    library = build_default_library()
+    skill = library.get("pick_and_place")
+    traces = []
+    for k, (name, y) in enumerate((("left", 0.2), ("left", 0.25), ("right", -0.2))):
+        start, goal = np.array([0.5, y, 0.675]), np.array([0.6, y + 0.02, 0.675])
+        path = np.linspace(start, goal, 50)
+        traces.append(
+            MoveTrace(
+                f"{name} move {k + 1}",
+                start,
+                goal,
+                path,
+                (),
+                orientations=np.tile(YAW_90, (50, 1)),
+                goal_orientation=YAW_90,
+                shape=PARCEL,
+                skill="pick_and_place",
+                demonstrated=demonstrated_path(skill, start, YAW_90, goal, YAW_90),
+            )
+        )
+    out = trajectory_figure(traces, tmp_path / "trajectories.png", "two objects")
+    assert out.stat().st_size > 10_000

@@ -1,0 +1,83 @@
+"""Every object's task runs and is judged: two parcels, each moved twice, in physics."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from types import SimpleNamespace
+from typing import Any
+
+import pytest
+from py_trees.common import Status
+
+from experiment.episode import judge, move_labels, run_episode, task_moves, task_steps
+from planner.default_tree import TaskStep, pick_and_place_xml
+from planner.runner import RunResult
+from worlds.sim_world import SafetyRecord
+from worlds.world_file import load_world
+
+TWO_PARCELS = Path(__file__).resolve().parents[1] / "data" / "worlds" / "two_parcels.yaml"
+PLACED = ["parcel_left", "parcel_left", "parcel_right", "parcel_right"]
+
+
+def test_the_task_is_read_step_by_step_with_each_objects_move_indices() -> None:
+    world = load_world(TWO_PARCELS)
+    assert task_steps(world) == [TaskStep("parcel_left", 2, 0), TaskStep("parcel_right", 2, 0)]
+    assert task_moves(world) == [
+        ("parcel_left", 0),
+        ("parcel_left", 1),
+        ("parcel_right", 0),
+        ("parcel_right", 1),
+    ]
+    assert move_labels(PLACED) == [
+        "parcel_left move 1",
+        "parcel_left move 2",
+        "parcel_right move 1",
+        "parcel_right move 2",
+    ]
+
+
+def test_a_move_without_a_placement_fails_the_run_whatever_the_tree_said() -> None:
+    tree_ok = RunResult(Status.SUCCESS, 10.0, 1.0, 600, "")
+    sim: Any = SimpleNamespace(safety=SafetyRecord())  # what judge reads of a SimWorld
+    ok, failure = judge(tree_ok, sim, PLACED, [0.001, 0.002, None, None], [0.1, 0.1, None, None])
+    assert (ok, failure) == (False, "not placed: parcel_right move 1, parcel_right move 2")
+    ok, failure = judge(tree_ok, sim, PLACED, [0.001, 0.002, 0.03, 0.001], [0.1] * 4)
+    assert (ok, failure) == (False, "parcel_right move 1 placed 3.0 cm, 0.1 deg from its goal")
+    ok, failure = judge(tree_ok, sim, PLACED, [0.001] * 4, [0.1] * 4)
+    assert (ok, failure) == (True, "")
+
+
+@pytest.mark.sim
+def test_two_parcels_are_each_placed_twice_and_every_placement_is_judged(tmp_path: Path) -> None:
+    report = run_episode(load_world(TWO_PARCELS), out=tmp_path, animation=False)
+    assert report.success, report.failure
+    assert report.placement_objects == PLACED
+    assert len(report.placement_error_m) == len(report.placement_error_deg) == 4
+    assert all(e is not None and e < 0.02 for e in report.placement_error_m)
+    assert all(d is not None and d < 10.0 for d in report.placement_error_deg)
+    assert report.skills == ["pick_and_place"] * 4  # the skill each move's Transport ran
+    assert not report.obstacle_contacts and report.arm_contacts == 0 and not report.dropped
+    summary = json.loads(json.dumps(report.summary()))
+    assert summary["placement_objects"] == PLACED
+    assert summary["placement_error_m"] == report.placement_error_m
+    # Every node of the two instances is told apart in the run log.
+    nodes = {json.loads(line).get("node") for line in (tmp_path / "run.jsonl").open()}
+    assert any(str(n).startswith("task.parcel_right.pick_and_place.") for n in nodes)
+    assert (tmp_path / "trajectories.png").stat().st_size > 0
+
+
+@pytest.mark.sim
+def test_a_tree_that_leaves_the_second_parcel_untouched_fails_naming_its_moves(
+    tmp_path: Path,
+) -> None:
+    # The shipped tree for one object (the blackboard's /object, the task's first) and two
+    # moves: it succeeds, but the second parcel's task is undone.
+    tree = tmp_path / "first_only.xml"
+    tree.write_text(pick_and_place_xml(2), encoding="utf-8")
+    report = run_episode(load_world(TWO_PARCELS), tree, out=None, animation=False)
+    assert report.tree_status == "SUCCESS"
+    assert not report.success
+    assert report.failure == "not placed: parcel_right move 1, parcel_right move 2"
+    assert all(e is not None and e < 0.02 for e in report.placement_error_m[:2])
+    assert report.placement_error_m[2:] == [None, None]

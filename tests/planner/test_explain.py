@@ -1,0 +1,91 @@
+"""A failed run always says where and why: the node that started the failure, named."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+
+import py_trees
+import pytest
+from py_trees.common import Status
+
+from planner.loader import load_tree_string
+from planner.runner import explain, status_chain
+from tests.planner.stub_leaves import FakeClock, StubCheck, StubCounter  # noqa: F401 (registers)
+
+
+@pytest.fixture(autouse=True)
+def _clean_blackboard() -> Iterator[None]:
+    py_trees.blackboard.Blackboard.clear()
+    yield
+    py_trees.blackboard.Blackboard.clear()
+
+
+def run(body: str, dt: float = 0.1, ticks: int = 100) -> py_trees.behaviour.Behaviour:
+    """Tick the tree ``body`` (a main tree's content) on a simulated clock until it ends."""
+    root = load_tree_string(
+        f'<root BTCPP_format="4" main_tree_to_execute="T"><BehaviorTree ID="T">{body}'
+        "</BehaviorTree></root>"
+    )
+    clock = FakeClock(dt=dt)
+    tree = py_trees.trees.BehaviourTree(root)
+    tree.setup(clock=clock)
+    for _ in range(ticks):
+        tree.tick()
+        if root.status in (Status.SUCCESS, Status.FAILURE):
+            break
+        clock.advance()
+    return root
+
+
+def test_a_timeout_that_halts_its_child_is_the_reason_with_what_the_child_said() -> None:
+    root = run(
+        '<Sequence name="s"><Timeout name="guard" msec="500">'
+        '<StubCounter name="count" ticks="1000"/></Timeout></Sequence>'
+    )
+    assert root.status == Status.FAILURE
+    assert [n.name for n in status_chain(root)] == ["s", "s.guard"]
+    assert explain(root) == (
+        "s.guard: timed out after 0.500 s (allowed 0.500 s); halted 's.guard.count' "
+        "while count said: tick 6"  # ticks at t = 0, 0.1 ... 0.5
+    )
+
+
+def test_a_leaf_that_fails_silently_is_still_named() -> None:
+    root = run(
+        '<Sequence name="s"><StubCounter name="first" ticks="1"/>'
+        '<StubCheck name="check" value="false"/></Sequence>'
+    )
+    assert root.status == Status.FAILURE
+    assert explain(root) == "s.check: failure without a feedback message"
+
+
+def test_a_silent_leaf_under_a_retry_gives_the_retrys_count() -> None:
+    root = run(
+        '<RetryUntilSuccessful name="again" num_attempts="2">'
+        '<StubCheck name="check" value="false"/></RetryUntilSuccessful>'
+    )
+    assert root.status == Status.FAILURE
+    assert explain(root) == (
+        "again.check: failure without a feedback message "
+        "(under again: final failure [status: 2 failure from 2])"
+    )
+
+
+def test_an_earlier_failure_that_was_recovered_is_not_blamed() -> None:
+    # The fallback's first branch fails with a message and its second succeeds; the sequence
+    # then fails later, at the timeout: that is the reason, not the recovered branch.
+    root = run(
+        '<Sequence name="s"><Fallback name="choose">'
+        '<Timeout name="quick" msec="200"><StubCounter name="slow" ticks="50"/></Timeout>'
+        '<StubCounter name="fine" ticks="1"/></Fallback>'
+        '<Timeout name="late" msec="300"><StubCounter name="stuck" ticks="50"/></Timeout>'
+        "</Sequence>"
+    )
+    assert root.status == Status.FAILURE
+    assert explain(root).startswith("s.late: timed out after 0.300 s")
+
+
+def test_a_running_tree_is_explained_by_its_tip() -> None:
+    root = run('<Sequence name="s"><StubCounter name="count" ticks="1000"/></Sequence>', ticks=3)
+    assert root.status == Status.RUNNING
+    assert explain(root) == "s.count: tick 3"
