@@ -122,6 +122,11 @@ def judge(
         return False, f"dropped {s.dropped_object}" if s.dropped_object else "dropped"
     if s.obstacle_contacts:
         return False, "obstacle contact: " + ", ".join(sorted(s.obstacle_contacts))
+    if s.min_obstacle_distance_m < 0.0:
+        # PyBullet makes no contact between a fixed base and a static body; FCL still sees
+        # them overlap (a negative clearance, measured every control step).
+        depth = -s.min_obstacle_distance_m * 1000.0
+        return False, f"obstacle penetration: {s.closest} overlap by {depth:.1f} mm (FCL)"
     if s.arm_contacts:
         return False, "arms touched"
     if not result.success:

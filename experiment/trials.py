@@ -471,7 +471,12 @@ def summarise(records: Iterable[dict[str, Any]]) -> dict[str, Any]:
         "successes": successes,
         "failure_reasons": dict(sorted(reasons.items(), key=lambda kv: (-kv[1], kv[0]))),
         "compositions": dict(sorted(carried.items(), key=lambda kv: (-kv[1], kv[0]))),
-        "obstacle_contacts": sum(1 for r in recs if r.get("obstacle_contacts")),
+        # A negative clearance is a contact PyBullet may not report (a fixed base in a sphere).
+        "obstacle_contacts": sum(
+            1
+            for r in recs
+            if r.get("obstacle_contacts") or (r.get("min_obstacle_distance_m") or 0.0) < 0.0
+        ),
         "min_obstacle_distance_m": min(dists) if dists else None,
         "sim_time_s": round(sim, 2),
         "wall_time_s": round(wall, 2),

@@ -141,3 +141,27 @@ def test_a_campaign_owns_the_records_of_its_seed_and_tree(tmp_path: Path) -> Non
     assert sorted(campaign_results(results, 0, None)) == [0]
     assert campaign_results(results, 0, None)[0]["success"] is False
     assert list(campaign_results(results, 1, None)) == [2]
+
+
+def test_a_negative_clearance_counts_as_an_obstacle_contact() -> None:
+    records = [
+        {
+            "trial": 0,
+            "seed": 0,
+            "success": False,
+            "obstacle_contacts": {},
+            "min_obstacle_distance_m": -0.04,
+            "failure": "obstacle penetration: a ~ b overlap",
+        },
+        {
+            "trial": 1,
+            "seed": 0,
+            "success": True,
+            "obstacle_contacts": {},
+            "min_obstacle_distance_m": 0.02,
+            "failure": "",
+        },
+    ]
+    s = summarise(records)
+    assert s["obstacle_contacts"] == 1
+    assert s["failure_reasons"] == {"obstacle penetration": 1}
