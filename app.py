@@ -84,6 +84,14 @@ def _demo_command(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def printable(text: object) -> str:
+    """``text`` safe to print on a terminal: control characters (newlines, ANSI escapes) are
+    written as escapes, so a name from a file cannot print a line of its own."""
+    import unicodedata
+
+    return "".join(repr(ch)[1:-1] if unicodedata.category(ch)[0] == "C" else ch for ch in str(text))
+
+
 def _register_leaves(args: argparse.Namespace) -> list[type] | None:
     """Register the shipped leaves, ``--leaves`` and the installed ``duet.leaves`` entry points;
     the user's leaf classes, or None (the problem on stderr) if one cannot be registered."""
@@ -353,7 +361,8 @@ def _run_command(args: argparse.Namespace) -> int:
     out = Path(args.out)
 
     def progress(t: float, leaf: str, feedback: str) -> None:
-        print(f"[{t:7.2f} s] {leaf.split('.')[-1]:<18} {feedback}", file=sys.stderr, flush=True)
+        name = printable(leaf.split(".")[-1])
+        print(f"[{t:7.2f} s] {name:<18} {printable(feedback)}", file=sys.stderr, flush=True)
 
     try:
         report = run_episode(
@@ -368,8 +377,8 @@ def _run_command(args: argparse.Namespace) -> int:
         print(err, file=sys.stderr)
         return EXIT_BAD_INPUT
     s = report.summary()
-    verdict = "SUCCESS" if report.success else f"FAILURE ({report.failure})"
-    print(f"{world.name}: {verdict}")
+    verdict = "SUCCESS" if report.success else f"FAILURE ({printable(report.failure)})"
+    print(f"{printable(world.name)}: {verdict}")
     for label, e, d in zip(
         move_labels(report.placement_objects),
         report.placement_error_m,
@@ -377,7 +386,7 @@ def _run_command(args: argparse.Namespace) -> int:
         strict=True,
     ):
         placed = "not placed" if e is None or d is None else f"{e * 1000:.1f} mm, {d:.1f} deg"
-        print(f"  {label}: {placed}")
+        print(f"  {printable(label)}: {placed}")
     dist = s["min_obstacle_distance_m"]
     print(
         f"  closest approach to an obstacle: "
@@ -431,7 +440,7 @@ def _trials_command(args: argparse.Namespace) -> int:
         what = "ok" if rec.get("success") else reason_of(rec.get("failure", ""))
         print(
             f"\r[{bar}] {finished}/{total}  successes {tally['ok']}  "
-            f"(trial {rec['trial']}: {what})".ljust(100),
+            f"(trial {rec['trial']}: {printable(what)})".ljust(100),
             end="",
             file=sys.stderr,
             flush=True,
@@ -471,7 +480,7 @@ def _trials_command(args: argparse.Namespace) -> int:
     print(f"  {'outcome':<44} trials")
     print(f"  {'success':<44} {summary['successes']}")
     for reason, count in summary["failure_reasons"].items():
-        print(f"  {reason[:44]:<44} {count}")
+        print(f"  {printable(reason)[:44]:<44} {count}")
     print(f"  {'moves placed with':<44} moves")
     for label, count in summary["compositions"].items():
         print(f"  {label[:44]:<44} {count}")

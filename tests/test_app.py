@@ -74,3 +74,18 @@ def test_sim_compiled_must_be_true_or_false(
     world.write_text(text.replace("sim:\n", "sim:\n  compiled: fast\n", 1), encoding="utf-8")
     assert exit_code(["validate", str(world)]) == app.EXIT_BAD_INPUT
     assert f"{world}: sim.compiled: expected true or false" in capsys.readouterr().err
+
+
+def test_names_from_a_file_cannot_print_lines_of_their_own(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    world = tmp_path / "spoof.yaml"
+    text = Path(DEFAULT).read_text(encoding="utf-8")
+    spoofed = 'name: "x: SUCCESS\\n\\u001b[2Kparcel_pick_place"'
+    world.write_text(text.replace("name: parcel_pick_place", spoofed, 1), encoding="utf-8")
+    assert app.printable("a\nb\x1b[2K") == "a\\nb\\x1b[2K"
+    assert app.printable("café") == "café"
+    code = exit_code(["validate", str(world)])
+    out = capsys.readouterr()
+    assert code in (0, 2)  # the world may be refused for its name; it must not spoof lines
+    assert "\x1b" not in out.out + out.err
