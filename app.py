@@ -562,7 +562,13 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument(
         "--tree", help="behaviour tree XML (default: planner/trees/pick_and_place.xml)"
     )
-    run.add_argument("--seed", type=int, help="override the world's seed")
+    run.add_argument(
+        "--seed",
+        type=int,
+        help="override the world's sim.seed; a run makes no random choice today (physics, "
+        "skills and tree are deterministic), so the same world gives the same run whatever "
+        "the seed; trials draw their worlds from trials --seed",
+    )
     run.add_argument("--out", default="out", help="output folder (default: out)")
     run.add_argument("--gui", action="store_true", help="show PyBullet's window (needs a display)")
     run.add_argument("--no-animation", action="store_true", help="skip the GIF (faster)")

@@ -124,7 +124,6 @@ class Scene:
         self.spec = spec if spec is not None else SceneSpec()
         if refresh_every is None:
             refresh_every = max(1, round(self.spec.physics_hz / RELINEARISE_HZ))
-        self.rng = np.random.default_rng(self.spec.seed)
         self.physics_dt = 1.0 / self.spec.physics_hz
         self.client = connect(gui)
         try:

@@ -340,7 +340,11 @@ class SimSettings(_FileModel):
     control_hz: _PositiveInt = Field(
         default=60, description="control rate, Hz, > 0, divides physics_hz"
     )
-    seed: _NonNegativeInt = Field(default=0, description="seed of every random choice, >= 0")
+    seed: _NonNegativeInt = Field(
+        default=0,
+        description="seed of a run's random choices, >= 0; a run of the shipped leaves makes "
+        "none (physics, skills and tree are deterministic); trials draw from their own seed",
+    )
     gravity: _Finite = Field(default=-9.81, description="gravity along world z, m/s^2")
     max_sim_time_s: _Positive = Field(default=120.0, description="simulated time limit, s, > 0")
     compiled: StrictBool = Field(
