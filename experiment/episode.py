@@ -342,6 +342,7 @@ def run_episode(
                 {"/object": world.task[0].object},
                 on_tick=on_tick,
                 attach=tuple(hooks),
+                max_wall_time=world.sim.max_wall_time_s,
             )
         finally:
             if log is not None:

@@ -6,6 +6,7 @@ against the PyBullet world and the in-memory fake.
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
@@ -106,6 +107,7 @@ def run_tree(
     blackboard: Mapping[str, Any] | None = None,
     on_tick: Callable[[py_trees.trees.BehaviourTree], None] | None = None,
     attach: tuple[Callable[[py_trees.trees.BehaviourTree], Any], ...] = (),
+    max_wall_time: float = math.inf,
 ) -> RunResult:
     """Set up ``root`` with the world and tick it until it finishes or time runs out.
 
@@ -125,6 +127,9 @@ def run_tree(
     attach : tuple of callables
         Each is given the tree before setup (e.g. ``RunLog.attach``, or a function adding a
         post-tick handler).
+    max_wall_time : float
+        Stop the same way after this much wall-clock time, s: a guard against a run that
+        cannot end in any sensible time (the only place wall time changes an outcome).
     """
     seed_blackboard(blackboard or {})
     tree = py_trees.trees.BehaviourTree(root)
@@ -140,15 +145,22 @@ def run_tree(
             on_tick(tree)
         if root.status in (Status.SUCCESS, Status.FAILURE):
             break
-        if world.time() - start_sim >= max_sim_time:
+        over_sim = world.time() - start_sim >= max_sim_time
+        over_wall = time.perf_counter() - start_wall >= max_wall_time
+        if over_sim or over_wall:
             reason = explain(root)
             root.stop(Status.INVALID)
+            limit = (
+                f"time limit {max_sim_time:g} s reached"
+                if over_sim
+                else f"wall-clock limit {max_wall_time:g} s reached"
+            )
             return RunResult(
                 Status.INVALID,
                 world.time() - start_sim,
                 time.perf_counter() - start_wall,
                 ticks,
-                f"time limit {max_sim_time:g} s reached; {reason}",
+                f"{limit}; {reason}",
             )
         world.advance(control_dt)
     return RunResult(

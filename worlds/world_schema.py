@@ -74,21 +74,30 @@ def _check_finite(item: Any, index: int) -> None:
         raise field_problem("a finite number", item, index)
 
 
-_Finite = Annotated[float, Field(strict=True, allow_inf_nan=False)]
-_Positive = Annotated[float, Field(strict=True, allow_inf_nan=False, gt=0)]
-_NonNegative = Annotated[float, Field(strict=True, allow_inf_nan=False, ge=0)]
-_PositiveInt = Annotated[int, Field(strict=True, gt=0)]
-_NonNegativeInt = Annotated[int, Field(strict=True, ge=0)]
+#: Largest magnitude of any number in a world file: far beyond anything the physics can mean
+#: (a 1e308 m position validated, then turned into NaN in the first physics step).
+LIMIT = 1e6
+#: Largest magnitude of a position or an extent, m: a tabletop world is metres across.
+LIMIT_M = 100.0
+_Finite = Annotated[float, Field(strict=True, allow_inf_nan=False, ge=-LIMIT, le=LIMIT)]
+_Positive = Annotated[float, Field(strict=True, allow_inf_nan=False, gt=0, le=LIMIT)]
+_NonNegative = Annotated[float, Field(strict=True, allow_inf_nan=False, ge=0, le=LIMIT)]
+_PositiveInt = Annotated[int, Field(strict=True, gt=0, le=10**9)]
+_NonNegativeInt = Annotated[int, Field(strict=True, ge=0, le=2**63 - 1)]
+_Metres = Annotated[float, Field(strict=True, allow_inf_nan=False, ge=-LIMIT_M, le=LIMIT_M)]
+_PositiveMetres = Annotated[float, Field(strict=True, allow_inf_nan=False, gt=0, le=LIMIT_M)]
 _Name = Annotated[str, Field(strict=True, min_length=1)]
 _Text = Annotated[str, Field(strict=True)]
 #: A skill's name or label in a library: letters, digits, '_' or '-', not starting with a digit.
 _SKILL_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_-]*")
 
-Vector3 = Annotated[tuple[_Finite, _Finite, _Finite], BeforeValidator(_vector3)]
-"""Three finite numbers ``[x, y, z]``."""
+Vector3 = Annotated[tuple[_Metres, _Metres, _Metres], BeforeValidator(_vector3)]
+"""Three finite numbers ``[x, y, z]``, within 100 (a position, m)."""
 
-PositiveVector3 = Annotated[tuple[_Positive, _Positive, _Positive], BeforeValidator(_vector3)]
-"""Three finite numbers ``[x, y, z]``, each greater than 0."""
+PositiveVector3 = Annotated[
+    tuple[_PositiveMetres, _PositiveMetres, _PositiveMetres], BeforeValidator(_vector3)
+]
+"""Three finite numbers ``[x, y, z]``, each greater than 0 and at most 100 (extents, m)."""
 
 
 def _range(value: Any) -> Any:
@@ -336,9 +345,11 @@ class TaskStep(_FileModel):
 class SimSettings(_FileModel):
     """Simulation rates, seed and limits."""
 
-    physics_hz: _PositiveInt = Field(default=240, description="physics rate, Hz, > 0")
-    control_hz: _PositiveInt = Field(
-        default=60, description="control rate, Hz, > 0, divides physics_hz"
+    physics_hz: Annotated[int, Field(strict=True, ge=60, le=10_000)] = Field(
+        default=240, description="physics rate, Hz, 60 to 10000"
+    )
+    control_hz: Annotated[int, Field(strict=True, ge=10, le=1000)] = Field(
+        default=60, description="control rate, Hz, 10 to 1000, divides physics_hz"
     )
     seed: _NonNegativeInt = Field(
         default=0,
@@ -346,7 +357,15 @@ class SimSettings(_FileModel):
         "none (physics, skills and tree are deterministic); trials draw from their own seed",
     )
     gravity: _Finite = Field(default=-9.81, description="gravity along world z, m/s^2")
-    max_sim_time_s: _Positive = Field(default=120.0, description="simulated time limit, s, > 0")
+    max_sim_time_s: Annotated[float, Field(strict=True, allow_inf_nan=False, gt=0, le=86_400)] = (
+        Field(default=120.0, description="simulated time limit, s, > 0, at most a day")
+    )
+    max_wall_time_s: Annotated[float, Field(strict=True, allow_inf_nan=False, gt=0, le=86_400)] = (
+        Field(
+            default=3600.0,
+            description="wall-clock limit of a run, s: a run still going then ends as a failure",
+        )
+    )
     compiled: StrictBool = Field(
         default=True,
         description="ignored, kept so that older files load: every composition runs compiled",

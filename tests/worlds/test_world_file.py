@@ -538,3 +538,22 @@ def test_schema_field_names_match_the_brief(default_data: dict[str, Any]) -> Non
         "palm_size",
     ]
     assert isinstance(World.model_validate(default_data).obstacles[0].shape, SphereShape)
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "message"),
+    [
+        ("physics_hz: 240", "physics_hz: 6000000", "sim.physics_hz: expected"),
+        ("max_sim_time_s: 120.0", "max_sim_time_s: 1.0e+12", "sim.max_sim_time_s: expected"),
+        ("position: [0.55, 0.0, 0.675]", "position: [1.0e+308, 0.0, 0.675]", "position[0]: expected"),
+    ],
+)
+def test_numbers_are_bounded_to_what_the_physics_can_mean(
+    old: str, new: str, message: str, tmp_path: Path
+) -> None:
+    text = DEFAULT_WORLD.read_text(encoding="utf-8")
+    assert old in text, old
+    path = tmp_path / "w.yaml"
+    path.write_text(text.replace(old, new, 1), encoding="utf-8")
+    with pytest.raises(WorldFileError, match=re.escape(message)):
+        load_world(path)
