@@ -30,8 +30,8 @@ from planner.runner import RunResult, run_tree
 from skills.default_library import DEMOS_DIR, build_default_library
 from skills.demos.io import read_demo_csv
 from skills.library import SkillLibrary
-from worlds.sim_world import SimWorld
-from worlds.world_file import World
+from worlds.sim_world import SimWorld, task_moves
+from worlds.world_file import World, as_world_spec
 
 PLACE_TOLERANCE_M = 0.02
 PLACE_TOLERANCE_DEG = 10.0
@@ -156,19 +156,25 @@ class _Recorder:
         self.tip_name = tip.name if tip is not None else ""
 
     def traces(self) -> list[MoveTrace]:
+        """One trace per move of the world file, its steps' paths joined."""
         out = []
+        first = 0
         for i, move in enumerate(self.moves):
-            start = self.starts[i]
-            path = np.array(self.paths[i]) if self.paths[i] else np.zeros((0, 3))
+            if not move.final:
+                continue
+            start = next((s for s in self.starts[first : i + 1] if s is not None), None)
+            points = [p for k in range(first, i + 1) for p in self.paths[k]]
+            path = np.array(points) if points else np.zeros((0, 3))
             out.append(
                 MoveTrace(
-                    i,
+                    len(out),
                     start if start is not None else move.goal.position,
                     move.goal.position,
                     path,
-                    self.obstacles[i],
+                    self.obstacles[first],
                 )
             )
+            first = i + 1
         return out
 
 
@@ -207,7 +213,9 @@ def run_episode(
         On bad input files (the caller turns them into exit code 2).
     """
     name = world.task[0].object
-    n_moves = sum(len(s.moves) for s in world.task if s.object == name)
+    # The moves as the robot makes them: a turn its grip cannot make is several moves.
+    steps = task_moves(as_world_spec(world), name)
+    n_moves = len(steps)
     # The loader writes constant port values to the blackboard: clear it first, not after.
     py_trees.blackboard.Blackboard.clear()
     # Without a tree file, the shipped tree (its Move subtree once per move of the task).
@@ -255,13 +263,17 @@ def run_episode(
         finally:
             if log is not None:
                 log.close()
-        ok, failure = judge(result, sim, recorder.errors_m, recorder.errors_deg)
+        # Judged per move of the world file: on the last step of each.
+        finals = [i for i, m in enumerate(steps) if m.final]
+        errors_m = [recorder.errors_m[i] for i in finals]
+        errors_deg = [recorder.errors_deg[i] for i in finals]
+        ok, failure = judge(result, sim, errors_m, errors_deg)
         report = EpisodeReport(
             ok,
             result.status.value,
             result.reason,
-            recorder.errors_m,
-            recorder.errors_deg,
+            errors_m,
+            errors_deg,
             sim.safety.min_obstacle_distance_m,
             dict(sim.safety.obstacle_contacts),
             sim.safety.arm_contacts,
@@ -269,7 +281,7 @@ def run_episode(
             result.sim_time,
             result.wall_time,
             failure,
-            compositions=recorder.compositions,
+            compositions=[recorder.compositions[i] for i in finals],
         )
         if out is not None:
             report.outputs["run_log"] = str(out / "run.jsonl")

@@ -9,9 +9,11 @@ from py_trees.ports import PortInformation
 
 from affordances import SemanticAction
 from planner.composition import (
+    grasp_quarter_turns,
     hold_terms,
     lateral_geometry,
     measured_dual_state,
+    move_turn,
     static_composition,
 )
 from planner.leaves.base import SQUEEZE_FORCE_N, MotionLeaf
@@ -54,12 +56,20 @@ def squeeze_force(plan: SemanticAction | None, default: float) -> float:
 
 
 class Grasp(MotionLeaf):
-    """Lateral contact, then squeeze: grasp maintenance pulls the palms onto the faces."""
+    """Lateral contact, then squeeze: grasp maintenance pulls the palms onto the faces (the
+    pair that suits move ``move``'s turn, as :class:`~planner.leaves.Approach` chose it)."""
 
     WORLD_ROLES: ClassVar[tuple[type, ...]] = (Clock, ObjectSensing, PalmControl)
 
     INPUT_PORTS = {
         "object": PortInformation(str, description="object to grasp"),
+        "move": PortInformation(
+            int,
+            required=False,
+            default_value=-1,
+            description="the task's move the grasp is for (its turn chooses the faces); "
+            "-1: the faces nearest the robot's y axis",
+        ),
         "force_n": PortInformation(
             float,
             required=False,
@@ -88,9 +98,9 @@ class Grasp(MotionLeaf):
         name = self.get_input("object")
         self.force = squeeze_force(self.optional_input("plan"), float(self.get_input("force_n")))
         depth = world.squeeze_depth(self.force)
-        relative = hold_terms(
-            self.optional_input("plan"), self.library, lateral_geometry(world, name), depth
-        )
+        turn = move_turn(world, name, int(self.get_input("move")))
+        geometry = lateral_geometry(world, name, grasp_quarter_turns(world, name, turn))
+        relative = hold_terms(self.optional_input("plan"), self.library, geometry, depth)
         self.composer = static_composition(
             measured_dual_state(world, name),
             relative,
