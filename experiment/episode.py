@@ -157,7 +157,7 @@ class _Recorder:
 
     def traces(self) -> list[MoveTrace]:
         """One trace per move of the world file, its steps' paths joined."""
-        out = []
+        out: list[MoveTrace] = []
         first = 0
         for i, move in enumerate(self.moves):
             if not move.final:

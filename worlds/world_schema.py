@@ -419,6 +419,10 @@ class TrialSettings(_FileModel):
         description="the robot_clearance holds also with the object lifted this much at the "
         "start and the goal (a carry begins with a lift and ends with a lowering), m",
     )
+    goal_yaw_deg: Range = Field(
+        default=(0.0, 0.0),
+        description="[low, high] of each goal's yaw about z, degrees, within [-180, 180]",
+    )
 
     @field_validator("sphere_radius")
     @classmethod
@@ -426,6 +430,13 @@ class TrialSettings(_FileModel):
         if radius[0] <= 0.0:
             raise field_problem("radii > 0", radius)
         return radius
+
+    @field_validator("goal_yaw_deg")
+    @classmethod
+    def _yaw_in_a_turn(cls, yaw: tuple[float, float]) -> tuple[float, float]:
+        if yaw[0] < -180.0 or yaw[1] > 180.0:
+            raise field_problem("angles within [-180, 180] degrees", yaw)
+        return yaw
 
 
 class World(_FileModel):

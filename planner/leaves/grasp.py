@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from typing import ClassVar
 
+import numpy as np
 from py_trees.common import Status
 from py_trees.ports import PortInformation
 
@@ -29,8 +30,16 @@ def anchored(composer: DualArmComposer, measured: Pose) -> DualArmState:
     Closing can nudge the object; from here on the object's frame must be where it really
     is, so that transports put the object (not an idealised grip) on the goal. The palms'
     world references stay as they are, so the commands do not jump.
+
+    Horizontally {O} is put midway between the palms' references: a box closed on off
+    centre (a palm that met its face first pushed it, and the table's friction holds it there)
+    slides to where the two squeezes balance as soon as it is lifted, and that is where the
+    transports must carry it from. Its height and orientation are the measured ones.
     """
     cmd = composer.commands()
+    centre = np.asarray(measured.position, dtype=float).copy()
+    centre[:2] = 0.5 * (cmd.positions[0][:2] + cmd.positions[1][:2])
+    measured = Pose(centre, measured.orientation)
     rel = [
         relative_from_world(
             measured.position, measured.orientation, cmd.positions[i], cmd.orientations[i]
