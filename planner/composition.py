@@ -17,7 +17,7 @@ import numpy as np
 from affordances import SemanticAction, SkillSelection, spare_grip_acceleration
 from planner.port import Move, ObjectSensing, PalmControl, Pose, WorldPort
 from skills import quaternion as quat
-from skills.composer import DualArmComposer, DualArmState, relative_from_world
+from skills.composer import DualArmComposer, DualArmState, commands_for, relative_from_world
 from skills.couplings import LearntForcing, Saturated
 from skills.couplings.grasp import GraspMaintenance
 from skills.couplings.limits import WorkspaceRepulsion
@@ -287,6 +287,29 @@ def hold_terms(
     }
 
 
+def on_measured_object(world: ObjectSensing, name: str, state: DualArmState) -> DualArmState:
+    """The handed-over state with {O} moved onto the object as measured, the palms' world
+    references (and every velocity) unchanged.
+
+    A held box slips a little in two palms, most when it turns; the next move must carry it
+    from where it is, not from where the last one commanded it, or the slips of a sequence
+    of moves (and of a turn made in steps) add up.
+    """
+    measured = world.object_pose(name)
+    cmd = commands_for(state)
+    rel = [
+        relative_from_world(
+            measured.position, measured.orientation, cmd.positions[i], cmd.orientations[i]
+        )
+        for i in range(2)
+    ]
+    return DualArmState(
+        state.object._replace(position=measured.position, orientation=measured.orientation),
+        state.left._replace(position=rel[0][0], orientation=rel[0][1]),
+        state.right._replace(position=rel[1][0], orientation=rel[1][1]),
+    )
+
+
 def held_geometry(state: DualArmState, nominal: GraspGeometry) -> GraspGeometry:
     """The grip as it is: the palms' poses in {O} from a handed-over state, nominal normals."""
     return GraspGeometry(
@@ -365,6 +388,7 @@ def transport_composition(
     ``transport_weight`` multiplies the learnt pick-and-place's (a lower carry). A tree tries
     such variants when a predicted path is not clear.
     """
+    state = on_measured_object(world, name, state)
     s = settings or TransportSettings()
     sel = plan.skill(Action.TRANSPORT)
     if sel is not None:
