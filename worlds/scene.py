@@ -97,7 +97,7 @@ def lateral_grasp_palm_poses(
     return {
         arm: (
             centre + quat.rotate(turn, np.array([0.0, side * offset, 0.0])),
-            quat.multiply(turn, np.array(LATERAL_PALM_QUATERNIONS[arm])),
+            np.asarray(quat.multiply(turn, np.array(LATERAL_PALM_QUATERNIONS[arm])), dtype=float),
         )
         for arm, side in ((Arm.LEFT, 1.0), (Arm.RIGHT, -1.0))
     }
