@@ -226,6 +226,9 @@ class ObjectContext:
         Goal positions of the object centre in {W}, metres, in visiting order; may be empty.
     goal_yaw : float or None
         Yaw the object must have at the last goal, radians; ``None`` if free.
+    goal_yaws : tuple of float
+        Yaw at each goal of ``goals``, radians, in visiting order; may be empty (then only
+        ``goal_yaw`` is known). Each move is planned with its own turn.
     """
 
     name: str
@@ -242,6 +245,7 @@ class ObjectContext:
     obstacles: tuple[Obstacle, ...] = ()
     goals: tuple[Vector3, ...] = ()
     goal_yaw: float | None = None
+    goal_yaws: tuple[float, ...] = ()
 
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name:
@@ -266,6 +270,15 @@ class ObjectContext:
         put(self, "goals", goals)
         if self.goal_yaw is not None:
             put(self, "goal_yaw", check_finite(self.goal_yaw, owner, "goal_yaw"))
+        if isinstance(self.goal_yaws, str | bytes) or not isinstance(self.goal_yaws, Iterable):
+            raise ValueError(
+                f"{owner}.goal_yaws: expected a list of angles in rad, got {self.goal_yaws!r}"
+            )
+        put(
+            self,
+            "goal_yaws",
+            tuple(check_finite(y, owner, f"goal_yaws[{i}]") for i, y in enumerate(self.goal_yaws)),
+        )
 
 
 def _check_dimensions(value: Any, shape: Shape, owner: str) -> tuple[float, ...]:
@@ -331,6 +344,10 @@ class RobotCapabilities:
     end_effectors : frozenset of EndEffector
         What the arms end in (at least one kind); it fixes which grasps the robot can make
         (:data:`affordances.physics.GRASP_END_EFFECTOR`).
+    max_turn_rad : float
+        Largest turn of the palms about the vertical from their natural pose that the arms can
+        hold an object at, radians, in [pi/4, pi/2) (:mod:`skills.turns`: a larger turn of the
+        object is made in steps, re-grasping between them).
     """
 
     payload_per_arm_kg: float
@@ -340,6 +357,7 @@ class RobotCapabilities:
     squeeze_force_n: float
     palm_friction: float
     end_effectors: frozenset[EndEffector]
+    max_turn_rad: float = math.pi / 4.0
 
     def __post_init__(self) -> None:
         owner = "RobotCapabilities"
@@ -367,6 +385,12 @@ class RobotCapabilities:
         )
         put(self, "palm_friction", check_non_negative(self.palm_friction, owner, "palm_friction"))
         put(self, "end_effectors", _check_end_effectors(self.end_effectors, owner))
+        turn = check_finite(self.max_turn_rad, owner, "max_turn_rad")
+        if not math.pi / 4.0 - 1e-9 <= turn < math.pi / 2.0:
+            raise ValueError(
+                f"{owner}.max_turn_rad: expected an angle in [pi/4, pi/2) rad, got {turn!r}"
+            )
+        put(self, "max_turn_rad", turn)
 
     def describe_end_effectors(self) -> str:
         """The end-effectors in words, e.g. ``flat palms``."""

@@ -508,8 +508,11 @@ def _common_skills(
     if ObjectState.CONTAINS_ITEMS in context.state:
         skills.append(SkillSelection(Action.KEEP_LEVEL, DEFAULT_SPACE[Action.KEEP_LEVEL]))
         because.append("hard: contains items: keep level")
-    if context.goal_yaw is not None:
-        delta = wrap_angle(context.goal_yaw - context.yaw)
+    # Each move turns from the yaw the last one left: the largest of those turns decides.
+    goal_yaws = context.goal_yaws or ((context.goal_yaw,) if context.goal_yaw is not None else ())
+    turns = [wrap_angle(b - a) for a, b in zip((context.yaw, *goal_yaws), goal_yaws, strict=False)]
+    if turns:
+        delta = max(turns, key=abs)
         if abs(delta) > config.yaw_tolerance_rad:
             skills.append(
                 SkillSelection(

@@ -25,13 +25,14 @@ from experiment.figures import Animation, MoveTrace, demonstrated_path, trajecto
 from planner.default_tree import TaskStep, default_tree
 from planner.loader import load_tree
 from planner.move_result import move_results
+from planner.port import Move
 from planner.render import render_tree
 from planner.runlog import RunLog
 from planner.runner import RunResult, run_tree
 from skills.default_library import build_default_library
 from skills.library import SkillLibrary
-from worlds.sim_world import SimWorld
-from worlds.world_file import World
+from worlds.sim_world import SimWorld, task_moves
+from worlds.world_file import World, as_world_spec
 
 PLACE_TOLERANCE_M = 0.02
 PLACE_TOLERANCE_DEG = 10.0
@@ -146,20 +147,31 @@ def judge(
     return True, ""
 
 
+def robot_moves(world: World) -> dict[str, tuple[Move, ...]]:
+    """Each object's moves as the robot makes them: a turn its grip cannot make in one grasp
+    is several moves (:func:`worlds.sim_world.task_moves`), each naming its file move."""
+    spec = as_world_spec(world)
+    return {step.object: task_moves(spec, step.object) for step in world.task}
+
+
 def task_steps(world: World) -> list[TaskStep]:
     """The world's task for :func:`planner.default_tree.default_tree`: per step, its object,
-    number of moves and the index of its first move among that object's moves."""
+    number of moves (as the robot makes them) and the index of its first among that object's
+    moves."""
+    stepped = robot_moves(world)
     done: dict[str, int] = {}
     steps = []
     for step in world.task:
-        first = done.get(step.object, 0)
-        steps.append(TaskStep(step.object, len(step.moves), first))
-        done[step.object] = first + len(step.moves)
+        first_file = done.get(step.object, 0)
+        files = range(first_file, first_file + len(step.moves))
+        indices = [i for i, m in enumerate(stepped[step.object]) if m.task_move in files]
+        steps.append(TaskStep(step.object, len(indices), indices[0] if indices else 0))
+        done[step.object] = first_file + len(step.moves)
     return steps
 
 
-def task_moves(world: World) -> list[tuple[str, int]]:
-    """Every move of the task as ``(object, index among the object's moves)``, in task order."""
+def move_keys(world: World) -> list[tuple[str, int]]:
+    """Every move the robot makes, ``(object, index among its moves)``, in task order."""
     return [(s.object, s.first_move + i) for s in task_steps(world) for i in range(s.moves)]
 
 
@@ -186,11 +198,25 @@ class _Recorder:
     SUCCESS the move's placement error, composition and skill are kept.
     """
 
-    def __init__(self, sim: SimWorld, moves: list[tuple[str, int]]) -> None:
+    def __init__(
+        self, sim: SimWorld, moves: list[tuple[str, int]], stepped: dict[str, tuple[Move, ...]]
+    ) -> None:
         self.sim = sim
         self.order = {key: i for i, key in enumerate(moves)}
         self.tracks = {key: _Track() for key in moves}
         self.current: tuple[str, int] | None = None
+        self.stepped = stepped
+        #: The moves judged: the last step of each file move, in task order.
+        self.finals = [k for k in moves if stepped[k[0]][k[1]].final]
+
+    def _steps_of(self, key: tuple[str, int]) -> list[tuple[str, int]]:
+        """The robot's moves that make the file move whose last step is ``key``."""
+        task_move = self.stepped[key[0]][key[1]].task_move
+        return [
+            k
+            for k in self.order
+            if k[0] == key[0] and (self.stepped[k[0]][k[1]].task_move == task_move)
+        ]
 
     def __call__(self, tree: py_trees.trees.BehaviourTree) -> None:
         # In task order, as a move that ends and the next that starts share a tick.
@@ -220,8 +246,8 @@ class _Recorder:
                 self.current = None
 
     def column(self, what: str) -> list[Any]:
-        """One attribute of every move's track, in task order."""
-        return [getattr(self.tracks[key], what) for key in self.order]
+        """One attribute of every judged move's track (its last step's), in task order."""
+        return [getattr(self.tracks[key], what) for key in self.finals]
 
     def traces(self, library: SkillLibrary) -> list[MoveTrace]:
         """Every move of the task as the figure draws it."""
@@ -230,11 +256,16 @@ class _Recorder:
         obstacles = {o.name: o for o in spec.scene.obstacles}
         goals = {name: spec.moves_of(name) for name, _ in self.order}
         out = []
-        for label, key in zip(move_labels([k[0] for k in self.order]), self.order, strict=True):
+        for label, key in zip(move_labels([k[0] for k in self.finals]), self.finals, strict=True):
             track = self.tracks[key]
-            goal = goals[key[0]][key[1]]
+            steps = [self.tracks[k] for k in self._steps_of(key)]
+            task_move = self.stepped[key[0]][key[1]].task_move
+            goal = goals[key[0]][task_move if task_move is not None else key[1]]
             goal_q = np.asarray(goal.goal_quaternion, dtype=float)
-            start = track.start or (np.asarray(goal.goal_position, dtype=float), goal_q)
+            first = next((t.start for t in steps if t.start is not None), None)
+            start = first or (np.asarray(goal.goal_position, dtype=float), goal_q)
+            positions = [p for t in steps for p in t.positions]
+            orientations = [q for t in steps for q in t.orientations]
             skill = (
                 library.get(track.skill)
                 if track.skill is not None and track.skill in library
@@ -245,11 +276,11 @@ class _Recorder:
                     label,
                     start[0],
                     np.asarray(goal.goal_position, dtype=float),
-                    np.array(track.positions).reshape(-1, 3),
-                    tuple(obstacles[n] for n in track.obstacles),
+                    np.array(positions).reshape(-1, 3),
+                    tuple(obstacles[n] for n in steps[0].obstacles),
                     start_orientation=start[1],
                     goal_orientation=goal_q,
-                    orientations=np.array(track.orientations).reshape(-1, 4),
+                    orientations=np.array(orientations).reshape(-1, 4),
                     shape=shapes[key[0]],
                     skill=track.skill,
                     demonstrated=(
@@ -298,14 +329,15 @@ def run_episode(
     planner.loader.TreeFileError, skills.library.LibraryFileError
         On bad input files (the caller turns them into exit code 2).
     """
-    moves = task_moves(world)
+    stepped = robot_moves(world)
+    moves = move_keys(world)
     # The loader writes constant port values to the blackboard: clear it first, not after.
     py_trees.blackboard.Blackboard.clear()
     # Without a tree file, the shipped tree for the world's task.
     root = load_tree(tree_path) if tree_path is not None else default_tree(task_steps(world))
     lib = library if library is not None else load_library(world)
     with SimWorld(world, gui=gui) as sim:
-        recorder = _Recorder(sim, moves)
+        recorder = _Recorder(sim, moves, stepped)
         hooks: list[Callable[[py_trees.trees.BehaviourTree], Any]] = [
             lambda tree: tree.add_post_tick_handler(recorder)
         ]
@@ -347,7 +379,7 @@ def run_episode(
         finally:
             if log is not None:
                 log.close()
-        objects = [name for name, _ in moves]
+        objects = [name for name, _ in recorder.finals]
         errors_m, errors_deg = recorder.column("error_m"), recorder.column("error_deg")
         ok, failure = judge(result, sim, objects, errors_m, errors_deg)
         report = EpisodeReport(

@@ -29,7 +29,7 @@ import os
 import signal
 from collections import Counter
 from collections.abc import Callable, Iterable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from types import TracebackType
 from typing import Any
@@ -44,8 +44,18 @@ from experiment.results import (
     repair_tail,
 )
 from planner.user_leaves import register_leaves
+from skills.turns import grip_yaw, lateral_quarter_turns, turn_steps
+from worlds.adapters import robot_capabilities
 from worlds.scene import Scene, lateral_grasp_palm_poses
 from worlds.world_file import Region, TrialSettings, World, world_from_data
+
+#: Goal yaws drawn for a move before giving up on placing its sphere: the robot turning the
+#: object must be clear of it too, and some turns leave no room for a sphere on the way.
+YAW_ATTEMPTS = 8
+#: Times a trial with turns is drawn again before giving up.
+TRIAL_REDRAWS = 10
+#: Spheres tried for one goal yaw.
+SPHERE_ATTEMPTS = 200
 
 #: The goal regions in the order of the moves.
 GOAL_REGIONS = ("centre", "right", "left")
@@ -61,10 +71,62 @@ class Sphere:
     kind: str  # "line" or "ahead"
 
 
-def _box_gap(centre: np.ndarray, half: np.ndarray, point: np.ndarray) -> float:
-    """Distance from a point to an axis-aligned box's surface (0 inside)."""
-    d = np.maximum(np.abs(point - centre) - half, 0.0)
+def _box_gap(centre: np.ndarray, half: np.ndarray, point: np.ndarray, yaw: float = 0.0) -> float:
+    """Distance from a point to the surface of a box turned by ``yaw`` about z (0 inside)."""
+    c, s = math.cos(yaw), math.sin(yaw)
+    dx, dy, dz = np.asarray(point, dtype=float) - centre
+    local = np.array([c * dx + s * dy, -s * dx + c * dy, dz])
+    d = np.maximum(np.abs(local) - half, 0.0)
     return float(np.linalg.norm(d))
+
+
+@dataclass(frozen=True)
+class Posture:
+    """The robot holding the object somewhere on a move: where, and with which grip.
+
+    Attributes
+    ----------
+    position : ndarray, shape (3,)
+        The object's centre, m.
+    object_yaw : float
+        The object's yaw, rad.
+    grip_yaw : float
+        The palms' turn from their natural pose (:mod:`skills.turns`), rad.
+    half_span : float
+        Half the distance between the held faces, m.
+    """
+
+    position: np.ndarray
+    object_yaw: float
+    grip_yaw: float
+    half_span: float
+
+
+def move_postures(
+    start: np.ndarray,
+    start_yaw: float,
+    goal: np.ndarray,
+    goal_yaw: float,
+    size: np.ndarray,
+    max_turn: float,
+    robot_yaw: float = 0.0,
+) -> list[Posture]:
+    """How the robot holds the object picking it up and putting it down on one move.
+
+    A turn the grip cannot make in one grasp is made in steps at the goal
+    (:func:`planner.port.stepped_moves`): each step's grasp at its start and its end, on the
+    faces :func:`skills.turns.lateral_quarter_turns` chooses for it.
+    """
+    out: list[Posture] = []
+    yaw = start_yaw
+    for i, step in enumerate(turn_steps(start_yaw, goal_yaw, max_turn, robot_yaw)):
+        k = lateral_quarter_turns(yaw, step - yaw, robot_yaw)
+        half = float(size[1] if k % 2 == 0 else size[0]) / 2.0
+        first = grip_yaw(yaw, k, robot_yaw)
+        out.append(Posture(start if i == 0 else goal, yaw, first, half))
+        out.append(Posture(goal, step, first + (step - yaw), half))
+        yaw = step
+    return out
 
 
 class RobotClearance:
@@ -89,7 +151,6 @@ class RobotClearance:
             raise ValueError(
                 f"trials: expected a box object to grasp, got a {obj.shape.type} ({obj.name!r})"
             )
-        self._half_span = float(size[1]) / 2.0
         self._thickness = float(world.robot.palm_size[2])
         self._posed_at: tuple[float, ...] | None = None
         client = self._scene.client
@@ -98,13 +159,19 @@ class RobotClearance:
         )
         self._probe = pb.createMultiBody(0.0, shape, physicsClientId=client)
 
-    def distance(self, object_centre: np.ndarray, centre: np.ndarray, radius: float) -> float:
-        """Gap between a sphere and the nearest robot link, m (negative: overlap)."""
+    def distance(self, posture: Posture, centre: np.ndarray, radius: float) -> float:
+        """Gap between a sphere and the nearest robot link holding the object in ``posture``,
+        m (negative: overlap)."""
         client = self._scene.client
-        key = tuple(float(v) for v in object_centre)
+        key = (*(float(v) for v in posture.position), posture.grip_yaw, posture.half_span)
         if key != self._posed_at:
             self._scene.place_palms(
-                lateral_grasp_palm_poses(object_centre, self._half_span, self._thickness)
+                lateral_grasp_palm_poses(
+                    posture.position,
+                    posture.half_span,
+                    self._thickness,
+                    grip_yaw=posture.grip_yaw,
+                )
             )
             pb.performCollisionDetection(physicsClientId=client)
             self._posed_at = key
@@ -154,27 +221,67 @@ def draw_trial(
     if robot is None:
         with RobotClearance(base) as own:
             return draw_trial(base, seed, trial, own)
+    turning = base.trials.goal_yaw_deg[0] != base.trials.goal_yaw_deg[1]
+    for redraw in range(TRIAL_REDRAWS if turning else 1):
+        try:
+            return _draw_trial(base, seed, trial, robot, redraw)
+        except RuntimeError:
+            # A turn that leaves no room for the next move's sphere (the arms turned across
+            # its way): the trial is drawn again from a stream of its own.
+            if redraw == TRIAL_REDRAWS - 1 or not turning:
+                raise
+    raise AssertionError("unreachable")
+
+
+def _draw_trial(
+    base: World, seed: int, trial: int, robot: RobotClearance, redraw: int
+) -> tuple[World, list[str]]:
+    """:func:`draw_trial` from stream ``redraw`` (0: the trial's own, as without turns)."""
     layout = base.trials
-    rng = np.random.default_rng([seed, trial])
+    rng = np.random.default_rng([seed, trial] if redraw == 0 else [seed, trial, 2, redraw])
     obj = base.objects[0]
     half = np.asarray(getattr(obj.shape, "size", (0.2, 0.3, 0.15)), dtype=float) / 2.0
     z = base.table.position[2] + half[2]
     start = _in_region(rng, layout.start, z)
     goals = [_in_region(rng, getattr(layout, region), z) for region in GOAL_REGIONS]
+    # The yaws come from a generator of their own, so a layout without turns draws the same
+    # starts, goals and spheres as before they were drawn.
+    turn_rng = np.random.default_rng([seed, trial, 1, redraw])
+    goal_yaws = [_uniform(turn_rng, layout.goal_yaw_deg) for _ in GOAL_REGIONS]
+    start_yaw = math.radians(obj.pose.rpy_deg[2])
+    max_turn = robot_capabilities(base).max_turn_rad
+    robot_yaw = math.radians(base.robot.base.rpy_deg[2])
+    size = 2.0 * half
     with_obstacle = [True, True, True]
     with_obstacle[int(rng.integers(3))] = bool(rng.random() < 0.5)  # at least two of three
     spheres: list[Sphere | None] = []
     kinds: list[str] = []
-    prev = start
+    prev, prev_yaw = start, start_yaw
     for i, goal in enumerate(goals):
-        sphere = (
-            _draw_sphere(rng, f"ball_{i + 1}", prev, goal, half, layout, robot)
-            if with_obstacle[i]
-            else None
-        )
+        sphere: Sphere | None = None
+        for attempt in range(YAW_ATTEMPTS):
+            if (
+                attempt == YAW_ATTEMPTS - 1
+                and layout.goal_yaw_deg[0] <= math.degrees(prev_yaw) <= layout.goal_yaw_deg[1]
+            ):
+                goal_yaws[i] = math.degrees(prev_yaw)  # at last, no turn at all
+            elif attempt:  # no sphere fits the robot turning this way: another turn
+                goal_yaws[i] = _uniform(turn_rng, layout.goal_yaw_deg)
+            yaw = math.radians(goal_yaws[i])
+            postures = move_postures(prev, prev_yaw, goal, yaw, size, max_turn, robot_yaw)
+            if not with_obstacle[i]:
+                break
+            try:
+                sphere = _draw_sphere(
+                    rng, f"ball_{i + 1}", prev, goal, half, layout, robot, postures
+                )
+                break
+            except RuntimeError:
+                if attempt == YAW_ATTEMPTS - 1 or layout.goal_yaw_deg[0] == layout.goal_yaw_deg[1]:
+                    raise
         spheres.append(sphere)
         kinds.append("none" if sphere is None else sphere.kind)
-        prev = goal
+        prev, prev_yaw = goal, yaw
     data = base.model_dump(mode="json")
     data["objects"][0]["pose"]["position"] = start.tolist()
     data["obstacles"] = [
@@ -191,10 +298,10 @@ def draw_trial(
             "object": obj.name,
             "moves": [
                 {
-                    "goal": {"position": g.tolist(), "rpy_deg": [0.0, 0.0, 0.0]},
+                    "goal": {"position": g.tolist(), "rpy_deg": [0.0, 0.0, yaw]},
                     "obstacles": [] if s is None else [s.name],
                 }
-                for g, s in zip(goals, spheres, strict=True)
+                for g, yaw, s in zip(goals, goal_yaws, spheres, strict=True)
             ],
         }
     ]
@@ -210,13 +317,22 @@ def _draw_sphere(
     half: np.ndarray,
     layout: TrialSettings,
     robot: RobotClearance,
+    postures: list[Posture],
 ) -> Sphere:
-    """A sphere on the line or ahead of the carry, clear of the box and the robot at start
-    and goal."""
+    """A sphere on the line or ahead of the carry, clear of the box and of the robot holding
+    it as it picks it up at the start and puts it down at the goal (``postures``: turned, and
+    at every step of a turn made in steps), at rest and lifted."""
     top = start[2] + half[2]
-    # The robot picks the object up at the start and puts it down at the goal.
-    grasps = [p + np.array([0.0, 0.0, dz]) for p in (start, goal) for dz in (0.0, layout.lift)]
-    for _ in range(500):  # rejection sampling
+    lifted = np.array([0.0, 0.0, layout.lift])
+    grasps = [
+        replace(p, position=p.position + dz) for p in postures for dz in (0.0 * lifted, lifted)
+    ]
+    # The box's reach along x, turned as it is at the start and the goal.
+    reach_x = max(
+        abs(math.cos(p.object_yaw)) * half[0] + abs(math.sin(p.object_yaw)) * half[1]
+        for p in postures
+    )
+    for _ in range(SPHERE_ATTEMPTS):  # rejection sampling
         radius = _uniform(rng, layout.sphere_radius)
         if rng.random() < 0.5:
             kind = "line"
@@ -225,7 +341,7 @@ def _draw_sphere(
             centre = np.array([*xy, top + _uniform(rng, layout.line_gap) + radius])
         else:
             kind = "ahead"
-            front = max(start[0], goal[0]) + half[0]
+            front = max(start[0], goal[0]) + reach_x
             centre = np.array(
                 [
                     front + radius + _uniform(rng, layout.ahead_gap),
@@ -233,9 +349,10 @@ def _draw_sphere(
                     top + _uniform(rng, layout.ahead_height),
                 ]
             )
-        if min(_box_gap(p, half, centre) for p in (start, goal)) - radius < layout.clearance:
+        box = min(_box_gap(p.position, half, centre, p.object_yaw) for p in postures)
+        if box - radius < layout.clearance:
             continue
-        if min(robot.distance(p, centre, radius) for p in grasps) < layout.robot_clearance:
+        if any(robot.distance(p, centre, radius) < layout.robot_clearance for p in grasps):
             continue
         return Sphere(name, (float(centre[0]), float(centre[1]), float(centre[2])), radius, kind)
     raise RuntimeError(f"{name}: could not place a sphere clear of the start and goal")

@@ -15,9 +15,9 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from affordances import SemanticAction, SkillSelection, spare_grip_acceleration
-from planner.port import Move, Pose, WorldPort
+from planner.port import Move, ObjectSensing, PalmControl, Pose, WorldPort
 from skills import quaternion as quat
-from skills.composer import DualArmComposer, DualArmState, relative_from_world
+from skills.composer import DualArmComposer, DualArmState, commands_for, relative_from_world
 from skills.couplings import LearntForcing, Saturated
 from skills.couplings.grasp import GraspMaintenance
 from skills.couplings.limits import WorkspaceRepulsion
@@ -28,6 +28,7 @@ from skills.dual_arm import GraspGeometry
 from skills.library import SkillLibrary
 from skills.pose_dmp import PoseState
 from skills.skill import Skill, SkillKind
+from skills.turns import held_quarter_turns, lateral_quarter_turns, wrap_angle, yaw_of
 from skills.vocabulary import ARMS, Action, Arm, Space
 
 #: Shortest move duration, s (the demonstrations last about 2 s).
@@ -96,10 +97,48 @@ def saturate_avoidance(
     return out
 
 
-def lateral_geometry(world: WorldPort, name: str) -> GraspGeometry:
-    """The two-palm lateral grasp geometry of an object's box, palms flat on its +-y faces."""
+def robot_yaw(world: PalmControl) -> float:
+    """The robot's heading about world z, rad: its y axis runs from the right palm's rest
+    pose to the left's."""
+    left = world.rest_palm_pose(Arm.LEFT).position
+    right = world.rest_palm_pose(Arm.RIGHT).position
+    return float(np.arctan2(left[1] - right[1], left[0] - right[0]) - np.pi / 2.0)
+
+
+def grasp_quarter_turns(world: WorldPort, name: str, turn: float = 0.0) -> int:
+    """The face pair to grasp an object on for a turn of ``turn`` rad about z
+    (:func:`skills.turns.lateral_quarter_turns`, from its measured yaw and the robot's)."""
+    yaw = yaw_of(world.object_pose(name).orientation)
+    return lateral_quarter_turns(yaw, turn, robot_yaw(world))
+
+
+def move_turn(world: ObjectSensing, name: str, index: int | None) -> float:
+    """The turn about z (rad, in [-pi, pi)) from the object's measured yaw to the goal of move
+    ``index`` of ``world.task_moves(name)``; 0 for ``None`` or an index out of range."""
+    moves = world.task_moves(name)
+    if index is None or not 0 <= index < len(moves):
+        return 0.0
+    now = yaw_of(world.object_pose(name).orientation)
+    return wrap_angle(yaw_of(moves[index].goal.orientation) - now)
+
+
+def lateral_geometry(
+    world: WorldPort, name: str, quarter_turns: int | None = None
+) -> GraspGeometry:
+    """The two-palm lateral grasp geometry of an object's box, palms flat on a pair of side
+    faces: face pair ``quarter_turns`` (:mod:`skills.turns`), by default the pair whose normals
+    lie closest to the robot's y axis as the object stands now. The width is the box's extent
+    between those faces."""
+    k = grasp_quarter_turns(world, name) if quarter_turns is None else quarter_turns
     extents = world.object_extents(name)
-    return GraspGeometry.lateral(float(extents[1]), world.palm_thickness())
+    width = float(extents[1] if k % 2 == 0 else extents[0])
+    return GraspGeometry.lateral(width, world.palm_thickness(), quarter_turns=k)
+
+
+def held_lateral_geometry(world: WorldPort, name: str, state: DualArmState) -> GraspGeometry:
+    """The grip of a handed-over state: its palms' poses in {O}, the held faces' normals."""
+    nominal = lateral_geometry(world, name, held_quarter_turns(state.left.position))
+    return held_geometry(state, nominal)
 
 
 def move_duration(start: np.ndarray, goal: np.ndarray, settings: TransportSettings) -> float:
@@ -302,6 +341,29 @@ def hold_terms(
     }
 
 
+def on_measured_object(world: ObjectSensing, name: str, state: DualArmState) -> DualArmState:
+    """The handed-over state with {O} moved onto the object as measured, the palms' world
+    references (and every velocity) unchanged.
+
+    A held box slips a little in two palms, most when it turns; the next move must carry it
+    from where it is, not from where the last one commanded it, or the slips of a sequence
+    of moves (and of a turn made in steps) add up.
+    """
+    measured = world.object_pose(name)
+    cmd = commands_for(state)
+    rel = [
+        relative_from_world(
+            measured.position, measured.orientation, cmd.positions[i], cmd.orientations[i]
+        )
+        for i in range(2)
+    ]
+    return DualArmState(
+        state.object._replace(position=measured.position, orientation=measured.orientation),
+        state.left._replace(position=rel[0][0], orientation=rel[0][1]),
+        state.right._replace(position=rel[1][0], orientation=rel[1][1]),
+    )
+
+
 def held_geometry(state: DualArmState, nominal: GraspGeometry) -> GraspGeometry:
     """The grip as it is: the palms' poses in {O} from a handed-over state, nominal normals."""
     return GraspGeometry(
@@ -384,12 +446,13 @@ def transport_composition(
     transport skill (:func:`transport_skill`; SkillChoiceError if the library has none so
     called).
     """
+    state = on_measured_object(world, name, state)
     s = settings or TransportSettings()
     sel = plan.skill(Action.TRANSPORT)
     if sel is not None:
         s = TransportSettings(_param(sel, "max_speed", s.max_speed), s.lift_m)
     tau = move_duration(state.object.position, move.goal.position, s)
-    geometry = held_geometry(state, lateral_geometry(world, name))
+    geometry = held_lateral_geometry(world, name, state)
     points = box_points(world.object_extents(name))
     key = skill or move.skill
     carry = transport_skill(library, key) if key else None

@@ -21,10 +21,12 @@ from collections.abc import Iterable
 from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
 
+import numpy as np
 from numpy.typing import ArrayLike
 
 from affordances import ObjectContext, RobotCapabilities, SceneQuery
 from skills import quaternion as quat
+from skills import turns
 from skills.state import validated_pose
 from skills.types import Array
 from skills.vocabulary import Arm
@@ -55,6 +57,11 @@ class Pose:
 class Move:
     """One step of a task: where the object should go and which obstacles are present.
 
+    A world shows a move whose turn about z the robot's grip cannot make in one grasp as
+    several moves (:func:`stepped_moves`): the steps before the last put the object down at
+    the move's goal position turned part of the way; ``task_move`` and ``final`` say which of
+    the task's moves a step belongs to and whether it is its last (the one to judge).
+
     Attributes
     ----------
     goal : Pose
@@ -64,11 +71,66 @@ class Move:
     skill : str or None
         Name or label of the library skill the move is carried with (the world file's
         ``skill``); None for the plan's transport skill.
+    task_move : int or None
+        Index of the task's move (as the world file lists the object's moves) this move is
+        (a step of); None for a move not made by :func:`stepped_moves`.
+    final : bool
+        The last step of its task move: its goal is the task move's goal.
     """
 
     goal: Pose
     obstacles: tuple[str, ...] = ()
     skill: str | None = None
+    task_move: int | None = None
+    final: bool = True
+
+
+def stepped_moves(
+    moves: Iterable[Move], start_yaw: float, max_turn: float, robot_yaw: float = 0.0
+) -> tuple[Move, ...]:
+    """A task's moves as a robot with a grip turn of ``max_turn`` rad makes them.
+
+    Each move whose turn about z (from the previous goal's yaw, or ``start_yaw`` for the
+    first) needs more than one grasp (:func:`skills.turns.turn_steps`) becomes a carry to its
+    goal position turned part of the way, then turns in place at the goal, each a move of its
+    own with the move's obstacles; every returned move names its task move
+    (``Move.task_move``) and the last step of each is ``final``.
+
+    Parameters
+    ----------
+    moves : iterable of Move
+        The task's moves of one object, in order.
+    start_yaw : float
+        The object's yaw before the first move, rad.
+    max_turn : float
+        The robot's largest grip turn, rad (``RobotCapabilities.max_turn_rad``).
+    robot_yaw : float
+        The robot's heading, rad.
+    """
+    out: list[Move] = []
+    yaw = float(start_yaw)
+    for index, move in enumerate(moves):
+        goal_yaw = turns.yaw_of(move.goal.orientation)
+        steps = turns.turn_steps(yaw, goal_yaw, max_turn, robot_yaw)
+        for i, step_yaw in enumerate(steps):
+            last = i == len(steps) - 1
+            # The last step keeps the goal's own quaternion (a tilt included); the others
+            # turn it back about z by what is still to come.
+            back = quat.from_axis_angle(np.array([0.0, 0.0, 1.0]), step_yaw - steps[-1])
+            orientation = (
+                move.goal.orientation if last else quat.multiply(back, move.goal.orientation)
+            )
+            out.append(
+                Move(
+                    Pose(move.goal.position, orientation),
+                    move.obstacles,
+                    skill=move.skill,
+                    task_move=index,
+                    final=last,
+                )
+            )
+        yaw = goal_yaw
+    return tuple(out)
 
 
 @dataclass(frozen=True)
@@ -150,7 +212,8 @@ class ObjectSensing(Protocol):
         ...
 
     def task_moves(self, name: str) -> tuple[Move, ...]:
-        """The moves the task asks of an object, in order."""
+        """The moves the task asks of an object, in order, each turn split into the steps the
+        robot's grip can make (:func:`stepped_moves`)."""
         ...
 
     def gravity(self) -> float:

@@ -116,8 +116,10 @@ class GraspGeometry:
         palm_thickness: float = 0.0,
         normal_axis: ArrayLike = (0.0, 0.0, 1.0),
         down_axis: ArrayLike = (1.0, 0.0, 0.0),
+        quarter_turns: int = 0,
     ) -> GraspGeometry:
-        """Two palms flat on the object's +y (left) and -y (right) faces.
+        """Two palms flat on the object's +y (left) and -y (right) faces, or on the pair of
+        side faces ``quarter_turns`` quarter turns about the object's z axis from them.
 
         Parameters
         ----------
@@ -130,6 +132,10 @@ class GraspGeometry:
             The palm-frame axis that points out of the contact face, into the object.
         down_axis : array_like, shape (3,)
             The palm-frame axis that should point down (along the object's -z).
+        quarter_turns : int
+            Which pair of side faces: 0 the +-y faces (left on +y), 1 the left palm on the
+            -x face, 2 on -y, 3 on +x (:mod:`skills.turns`). ``width`` is the distance
+            between the faces of that pair.
         """
         if not (np.isfinite(width) and width > 0):
             raise ValueError(f"width: expected a positive distance in m, got {width!r}")
@@ -144,13 +150,14 @@ class GraspGeometry:
         offset = width / 2.0 + palm_thickness / 2.0
         left_in = np.array([0.0, -1.0, 0.0])  # the left palm pushes towards -y
         right_in = np.array([0.0, 1.0, 0.0])
+        turn = quat.from_axis_angle(np.array([0.0, 0.0, 1.0]), int(quarter_turns) * np.pi / 2.0)
         return GraspGeometry(
-            np.array([0.0, offset, 0.0]),
-            _frame(n, d, left_in),
-            np.array([0.0, -offset, 0.0]),
-            _frame(n, d, right_in),
-            left_in,
-            right_in,
+            quat.rotate(turn, np.array([0.0, offset, 0.0])),
+            quat.multiply(turn, _frame(n, d, left_in)),
+            quat.rotate(turn, np.array([0.0, -offset, 0.0])),
+            quat.multiply(turn, _frame(n, d, right_in)),
+            quat.rotate(turn, left_in),
+            quat.rotate(turn, right_in),
         )
 
     def position(self, arm: Arm) -> Array:

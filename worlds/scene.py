@@ -68,8 +68,10 @@ def lateral_grasp_palm_poses(
     half_span: float,
     palm_thickness: float,
     gap: float = 0.0,
+    grip_yaw: float = 0.0,
 ) -> dict[Arm, tuple[FloatArray, FloatArray]]:
-    """Palm poses touching (or ``gap`` outside) an object's +-y faces, object unrotated.
+    """Palm poses touching (or ``gap`` outside) an object's +-y faces, object unrotated, or
+    a pair of faces turned by ``grip_yaw`` about z (the palms turned with them).
 
     Parameters
     ----------
@@ -81,6 +83,8 @@ def lateral_grasp_palm_poses(
         Palm box thickness along its z axis, m.
     gap : float
         Distance between each palm's contact face and the object's face, m.
+    grip_yaw : float
+        Turn of the held faces and the palms about world z from the +-y faces, rad.
 
     Returns
     -------
@@ -89,8 +93,12 @@ def lateral_grasp_palm_poses(
     """
     centre = np.asarray(object_position, dtype=float).reshape(3)
     offset = half_span + palm_thickness / 2.0 + gap
+    turn = quat.from_axis_angle(np.array([0.0, 0.0, 1.0]), float(grip_yaw))
     return {
-        arm: (centre + np.array([0.0, side * offset, 0.0]), np.array(LATERAL_PALM_QUATERNIONS[arm]))
+        arm: (
+            centre + quat.rotate(turn, np.array([0.0, side * offset, 0.0])),
+            np.asarray(quat.multiply(turn, np.array(LATERAL_PALM_QUATERNIONS[arm])), dtype=float),
+        )
         for arm, side in ((Arm.LEFT, 1.0), (Arm.RIGHT, -1.0))
     }
 

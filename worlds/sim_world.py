@@ -17,7 +17,7 @@ import pybullet as pb
 
 from affordances import ObjectContext, RobotCapabilities, SceneQuery
 from affordances.scene import GeometricSceneQuery
-from planner.port import Move, ObstacleInfo, PathCheck, Pose
+from planner.port import Move, ObstacleInfo, PathCheck, Pose, stepped_moves
 from skills import quaternion as quat
 from skills.types import Array
 from skills.vocabulary import ARMS, Arm
@@ -73,6 +73,22 @@ class SafetyRecord:
     dropped: bool = False
     drop_time: float | None = None
     dropped_object: str = ""
+
+
+def task_moves(spec: WorldSpec, name: str) -> tuple[Move, ...]:
+    """The world's moves for object ``name``, each turn split into the steps the robot's grip
+    can make (:func:`planner.port.stepped_moves`; ``Move.task_move`` names the file's move of
+    each, and ``Move.final`` its last step)."""
+    obj = next(o for o in spec.scene.objects if o.name == name)
+    return stepped_moves(
+        (
+            Move(Pose.of(m.goal_position, m.goal_quaternion), m.obstacles, skill=m.skill)
+            for m in spec.moves_of(name)
+        ),
+        obj.yaw,
+        robot_capabilities(spec).max_turn_rad,
+        math.radians(spec.scene.robot.base_rpy_deg[2]),
+    )
 
 
 class SimWorld:
@@ -232,11 +248,8 @@ class SimWorld:
         return robot_capabilities(self.spec)
 
     def task_moves(self, name: str) -> tuple[Move, ...]:
-        """The world file's moves for ``name``."""
-        return tuple(
-            Move(Pose.of(m.goal_position, m.goal_quaternion), m.obstacles, m.skill)
-            for m in self.spec.moves_of(name)
-        )
+        """The world file's moves for ``name`` as the robot makes them (:func:`task_moves`)."""
+        return task_moves(self.spec, name)
 
     def gravity(self) -> float:
         """Magnitude of the scene's gravity, m/s^2."""

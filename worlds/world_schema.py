@@ -94,6 +94,10 @@ _SKILL_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_-]*")
 Vector3 = Annotated[tuple[_Metres, _Metres, _Metres], BeforeValidator(_vector3)]
 """Three finite numbers ``[x, y, z]``, within 100 (a position, m)."""
 
+_Degrees = Annotated[float, Field(strict=True, allow_inf_nan=False, ge=-720.0, le=720.0)]
+Angles3 = Annotated[tuple[_Degrees, _Degrees, _Degrees], BeforeValidator(_vector3)]
+"""Three finite angles ``[roll, pitch, yaw]``, degrees, within two turns either way."""
+
 PositiveVector3 = Annotated[
     tuple[_PositiveMetres, _PositiveMetres, _PositiveMetres], BeforeValidator(_vector3)
 ]
@@ -137,7 +141,7 @@ class PoseEntry(_FileModel):
     """
 
     position: Vector3 = Field(description="position [x, y, z], m")
-    rpy_deg: Vector3 = Field(
+    rpy_deg: Angles3 = Field(
         default=(0.0, 0.0, 0.0),
         description="roll, pitch, yaw about the fixed x, y, z axes, degrees",
     )
@@ -457,6 +461,10 @@ class TrialSettings(_FileModel):
         description="the robot_clearance holds also with the object lifted this much at the "
         "start and the goal (a carry begins with a lift and ends with a lowering), m",
     )
+    goal_yaw_deg: Range = Field(
+        default=(0.0, 0.0),
+        description="[low, high] of each goal's yaw about z, degrees, within [-180, 180]",
+    )
 
     @field_validator("sphere_radius")
     @classmethod
@@ -464,6 +472,13 @@ class TrialSettings(_FileModel):
         if radius[0] <= 0.0:
             raise field_problem("radii > 0", radius)
         return radius
+
+    @field_validator("goal_yaw_deg")
+    @classmethod
+    def _yaw_in_a_turn(cls, yaw: tuple[float, float]) -> tuple[float, float]:
+        if yaw[0] < -180.0 or yaw[1] > 180.0:
+            raise field_problem("angles within [-180, 180] degrees", yaw)
+        return yaw
 
 
 class World(_FileModel):

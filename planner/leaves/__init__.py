@@ -7,11 +7,13 @@ from planner.leaves.grasp import Grasp
 from planner.leaves.release import Release, Retreat
 from planner.leaves.select import SelectSkills
 from planner.leaves.transport import Transport
+from planner.leaves.turning import GripTurns
 
 __all__ = [
     "Approach",
     "AtGoal",
     "Grasp",
+    "GripTurns",
     "IsHeld",
     "MotionLeaf",
     "PathClear",

@@ -7,7 +7,7 @@ from typing import ClassVar
 import numpy as np
 from py_trees.ports import PortInformation
 
-from planner.composition import lateral_geometry
+from planner.composition import grasp_quarter_turns, lateral_geometry, move_turn
 from planner.leaves.palm_motion import ViaPointLeaf, ViaPointMotion, measured_state
 from planner.port import ObjectSensing, PalmControl, Pose
 from skills import quaternion as quat
@@ -37,12 +37,23 @@ def pregrasp_poses(
 
 
 class Approach(ViaPointLeaf):
-    """Move both palms to ``standoff`` m outside the object's faces via set-points above."""
+    """Move both palms to ``standoff`` m outside the object's faces via set-points above.
+
+    The faces are the pair that suits move ``move``'s turn (:mod:`skills.turns`), from the
+    object's measured yaw: after a turn, the palms meet the faces that now face them.
+    """
 
     WORLD_ROLES: ClassVar[tuple[type, ...]] = (ObjectSensing, PalmControl)
 
     INPUT_PORTS = {
         "object": PortInformation(str, description="object to approach"),
+        "move": PortInformation(
+            int,
+            required=False,
+            default_value=-1,
+            description="the task's move the grasp is for (its turn chooses the faces); "
+            "-1: the faces nearest the robot's y axis",
+        ),
         "standoff_m": PortInformation(
             float,
             required=False,
@@ -73,7 +84,8 @@ class Approach(ViaPointLeaf):
             return
         world = self.world
         name = self.get_input("object")
-        g = lateral_geometry(world, name)
+        turn = move_turn(world, name, int(self.get_input("move")))
+        g = lateral_geometry(world, name, grasp_quarter_turns(world, name, turn))
         waypoints = pregrasp_poses(
             world.object_pose(name),
             {a: g.position(a) for a in ARMS},

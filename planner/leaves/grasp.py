@@ -4,14 +4,17 @@ from __future__ import annotations
 
 from typing import ClassVar
 
+import numpy as np
 from py_trees.common import Status
 from py_trees.ports import PortInformation
 
 from affordances import SemanticAction
 from planner.composition import (
+    grasp_quarter_turns,
     hold_terms,
     lateral_geometry,
     measured_dual_state,
+    move_turn,
     static_composition,
 )
 from planner.leaves.base import SQUEEZE_FORCE_N, MotionLeaf
@@ -27,8 +30,16 @@ def anchored(composer: DualArmComposer, measured: Pose) -> DualArmState:
     Closing can nudge the object; from here on the object's frame must be where it really
     is, so that transports put the object (not an idealised grip) on the goal. The palms'
     world references stay as they are, so the commands do not jump.
+
+    Horizontally {O} is put midway between the palms' references: a box closed on off
+    centre (a palm that met its face first pushed it, and the table's friction holds it there)
+    slides to where the two squeezes balance as soon as it is lifted, and that is where the
+    transports must carry it from. Its height and orientation are the measured ones.
     """
     cmd = composer.commands()
+    centre = np.asarray(measured.position, dtype=float).copy()
+    centre[:2] = 0.5 * (cmd.positions[0][:2] + cmd.positions[1][:2])
+    measured = Pose(centre, measured.orientation)
     rel = [
         relative_from_world(
             measured.position, measured.orientation, cmd.positions[i], cmd.orientations[i]
@@ -54,12 +65,20 @@ def squeeze_force(plan: SemanticAction | None, default: float) -> float:
 
 
 class Grasp(MotionLeaf):
-    """Lateral contact, then squeeze: grasp maintenance pulls the palms onto the faces."""
+    """Lateral contact, then squeeze: grasp maintenance pulls the palms onto the faces (the
+    pair that suits move ``move``'s turn, as :class:`~planner.leaves.Approach` chose it)."""
 
     WORLD_ROLES: ClassVar[tuple[type, ...]] = (Clock, ObjectSensing, PalmControl)
 
     INPUT_PORTS = {
         "object": PortInformation(str, description="object to grasp"),
+        "move": PortInformation(
+            int,
+            required=False,
+            default_value=-1,
+            description="the task's move the grasp is for (its turn chooses the faces); "
+            "-1: the faces nearest the robot's y axis",
+        ),
         "force_n": PortInformation(
             float,
             required=False,
@@ -88,9 +107,9 @@ class Grasp(MotionLeaf):
         name = self.get_input("object")
         self.force = squeeze_force(self.optional_input("plan"), float(self.get_input("force_n")))
         depth = world.squeeze_depth(self.force)
-        relative = hold_terms(
-            self.optional_input("plan"), self.library, lateral_geometry(world, name), depth
-        )
+        turn = move_turn(world, name, int(self.get_input("move")))
+        geometry = lateral_geometry(world, name, grasp_quarter_turns(world, name, turn))
+        relative = hold_terms(self.optional_input("plan"), self.library, geometry, depth)
         self.composer = static_composition(
             measured_dual_state(world, name),
             relative,

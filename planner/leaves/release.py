@@ -8,12 +8,7 @@ import numpy as np
 from py_trees.common import Status
 from py_trees.ports import PortInformation
 
-from planner.composition import (
-    held_geometry,
-    lateral_geometry,
-    opening_terms,
-    static_composition,
-)
+from planner.composition import held_lateral_geometry, opening_terms, static_composition
 from planner.leaves.base import MotionLeaf
 from planner.leaves.palm_motion import ViaPointLeaf, ViaPointMotion, measured_state
 from planner.port import Clock, ObjectSensing, PalmControl, Pose
@@ -51,7 +46,7 @@ class Release(MotionLeaf):
         name = self.get_input("object")
         state = self.get_input("from_state")
         relative = opening_terms(
-            held_geometry(state, lateral_geometry(self.world, name)),
+            held_lateral_geometry(self.world, name, state),
             float(self.get_input("opening_m")),
         )
         self.composer = static_composition(state, relative, float(self.get_input("open_s")))

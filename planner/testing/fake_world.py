@@ -32,9 +32,10 @@ from affordances import (
 )
 from affordances.context import PAPER_ROBOT
 from affordances.scene import GeometricSceneQuery
-from planner.port import Move, ObstacleInfo, PathCheck, Pose
+from planner.port import Move, ObstacleInfo, PathCheck, Pose, stepped_moves
 from skills import quaternion as quat
 from skills.dual_arm import GraspGeometry
+from skills.turns import yaw_of
 from skills.types import Array
 from skills.vocabulary import ARMS, Arm
 
@@ -82,7 +83,15 @@ class FakeWorld:
         self._objects = {o.name: o for o in objs}
         self._all_obstacles = {o.name: o for o in obstacles}
         self._active: set[str] = set()
-        self._moves = moves or {}
+        # As a world shows them: turns beyond the paper robot's grip split into steps.
+        self._moves = {
+            name: stepped_moves(
+                task,
+                yaw_of(self._objects[name].pose.orientation) if name in self._objects else 0.0,
+                PAPER_ROBOT.max_turn_rad,
+            )
+            for name, task in (moves or {}).items()
+        }
         self.table_height = table_height
         self._palm_thickness = palm_thickness
         self.contact_stiffness = contact_stiffness

@@ -3,22 +3,28 @@
 from __future__ import annotations
 
 import json
+import math
 from collections.abc import Iterator
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 import pytest
+from numpy.testing import assert_allclose
 
 from experiment.results import read_results
 from experiment.trials import (
     GOAL_REGIONS,
+    Posture,
     RobotClearance,
     _box_gap,
     campaign_results,
     draw_trial,
+    move_postures,
     reason_of,
     summarise,
 )
+from worlds.adapters import robot_capabilities
 from worlds.scene import lateral_grasp_palm_poses
 from worlds.world_file import World, load_world
 
@@ -52,11 +58,13 @@ def test_a_scene_of_its_own_draws_the_same_trial(base: World, robot: RobotCleara
 def test_robot_clearance_knows_where_the_palms_are(base: World, robot: RobotClearance) -> None:
     centre = np.array(base.objects[0].pose.position)
     half_span = base.objects[0].shape.size[1] / 2.0  # type: ignore[union-attr]
-    palms = lateral_grasp_palm_poses(centre, half_span, base.robot.palm_size[2])
-    for position, _ in palms.values():
-        assert robot.distance(centre, position, 0.01) < 0.0  # a ball inside the palm
+    for grip in (0.0, math.radians(20.0)):
+        posture = Posture(centre, grip, grip, half_span)
+        palms = lateral_grasp_palm_poses(centre, half_span, base.robot.palm_size[2], grip_yaw=grip)
+        for position, _ in palms.values():
+            assert robot.distance(posture, position, 0.01) < 0.0  # a ball inside the palm
     far = centre + np.array([0.0, 0.0, 1.5])
-    assert robot.distance(centre, far, 0.01) > 0.3
+    assert robot.distance(Posture(centre, 0.0, 0.0, half_span), far, 0.01) > 0.3
 
 
 @pytest.mark.parametrize("trial", range(12))
@@ -72,20 +80,56 @@ def test_a_trial_meets_the_papers_conditions(
         (x0, x1), (y0, y1) = region.x, region.y
         assert x0 <= move.goal.position[0] <= x1 and y0 <= move.goal.position[1] <= y1
     assert sum(k != "none" for k in kinds) >= 2  # obstacles on at least two of three moves
-    half = np.array(base.objects[0].shape.size) / 2.0  # type: ignore[union-attr]
+    size = np.array(base.objects[0].shape.size)  # type: ignore[union-attr]
     start = np.array(world.objects[0].pose.position)
+    start_yaw = math.radians(world.objects[0].pose.rpy_deg[2])
+    max_turn = robot_capabilities(base).max_turn_rad
     for move in moves:
         goal = np.array(move.goal.position)
+        goal_yaw = math.radians(move.goal.rpy_deg[2])
+        lo_yaw, hi_yaw = layout.goal_yaw_deg
+        assert lo_yaw <= move.goal.rpy_deg[2] <= hi_yaw
+        postures = move_postures(start, start_yaw, goal, goal_yaw, size, max_turn)
         for name in move.obstacles:
             ob = world.obstacle_named(name)
             centre, r = np.array(ob.position), ob.shape.radius  # type: ignore[union-attr]
             lo, hi = layout.sphere_radius
             assert lo <= r <= hi
-            for p in (start, goal):
-                assert _box_gap(p, half, centre) - r >= layout.clearance - 1e-12
-                for lifted in (p, p + [0.0, 0.0, layout.lift]):
+            for p in postures:
+                gap = _box_gap(p.position, size / 2.0, centre, p.object_yaw)
+                assert gap - r >= layout.clearance - 1e-12
+                for dz in (0.0, layout.lift):
+                    lifted = replace(p, position=p.position + [0.0, 0.0, dz])
                     assert robot.distance(lifted, centre, r) >= layout.robot_clearance - 1e-12
-        start = goal
+        start, start_yaw = goal, goal_yaw
+
+
+def test_trials_draw_each_goal_yaw_from_the_seed(base: World, robot: RobotClearance) -> None:
+    turned = base.model_copy(
+        update={"trials": base.trials.model_copy(update={"goal_yaw_deg": (-90.0, 90.0)})}
+    )
+    flat = base.model_copy(
+        update={"trials": base.trials.model_copy(update={"goal_yaw_deg": (0.0, 0.0)})}
+    )
+    a, _ = draw_trial(turned, 3, 2, robot)
+    b, _ = draw_trial(turned, 3, 2, robot)
+    yaws = [m.goal.rpy_deg[2] for m in a.task[0].moves]
+    assert yaws == [m.goal.rpy_deg[2] for m in b.task[0].moves]
+    assert all(-90.0 <= y <= 90.0 for y in yaws) and len(set(yaws)) == 3
+    # Without turns the same starts and goals as ever, at yaw 0.
+    c, _ = draw_trial(flat, 3, 2, robot)
+    assert [m.goal.rpy_deg[2] for m in c.task[0].moves] == [0.0, 0.0, 0.0]
+    assert [m.goal.position for m in c.task[0].moves] == [m.goal.position for m in a.task[0].moves]
+
+
+def test_move_postures_hold_the_faces_of_each_step() -> None:
+    size = np.array([0.2, 0.3, 0.15])
+    start, goal = np.array([0.55, 0.0, 0.675]), np.array([0.65, 0.0, 0.675])
+    postures = move_postures(start, 0.0, goal, math.radians(90), size, math.radians(45))
+    assert [round(math.degrees(p.grip_yaw)) for p in postures] == [0, 45, -45, 0]
+    assert [p.half_span for p in postures] == [0.15, 0.15, 0.1, 0.1]
+    assert_allclose(postures[0].position, start)
+    assert all(np.array_equal(p.position, goal) for p in postures[1:])
 
 
 def test_results_resume_and_summarise(tmp_path: Path) -> None:

@@ -10,7 +10,7 @@ from typing import Any
 import pytest
 from py_trees.common import Status
 
-from experiment.episode import judge, move_labels, run_episode, task_moves, task_steps
+from experiment.episode import judge, move_keys, move_labels, run_episode, task_steps
 from planner.default_tree import TaskStep, pick_and_place_xml
 from planner.runner import RunResult
 from worlds.sim_world import SafetyRecord
@@ -23,7 +23,7 @@ PLACED = ["parcel_left", "parcel_left", "parcel_right", "parcel_right"]
 def test_the_task_is_read_step_by_step_with_each_objects_move_indices() -> None:
     world = load_world(TWO_PARCELS)
     assert task_steps(world) == [TaskStep("parcel_left", 2, 0), TaskStep("parcel_right", 2, 0)]
-    assert task_moves(world) == [
+    assert move_keys(world) == [
         ("parcel_left", 0),
         ("parcel_left", 1),
         ("parcel_right", 0),

@@ -206,7 +206,6 @@ def carry_sagging(library: SkillLibrary, sag_m: float) -> tuple[Status, str, Sag
     world = sagging_world()
     select(world, library)
     approach_and_grasp(world, library)
-    world.sag_m = sag_m
     leaf = ready(
         Transport("move0"),
         world,
@@ -217,6 +216,10 @@ def carry_sagging(library: SkillLibrary, sag_m: float) -> tuple[Status, str, Sag
         from_state="{state}",
         to_state="{state}",
     )
+    # The object starts to hang below the palms once the move is composed (from where it
+    # was measured): the commanded path no longer says where the object is.
+    leaf.tick_once()
+    world.sag_m = sag_m
     log = tick_until(leaf, world, DT, max_ticks=3000)
     return log.final, leaf.feedback_message, world
 

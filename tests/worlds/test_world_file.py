@@ -545,7 +545,11 @@ def test_schema_field_names_match_the_brief(default_data: dict[str, Any]) -> Non
     [
         ("physics_hz: 240", "physics_hz: 6000000", "sim.physics_hz: expected"),
         ("max_sim_time_s: 120.0", "max_sim_time_s: 1.0e+12", "sim.max_sim_time_s: expected"),
-        ("position: [0.55, 0.0, 0.675]", "position: [1.0e+308, 0.0, 0.675]", "position[0]: expected"),
+        (
+            "position: [0.55, 0.0, 0.675]",
+            "position: [1.0e+308, 0.0, 0.675]",
+            "position[0]: expected",
+        ),
     ],
 )
 def test_numbers_are_bounded_to_what_the_physics_can_mean(

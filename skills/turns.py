@@ -1,0 +1,141 @@
+"""Turning a box about the vertical in two palms: which faces to hold, and in how many steps.
+
+A two-palm lateral grasp holds a box on a pair of opposite side faces. The palms turn with the
+box, and the arms reach only so far: the *grip yaw*, the turn of the palms from their natural
+pose (pressing along the robot's y axis), must stay within ``+-max_turn``. A box presents a
+new pair of faces every quarter turn, so a turn the grip cannot make is made in steps: put the
+box down, let go, grasp the pair of faces that suits the next step, turn again.
+
+Angles are radians; yaws are rotations about world z. The object frame's quarter turn ``k``
+names a face pair: ``k`` even holds the object's +-y faces (``k = 0``: its +y face on the left
+palm), ``k`` odd its +-x faces. The grip yaw of face pair ``k`` on an object at yaw ``psi`` is
+``wrap(psi + k pi/2 - robot_yaw)``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+__all__ = [
+    "grip_yaw",
+    "held_quarter_turns",
+    "lateral_quarter_turns",
+    "turn_steps",
+    "wrap_angle",
+    "yaw_of",
+]
+
+#: Turns below this are no turn, rad (rounding of measured yaws).
+_EPS = 1e-6
+
+
+def wrap_angle(angle: float) -> float:
+    """``angle`` wrapped to [-pi, pi), rad."""
+    return (float(angle) + math.pi) % (2.0 * math.pi) - math.pi
+
+
+def yaw_of(quaternion: ArrayLike) -> float:
+    """Rotation about world z of a frame's x axis, rad, from a quaternion ``(x, y, z, w)``."""
+    x, y, z, w = (float(v) for v in np.asarray(quaternion, dtype=float))
+    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+
+
+def grip_yaw(object_yaw: float, quarter_turns: int, robot_yaw: float = 0.0) -> float:
+    """The palms' turn from their natural pose holding face pair ``quarter_turns``, rad."""
+    return wrap_angle(object_yaw + quarter_turns * math.pi / 2.0 - robot_yaw)
+
+
+def lateral_quarter_turns(object_yaw: float, turn: float = 0.0, robot_yaw: float = 0.0) -> int:
+    """The face pair (quarter turns, in 0..3) to grasp for turning the object by ``turn``.
+
+    Of the four ways to hold the box's side faces, the one whose grip yaw stays smallest
+    over the whole turn (the larger of its magnitudes at the start and at the end); ties go to
+    the smaller grip yaw at the start, then to the lower ``k``. With no turn, this is the pair
+    whose normals lie closest to the robot's y axis.
+    """
+
+    def cost(k: int) -> tuple[float, float, int]:
+        start = grip_yaw(object_yaw, k, robot_yaw)
+        end = start + turn
+        return (round(max(abs(start), abs(end)), 9), round(abs(start), 9), k)
+
+    return min(range(4), key=cost)
+
+
+def held_quarter_turns(left_palm_in_object: ArrayLike) -> int:
+    """The face pair (quarter turns, in 0..3) the left palm holds, from its position in {O}.
+
+    Face pair ``k`` puts the left palm on the object's +y face turned by ``k`` quarter turns
+    about its z axis: at ``(0, +w/2)`` for ``k = 0``, ``(-w/2, 0)`` for ``k = 1``, and so on.
+    """
+    p = np.asarray(left_palm_in_object, dtype=float)
+    angle = math.atan2(float(p[1]), float(p[0])) - math.pi / 2.0
+    return round(angle / (math.pi / 2.0)) % 4
+
+
+def turn_steps(
+    start_yaw: float, goal_yaw: float, max_turn: float, robot_yaw: float = 0.0
+) -> list[float]:
+    """The yaws to put the object down at, in order, to turn it from ``start_yaw`` to
+    ``goal_yaw`` holding it within ``+-max_turn`` of grip yaw (the last one is the goal's).
+
+    The turn is the real one, ``wrap(goal - start)`` in [-pi, pi) (a box turned half a turn
+    is not the same box for a judge of its real orientation), made in steps of at most
+    ``max_turn``. Each step either carries on with the grip it has or, when that grip has no
+    room left in the turn's direction, starts from a fresh grasp of the faces a quarter turn
+    back (as :func:`lateral_quarter_turns` chooses them); a step ends where the grip reaches
+    its limit, so each step is the largest the grip allows.
+
+    Parameters
+    ----------
+    start_yaw, goal_yaw : float
+        The object's yaw now and at the goal, rad.
+    max_turn : float
+        The largest grip yaw the arms can hold, rad, in [pi/4, pi/2): a box's faces come
+        every quarter turn, so a grip that cannot turn an eighth of a turn either way cannot
+        reach every yaw.
+    robot_yaw : float
+        The robot's heading, rad.
+
+    Returns
+    -------
+    list of float
+        Yaws (rad, unwrapped from ``start_yaw``), at least one: ``[start + turn]`` when one
+        grasp can make the whole turn.
+
+    Raises
+    ------
+    ValueError
+        If ``max_turn`` is outside [pi/4, pi/2) or a yaw is not finite.
+    """
+    for label, value in (("start_yaw", start_yaw), ("goal_yaw", goal_yaw)):
+        if not math.isfinite(value):
+            raise ValueError(f"turn_steps: {label}: expected a finite angle in rad, got {value}")
+    if not (math.pi / 4.0 - _EPS <= max_turn < math.pi / 2.0):
+        raise ValueError(
+            "turn_steps: max_turn: expected an angle in [pi/4, pi/2) rad (45 to 90 deg), "
+            f"got {max_turn!r}"
+        )
+    remaining = wrap_angle(goal_yaw - start_yaw)
+    yaw = float(start_yaw)
+    if abs(remaining) <= _EPS:
+        return [yaw + remaining]
+    direction = 1.0 if remaining > 0 else -1.0
+    # The first grasp holds the faces nearest the robot's y axis (grip yaw within 45 deg).
+    grip = grip_yaw(yaw, lateral_quarter_turns(yaw, 0.0, robot_yaw), robot_yaw)
+    steps: list[float] = []
+    while abs(remaining) > _EPS:
+        room = max_turn - direction * grip
+        if room <= _EPS:  # this grip is at its limit: grasp the faces a quarter turn back
+            grip -= direction * math.pi / 2.0
+            room = max_turn - direction * grip
+        step = min(abs(remaining), room, max_turn)
+        yaw += direction * step
+        grip += direction * step
+        remaining -= direction * step
+        steps.append(yaw)
+    steps[-1] = float(start_yaw) + wrap_angle(goal_yaw - start_yaw)
+    return steps
