@@ -18,6 +18,7 @@ from planner.tree_reading import read_tree_document
 from planner.tree_task import check_tree_moves, tree_grasps
 from planner.validate import validate_tree
 from worlds.feasibility import feasibility_problems
+from worlds.sim_world import task_moves
 from worlds.world_file import World, WorldFileError, load_world, world_spec, world_summary
 
 
@@ -59,7 +60,9 @@ def preflight_problems(world: World, world_file: str, tree: Path | None = None) 
     lines = [p.format(world_file) for p in feasibility_problems(world, tree_grasps(doc))]
     if tree is not None:
         spec = world_spec(world)
-        moves = {step.object: len(spec.moves_of(step.object)) for step in spec.task}
+        # The moves as the robot makes them (a turn its grip cannot make is several), which
+        # is what a tree's move indices count.
+        moves = {step.object: len(task_moves(spec, step.object)) for step in spec.task}
         lines += [str(p) for p in check_tree_moves(doc, moves, bound_object(world))]
     return lines + move_skill_problems(world, world_file)
 
