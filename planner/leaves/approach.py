@@ -7,10 +7,11 @@ from typing import ClassVar
 import numpy as np
 from py_trees.ports import PortInformation
 
-from planner.composition import grasp_quarter_turns, lateral_geometry, move_turn
+from planner.composition import grasp_quarter_turns, lateral_geometry, move_turn, robot_yaw
 from planner.leaves.palm_motion import ViaPointLeaf, ViaPointMotion, measured_state
-from planner.port import ObjectSensing, PalmControl, Pose
+from planner.port import ObjectSensing, PalmControl, Pose, WorldPort
 from skills import quaternion as quat
+from skills.turns import grip_yaw, wrap_angle, yaw_of
 from skills.vocabulary import ARMS, Arm
 
 
@@ -34,6 +35,23 @@ def pregrasp_poses(
         mid = mid + np.array([0.0, 0.0, rise])
         out[arm] = [Pose(mid, q), Pose(pre, q)]
     return out
+
+
+#: Turned this far from the palms' natural grip, an object's corners stand in the palms' way.
+TURNED_RAD = np.radians(15.0)
+
+
+def clear_rise(world: WorldPort, name: str, pose: Pose, quarter_turns: int, rise: float) -> float:
+    """Height of the middle set-points above the grasp: ``rise``, or, when the object stands
+    turned from the palms' natural grip (a re-grasp after a turn), enough for the palms to
+    pass above its top (a straight way in from the side would sweep its corners)."""
+    grip = wrap_angle(grip_yaw(yaw_of(pose.orientation), quarter_turns, robot_yaw(world)))
+    if abs(grip) <= TURNED_RAD:
+        return rise
+    top = float(world.object_extents(name)[2]) / 2.0  # the grasp is at the centre's height
+    # A palm's farthest point from its centre, across its face.
+    palm_reach = float(max(world.robot_capabilities().palm_size_m[:2])) / 2.0
+    return max(rise, top + palm_reach + 0.02)
 
 
 class Approach(ViaPointLeaf):
@@ -85,14 +103,16 @@ class Approach(ViaPointLeaf):
         world = self.world
         name = self.get_input("object")
         turn = move_turn(world, name, int(self.get_input("move")))
-        g = lateral_geometry(world, name, grasp_quarter_turns(world, name, turn))
+        quarter_turns = grasp_quarter_turns(world, name, turn)
+        g = lateral_geometry(world, name, quarter_turns)
+        pose = world.object_pose(name)
         waypoints = pregrasp_poses(
-            world.object_pose(name),
+            pose,
             {a: g.position(a) for a in ARMS},
             {a: g.orientation(a) for a in ARMS},
             {a: g.normal(a) for a in ARMS},
             float(self.get_input("standoff_m")),
-            float(self.get_input("rise_m")),
+            clear_rise(world, name, pose, quarter_turns, float(self.get_input("rise_m"))),
         )
         starts = {a: measured_state(world.palm_pose(a), world.palm_twist(a)) for a in ARMS}
         self.motion = ViaPointMotion(starts, waypoints, float(self.get_input("segment_s")))

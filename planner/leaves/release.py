@@ -8,12 +8,33 @@ import numpy as np
 from py_trees.common import Status
 from py_trees.ports import PortInformation
 
-from planner.composition import held_lateral_geometry, opening_terms, static_composition
+from planner.composition import (
+    on_measured_object,
+    opening_terms,
+    static_composition,
+)
 from planner.leaves.base import MotionLeaf
 from planner.leaves.palm_motion import ViaPointLeaf, ViaPointMotion, measured_state
 from planner.port import Clock, ObjectSensing, PalmControl, Pose
+from skills import quaternion as quat
 from skills.composer import DualArmComposer, DualArmState
+from skills.dual_arm import GraspGeometry
 from skills.vocabulary import ARMS
+
+
+def palms_facing(state: DualArmState) -> GraspGeometry:
+    """The palms where they are in {O}, each pushing along its own contact normal (its frame's
+    z axis): what opening moves them back along, whatever face of a turned box they press."""
+    z = np.array([0.0, 0.0, 1.0])
+    left, right = state.left, state.right
+    return GraspGeometry(
+        left.position.copy(),
+        left.orientation.copy(),
+        right.position.copy(),
+        right.orientation.copy(),
+        quat.rotate(left.orientation, z),
+        quat.rotate(right.orientation, z),
+    )
 
 
 class Release(MotionLeaf):
@@ -44,11 +65,10 @@ class Release(MotionLeaf):
         if self.connected() is not None:
             return
         name = self.get_input("object")
-        state = self.get_input("from_state")
-        relative = opening_terms(
-            held_lateral_geometry(self.world, name, state),
-            float(self.get_input("opening_m")),
-        )
+        # Open along the faces as the object stands: a box that lagged its palms in a turn
+        # is not where the last move commanded it.
+        state = on_measured_object(self.world, name, self.get_input("from_state"))
+        relative = opening_terms(palms_facing(state), float(self.get_input("opening_m")))
         self.composer = static_composition(state, relative, float(self.get_input("open_s")))
         self.started = self.world.time()
 
@@ -76,6 +96,13 @@ class Retreat(ViaPointLeaf):
     WORLD_ROLES: ClassVar[tuple[type, ...]] = (PalmControl,)
 
     INPUT_PORTS = {
+        "back_m": PortInformation(
+            float,
+            required=False,
+            default_value=0.0,
+            description="how far each palm first backs away from what it faced (along its "
+            "contact normal), m: beside a turned object, rising straight up may drag it",
+        ),
         "rise_m": PortInformation(
             float,
             required=False,
@@ -100,11 +127,16 @@ class Retreat(ViaPointLeaf):
             return
         world = self.world
         rise = np.array([0.0, 0.0, float(self.get_input("rise_m"))])
+        back = float(self.get_input("back_m"))
         waypoints = {}
         for arm in ARMS:
             here = world.palm_pose(arm)
+            # The palm frame's z is its contact normal, pointing out of its face.
+            away = here.position - back * quat.rotate(here.orientation, np.array([0.0, 0.0, 1.0]))
+            first = [Pose(away, here.orientation)] if back > 0.0 else []
             waypoints[arm] = [
-                Pose(here.position + rise, here.orientation),
+                *first,
+                Pose(away + rise, here.orientation),
                 world.rest_palm_pose(arm),
             ]
         starts = {a: measured_state(world.palm_pose(a), world.palm_twist(a)) for a in ARMS}
