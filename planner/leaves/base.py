@@ -93,6 +93,13 @@ class WorldLeaf(BehaviourWithPorts):
             return "not set up: expected setup(world=...)"
         return None
 
+    def bad_move_index(self, name: str, index: int) -> str | None:
+        """Why ``index`` names no move of ``name``'s task (as the robot makes it), or None."""
+        count = len(self.world.task_moves(name))
+        if not 0 <= index < count:
+            return f"move {index}: expected an index below {count}"
+        return None
+
 
 def status_is_halt(new_status: Status) -> bool:
     """A parent preempted the leaf (``terminate(INVALID)``)."""

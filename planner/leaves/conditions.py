@@ -86,10 +86,9 @@ class AtGoal(WorldLeaf):
             return self.fail(why)
         name = self.get_input("object")
         index = int(self.get_input("move"))
-        moves = self.world.task_moves(name)
-        if not 0 <= index < len(moves):
-            return self.fail(f"move {index}: expected an index below {len(moves)}")
-        err_m, err_rad = goal_error(self.world, name, moves[index].goal)
+        if (bad := self.bad_move_index(name, index)) is not None:
+            return self.fail(bad)
+        err_m, err_rad = goal_error(self.world, name, self.world.task_moves(name)[index].goal)
         deg = float(np.degrees(err_rad))
         text = f"{err_m * 1000:.1f} mm and {deg:.1f} deg from goal {index}"
         tol_m, tol_deg = (
@@ -134,9 +133,8 @@ class PathClear(WorldLeaf):
         world = self.world
         name = self.get_input("object")
         index = int(self.get_input("move"))
-        moves = world.task_moves(name)
-        if not 0 <= index < len(moves):
-            return self.fail(f"move {index}: expected an index below {len(moves)}")
+        if (bad := self.bad_move_index(name, index)) is not None:
+            return self.fail(bad)
         plan: SemanticAction = self.get_input("plan")
         try:
             checked = compose_move(

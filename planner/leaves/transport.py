@@ -89,10 +89,9 @@ class Transport(MotionLeaf):
             return
         world = self.world
         name = self.get_input("object")
-        moves = world.task_moves(name)
         index = int(self.get_input("move"))
-        if not 0 <= index < len(moves):
-            self.problem = f"move {index}: expected an index below {len(moves)}"
+        if (bad := self.bad_move_index(name, index)) is not None:
+            self.problem = bad
             return
         plan: SemanticAction = self.get_input("plan")
         force = squeeze_force(plan, float(self.get_input("force_n")))

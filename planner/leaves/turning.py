@@ -50,9 +50,8 @@ class GripTurns(WorldLeaf):
         world = self.world
         name = self.get_input("object")
         index = int(self.get_input("move"))
-        moves = world.task_moves(name)
-        if not 0 <= index < len(moves):
-            return self.fail(f"move {index}: expected an index below {len(moves)}")
+        if (bad := self.bad_move_index(name, index)) is not None:
+            return self.fail(bad)
         forces = [world.contact_force(arm, name) for arm in ARMS]
         if min(forces) < float(self.get_input("min_force_n")):
             return self.succeed("not held: no grip to turn")
