@@ -150,10 +150,10 @@ def read_tree_document(
     """
     source = os.fspath(path)
     try:
-        data = Path(source).read_bytes()
+        data = read_tree_bytes(Path(source))
     except OSError as exc:
         raise TreeFileError(
-            [TreeProblem(source, None, "", f"cannot read: {exc.strerror}")]
+            [TreeProblem(source, None, "", f"cannot read: {exc.strerror or exc}")]
         ) from None
     return _read(data, source, os.path.dirname(os.path.abspath(source)), registry, main_tree_id)
 
@@ -221,6 +221,30 @@ def _read(
     return TreeDocument(source, root, main_id, problems)
 
 
+#: Largest tree file read, bytes (the shipped trees are 5-10 KB).
+MAX_TREE_BYTES = 1 << 20
+
+
+def read_tree_bytes(path: Path) -> bytes:
+    """The bytes of a tree file: a regular file (never a device, a pipe or a folder, which
+    could block or never end) of at most :data:`MAX_TREE_BYTES`.
+
+    Raises
+    ------
+    OSError
+        Saying why, if it is not such a file or cannot be read.
+    """
+    if path.exists() and not path.is_file():
+        raise OSError(
+            f"expected a regular file, got {'a folder' if path.is_dir() else 'a device or pipe'}"
+        )
+    with open(path, "rb") as fh:
+        data = fh.read(MAX_TREE_BYTES + 1)
+    if len(data) > MAX_TREE_BYTES:
+        raise OSError(f"expected a tree file of at most {MAX_TREE_BYTES} bytes, got more")
+    return data
+
+
 def _inline_includes(
     root: SourceElement, base_dir: str, visited: set[str], problems: list[TreeProblem]
 ) -> None:
@@ -245,14 +269,14 @@ def _inline_includes(
             continue
         visited.add(target)
         try:
-            data = Path(target).read_bytes()
+            data = read_tree_bytes(Path(target))
         except OSError as exc:
             problems.append(
                 TreeProblem(
                     inc.sourcefile,
                     inc.sourceline,
                     describe(inc),
-                    f"cannot read included file '{ref}' ({target}): {exc.strerror}",
+                    f"cannot read included file '{ref}' ({target}): {exc.strerror or exc}",
                 )
             )
             continue

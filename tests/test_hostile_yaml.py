@@ -79,3 +79,23 @@ def test_a_huge_world_file_is_refused_before_parsing(tmp_path: Path) -> None:
     done = run_app("validate", str(world))
     assert done.returncode == 2
     assert "over the limit of 1048576" in done.stderr and "Traceback" not in done.stderr
+
+
+def test_a_tree_including_devices_is_refused_without_reading_them(tmp_path: Path) -> None:
+    tree = tmp_path / "devices.xml"
+    tree.write_text(
+        '<root BTCPP_format="4"><include path="/dev/zero"/><include path="/dev/stdin"/>'
+        '<BehaviorTree ID="Main"><Retreat name="r"/></BehaviorTree></root>',
+        encoding="utf-8",
+    )
+    done = subprocess.run(
+        [sys.executable, str(ROOT / "app.py"), "validate", str(tree)],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=60,
+        stdin=subprocess.PIPE,  # /dev/stdin would block a reader forever
+    )
+    assert done.returncode == 2
+    assert "'/dev/zero' (/dev/zero): expected a regular file, got a device or pipe" in done.stderr
+    assert "'/dev/stdin'" in done.stderr and "Traceback" not in done.stderr
