@@ -53,8 +53,7 @@ def _demo_command(args: argparse.Namespace) -> int:
     for y0, g in goals:
         target = model.target(y0, quat.IDENTITY, g, quat.from_axis_angle([0, 0, 1], 0.3))
         rollouts.append(pose_rollout(model, target, PoseState.at_rest(y0), dt, int(3 * 2.0 / dt)))
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    out = _out_folder_or_exit(Path(args.out))
     fig, (top, side) = plt.subplots(1, 2, figsize=(11, 4.5))
     top.plot(positions[:, 1], positions[:, 0], color="green", lw=2.5, label="demonstration")
     side.plot(positions[:, 1], positions[:, 2], color="green", lw=2.5)
@@ -90,6 +89,22 @@ def printable(text: object) -> str:
     import unicodedata
 
     return "".join(repr(ch)[1:-1] if unicodedata.category(ch)[0] == "C" else ch for ch in str(text))
+
+
+def _out_folder_or_exit(out: Path) -> Path:
+    """``--out`` as a folder this process can write into; exit 2 naming it otherwise."""
+    if out.exists() and not out.is_dir():
+        print(f"--out {out}: expected a folder, got a file", file=sys.stderr)
+        raise SystemExit(EXIT_BAD_INPUT)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        print(f"--out {out}: cannot make the folder: {err.strerror or err}", file=sys.stderr)
+        raise SystemExit(EXIT_BAD_INPUT) from None
+    if not os.access(out, os.W_OK | os.X_OK):
+        print(f"--out {out}: expected a folder this user can write into", file=sys.stderr)
+        raise SystemExit(EXIT_BAD_INPUT)
+    return out
 
 
 def _register_leaves(args: argparse.Namespace) -> list[type] | None:
@@ -358,7 +373,7 @@ def _run_command(args: argparse.Namespace) -> int:
     _preflight_or_exit(world, args.world, args.tree)
     if args.seed is not None:
         world = world.model_copy(update={"sim": world.sim.model_copy(update={"seed": args.seed})})
-    out = Path(args.out)
+    out = _out_folder_or_exit(Path(args.out))
 
     def progress(t: float, leaf: str, feedback: str) -> None:
         name = printable(leaf.split(".")[-1])
@@ -398,6 +413,8 @@ def _run_command(args: argparse.Namespace) -> int:
     )
     for key, path in report.outputs.items():
         print(f"  {key}: {path}")
+    for problem in report.output_errors:
+        print(f"not written: {problem}", file=sys.stderr)
     if args.json:
         print(json.dumps(s))
     return EXIT_OK if report.success else EXIT_FAILURE
@@ -409,8 +426,12 @@ def _trials_command(args: argparse.Namespace) -> int:
     from experiment.trials import campaign_results, reason_of, run_campaign, summarise
 
     world = _load_world_or_exit(args.world)
-    if args.n < 1 or args.workers < 1:
-        print("--n, --workers: expected positive whole numbers", file=sys.stderr)
+    if not (1 <= args.n <= 1_000_000 and 1 <= args.workers <= 1024):
+        print(
+            f"--n, --workers: expected whole numbers 1..1000000 and 1..1024, got {args.n} and "
+            f"{args.workers}",
+            file=sys.stderr,
+        )
         return EXIT_BAD_INPUT
     if _register_leaves(args) is None:
         return EXIT_BAD_INPUT
@@ -424,7 +445,7 @@ def _trials_command(args: argparse.Namespace) -> int:
         except TreeFileError as err:
             print(err, file=sys.stderr)
             return EXIT_BAD_INPUT
-    out = Path(args.out)
+    out = _out_folder_or_exit(Path(args.out))
     try:
         earlier = campaign_results(out / "results.jsonl", args.seed, tree).values()
     except ResultsFileError as err:

@@ -56,6 +56,8 @@ class EpisodeReport:
     wall_time_s: float
     failure: str = ""
     outputs: dict[str, str] = field(default_factory=dict)
+    #: Outputs that could not be written after the verdict, each naming its file and why.
+    output_errors: list[str] = field(default_factory=list)
     #: Per move, the composition that placed the object: ``{"transport_weight": w,
     #: "avoid_gain": g}`` of the Transport leaf that succeeded (its published
     #: :class:`planner.move_result.MoveResult`), or None if none did.
@@ -402,13 +404,23 @@ def run_episode(
         if out is not None:
             report.outputs["run_log"] = str(out / "run.jsonl")
             title = f"{world.name}: {'success' if ok else 'failure: ' + failure}"
-            report.outputs["trajectories"] = str(
-                trajectory_figure(recorder.traces(lib), out / "trajectories.png", title)
-            )
+            # The verdict is made: a figure that cannot be written costs that figure alone.
+            try:
+                report.outputs["trajectories"] = str(
+                    trajectory_figure(recorder.traces(lib), out / "trajectories.png", title)
+                )
+            except OSError as err:
+                report.output_errors.append(f"{out / 'trajectories.png'}: {err.strerror or err}")
             if anim is not None:
-                gif = anim.save_gif(out / "animation.gif")
-                if gif is not None:
-                    report.outputs["animation"] = str(gif)
-            (out / "tree.svg").write_text(render_tree(root, "svg"), encoding="utf-8")
-            report.outputs["tree"] = str(out / "tree.svg")
+                try:
+                    gif = anim.save_gif(out / "animation.gif")
+                    if gif is not None:
+                        report.outputs["animation"] = str(gif)
+                except OSError as err:
+                    report.output_errors.append(f"{out / 'animation.gif'}: {err.strerror or err}")
+            try:
+                (out / "tree.svg").write_text(render_tree(root, "svg"), encoding="utf-8")
+                report.outputs["tree"] = str(out / "tree.svg")
+            except OSError as err:
+                report.output_errors.append(f"{out / 'tree.svg'}: {err.strerror or err}")
     return report

@@ -89,3 +89,15 @@ def test_names_from_a_file_cannot_print_lines_of_their_own(
     out = capsys.readouterr()
     assert code in (0, 2)  # the world may be refused for its name; it must not spoof lines
     assert "\x1b" not in out.out + out.err
+
+
+def test_out_naming_a_file_and_absurd_campaigns_are_one_line_and_exit_2(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    a_file = tmp_path / "out"
+    a_file.write_text("not a folder", encoding="utf-8")
+    assert exit_code(["run", DEFAULT, "--out", str(a_file)]) == app.EXIT_BAD_INPUT
+    assert f"--out {a_file}: expected a folder, got a file" in capsys.readouterr().err
+    assert exit_code(["trials", DEFAULT, "--n", str(10**12), "--out", str(tmp_path / "t")]) == 2
+    assert "--n, --workers: expected whole numbers 1..1000000" in capsys.readouterr().err
+    assert a_file.read_text(encoding="utf-8") == "not a folder"  # nothing lost
