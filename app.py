@@ -391,6 +391,9 @@ def _run_command(args: argparse.Namespace) -> int:
     except (TreeFileError, LibraryFileError, NoDisplayError) as err:
         print(err, file=sys.stderr)
         return EXIT_BAD_INPUT
+    except OSError as err:  # an output the run cannot write (a folder named like it)
+        print(f"--out {out}: {err}", file=sys.stderr)
+        return EXIT_BAD_INPUT
     s = report.summary()
     verdict = "SUCCESS" if report.success else f"FAILURE ({printable(report.failure)})"
     print(f"{printable(world.name)}: {verdict}")
@@ -413,6 +416,8 @@ def _run_command(args: argparse.Namespace) -> int:
     )
     for key, path in report.outputs.items():
         print(f"  {key}: {path}")
+    if report.replaced_outputs:
+        print(f"replaced the earlier run's {', '.join(report.replaced_outputs)} in {out}")
     for problem in report.output_errors:
         print(f"not written: {problem}", file=sys.stderr)
     if args.json:

@@ -58,6 +58,8 @@ class EpisodeReport:
     outputs: dict[str, str] = field(default_factory=dict)
     #: Outputs that could not be written after the verdict, each naming its file and why.
     output_errors: list[str] = field(default_factory=list)
+    #: Outputs of an earlier run this one replaced (links among them removed, not followed).
+    replaced_outputs: list[str] = field(default_factory=list)
     #: Per move, the composition that placed the object: ``{"transport_weight": w,
     #: "avoid_gain": g}`` of the Transport leaf that succeeded (its published
     #: :class:`planner.move_result.MoveResult`), or None if none did.
@@ -295,6 +297,25 @@ class _Recorder:
         return out
 
 
+#: What a run writes into its ``out`` folder.
+OUTPUT_NAMES = ("run.jsonl", "trajectories.png", "animation.gif", "tree.svg")
+
+
+def clear_outputs(out: Path) -> list[str]:
+    """Remove an earlier run's outputs from ``out`` before this run writes its own; the names
+    removed. A link is removed itself, never followed: writing through a link named like an
+    output would overwrite whatever it points at, outside ``out``."""
+    removed = []
+    for name in OUTPUT_NAMES:
+        path = out / name
+        if path.is_symlink() or path.is_file():
+            path.unlink()
+            removed.append(name)
+        elif path.exists():
+            raise OSError(f"{path}: expected a file this run may replace, got a folder")
+    return removed
+
+
 def run_episode(
     world: World,
     tree_path: Path | None = None,
@@ -345,8 +366,10 @@ def run_episode(
         ]
         log: RunLog | None = None
         anim: Animation | None = None
+        replaced: list[str] = []
         if out is not None:
             out.mkdir(parents=True, exist_ok=True)
+            replaced = clear_outputs(out)
             log = RunLog(out / "run.jsonl", clock=sim.time)
             hooks.append(log.attach)
             if animation:
@@ -401,6 +424,7 @@ def run_episode(
             placement_objects=objects,
             skills=recorder.column("skill"),
         )
+        report.replaced_outputs = replaced
         if out is not None:
             report.outputs["run_log"] = str(out / "run.jsonl")
             title = f"{world.name}: {'success' if ok else 'failure: ' + failure}"

@@ -53,3 +53,20 @@ def test_an_obstacle_inside_the_robot_fails_the_run_on_fcl_clearance(tmp_path: P
     assert report.min_obstacle_distance_m < 0.0
     assert report.failure.startswith("obstacle penetration: ")
     assert "ball_right" in report.failure and "mm (FCL)" in report.failure
+
+
+def test_outputs_never_write_through_a_link_and_say_what_they_replaced(tmp_path: Path) -> None:
+    from experiment.episode import clear_outputs
+
+    out = tmp_path / "out"
+    out.mkdir()
+    elsewhere = tmp_path / "precious.txt"
+    elsewhere.write_text("keep me", encoding="utf-8")
+    (out / "run.jsonl").symlink_to(elsewhere)
+    (out / "tree.svg").write_text("old", encoding="utf-8")
+    assert clear_outputs(out) == ["run.jsonl", "tree.svg"]
+    assert elsewhere.read_text(encoding="utf-8") == "keep me"
+    assert not (out / "run.jsonl").exists() and not (out / "tree.svg").exists()
+    (out / "trajectories.png").mkdir()
+    with pytest.raises(OSError, match="expected a file this run may replace, got a folder"):
+        clear_outputs(out)
