@@ -166,7 +166,7 @@ class _Checker:
                     f"blackboard key '{value}'",
                 )
             elif not is_key:
-                bad = literal_problem(value, params[key].annotation)
+                bad = literal_problem(value, params[key].annotation, key)
                 if bad:
                     self.add(elem, f"attribute '{key}': {bad}")
         unknown = [k for k in elem.attrib if k not in params and k != "name"]
@@ -200,7 +200,7 @@ class _Checker:
                     f"literal '{value}'",
                 )
             elif key in inputs and not is_key:
-                bad = literal_problem(value, inputs[key].data_type)
+                bad = literal_problem(value, inputs[key].data_type, key)
                 if bad:
                     self.add(elem, f"port '{key}': {bad}")
         for port, info in inputs.items():
@@ -274,7 +274,7 @@ class _Checker:
             for name, info in cls.input_ports().items():
                 if inner.attrib.get(name) != f"{{{port}}}":
                     continue
-                bad = literal_problem(value, info.data_type)
+                bad = literal_problem(value, info.data_type, name)
                 if bad:
                     self.add(
                         elem,

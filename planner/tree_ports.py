@@ -7,6 +7,7 @@ from __future__ import annotations
 import enum
 import functools
 import inspect
+import math
 import typing
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -100,14 +101,22 @@ def type_name(tp: Any) -> str:
     return str(tp)
 
 
-def literal_problem(value: str, data_type: Any) -> str | None:
+#: Largest magnitude a number written in a tree may have: far beyond any port's meaning.
+LIMIT = 1e6
+
+
+def literal_problem(value: str, data_type: Any, port: str = "") -> str | None:
     """Return why ``value`` does not convert to ``data_type`` as the parser does, or None.
 
     Uses py_trees' own conversion (the one ``setup_ports`` applies), plus a length check for
-    fixed-length tuples, which py_trees converts without checking.
+    fixed-length tuples, which py_trees converts without checking. Numbers must be finite and
+    within :data:`LIMIT`; by the project's naming, a port ending in ``_s`` (a duration) must be
+    greater than 0 and one ending in ``_m`` or ``_n`` (a distance, a force) at least 0.
     """
     if data_type is None or data_type is str or data_type is Any or data_type is object:
         return None
+    if data_type in (int, float):
+        return _number_problem(value, data_type, port)
     expected = type_name(data_type)
     try:
         ok, converted = convert_str_to_type(value, data_type)
@@ -124,6 +133,25 @@ def literal_problem(value: str, data_type: Any) -> str | None:
         args = get_args(data_type)
         if args and Ellipsis not in args and len(converted) != len(args):
             return f"expected {len(args)} comma-separated values for {expected}, got '{value}'"
+    return None
+
+
+def _number_problem(value: str, data_type: type, port: str) -> str | None:
+    text = value.strip()
+    if len(text) > 40:
+        return (
+            f"expected a {data_type.__name__} within {LIMIT:g}, got a {len(text)}-character value"
+        )
+    try:
+        number = data_type(text)
+    except (ValueError, OverflowError):
+        return f"cannot convert '{value}' to {data_type.__name__}"
+    if not math.isfinite(number) or abs(number) > LIMIT:
+        return f"expected a finite {data_type.__name__} within {LIMIT:g}, got '{value}'"
+    if port.endswith("_s") and number <= 0:
+        return f"expected a duration greater than 0 s, got '{value}'"
+    if port.endswith(("_m", "_n")) and number < 0:
+        return f"expected a value of at least 0, got '{value}'"
     return None
 
 

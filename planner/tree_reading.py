@@ -221,6 +221,8 @@ def _read(
     return TreeDocument(source, root, main_id, problems)
 
 
+#: Longest Timeout a tree may ask for, ms: a day of simulated time.
+MAX_TIMEOUT_MS = 86_400_000
 #: Largest tree file read, bytes (the shipped trees are 5-10 KB).
 MAX_TREE_BYTES = 1 << 20
 
@@ -343,12 +345,18 @@ def _translate(elem: ET.Element, registry: Registry, problems: list[TreeProblem]
         elem.tag = "Timeout"
         msec = _drop_attribute(elem, "msec")
         if msec is not None:
+            ms: int | None
             try:
-                elem.attrib.setdefault("duration", repr(int(msec) / 1000.0))
+                ms = int(msec) if len(msec.strip()) <= 12 else None
             except ValueError:
+                ms = None
+            if ms is None or not 0 < ms <= MAX_TIMEOUT_MS:
                 problem(
-                    f"attribute 'msec': expected an integer number of milliseconds, got '{msec}'"
+                    "attribute 'msec': expected a whole number of milliseconds from 1 to "
+                    f"{MAX_TIMEOUT_MS}, got {msec[:40]!r}"
                 )
+            else:
+                elem.attrib.setdefault("duration", repr(ms / 1000.0))
     elif lower == "repeat":
         elem.tag = "Repeat"
         cycles = _drop_attribute(elem, "num_cycles")

@@ -124,7 +124,11 @@ def test_decorator_and_parallel_attributes() -> None:
             "fails (failure_count=\"1\")"),
         (3, "success_count=\"2\" is not supported; expected 1 (any child) or -1 / 4 (all "
             "children)"),
-        (6, "attribute 'msec': expected an integer number of milliseconds, got 'soon'"),
+        (
+            6,
+            "attribute 'msec': expected a whole number of milliseconds from 1 to 86400000, "
+            "got 'soon'",
+        ),
         (4, "attribute 'num_failures': cannot convert 'many' to int"),
         (7, "missing required attribute 'num_failures'"),
         (8, "unknown attribute 'speed'; expected one of num_success"),
@@ -213,3 +217,22 @@ def test_literals_passed_into_a_subtree_are_checked_against_the_leaf_port() -> N
         (3, "port 'force' feeds <StubGrasp name=\"squeeze\"> port 'force_n' (line 6): cannot "
             "convert 'strong' to float"),
     ]  # fmt: skip
+
+
+def test_values_that_would_crash_a_run_are_refused_at_validate(tmp_path: Path) -> None:
+    tree = tmp_path / "crashers.xml"
+    tree.write_text(
+        '<root BTCPP_format="4" main_tree_to_execute="Main"><BehaviorTree ID="Main"><Sequence>'
+        '<Approach name="a" object="parcel" standoff_m="nan"/>'
+        '<Retreat name="r" segment_s="0"/>'
+        '<Timeout msec="-5"><Retreat name="r2"/></Timeout>'
+        f'<Timeout msec="{"9" * 400}"><Retreat name="r3"/></Timeout>'
+        "</Sequence></BehaviorTree></root>",
+        encoding="utf-8",
+    )
+    import planner.leaves  # noqa: F401  (the shipped leaves this tree uses)
+
+    messages = [p.message for p in validate_tree(tree)]
+    assert "port 'standoff_m': expected a finite float within 1e+06, got 'nan'" in messages
+    assert "port 'segment_s': expected a duration greater than 0 s, got '0'" in messages
+    assert sum("attribute 'msec': expected a whole number" in m for m in messages) == 2
