@@ -520,6 +520,17 @@ class MovePlan:
         return replace(self.composer, state=self.start)
 
 
+def squeeze_force(plan: SemanticAction | None, default: float) -> float:
+    """The plan's squeeze force for the hold skill, else ``default``, N."""
+    if plan is not None:
+        sel = plan.skill(Action.HOLD_LATERAL)
+        if sel is not None:
+            value = sel.params.get("squeeze_force_n")
+            if isinstance(value, int | float):
+                return max(float(value), default)
+    return default
+
+
 def compose_move(
     plan: SemanticAction,
     library: SkillLibrary,

@@ -8,6 +8,7 @@ import numpy as np
 from py_trees.ports import PortInformation
 
 from planner.composition import grasp_quarter_turns, lateral_geometry, move_turn, robot_yaw
+from planner.leaves.base import grasp_move_port
 from planner.leaves.palm_motion import ViaPointLeaf, ViaPointMotion, measured_state
 from planner.port import ObjectSensing, PalmControl, Pose, WorldPort
 from skills import quaternion as quat
@@ -65,13 +66,7 @@ class Approach(ViaPointLeaf):
 
     INPUT_PORTS = {
         "object": PortInformation(str, description="object to approach"),
-        "move": PortInformation(
-            int,
-            required=False,
-            default_value=-1,
-            description="the task's move the grasp is for (its turn chooses the faces); "
-            "-1: the faces nearest the robot's y axis",
-        ),
+        "move": grasp_move_port(),
         "standoff_m": PortInformation(
             float,
             required=False,

@@ -8,6 +8,7 @@ import py_trees
 from py_trees.common import Status
 from py_trees.ports import BehaviourWithPorts, NoDataAvailable, PortInformation
 
+from planner.composition import MovePlan, compose_move, squeeze_force
 from planner.port import WorldPort
 from skills.library import SkillLibrary
 
@@ -134,6 +135,41 @@ def composition_ports() -> dict[str, PortInformation]:
             "default: the world's move's skill, else the plan's transport skill",
         ),
     }
+
+
+def composed_move(leaf: WorldLeaf, name: str, index: int) -> MovePlan:
+    """Move ``index`` of ``name`` composed as ``leaf``'s ports ask: ``plan``, ``from_state``
+    and :func:`composition_ports` (what PathClear checks and Transport runs).
+
+    Raises
+    ------
+    SkillChoiceError
+        If the ``skill`` asked for is not one the library can carry the object with.
+    """
+    plan = leaf.get_input("plan")
+    return compose_move(
+        plan,
+        leaf.library,
+        leaf.world,
+        name,
+        index,
+        leaf.get_input("from_state"),
+        squeeze_force(plan, float(leaf.get_input("force_n"))),
+        avoid_gain=float(leaf.get_input("avoid_gain")),
+        transport_weight=float(leaf.get_input("transport_weight")),
+        skill=leaf.optional_input("skill"),
+    )
+
+
+def grasp_move_port() -> PortInformation:
+    """The ``move`` port of the leaves that take hold of an object (Approach, Grasp)."""
+    return PortInformation(
+        int,
+        required=False,
+        default_value=-1,
+        description="the task's move the grasp is for (its turn chooses the faces); "
+        "-1: the faces nearest the robot's y axis",
+    )
 
 
 class MotionLeaf(WorldLeaf):

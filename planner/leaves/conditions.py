@@ -9,9 +9,8 @@ from py_trees.common import Status
 from py_trees.ports import PortInformation
 
 from affordances import SemanticAction
-from planner.composition import MovePlan, SkillChoiceError, compose_move, goal_error
-from planner.leaves.base import WorldLeaf, composition_ports
-from planner.leaves.grasp import squeeze_force
+from planner.composition import MovePlan, SkillChoiceError, goal_error
+from planner.leaves.base import WorldLeaf, composed_move, composition_ports
 from planner.port import ObjectSensing, ObstacleScene, PalmControl
 from skills.composer import DualArmState
 from skills.vocabulary import ARMS
@@ -135,20 +134,8 @@ class PathClear(WorldLeaf):
         index = int(self.get_input("move"))
         if (bad := self.bad_move_index(name, index)) is not None:
             return self.fail(bad)
-        plan: SemanticAction = self.get_input("plan")
         try:
-            checked = compose_move(
-                plan,
-                self.library,
-                world,
-                name,
-                index,
-                self.get_input("from_state"),
-                squeeze_force(plan, float(self.get_input("force_n"))),
-                avoid_gain=float(self.get_input("avoid_gain")),
-                transport_weight=float(self.get_input("transport_weight")),
-                skill=self.optional_input("skill"),
-            )
+            checked = composed_move(self, name, index)
         except SkillChoiceError as err:
             return self.fail(str(err))
         n = int(np.ceil((checked.composer.target.tau + 0.5) / self.control_dt))

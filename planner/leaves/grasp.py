@@ -15,13 +15,14 @@ from planner.composition import (
     lateral_geometry,
     measured_dual_state,
     move_turn,
+    squeeze_force,
     static_composition,
 )
-from planner.leaves.base import SQUEEZE_FORCE_N, MotionLeaf
+from planner.leaves.base import SQUEEZE_FORCE_N, MotionLeaf, grasp_move_port
 from planner.port import Clock, ObjectSensing, PalmControl, Pose
 from skills.composer import DualArmComposer, DualArmState, relative_from_world
 from skills.pose_dmp import PoseState
-from skills.vocabulary import ARMS, Action
+from skills.vocabulary import ARMS
 
 
 def anchored(composer: DualArmComposer, measured: Pose) -> DualArmState:
@@ -53,17 +54,6 @@ def anchored(composer: DualArmComposer, measured: Pose) -> DualArmState:
     )
 
 
-def squeeze_force(plan: SemanticAction | None, default: float) -> float:
-    """The plan's squeeze force for the hold skill, else ``default``, N."""
-    if plan is not None:
-        sel = plan.skill(Action.HOLD_LATERAL)
-        if sel is not None:
-            value = sel.params.get("squeeze_force_n")
-            if isinstance(value, int | float):
-                return max(float(value), default)
-    return default
-
-
 class Grasp(MotionLeaf):
     """Lateral contact, then squeeze: grasp maintenance pulls the palms onto the faces (the
     pair that suits move ``move``'s turn, as :class:`~planner.leaves.Approach` chose it)."""
@@ -72,13 +62,7 @@ class Grasp(MotionLeaf):
 
     INPUT_PORTS = {
         "object": PortInformation(str, description="object to grasp"),
-        "move": PortInformation(
-            int,
-            required=False,
-            default_value=-1,
-            description="the task's move the grasp is for (its turn chooses the faces); "
-            "-1: the faces nearest the robot's y axis",
-        ),
+        "move": grasp_move_port(),
         "force_n": PortInformation(
             float,
             required=False,

@@ -9,9 +9,8 @@ from py_trees.common import Status
 from py_trees.ports import PortInformation
 
 from affordances import SemanticAction
-from planner.composition import MovePlan, SkillChoiceError, compose_move, goal_error
-from planner.leaves.base import MotionLeaf, composition_ports
-from planner.leaves.grasp import squeeze_force
+from planner.composition import MovePlan, SkillChoiceError, goal_error, squeeze_force
+from planner.leaves.base import MotionLeaf, composed_move, composition_ports
 from planner.move_result import MoveResult, publish_move_result
 from planner.port import Clock, Move, ObjectSensing, ObstacleScene, PalmControl, Pose
 from skills.composer import DualArmComposer, DualArmState
@@ -102,18 +101,7 @@ class Transport(MotionLeaf):
         checked: MovePlan | None = self.optional_input("composition")
         if checked is None:
             try:
-                checked = compose_move(
-                    plan,
-                    self.library,
-                    world,
-                    name,
-                    index,
-                    state,
-                    force,
-                    avoid_gain=avoid_gain,
-                    transport_weight=transport_weight,
-                    skill=skill,
-                )
+                checked = composed_move(self, name, index)
             except SkillChoiceError as err:
                 self.problem = str(err)
                 return
