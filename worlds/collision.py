@@ -285,14 +285,15 @@ class CollisionWorld:
         palm_positions: ArrayLike,
         palm_quaternions: ArrayLike,
         distal_links: int = 4,
-        margin: float = 0.0,
+        margin: float | ArrayLike = 0.0,
     ) -> NDArray[np.bool_]:
         """Check each arm's last ``distal_links`` links carried along predicted palm poses.
 
         Without inverse kinematics for every waypoint, the forearm and wrist are taken to move
-        rigidly with the palm: each keeps the pose in the palm's frame it has now (after
-        :meth:`sync`). Over one carry that holds for the links nearest the palm, the ones that
-        hit obstacles beside the object; a bounding-sphere test screens before FCL.
+        rigidly with the palm: each starts where it is now (after :meth:`sync`) and follows the
+        palm's predicted motion from the first waypoint. Over one carry that holds for the
+        links nearest the palm, the ones that hit obstacles beside the object; a
+        bounding-sphere test screens before FCL.
 
         Parameters
         ----------
@@ -302,13 +303,16 @@ class CollisionWorld:
             (N, 2, 4) left and right palm orientations, scalar-last.
         distal_links : int
             How many links before the palm to carry (the iiwa's forearm and wrist are 4).
-        margin : float
-            Clearance below which a waypoint counts as colliding, m.
+        margin : float or array_like
+            Clearance below which a waypoint counts as colliding, m: one for all, or (N,) one
+            per waypoint.
 
         Returns
         -------
         ndarray
-            (N,) True where a carried link is within ``margin`` of an active obstacle.
+            (N,) True where a carried link is within ``margin`` of an active obstacle, or, for
+            a link that starts nearer than ``margin``, nearer than it starts (see
+            :func:`_start_allowance`).
         """
         positions = np.asarray(palm_positions, dtype=float)
         quaternions = np.asarray(palm_quaternions, dtype=float)
@@ -316,32 +320,37 @@ class CollisionWorld:
         collides = np.zeros(n, dtype=bool)
         if not self._active or n == 0:
             return collides
+        margins = np.broadcast_to(np.asarray(margin, dtype=float), (n,))
         obstacles = [self._elements[r] for r in self._active]
         o_centre = np.array([o.centre for o in obstacles])
         o_radius = np.array([o.radius for o in obstacles])
         palm_r = quat.to_matrix(quaternions)  # (N, 2, 3, 3)
         for a, arm in enumerate((Arm.LEFT, Arm.RIGHT)):
             rows = self._rows(arm_group(arm))
-            palm = self._elements[self._palm_rows[arm]]
-            p_now = np.asarray(palm.obj.getTranslation(), dtype=float)
-            r_now = np.asarray(palm.obj.getRotation(), dtype=float)
+            # The palm's predicted motion from the first waypoint, start2waypoint (N, 3, 3):
+            # links move with it from where they are now. (Placing them by the palm's pose now
+            # would shift them by the gap between the palm and its first command, which a
+            # squeezing or slipped grip makes centimetres.)
+            start2waypoint = palm_r[:, a] @ palm_r[0, a].T
             links = [r for r in rows if r != self._palm_rows[arm]][-distal_links:]
             for row in links:
                 element = self._elements[row]
-                # The link in the palm's frame now, carried rigidly along its predicted poses.
-                lp = r_now.T @ (np.asarray(element.obj.getTranslation(), dtype=float) - p_now)
-                lr = r_now.T @ np.asarray(element.obj.getRotation(), dtype=float)
-                rot = palm_r[:, a] @ lr  # (N, 3, 3)
-                pos = np.einsum("nij,j->ni", palm_r[:, a], lp) + positions[:, a]
+                offset = np.asarray(element.obj.getTranslation(), dtype=float) - positions[0, a]
+                rot = start2waypoint @ np.asarray(element.obj.getRotation(), dtype=float)
+                pos = start2waypoint @ offset + positions[:, a]
                 centres = np.einsum("nij,j->ni", rot, element.centre_local) + pos
                 gaps = (
                     np.linalg.norm(centres[:, None] - o_centre, axis=-1) - element.radius - o_radius
                 )
                 probe = fcl.CollisionObject(element.geometry, fcl.Transform())
-                for w, o in np.argwhere(gaps <= margin):
+                allowed: dict[int, float] = {}
+                for w, o in np.argwhere(gaps <= margins[:, None]):
                     if collides[w]:
                         continue
-                    collides[w] = _hit(probe, rot[w], pos[w], obstacles[o].obj, margin)
+                    if o not in allowed:
+                        allowed[o] = _start_allowance(probe, rot[0], pos[0], obstacles[o].obj)
+                    asked = min(float(margins[w]), allowed[o])
+                    collides[w] = _hit(probe, rot[w], pos[w], obstacles[o].obj, asked)
         return collides
 
     def arm_links(self, arm: Arm) -> tuple[str, ...]:
@@ -651,6 +660,26 @@ __all__ = [
     "TrajectoryCheck",
     "arm_group",
 ]
+
+
+#: How much nearer than it is now a link already inside the margin may be carried, m: the
+#: prediction's own numerical slack, not a licence to approach.
+START_SLACK_M = 0.002
+
+
+def _start_allowance(
+    probe: Any,
+    rotation: NDArray[np.float64],
+    position: NDArray[np.float64],
+    obstacle: Any,
+) -> float:
+    """The most clearance a path can ask of a carried link from one obstacle: its distance at
+    the path's first waypoint (posed at ``rotation``, ``position``) less :data:`START_SLACK_M`.
+    The robot is where it is: a path may keep or widen the gap it starts with, never narrow
+    it, and a link touching at the start is refused at once."""
+    probe.setTransform(fcl.Transform(rotation, position))
+    start = float(fcl.distance(probe, obstacle, fcl.DistanceRequest()))
+    return max(start - START_SLACK_M, 0.0)
 
 
 def _hit(

@@ -28,10 +28,38 @@ from worlds.scene import LATERAL_PALM_QUATERNIONS, Scene
 from worlds.spec import Shape, ShapeSpec, WorldSpec
 from worlds.world_file import World, as_world_spec
 
-#: Extra clearance asked of predicted forearm poses (carried rigidly with the palms), m.
+#: Extra clearance asked of predicted forearm poses (carried rigidly with the palms), m: the
+#: most, for a long carry.
 FOREARM_MARGIN_M = 0.03
+#: How fast that extra clearance grows with the palms' travel from the path's start, m per m.
+#: The rigid prediction misses the elbow's swing, which grows with how far the palms have
+#: gone (turns counted at :data:`FOREARM_LEVER_M` per radian); a short correction near an
+#: obstacle is not held to a long carry's doubt.
+FOREARM_DOUBT_PER_M = 0.2
+#: Lever that converts a palm's turn into travel for that doubt, m per rad (a forearm's length).
+FOREARM_LEVER_M = 0.3
 #: Highest an object's centre may be carried above the table top, m.
 MAX_LIFT_M = 0.30
+
+
+def forearm_doubt(palm_positions: Array, palm_orientations: Array) -> Array:
+    """Extra clearance asked of the forearms at each waypoint (N,), m: grows with the palms'
+    travel from the first waypoint (:data:`FOREARM_DOUBT_PER_M`), up to
+    :data:`FOREARM_MARGIN_M`.
+
+    Parameters
+    ----------
+    palm_positions : ndarray
+        (N, 2, 3) left and right palm positions, world frame, m.
+    palm_orientations : ndarray
+        (N, 2, 4) their orientations, scalar-last.
+    """
+    p = np.asarray(palm_positions, dtype=float)
+    q = np.asarray(palm_orientations, dtype=float)
+    shift = np.linalg.norm(p - p[:1], axis=-1)  # (N, 2)
+    turn = 2.0 * np.arccos(np.clip(np.abs(np.sum(q * q[:1], axis=-1)), 0.0, 1.0))
+    travel = np.max(shift + FOREARM_LEVER_M * turn, axis=-1)
+    return np.minimum(FOREARM_MARGIN_M, FOREARM_DOUBT_PER_M * travel)
 
 
 def shape_extents(shape: ShapeSpec) -> Array:
@@ -335,7 +363,10 @@ class SimWorld:
         # The forearms are predicted by carrying them rigidly with the palms, which misses the
         # elbow's swing: they get extra clearance so that a doubtful path is not trusted.
         arms = self.collision.check_attached_links(
-            palm_positions, palm_orientations, 4, margin_m + FOREARM_MARGIN_M
+            palm_positions,
+            palm_orientations,
+            4,
+            margin_m + forearm_doubt(palm_positions, palm_orientations),
         )
         pts = np.concatenate((object_positions, palm_positions.reshape(-1, 3)))
         d, _ = self.collision.query(pts)
@@ -343,8 +374,12 @@ class SimWorld:
         first = int(hits[0]) if hits.size else None
         what = "clear"
         if first is not None:
-            what = "a forearm" if arms[first] and not check.collides[first] else "palm or object"
-            what += f" within {margin_m:g} m at step {first}"
+            if arms[first] and not check.collides[first]:
+                doubt = forearm_doubt(palm_positions, palm_orientations)[first]
+                what = f"a forearm within {margin_m + doubt:.3f} m"
+            else:
+                what = f"palm or object within {margin_m:g} m"
+            what += f" at step {first}"
         return PathCheck(first is None, float(d.min()) if d.size else math.inf, first, what)
 
     def link_points(self) -> Array:

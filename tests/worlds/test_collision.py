@@ -235,3 +235,41 @@ def test_palms_reach_the_parcel_sides_over_the_table_workspace() -> None:
                         assert world.distance(arm_group(arm), TABLE).distance > 0.0, (x, y, z)
         # Upright bases missed the far low corner by 5 cm; the 9 degree lean brings it in.
         assert worst < 0.012
+
+
+def _left_palm_path(scene: Scene, shift: np.ndarray, n: int = 40) -> tuple[np.ndarray, np.ndarray]:
+    """Both palms held where they are, the left one moved linearly by ``shift`` (3,), m."""
+    states = [scene.palm_state(arm) for arm in (Arm.LEFT, Arm.RIGHT)]
+    positions = np.repeat(np.array([[s.position for s in states]]), n, axis=0)
+    positions[:, 0] += np.linspace(0.0, 1.0, n)[:, None] * shift
+    quaternions = np.repeat(np.array([[s.quaternion for s in states]]), n, axis=0)
+    return positions, quaternions
+
+
+def test_carried_forearms_start_where_they_are_and_may_not_narrow_their_gap() -> None:
+    # A ball 6 cm above the left wrist: a forearm margin wider than the gap it starts with.
+    with Scene(SceneSpec()) as bare:
+        palm = np.asarray(bare.palm_state(Arm.LEFT).position, dtype=float)
+    ball = ObstacleSpec("ball", ShapeSpec.sphere(0.03), tuple(palm + [0.0, 0.0, 0.16]))
+    with Scene(SceneSpec(obstacles=(ball,))) as scene:
+        scene.set_active_obstacles(["ball"])
+        world = CollisionWorld(scene)
+        world.sync()
+        wrist = world.link_distances(Arm.LEFT).distances[-5:-1]  # the carried links
+        start_gap = float(wrist.min())
+        assert 0.01 < start_gap < 0.2
+        margin = start_gap + 0.03
+        down, q = _left_palm_path(scene, np.array([0.0, 0.0, -0.05]))
+        up, _ = _left_palm_path(scene, np.array([0.0, 0.0, 0.05]))
+        # Moving away keeps the gap it starts with: clear, though inside the margin.
+        assert not world.check_attached_links(down, q, 4, margin).any()
+        # Moving towards narrows it: refused, at the step where it is 2 mm nearer than at first.
+        toward = world.check_attached_links(up, q, 4, margin)
+        assert not toward[0] and toward[-1]
+        # Far from the ball a margin below the gap asks nothing of the start.
+        assert not world.check_attached_links(down, q, 4, start_gap - 0.01).any()
+        # The first command 3 cm ahead of the palm (a squeezing grip) does not move the
+        # links: they start where they are, so a path that stands still is clear.
+        ahead = up.copy()
+        ahead[:] = up[-1] - [0.0, 0.0, 0.02]
+        assert not world.check_attached_links(ahead, q, 4, margin).any()

@@ -1,0 +1,39 @@
+"""The forearm clearance a predicted path is held to grows with the palms' travel."""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.testing import assert_allclose
+
+from worlds.sim_world import (
+    FOREARM_DOUBT_PER_M,
+    FOREARM_LEVER_M,
+    FOREARM_MARGIN_M,
+    forearm_doubt,
+)
+
+
+def _yaw(angle: np.ndarray) -> np.ndarray:
+    return np.stack(
+        [np.zeros_like(angle), np.zeros_like(angle), np.sin(angle / 2), np.cos(angle / 2)], -1
+    )
+
+
+def test_doubt_is_zero_at_the_start_and_grows_with_travel_to_the_cap() -> None:
+    n = 11
+    positions = np.zeros((n, 2, 3))
+    positions[:, 1, 0] = np.linspace(0.0, 0.5, n)  # the right palm travels 0.5 m in x
+    quaternions = np.tile(_yaw(np.zeros(1)), (n, 2, 1))
+    doubt = forearm_doubt(positions, quaternions)
+    expected = np.minimum(FOREARM_MARGIN_M, FOREARM_DOUBT_PER_M * np.linspace(0.0, 0.5, n))
+    assert_allclose(doubt, expected, atol=1e-12)
+    assert doubt[0] == 0.0 and doubt[-1] == FOREARM_MARGIN_M
+
+
+def test_a_turn_counts_at_the_forearm_lever() -> None:
+    angles = np.array([0.0, 0.05, 0.1])
+    quaternions = np.repeat(_yaw(angles)[:, None], 2, axis=1)
+    # The same turn read from -q (the same rotation) counts the same.
+    quaternions[:, 1] *= -1.0
+    doubt = forearm_doubt(np.zeros((3, 2, 3)), quaternions)
+    assert_allclose(doubt, FOREARM_DOUBT_PER_M * FOREARM_LEVER_M * angles, atol=1e-9)
