@@ -37,6 +37,10 @@ def palms_facing(state: DualArmState) -> GraspGeometry:
     )
 
 
+#: Further openings a release makes when the opened palms still touch the object.
+MAX_REOPENINGS = 2
+
+
 class Release(MotionLeaf):
     """Move each palm ``opening_m`` out along its contact normal (a relative skill)."""
 
@@ -67,7 +71,10 @@ class Release(MotionLeaf):
         name = self.get_input("object")
         # Open along the faces as the object stands: a box that lagged its palms in a turn
         # is not where the last move commanded it.
-        state = on_measured_object(self.world, name, self.get_input("from_state"))
+        self.reopenings = 0
+        self._open_from(on_measured_object(self.world, name, self.get_input("from_state")))
+
+    def _open_from(self, state: DualArmState) -> None:
         relative = opening_terms(palms_facing(state), float(self.get_input("opening_m")))
         self.composer = static_composition(state, relative, float(self.get_input("open_s")))
         self.started = self.world.time()
@@ -84,9 +91,19 @@ class Release(MotionLeaf):
         forces = [world.contact_force(arm, self.get_input("object")) for arm in ARMS]
         st = self.composer.state
         still = max(np.linalg.norm(st.left.velocity), np.linalg.norm(st.right.velocity)) < 5e-3
-        if max(forces) < 0.5 and still and world.time() - self.started > 0.3:
+        settled = still and world.time() - self.started > 0.3
+        if max(forces) < 0.5 and settled:
             self._set_output("to_state", st)
             return self.succeed("palms open and clear of the object")
+        if settled and self.reopenings < MAX_REOPENINGS:
+            # The palms stand open and still, yet one is pressed: the object leans on it or
+            # came with it. Open again from here, along the faces as the object now stands.
+            self.reopenings += 1
+            self._open_from(on_measured_object(world, self.get_input("object"), st))
+            return self.running(
+                f"opening further ({self.reopenings} of {MAX_REOPENINGS}): the object "
+                f"still presses {max(forces):.1f} N on a palm"
+            )
         return self.running(f"opening: {forces[0]:.1f} N, {forces[1]:.1f} N")
 
 

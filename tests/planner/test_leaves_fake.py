@@ -22,6 +22,7 @@ from planner.leaves import (
     SelectSkills,
     Transport,
 )
+from planner.leaves.release import MAX_REOPENINGS
 from planner.move_result import MoveResult, move_results
 from planner.port import Pose
 from planner.testing import FakeWorld, tick_until
@@ -30,7 +31,7 @@ from planner.testing.fixtures import paper_moves
 from planner.wiring import wire
 from skills import quaternion as quat
 from skills.library import SkillLibrary
-from skills.vocabulary import ARMS, Action, GraspType, Space
+from skills.vocabulary import ARMS, Action, Arm, GraspType, Space
 
 DT = 1.0 / 60.0
 
@@ -417,6 +418,63 @@ def test_release_then_retreat(fake_world: FakeWorld, library: SkillLibrary) -> N
     for arm in ARMS:
         rest = fake_world.rest_palm_pose(arm)
         assert np.linalg.norm(fake_world.palm_pose(arm).position - rest.position) < 3e-3
+
+
+class LeaningWorld(FakeWorld):
+    """An object that leans on the left palm with 2 N until that palm is ``lean_m`` out from
+    where the release found it (a tipped box following the palm that held it)."""
+
+    lean_m = 0.08
+    found: np.ndarray | None = None
+
+    def contact_force(self, arm: Arm, name: str) -> float:
+        force = super().contact_force(arm, name)
+        if arm is Arm.LEFT and self.found is not None:
+            if np.linalg.norm(self.palm_pose(arm).position - self.found) < self.lean_m:
+                return max(force, 2.0)
+        return force
+
+
+def test_release_opens_further_when_the_object_leans_on_a_palm(library: SkillLibrary) -> None:
+    world = LeaningWorld(
+        objects=[FakeObject("parcel", np.array([0.20, 0.30, 0.15]))], moves=paper_moves()
+    )
+    select(world, library)
+    approach_and_grasp(world, library)
+    world.found = world.palm_pose(Arm.LEFT).position.copy()
+    leaf = ready(
+        Release("release"),
+        world,
+        library,
+        object="parcel",
+        from_state="{state}",
+        to_state="{state}",
+    )
+    log = tick_until(leaf, world, DT, max_ticks=2000)
+    assert log.final == Status.SUCCESS, log.feedback
+    # One opening of 5 cm leaves the palm pressed; the release opened again and cleared it.
+    assert leaf.reopenings == 1
+    assert np.linalg.norm(world.palm_pose(Arm.LEFT).position - world.found) > world.lean_m
+    # An object that never lets go ends the release's retries without a success.
+    world = LeaningWorld(
+        objects=[FakeObject("parcel", np.array([0.20, 0.30, 0.15]))], moves=paper_moves()
+    )
+    world.lean_m = 10.0
+    select(world, library)
+    approach_and_grasp(world, library)
+    world.found = world.palm_pose(Arm.LEFT).position.copy()
+    leaf = ready(
+        Release("release"),
+        world,
+        library,
+        object="parcel",
+        from_state="{state}",
+        to_state="{state}",
+    )
+    log = tick_until(leaf, world, DT, max_ticks=1500)
+    assert log.final == Status.RUNNING
+    assert leaf.reopenings == MAX_REOPENINGS
+    assert "2.0 N" in leaf.feedback_message
 
 
 def test_selection_helpers_are_typed() -> None:
