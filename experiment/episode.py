@@ -68,6 +68,8 @@ class EpisodeReport:
     placement_objects: list[str] = field(default_factory=list)
     #: Per move, the learnt transport skill its Transport ran (``MoveResult.skill``), or None.
     skills: list[str | None] = field(default_factory=list)
+    #: Wall time inside the physics engine's steps alone, s (no control, tree or checks).
+    physics_wall_s: float = 0.0
 
     def summary(self) -> dict[str, Any]:
         """Plain JSON-safe dictionary (infinite distances as None)."""
@@ -86,6 +88,7 @@ class EpisodeReport:
             "dropped": self.dropped,
             "sim_time_s": round(self.sim_time_s, 3),
             "wall_time_s": round(self.wall_time_s, 3),
+            "physics_wall_s": round(self.physics_wall_s, 3),
             "compositions": self.compositions,
             "skills": self.skills,
             "outputs": self.outputs,
@@ -425,6 +428,7 @@ def run_episode(
             skills=recorder.column("skill"),
         )
         report.replaced_outputs = replaced
+        report.physics_wall_s = sim.scene.physics_wall_s
         if out is not None:
             report.outputs["run_log"] = str(out / "run.jsonl")
             title = f"{world.name}: {'success' if ok else 'failure: ' + failure}"

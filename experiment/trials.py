@@ -579,6 +579,7 @@ def summarise(records: Iterable[dict[str, Any]]) -> dict[str, Any]:
     successes = reasons.pop("success", 0)
     sim = sum(float(r.get("sim_time_s") or 0.0) for r in recs)
     wall = sum(float(r.get("wall_time_s") or 0.0) for r in recs)
+    physics = sum(float(r.get("physics_wall_s") or 0.0) for r in recs)
     dists = [r["min_obstacle_distance_m"] for r in recs if r.get("min_obstacle_distance_m")]
     carried = Counter(
         composition_label(c) for r in recs for c in r.get("compositions") or () if c is not None
@@ -598,4 +599,6 @@ def summarise(records: Iterable[dict[str, Any]]) -> dict[str, Any]:
         "sim_time_s": round(sim, 2),
         "wall_time_s": round(wall, 2),
         "realtime_factor": round(sim / wall, 2) if wall > 0 else math.nan,
+        # The physics engine's steps alone, in the same trials (records that lack it: nan).
+        "physics_only_realtime_factor": round(sim / physics, 2) if physics > 0 else math.nan,
     }

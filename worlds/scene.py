@@ -12,6 +12,7 @@ on or off per move by parking them far below the floor.
 
 from __future__ import annotations
 
+import time
 from collections.abc import Iterable, Mapping
 from dataclasses import replace
 
@@ -140,6 +141,8 @@ class Scene:
             pb.disconnect(self.client)
             raise
         self.step_count = 0
+        #: Wall time spent inside PyBullet's stepSimulation, s: the physics alone.
+        self.physics_wall_s = 0.0
 
     @classmethod
     def from_world(
@@ -333,11 +336,16 @@ class Scene:
         """Apply the palm control torques and advance physics, ``steps`` times."""
         apply = self.controller.apply
         step = pb.stepSimulation
+        clock = time.perf_counter
         c = self.client
+        spent = 0.0
         for _ in range(steps):
             apply()
+            started = clock()
             step(physicsClientId=c)
+            spent += clock() - started
         self.step_count += steps
+        self.physics_wall_s += spent
 
     def set_palm_command(self, arm: Arm, command: PalmCommand) -> None:
         """Set the target pose (and feed-forward twist, squeeze offset) of ``arm``'s palm."""
