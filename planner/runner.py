@@ -98,6 +98,36 @@ def explain(root: py_trees.behaviour.Behaviour) -> str:
     return text
 
 
+def tick_tree(tree: py_trees.trees.BehaviourTree) -> None:
+    """Tick ``tree`` once, as :meth:`py_trees.trees.BehaviourTree.tick` does: pre-tick
+    handlers, visitors initialised, the root ticked with the partial visitors visiting each
+    ticked node, full visitors visiting every node, visitors finalised, post-tick handlers.
+
+    py_trees walks the whole tree after every tick even when no visitor asks for it; this
+    walks it only for a full visitor. On a run's trees (hundreds of nodes, a few ticked per
+    tick) that walk was an eighth of a run.
+    """
+    for handler in tree.pre_tick_handlers:
+        handler(tree)
+    visitors = list(tree.visitors)
+    for visitor in visitors:
+        visitor.initialise()
+    partial = [visitor for visitor in visitors if not visitor.full]
+    for node in tree.root.tick():
+        for visitor in partial:
+            node.visit(visitor)
+    full = [visitor for visitor in visitors if visitor.full]
+    if full:
+        for node in tree.root.iterate():
+            for visitor in full:
+                node.visit(visitor)
+    for visitor in visitors:
+        visitor.finalise()
+    for handler in tree.post_tick_handlers:
+        handler(tree)
+    tree.count += 1
+
+
 def run_tree(
     root: py_trees.behaviour.Behaviour,
     world: WorldPort,
@@ -139,7 +169,7 @@ def run_tree(
     start_sim, start_wall = world.time(), time.perf_counter()
     ticks = 0
     while True:
-        tree.tick()
+        tick_tree(tree)
         ticks += 1
         if on_tick is not None:
             on_tick(tree)
