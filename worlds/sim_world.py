@@ -9,8 +9,9 @@ other, the smallest FCL distance to an obstacle, and the parcel falling.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import pybullet as pb
@@ -40,6 +41,17 @@ FOREARM_DOUBT_PER_M = 0.2
 FOREARM_LEVER_M = 0.3
 #: Highest an object's centre may be carried above the table top, m.
 MAX_LIFT_M = 0.30
+
+
+def touching(points: Sequence[Sequence[Any]]) -> bool:
+    """Whether PyBullet contact points (``getContactPoints`` tuples) say two bodies touch: a
+    point at or below zero distance, or one that carries a normal force.
+
+    Bullet keeps a manifold's points a little past separation (positive distance, no force)
+    so that contacts persist cheaply; such a point is a near miss, which the FCL clearance
+    measures, not a contact.
+    """
+    return any(p[8] <= 0.0 or p[9] > 0.0 for p in points)
 
 
 def forearm_doubt(palm_positions: Array, palm_orientations: Array) -> Array:
@@ -208,13 +220,15 @@ class SimWorld:
         for name in self.scene.active_obstacles:
             obstacle = self.scene.obstacle_ids[name]
             for label, body in bodies.items():
-                if pb.getContactPoints(bodyA=body, bodyB=obstacle, physicsClientId=c):
+                if touching(pb.getContactPoints(bodyA=body, bodyB=obstacle, physicsClientId=c)):
                     key = f"{label} ~ {name}"
                     self.safety.obstacle_contacts[key] = (
                         self.safety.obstacle_contacts.get(key, 0) + 1
                     )
         left, right = (bodies["left_arm"], bodies["right_arm"])
-        if left != right and pb.getContactPoints(bodyA=left, bodyB=right, physicsClientId=c):
+        if left != right and touching(
+            pb.getContactPoints(bodyA=left, bodyB=right, physicsClientId=c)
+        ):
             self.safety.arm_contacts += 1
 
     def _watch_distances(self) -> None:

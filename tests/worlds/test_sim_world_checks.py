@@ -1,4 +1,4 @@
-"""The forearm clearance a predicted path is held to grows with the palms' travel."""
+"""SimWorld's checks: the forearm clearance asked of a path, and what counts as a contact."""
 
 from __future__ import annotations
 
@@ -10,6 +10,7 @@ from worlds.sim_world import (
     FOREARM_LEVER_M,
     FOREARM_MARGIN_M,
     forearm_doubt,
+    touching,
 )
 
 
@@ -37,3 +38,16 @@ def test_a_turn_counts_at_the_forearm_lever() -> None:
     quaternions[:, 1] *= -1.0
     doubt = forearm_doubt(np.zeros((3, 2, 3)), quaternions)
     assert_allclose(doubt, FOREARM_DOUBT_PER_M * FOREARM_LEVER_M * angles, atol=1e-9)
+
+
+def _point(distance: float, force: float) -> tuple[float, ...]:
+    # getContactPoints' layout: index 8 the distance, 9 the normal force.
+    return (0, 1, 2, -1, -1, (0, 0, 0), (0, 0, 0), (0, 0, 1), distance, force)
+
+
+def test_touching_counts_penetration_or_force_never_a_near_miss() -> None:
+    assert not touching([])
+    assert not touching([_point(0.001, 0.0), _point(0.0004, 0.0)])  # kept past separation
+    assert touching([_point(0.001, 0.0), _point(-0.0002, 0.0)])  # penetrating
+    assert touching([_point(0.0, 0.0)])  # touching
+    assert touching([_point(0.0005, 3.0)])  # pushing before it closes
