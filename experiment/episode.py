@@ -22,6 +22,7 @@ from py_trees.common import Status
 
 import planner.leaves  # noqa: F401  (registers the leaves for the XML loader)
 from experiment.figures import Animation, MoveTrace, demonstrated_path, trajectory_figure
+from planner.btlog import BtLog
 from planner.default_tree import TaskStep, default_tree
 from planner.loader import load_tree
 from planner.move_result import move_results
@@ -298,7 +299,7 @@ class _Recorder:
 
 
 #: What a run writes into its ``out`` folder.
-OUTPUT_NAMES = ("run.jsonl", "trajectories.png", "animation.gif", "tree.svg")
+OUTPUT_NAMES = ("run.jsonl", "run.btlog", "trajectories.png", "animation.gif", "tree.svg")
 
 
 def clear_outputs(out: Path) -> list[str]:
@@ -338,8 +339,8 @@ def run_episode(
     library : SkillLibrary, optional
         Default: the world's.
     out : Path, optional
-        Folder for ``run.jsonl``, ``trajectories.png``, ``animation.gif`` and ``tree.svg``;
-        None writes nothing.
+        Folder for ``run.jsonl``, ``run.btlog`` (Groot2's replay), ``trajectories.png``,
+        ``animation.gif`` and ``tree.svg``; None writes nothing.
     animation : bool
         Capture frames with the CPU renderer (slower).
     progress : callable (sim_time, leaf_name, feedback), optional
@@ -365,12 +366,15 @@ def run_episode(
             lambda tree: tree.add_post_tick_handler(recorder)
         ]
         log: RunLog | None = None
+        btlog: BtLog | None = None
         anim: Animation | None = None
         replaced: list[str] = []
         if out is not None:
             out.mkdir(parents=True, exist_ok=True)
             replaced = clear_outputs(out)
             log = RunLog(out / "run.jsonl", clock=sim.time)
+            btlog = BtLog(out / "run.btlog", root, clock=sim.time)  # the same changes, for Groot2
+            log.add_status_listener(btlog.record)
             hooks.append(log.attach)
             if animation:
                 table = world.table.size
@@ -404,6 +408,8 @@ def run_episode(
         finally:
             if log is not None:
                 log.close()
+            if btlog is not None:
+                btlog.close()
         objects = [name for name, _ in recorder.finals]
         errors_m, errors_deg = recorder.column("error_m"), recorder.column("error_deg")
         ok, failure = judge(result, sim, objects, errors_m, errors_deg)
@@ -427,6 +433,7 @@ def run_episode(
         report.replaced_outputs = replaced
         if out is not None:
             report.outputs["run_log"] = str(out / "run.jsonl")
+            report.outputs["groot_log"] = str(out / "run.btlog")
             title = f"{world.name}: {'success' if ok else 'failure: ' + failure}"
             # The verdict is made: a figure that cannot be written costs that figure alone.
             try:

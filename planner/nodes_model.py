@@ -30,7 +30,7 @@ from py_trees.ports import PortInformation, PortsMixin, get_ports_registry
 
 from planner.tree_ports import Registry, registry_class, type_name
 
-__all__ = ["leaf_kind", "nodes_model_xml", "summary_line"]
+__all__ = ["add_node_model", "leaf_kind", "nodes_model_xml", "summary_line"]
 
 NODE_KINDS = ("Action", "Condition")
 
@@ -100,6 +100,21 @@ def _selected(
     return sorted(chosen, key=lambda item: item[0])
 
 
+def add_node_model(model: ET.Element, tag: str, cls: type[PortsMixin]) -> ET.Element:
+    """Append the model of one ports-enabled class, registered as ``tag``, to a
+    ``<TreeNodesModel>`` element: its kind, ports and description; the new element."""
+    node = ET.SubElement(model, leaf_kind(cls), {"ID": tag})
+    for name, info in cls.input_ports().items():
+        _port_element(node, "input_port", name, info)
+    for name, info in cls.output_ports().items():
+        _port_element(node, "output_port", name, info)
+    description = summary_line(cls)
+    if description:
+        fields = ET.SubElement(node, "MetadataFields")
+        ET.SubElement(fields, "Metadata", {"description": description})
+    return node
+
+
 def nodes_model_xml(
     registry: Registry | None = None,
     *,
@@ -126,14 +141,6 @@ def nodes_model_xml(
     root = ET.Element("root", {"BTCPP_format": "4"})
     model = ET.SubElement(root, "TreeNodesModel")
     for tag, cls in _selected(reg, include_all, packages):
-        node = ET.SubElement(model, leaf_kind(cls), {"ID": tag})
-        for name, info in cls.input_ports().items():
-            _port_element(node, "input_port", name, info)
-        for name, info in cls.output_ports().items():
-            _port_element(node, "output_port", name, info)
-        description = summary_line(cls)
-        if description:
-            fields = ET.SubElement(node, "MetadataFields")
-            ET.SubElement(fields, "Metadata", {"description": description})
+        add_node_model(model, tag, cls)
     ET.indent(root)
     return ET.tostring(root, encoding="unicode") + "\n"

@@ -10,13 +10,13 @@ One JSON object per line, stamped with the simulated time::
 After every tick the log compares the status of the nodes that may have changed, and only
 those: the nodes ticked (a visitor records their order) and the nodes stopped (each node's
 ``stop`` is wrapped while the log is attached; py_trees changes a status only in ``tick`` and
-``stop``), stopped ones not ticked following in tree order. Labels and tree order are worked out
-once at attach, and again only when a node not seen before turns up. ``node`` names one node of the tree
-(:func:`node_labels`): its name, which for a tree loaded from XML is already its dotted path
-from the root, or, where several nodes share a name (a tree built in code), its path from the
-root. Writes come from py_trees' blackboard activity stream, which is drained after every
-tick. The file is flushed after every tick, so an interrupted run keeps everything up to its
-last tick.
+``stop``), stopped ones not ticked following in tree order. Labels and tree order are worked
+out once at attach, and again only when a node not seen before turns up. ``node`` names one
+node of the tree (:func:`node_labels`): its name, which for a tree loaded from XML is already
+its dotted path from the root, or, where several nodes share a name (a tree built in code), its
+path from the root. Writes come from py_trees' blackboard activity stream, which is drained
+after every tick. The file is flushed after every tick, so an interrupted run keeps everything
+up to its last tick.
 """
 
 from __future__ import annotations
