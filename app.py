@@ -120,31 +120,52 @@ def _register_leaves(args: argparse.Namespace) -> list[type] | None:
 
 
 def _validate_command(args: argparse.Namespace) -> int:
-    """Check a world file (YAML or JSON) and what it asks of the robot, optionally with the
-    tree to run it (``--tree``); or a behaviour tree (XML) alone."""
+    """Check world files (YAML or JSON) and what they ask of the robot, optionally with the
+    tree to run them (``--tree``), and behaviour trees (XML), one line each when fine; exit 2
+    if any has a problem. ``--nodes`` adds stub nodes from TreeNodesModel files."""
     if _register_leaves(args) is None:
         return EXIT_BAD_INPUT
-    if args.file.lower().endswith(".xml"):
-        if args.tree:
-            print(
-                f"--tree: expected a world file to check the tree against, got the tree "
-                f"{args.file}",
-                file=sys.stderr,
-            )
-            return EXIT_BAD_INPUT
-        from planner.validate import tree_cli_validate
+    trees = [f for f in args.files if f.lower().endswith(".xml")]
+    if args.tree and trees:
+        print(
+            f"--tree: expected world files to check the tree against, got the tree {trees[0]}",
+            file=sys.stderr,
+        )
+        return EXIT_BAD_INPUT
+    registry: dict[str, Any] | None = None
+    if args.nodes:
+        from py_trees.ports import get_ports_registry
 
-        return tree_cli_validate(args.file)
-    from experiment.preflight import validate_cli
+        from planner.model_stubs import model_stub_classes
+        from planner.tree_problems import TreeFileError
 
-    return validate_cli(args.file, args.tree)
+        registry = dict(get_ports_registry())
+        for model in args.nodes:
+            try:
+                registry.update(model_stub_classes(model))  # the model's nodes win
+            except TreeFileError as err:
+                print(err, file=sys.stderr)
+                return EXIT_BAD_INPUT
+    from planner.validate import tree_cli_validate
+
+    codes = []
+    for path in args.files:
+        if path.lower().endswith(".xml"):
+            codes.append(tree_cli_validate(path, registry, main_tree_id=args.main_tree))
+        else:
+            from experiment.preflight import validate_cli  # the world's checks need PyBullet
+
+            codes.append(validate_cli(path, args.tree, args.main_tree))
+    return EXIT_BAD_INPUT if EXIT_BAD_INPUT in codes else max(codes)
 
 
-def _preflight_or_exit(world: Any, world_file: str, tree: str | None) -> None:
+def _preflight_or_exit(
+    world: Any, world_file: str, tree: str | None, main_tree: str | None = None
+) -> None:
     """Fail before simulating (exit 2) when the task cannot work: ``validate``'s checks."""
     from experiment.preflight import preflight_problems
 
-    problems = preflight_problems(world, world_file, Path(tree) if tree else None)
+    problems = preflight_problems(world, world_file, Path(tree) if tree else None, main_tree)
     if problems:
         print("\n".join(problems), file=sys.stderr)
         raise SystemExit(EXIT_BAD_INPUT)
@@ -172,7 +193,7 @@ def _render_tree_command(args: argparse.Namespace) -> int:
         return EXIT_BAD_INPUT
     from planner.render import render_cli
 
-    return render_cli(args.tree, args.format, args.out)
+    return render_cli(args.tree, args.format, args.out, args.main_tree)
 
 
 def _schema_command(args: argparse.Namespace) -> int:
@@ -370,7 +391,7 @@ def _run_command(args: argparse.Namespace) -> int:
     world = _load_world_or_exit(args.world)
     if _register_leaves(args) is None:
         return EXIT_BAD_INPUT
-    _preflight_or_exit(world, args.world, args.tree)
+    _preflight_or_exit(world, args.world, args.tree, args.main_tree)
     if args.seed is not None:
         world = world.model_copy(update={"sim": world.sim.model_copy(update={"seed": args.seed})})
     out = _out_folder_or_exit(Path(args.out))
@@ -387,6 +408,7 @@ def _run_command(args: argparse.Namespace) -> int:
             animation=not args.no_animation,
             progress=progress,
             gui=args.gui,
+            main_tree=args.main_tree,
         )
     except (TreeFileError, LibraryFileError, NoDisplayError) as err:
         print(err, file=sys.stderr)
@@ -541,6 +563,15 @@ def _add_leaves_option(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def _add_main_tree_option(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--main-tree",
+        metavar="ID",
+        help="the <BehaviorTree ID> to run instead of main_tree_to_execute (a file saved by "
+        "Groot2 has none; a file of one tree runs that one)",
+    )
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser with one sub-command per job."""
     parser = argparse.ArgumentParser(prog="app.py", description=__doc__.splitlines()[0])
@@ -551,12 +582,23 @@ def build_parser() -> argparse.ArgumentParser:
     demo.set_defaults(handler=_demo_command)
     validate = sub.add_parser(
         "validate",
-        help="check a world file (and what it asks of the robot) or a tree; exit 2 if bad",
+        help="check world files (and what they ask of the robot) and trees; exit 2 if any is bad",
     )
-    validate.add_argument("file", help="world file (.yaml, .yml, .json) or tree (.xml)")
     validate.add_argument(
-        "--tree", help="with a world file: also check this tree XML and its moves against it"
+        "files", nargs="+", metavar="FILE", help="world files (.yaml, .yml, .json), trees (.xml)"
     )
+    validate.add_argument(
+        "--tree", help="with world files: also check this tree XML and its moves against each"
+    )
+    validate.add_argument(
+        "--nodes",
+        action="append",
+        default=[],
+        metavar="MODEL.xml",
+        help="register stub nodes from a Groot2 TreeNodesModel (repeatable; its nodes win over "
+        "ours of the same ID), to check a tree written for another robot",
+    )
+    _add_main_tree_option(validate)
     _add_leaves_option(validate)
     validate.set_defaults(handler=_validate_command)
     nodes = sub.add_parser("nodes", help="export a Groot2 TreeNodesModel of our leaves")
@@ -567,6 +609,7 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("tree", help="tree XML")
     render.add_argument("--format", choices=["ascii", "dot", "svg"], default="ascii")
     render.add_argument("--out", help="write to this file instead of printing")
+    _add_main_tree_option(render)
     _add_leaves_option(render)
     render.set_defaults(handler=_render_tree_command)
     schema = sub.add_parser("schema", help="print the world-file JSON Schema (for editors)")
@@ -599,6 +642,7 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--gui", action="store_true", help="show PyBullet's window (needs a display)")
     run.add_argument("--no-animation", action="store_true", help="skip the GIF (faster)")
     run.add_argument("--json", action="store_true", help="print a JSON summary as the last line")
+    _add_main_tree_option(run)
     _add_leaves_option(run)
     run.set_defaults(handler=_run_command)
     trials = sub.add_parser("trials", help="the paper's experiment: many randomised trials")

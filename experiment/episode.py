@@ -325,6 +325,7 @@ def run_episode(
     animation: bool = True,
     progress: Callable[[float, str, str], None] | None = None,
     gui: bool = False,
+    main_tree: str | None = None,
 ) -> EpisodeReport:
     """Run the world's task once and judge it.
 
@@ -347,6 +348,9 @@ def run_episode(
         Called when the running leaf changes.
     gui : bool
         Show PyBullet's window (needs a display; :class:`worlds.scene.NoDisplayError`).
+    main_tree : str, optional
+        The ``<BehaviorTree ID>`` of ``tree_path`` to run instead of its
+        ``main_tree_to_execute`` (a file saved by Groot2 has none).
 
     Raises
     ------
@@ -358,7 +362,10 @@ def run_episode(
     # The loader writes constant port values to the blackboard: clear it first, not after.
     py_trees.blackboard.Blackboard.clear()
     # Without a tree file, the shipped tree for the world's task.
-    root = load_tree(tree_path) if tree_path is not None else default_tree(task_steps(world))
+    if tree_path is not None:
+        root = load_tree(tree_path, main_tree_id=main_tree)
+    else:
+        root = default_tree(task_steps(world))
     lib = library if library is not None else load_library(world)
     with SimWorld(world, gui=gui) as sim:
         recorder = _Recorder(sim, moves, stepped)
