@@ -178,7 +178,20 @@ def _nodes_command(args: argparse.Namespace) -> int:
         return EXIT_BAD_INPUT
     from planner.nodes_model import nodes_model_xml
 
-    text = nodes_model_xml(packages=("planner", *dict.fromkeys(c.__module__ for c in user)))
+    packages = ("planner", *dict.fromkeys(c.__module__ for c in user))
+    if args.embed:
+        from planner.nodes_model import embed_nodes_model
+        from planner.tree_problems import TreeFileError
+
+        try:
+            text = embed_nodes_model(args.embed, packages=packages)
+            Path(args.embed).write_text(text, encoding="utf-8")
+        except (TreeFileError, OSError) as err:
+            print(f"--embed {args.embed}: {err}", file=sys.stderr)
+            return EXIT_BAD_INPUT
+        print(f"wrote the TreeNodesModel of the leaves {args.embed} uses into it")
+        return EXIT_OK
+    text = nodes_model_xml(packages=packages)
     if args.out:
         Path(args.out).write_text(text, encoding="utf-8")
         print(f"wrote {args.out}")
@@ -603,6 +616,12 @@ def build_parser() -> argparse.ArgumentParser:
     validate.set_defaults(handler=_validate_command)
     nodes = sub.add_parser("nodes", help="export a Groot2 TreeNodesModel of our leaves")
     nodes.add_argument("--out", help="write to this file instead of printing")
+    nodes.add_argument(
+        "--embed",
+        metavar="TREE.xml",
+        help="instead, write the model of the leaves this tree file uses into it (replacing "
+        "its <TreeNodesModel>), so Groot2 opens it with their ports",
+    )
     _add_leaves_option(nodes)
     nodes.set_defaults(handler=_nodes_command)
     render = sub.add_parser("render-tree", help="draw a tree file")

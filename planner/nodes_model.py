@@ -21,6 +21,8 @@ from __future__ import annotations
 
 import enum
 import inspect
+import os
+import re
 import xml.etree.ElementTree as ET
 from collections.abc import Iterable
 from typing import Any
@@ -29,8 +31,9 @@ import py_trees
 from py_trees.ports import PortInformation, PortsMixin, get_ports_registry
 
 from planner.tree_ports import Registry, registry_class, type_name
+from planner.tree_reading import read_tree_document
 
-__all__ = ["add_node_model", "leaf_kind", "nodes_model_xml", "summary_line"]
+__all__ = ["add_node_model", "embed_nodes_model", "leaf_kind", "nodes_model_xml", "summary_line"]
 
 NODE_KINDS = ("Action", "Condition")
 
@@ -144,3 +147,42 @@ def nodes_model_xml(
         add_node_model(model, tag, cls)
     ET.indent(root)
     return ET.tostring(root, encoding="unicode") + "\n"
+
+
+#: An embedded model, with the whitespace before it, in a tree file's text.
+_EMBEDDED = re.compile(r"\s*<TreeNodesModel\s*/>|\s*<TreeNodesModel>.*?</TreeNodesModel>", re.S)
+
+
+def embed_nodes_model(
+    path: str | os.PathLike[str],
+    registry: Registry | None = None,
+    *,
+    packages: Iterable[str] = ("planner",),
+) -> str:
+    """The text of a tree file with its ``<TreeNodesModel>`` made anew: the models, as
+    :func:`nodes_model_xml` writes them, of the leaves its trees use (those defined in
+    ``packages``), so Groot2 opens it with its nodes' kinds and ports.
+
+    The rest of the text (comments, layout) is kept; a model already there is replaced, else
+    the new one goes last in ``<root>``. The file itself is not written.
+
+    Raises
+    ------
+    planner.tree_problems.TreeFileError
+        If the file cannot be read, or is not XML.
+    """
+    doc = read_tree_document(path, registry)
+    used = {
+        elem.tag for bt in doc.root.findall("BehaviorTree") for elem in bt.iter() if elem is not bt
+    }
+    reg = get_ports_registry() if registry is None else registry
+    model = ET.Element("TreeNodesModel")
+    for tag, cls in _selected(reg, False, packages):
+        if tag in used:
+            add_node_model(model, tag, cls)
+    ET.indent(model, level=1)
+    block = "\n\n  " + ET.tostring(model, encoding="unicode")
+    with open(path, encoding="utf-8") as handle:
+        text = _EMBEDDED.sub("", handle.read())
+    end = text.rindex("</root>")
+    return text[:end].rstrip() + block + "\n" + text[end:]
