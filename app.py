@@ -587,7 +587,8 @@ def _add_main_tree_option(parser: argparse.ArgumentParser) -> None:
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser with one sub-command per job."""
-    parser = argparse.ArgumentParser(prog="app.py", description=__doc__.splitlines()[0])
+    # prog: how the user ran it (app.py, duet-robot, python -m duet_robot).
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     demo = sub.add_parser("demo", help="learn a DMP from a synthetic demo and plot generalisations")
     demo.add_argument("--out", default="out", help="output folder (default: out)")
