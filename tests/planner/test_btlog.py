@@ -106,20 +106,43 @@ def test_default_run_on_the_fake_world(
     assert result.success, result.reason
     got = read_btlog(tmp_path / "run.btlog")
     elements = got.uids()
-    assert len(elements) == sum(1 for _ in root.iterate())
+    subtrees = {u for u, e in elements.items() if e.tag == "SubTree"}
+    assert len(elements) - len(subtrees) == sum(1 for _ in root.iterate())
+    # the subtrees as Groot2 expects them: a SubTree node, and a BehaviorTree per instance
+    document = ET.fromstring(got.xml)
+    instances = [(bt.attrib["ID"], bt.attrib["_fullpath"]) for bt in document.iter("BehaviorTree")]
+    assert instances[:3] == [
+        ("MainTree", ""), ("PickAndPlace", "first_object"),
+        ("GraspObject", "first_object/grasp_object"),
+    ]  # fmt: skip
+    assert ("Move", "first_object/move_left") in instances
+    assert len(instances) == len(subtrees) + 1
+    assert {e.attrib["_fullpath"] for e in document.iter("SubTree")} == {
+        p for _, p in instances[1:]
+    }
     labels = node_labels(root)
     uid_of = {labels[i]: btlog.uids[i] for i in labels}
     events = status_events(tmp_path / "run.jsonl")
-    assert [(u, s) for _, u, s in got.transitions] == [
-        (uid_of[e["node"]], CODES[e["to"]]) for e in events
-    ]
+    own = [(u, s) for _, u, s in got.transitions if u not in subtrees]
+    assert own == [(uid_of[e["node"]], CODES[e["to"]]) for e in events]
+    # a SubTree node changes with its subtree's root node, at the same time, right after it
+    for i, (t, u, s) in enumerate(got.transitions):
+        if u in subtrees:
+            before = got.transitions[i - 1]
+            assert before[0] == t and before[2] == s
+    first_object = next(
+        int(e.attrib["_uid"])
+        for e in document.iter("SubTree")
+        if e.attrib["_fullpath"] == "first_object"
+    )
+    assert [s for _, u, s in got.transitions if u == first_object] == [1, 2]  # running, success
     times = [t for t, _, _ in got.transitions]
     assert times == sorted(times) and times[-1] == pytest.approx(result.sim_time * 1e6, abs=2e4)
     # every node ever logged has a model, or is a BT.CPP built-in Groot2 knows
     model = {e.attrib["ID"] for e in model_of(got.xml)}
     builtin = {"Sequence", "ReactiveSequence", "Fallback", "ReactiveFallback", "Parallel",
                "RetryUntilSuccessful", "Timeout", "ForceSuccess", "ForceFailure", "Inverter",
-               "Repeat"}  # fmt: skip
+               "Repeat", "SubTree"}  # fmt: skip
     assert {e.tag for e in elements.values()} <= model | builtin
 
 
