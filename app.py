@@ -475,19 +475,20 @@ def _trials_command(args: argparse.Namespace) -> int:
         return EXIT_BAD_INPUT
     if _register_leaves(args) is None:
         return EXIT_BAD_INPUT
-    _preflight_or_exit(world, args.world, args.tree)  # one message now, not one per trial
+    # one message now, not one per trial
+    _preflight_or_exit(world, args.world, args.tree, args.main_tree)
     tree = Path(args.tree) if args.tree else None
     if tree is not None:
         from planner.loader import TreeFileError, load_tree
 
         try:
-            load_tree(tree)
+            load_tree(tree, main_tree_id=args.main_tree)
         except TreeFileError as err:
             print(err, file=sys.stderr)
             return EXIT_BAD_INPUT
     out = _out_folder_or_exit(Path(args.out))
     try:
-        earlier = campaign_results(out / "results.jsonl", args.seed, tree).values()
+        earlier = campaign_results(out / "results.jsonl", args.seed, tree, args.main_tree).values()
     except ResultsFileError as err:
         print(err, file=sys.stderr)
         return EXIT_BAD_INPUT
@@ -521,6 +522,7 @@ def _trials_command(args: argparse.Namespace) -> int:
             tree,
             on_notice=notice,
             leaves=args.leaves,
+            main_tree=args.main_tree,
         )
     except ResultsFileError as err:  # a folder that is not one, or another campaign in it
         print(f"\n{err}", file=sys.stderr)
@@ -681,6 +683,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     trials.add_argument("--out", default="out/trials", help="folder of results.jsonl")
     trials.add_argument("--json", action="store_true", help="print a JSON summary as the last line")
+    _add_main_tree_option(trials)
     _add_leaves_option(trials)
     trials.set_defaults(handler=_trials_command)
     skills = sub.add_parser("skills", help="list a skill library")

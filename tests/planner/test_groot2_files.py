@@ -124,3 +124,40 @@ def test_stubs_load_and_tick() -> None:
     assert [n.status for n in root.children] == [Status.SUCCESS, Status.FAILURE, Status.INVALID]
     assert root.status == Status.FAILURE
     py_trees.blackboard.Blackboard.clear()
+
+
+TWO_TREES = """<?xml version="1.0" encoding="UTF-8"?>
+<root BTCPP_format="4">
+  <BehaviorTree ID="Select">
+    <SelectSkills name="select" object="{object}" plan="{plan}"/>
+  </BehaviorTree>
+  <BehaviorTree ID="Check">
+    <IsHeld name="held" object="{object}"/>
+  </BehaviorTree>
+</root>
+"""
+
+
+@pytest.mark.sim
+def test_trials_run_the_main_tree_named_and_keep_campaigns_apart(tmp_path: Path) -> None:
+    import json
+
+    from experiment.trials import campaign_results, run_trial
+    from worlds.world_file import load_world
+
+    tree = tmp_path / "two.xml"
+    tree.write_text(TWO_TREES, encoding="utf-8")
+    world = load_world(WORLD)
+    payload = {"world": world.model_dump(mode="json"), "source": str(world.source),
+               "tree": str(tree), "leaves": []}  # fmt: skip
+    select = run_trial(({**payload, "main_tree": "Select"}, 0, 0))
+    check = run_trial(({**payload, "main_tree": "Check"}, 0, 0))
+    assert (select["tree_status"], check["tree_status"]) == ("SUCCESS", "FAILURE")
+    assert (select["main_tree"], check["main_tree"]) == ("Select", "Check")
+    results = tmp_path / "results.jsonl"
+    results.write_text(json.dumps(select) + "\n" + json.dumps(check) + "\n", encoding="utf-8")
+    assert campaign_results(results, 0, tree, "Check")[0]["tree_status"] == "FAILURE"
+    assert campaign_results(results, 0, tree) == {}  # the file's own main tree: none ran
+    with pytest.raises(SystemExit) as stop:  # which tree? the file does not say
+        app.main(["trials", str(WORLD), "--tree", str(tree), "--n", "1", "--out", str(tmp_path)])
+    assert stop.value.code == app.EXIT_BAD_INPUT
