@@ -128,7 +128,7 @@ def _validate_command(args: argparse.Namespace) -> int:
     trees = [f for f in args.files if f.lower().endswith(".xml")]
     if args.tree and trees:
         print(
-            f"--tree: expected world files to check the tree against, got the tree {trees[0]}",
+            f"--tree: expected a world file to check the tree against, got the tree {trees[0]}",
             file=sys.stderr,
         )
         return EXIT_BAD_INPUT
