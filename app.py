@@ -397,6 +397,7 @@ def _teach_command(args: argparse.Namespace) -> int:
 def _run_command(args: argparse.Namespace) -> int:
     """Run a world's task in PyBullet, show progress, judge it and write what it shows."""
     from experiment.episode import move_labels, run_episode
+    from planner.groot_publisher import GrootUnavailableError
     from planner.loader import TreeFileError
     from skills.library import LibraryFileError
     from worlds.scene import NoDisplayError
@@ -404,6 +405,13 @@ def _run_command(args: argparse.Namespace) -> int:
     world = _load_world_or_exit(args.world)
     if _register_leaves(args) is None:
         return EXIT_BAD_INPUT
+    if args.groot is not None:
+        from planner.groot_publisher import groot_problem
+
+        problem = groot_problem(args.groot)
+        if problem:
+            print(problem, file=sys.stderr)
+            return EXIT_BAD_INPUT
     _preflight_or_exit(world, args.world, args.tree, args.main_tree)
     if args.seed is not None:
         world = world.model_copy(update={"sim": world.sim.model_copy(update={"seed": args.seed})})
@@ -422,8 +430,9 @@ def _run_command(args: argparse.Namespace) -> int:
             progress=progress,
             gui=args.gui,
             main_tree=args.main_tree,
+            groot_port=args.groot,
         )
-    except (TreeFileError, LibraryFileError, NoDisplayError) as err:
+    except (TreeFileError, LibraryFileError, NoDisplayError, GrootUnavailableError) as err:
         print(err, file=sys.stderr)
         return EXIT_BAD_INPUT
     except OSError as err:  # an output the run cannot write (a folder named like it)
@@ -664,6 +673,13 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--gui", action="store_true", help="show PyBullet's window (needs a display)")
     run.add_argument("--no-animation", action="store_true", help="skip the GIF (faster)")
     run.add_argument("--json", action="store_true", help="print a JSON summary as the last line")
+    run.add_argument(
+        "--groot",
+        type=int,
+        metavar="PORT",
+        help="serve the run's status live to Groot2's monitor on 127.0.0.1:PORT (and PORT+1); "
+        "needs the extra duet-robot[groot] (pyzmq)",
+    )
     _add_main_tree_option(run)
     _add_leaves_option(run)
     run.set_defaults(handler=_run_command)

@@ -326,6 +326,7 @@ def run_episode(
     progress: Callable[[float, str, str], None] | None = None,
     gui: bool = False,
     main_tree: str | None = None,
+    groot_port: int | None = None,
 ) -> EpisodeReport:
     """Run the world's task once and judge it.
 
@@ -351,6 +352,9 @@ def run_episode(
     main_tree : str, optional
         The ``<BehaviorTree ID>`` of ``tree_path`` to run instead of its
         ``main_tree_to_execute`` (a file saved by Groot2 has none).
+    groot_port : int, optional
+        Serve the run's status live to Groot2 on this port
+        (:class:`planner.groot_publisher.GrootPublisher`; needs ``out``).
 
     Raises
     ------
@@ -374,6 +378,7 @@ def run_episode(
         ]
         log: RunLog | None = None
         btlog: BtLog | None = None
+        publisher: Any = None
         anim: Animation | None = None
         replaced: list[str] = []
         if out is not None:
@@ -382,6 +387,16 @@ def run_episode(
             log = RunLog(out / "run.jsonl", clock=sim.time)
             btlog = BtLog(out / "run.btlog", root, clock=sim.time)  # the same changes, for Groot2
             log.add_status_listener(btlog.record)
+            if groot_port is not None:
+                from planner.groot_publisher import GrootPublisher
+
+                try:
+                    publisher = GrootPublisher(btlog.tree, groot_port)
+                except Exception:
+                    log.close()
+                    btlog.close()
+                    raise
+                log.add_status_listener(publisher.record)
             hooks.append(log.attach)
             if animation:
                 table = world.table.size
@@ -417,6 +432,8 @@ def run_episode(
                 log.close()
             if btlog is not None:
                 btlog.close()
+            if publisher is not None:
+                publisher.close()
         objects = [name for name, _ in recorder.finals]
         errors_m, errors_deg = recorder.column("error_m"), recorder.column("error_deg")
         ok, failure = judge(result, sim, objects, errors_m, errors_deg)

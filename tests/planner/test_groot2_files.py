@@ -161,3 +161,21 @@ def test_trials_run_the_main_tree_named_and_keep_campaigns_apart(tmp_path: Path)
     with pytest.raises(SystemExit) as stop:  # which tree? the file does not say
         app.main(["trials", str(WORLD), "--tree", str(tree), "--n", "1", "--out", str(tmp_path)])
     assert stop.value.code == app.EXIT_BAD_INPUT
+
+
+def test_run_groot_without_pyzmq_or_with_a_bad_port_is_bad_input(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    import importlib.util
+
+    real = importlib.util.find_spec
+    monkeypatch.setattr(
+        importlib.util, "find_spec", lambda name, *a: None if name == "zmq" else real(name, *a)
+    )
+    argv = ["run", str(WORLD), "--no-animation", "--out", str(tmp_path)]
+    assert app.main([*argv, "--groot", "5555"]) == app.EXIT_BAD_INPUT
+    assert "pip install 'duet-robot[groot]'" in capsys.readouterr().err
+    monkeypatch.setattr(importlib.util, "find_spec", real)
+    if real("zmq") is not None:
+        assert app.main([*argv, "--groot", "65535"]) == app.EXIT_BAD_INPUT
+        assert "expected a port 1..65534" in capsys.readouterr().err
