@@ -5,7 +5,7 @@ PYTHON ?= python3.11
 VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
-PACKAGES := skills affordances worlds planner experiment app.py
+PACKAGES := skills affordances worlds planner experiment duet_robot app.py
 
 .PHONY: run test lint types pytest bench clean
 

@@ -120,31 +120,52 @@ def _register_leaves(args: argparse.Namespace) -> list[type] | None:
 
 
 def _validate_command(args: argparse.Namespace) -> int:
-    """Check a world file (YAML or JSON) and what it asks of the robot, optionally with the
-    tree to run it (``--tree``); or a behaviour tree (XML) alone."""
+    """Check world files (YAML or JSON) and what they ask of the robot, optionally with the
+    tree to run them (``--tree``), and behaviour trees (XML), one line each when fine; exit 2
+    if any has a problem. ``--nodes`` adds stub nodes from TreeNodesModel files."""
     if _register_leaves(args) is None:
         return EXIT_BAD_INPUT
-    if args.file.lower().endswith(".xml"):
-        if args.tree:
-            print(
-                f"--tree: expected a world file to check the tree against, got the tree "
-                f"{args.file}",
-                file=sys.stderr,
-            )
-            return EXIT_BAD_INPUT
-        from planner.validate import tree_cli_validate
+    trees = [f for f in args.files if f.lower().endswith(".xml")]
+    if args.tree and trees:
+        print(
+            f"--tree: expected a world file to check the tree against, got the tree {trees[0]}",
+            file=sys.stderr,
+        )
+        return EXIT_BAD_INPUT
+    registry: dict[str, Any] | None = None
+    if args.nodes:
+        from py_trees.ports import get_ports_registry
 
-        return tree_cli_validate(args.file)
-    from experiment.preflight import validate_cli
+        from planner.model_stubs import model_stub_classes
+        from planner.tree_problems import TreeFileError
 
-    return validate_cli(args.file, args.tree)
+        registry = dict(get_ports_registry())
+        for model in args.nodes:
+            try:
+                registry.update(model_stub_classes(model))  # the model's nodes win
+            except TreeFileError as err:
+                print(err, file=sys.stderr)
+                return EXIT_BAD_INPUT
+    from planner.validate import tree_cli_validate
+
+    codes = []
+    for path in args.files:
+        if path.lower().endswith(".xml"):
+            codes.append(tree_cli_validate(path, registry, main_tree_id=args.main_tree))
+        else:
+            from experiment.preflight import validate_cli  # the world's checks need PyBullet
+
+            codes.append(validate_cli(path, args.tree, args.main_tree))
+    return EXIT_BAD_INPUT if EXIT_BAD_INPUT in codes else max(codes)
 
 
-def _preflight_or_exit(world: Any, world_file: str, tree: str | None) -> None:
+def _preflight_or_exit(
+    world: Any, world_file: str, tree: str | None, main_tree: str | None = None
+) -> None:
     """Fail before simulating (exit 2) when the task cannot work: ``validate``'s checks."""
     from experiment.preflight import preflight_problems
 
-    problems = preflight_problems(world, world_file, Path(tree) if tree else None)
+    problems = preflight_problems(world, world_file, Path(tree) if tree else None, main_tree)
     if problems:
         print("\n".join(problems), file=sys.stderr)
         raise SystemExit(EXIT_BAD_INPUT)
@@ -157,7 +178,20 @@ def _nodes_command(args: argparse.Namespace) -> int:
         return EXIT_BAD_INPUT
     from planner.nodes_model import nodes_model_xml
 
-    text = nodes_model_xml(packages=("planner", *dict.fromkeys(c.__module__ for c in user)))
+    packages = ("planner", *dict.fromkeys(c.__module__ for c in user))
+    if args.embed:
+        from planner.nodes_model import embed_nodes_model
+        from planner.tree_problems import TreeFileError
+
+        try:
+            text = embed_nodes_model(args.embed, packages=packages)
+            Path(args.embed).write_text(text, encoding="utf-8")
+        except (TreeFileError, OSError) as err:
+            print(f"--embed {args.embed}: {err}", file=sys.stderr)
+            return EXIT_BAD_INPUT
+        print(f"wrote the TreeNodesModel of the leaves {args.embed} uses into it")
+        return EXIT_OK
+    text = nodes_model_xml(packages=packages)
     if args.out:
         Path(args.out).write_text(text, encoding="utf-8")
         print(f"wrote {args.out}")
@@ -172,7 +206,7 @@ def _render_tree_command(args: argparse.Namespace) -> int:
         return EXIT_BAD_INPUT
     from planner.render import render_cli
 
-    return render_cli(args.tree, args.format, args.out)
+    return render_cli(args.tree, args.format, args.out, args.main_tree)
 
 
 def _schema_command(args: argparse.Namespace) -> int:
@@ -363,6 +397,7 @@ def _teach_command(args: argparse.Namespace) -> int:
 def _run_command(args: argparse.Namespace) -> int:
     """Run a world's task in PyBullet, show progress, judge it and write what it shows."""
     from experiment.episode import move_labels, run_episode
+    from planner.groot_publisher import GrootUnavailableError
     from planner.loader import TreeFileError
     from skills.library import LibraryFileError
     from worlds.scene import NoDisplayError
@@ -370,7 +405,14 @@ def _run_command(args: argparse.Namespace) -> int:
     world = _load_world_or_exit(args.world)
     if _register_leaves(args) is None:
         return EXIT_BAD_INPUT
-    _preflight_or_exit(world, args.world, args.tree)
+    if args.groot is not None:
+        from planner.groot_publisher import groot_problem
+
+        problem = groot_problem(args.groot)
+        if problem:
+            print(problem, file=sys.stderr)
+            return EXIT_BAD_INPUT
+    _preflight_or_exit(world, args.world, args.tree, args.main_tree)
     if args.seed is not None:
         world = world.model_copy(update={"sim": world.sim.model_copy(update={"seed": args.seed})})
     out = _out_folder_or_exit(Path(args.out))
@@ -387,8 +429,10 @@ def _run_command(args: argparse.Namespace) -> int:
             animation=not args.no_animation,
             progress=progress,
             gui=args.gui,
+            main_tree=args.main_tree,
+            groot_port=args.groot,
         )
-    except (TreeFileError, LibraryFileError, NoDisplayError) as err:
+    except (TreeFileError, LibraryFileError, NoDisplayError, GrootUnavailableError) as err:
         print(err, file=sys.stderr)
         return EXIT_BAD_INPUT
     except OSError as err:  # an output the run cannot write (a folder named like it)
@@ -440,19 +484,20 @@ def _trials_command(args: argparse.Namespace) -> int:
         return EXIT_BAD_INPUT
     if _register_leaves(args) is None:
         return EXIT_BAD_INPUT
-    _preflight_or_exit(world, args.world, args.tree)  # one message now, not one per trial
+    # one message now, not one per trial
+    _preflight_or_exit(world, args.world, args.tree, args.main_tree)
     tree = Path(args.tree) if args.tree else None
     if tree is not None:
         from planner.loader import TreeFileError, load_tree
 
         try:
-            load_tree(tree)
+            load_tree(tree, main_tree_id=args.main_tree)
         except TreeFileError as err:
             print(err, file=sys.stderr)
             return EXIT_BAD_INPUT
     out = _out_folder_or_exit(Path(args.out))
     try:
-        earlier = campaign_results(out / "results.jsonl", args.seed, tree).values()
+        earlier = campaign_results(out / "results.jsonl", args.seed, tree, args.main_tree).values()
     except ResultsFileError as err:
         print(err, file=sys.stderr)
         return EXIT_BAD_INPUT
@@ -486,6 +531,7 @@ def _trials_command(args: argparse.Namespace) -> int:
             tree,
             on_notice=notice,
             leaves=args.leaves,
+            main_tree=args.main_tree,
         )
     except ResultsFileError as err:  # a folder that is not one, or another campaign in it
         print(f"\n{err}", file=sys.stderr)
@@ -541,9 +587,19 @@ def _add_leaves_option(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def _add_main_tree_option(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--main-tree",
+        metavar="ID",
+        help="the <BehaviorTree ID> to run instead of main_tree_to_execute (a file saved by "
+        "Groot2 has none; a file of one tree runs that one)",
+    )
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser with one sub-command per job."""
-    parser = argparse.ArgumentParser(prog="app.py", description=__doc__.splitlines()[0])
+    # prog: how the user ran it (app.py, duet-robot, python -m duet_robot).
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     demo = sub.add_parser("demo", help="learn a DMP from a synthetic demo and plot generalisations")
     demo.add_argument("--out", default="out", help="output folder (default: out)")
@@ -551,22 +607,40 @@ def build_parser() -> argparse.ArgumentParser:
     demo.set_defaults(handler=_demo_command)
     validate = sub.add_parser(
         "validate",
-        help="check a world file (and what it asks of the robot) or a tree; exit 2 if bad",
+        help="check world files (and what they ask of the robot) and trees; exit 2 if any is bad",
     )
-    validate.add_argument("file", help="world file (.yaml, .yml, .json) or tree (.xml)")
     validate.add_argument(
-        "--tree", help="with a world file: also check this tree XML and its moves against it"
+        "files", nargs="+", metavar="FILE", help="world files (.yaml, .yml, .json), trees (.xml)"
     )
+    validate.add_argument(
+        "--tree", help="with world files: also check this tree XML and its moves against each"
+    )
+    validate.add_argument(
+        "--nodes",
+        action="append",
+        default=[],
+        metavar="MODEL.xml",
+        help="register stub nodes from a Groot2 TreeNodesModel (repeatable; its nodes win over "
+        "ours of the same ID), to check a tree written for another robot",
+    )
+    _add_main_tree_option(validate)
     _add_leaves_option(validate)
     validate.set_defaults(handler=_validate_command)
     nodes = sub.add_parser("nodes", help="export a Groot2 TreeNodesModel of our leaves")
     nodes.add_argument("--out", help="write to this file instead of printing")
+    nodes.add_argument(
+        "--embed",
+        metavar="TREE.xml",
+        help="instead, write the model of the leaves this tree file uses into it (replacing "
+        "its <TreeNodesModel>), so Groot2 opens it with their ports",
+    )
     _add_leaves_option(nodes)
     nodes.set_defaults(handler=_nodes_command)
     render = sub.add_parser("render-tree", help="draw a tree file")
     render.add_argument("tree", help="tree XML")
     render.add_argument("--format", choices=["ascii", "dot", "svg"], default="ascii")
     render.add_argument("--out", help="write to this file instead of printing")
+    _add_main_tree_option(render)
     _add_leaves_option(render)
     render.set_defaults(handler=_render_tree_command)
     schema = sub.add_parser("schema", help="print the world-file JSON Schema (for editors)")
@@ -599,6 +673,14 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--gui", action="store_true", help="show PyBullet's window (needs a display)")
     run.add_argument("--no-animation", action="store_true", help="skip the GIF (faster)")
     run.add_argument("--json", action="store_true", help="print a JSON summary as the last line")
+    run.add_argument(
+        "--groot",
+        type=int,
+        metavar="PORT",
+        help="serve the run's status live to Groot2's monitor on 127.0.0.1:PORT (and PORT+1); "
+        "needs the extra duet-robot[groot] (pyzmq)",
+    )
+    _add_main_tree_option(run)
     _add_leaves_option(run)
     run.set_defaults(handler=_run_command)
     trials = sub.add_parser("trials", help="the paper's experiment: many randomised trials")
@@ -617,6 +699,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     trials.add_argument("--out", default="out/trials", help="folder of results.jsonl")
     trials.add_argument("--json", action="store_true", help="print a JSON summary as the last line")
+    _add_main_tree_option(trials)
     _add_leaves_option(trials)
     trials.set_defaults(handler=_trials_command)
     skills = sub.add_parser("skills", help="list a skill library")

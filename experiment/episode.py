@@ -22,6 +22,7 @@ from py_trees.common import Status
 
 import planner.leaves  # noqa: F401  (registers the leaves for the XML loader)
 from experiment.figures import Animation, MoveTrace, demonstrated_path, trajectory_figure
+from planner.btlog import BtLog
 from planner.default_tree import TaskStep, default_tree
 from planner.loader import load_tree
 from planner.move_result import move_results
@@ -301,7 +302,7 @@ class _Recorder:
 
 
 #: What a run writes into its ``out`` folder.
-OUTPUT_NAMES = ("run.jsonl", "trajectories.png", "animation.gif", "tree.svg")
+OUTPUT_NAMES = ("run.jsonl", "run.btlog", "trajectories.png", "animation.gif", "tree.svg")
 
 
 def clear_outputs(out: Path) -> list[str]:
@@ -327,6 +328,8 @@ def run_episode(
     animation: bool = True,
     progress: Callable[[float, str, str], None] | None = None,
     gui: bool = False,
+    main_tree: str | None = None,
+    groot_port: int | None = None,
 ) -> EpisodeReport:
     """Run the world's task once and judge it.
 
@@ -341,14 +344,20 @@ def run_episode(
     library : SkillLibrary, optional
         Default: the world's.
     out : Path, optional
-        Folder for ``run.jsonl``, ``trajectories.png``, ``animation.gif`` and ``tree.svg``;
-        None writes nothing.
+        Folder for ``run.jsonl``, ``run.btlog`` (Groot2's replay), ``trajectories.png``,
+        ``animation.gif`` and ``tree.svg``; None writes nothing.
     animation : bool
         Capture frames with the CPU renderer (slower).
     progress : callable (sim_time, leaf_name, feedback), optional
         Called when the running leaf changes.
     gui : bool
         Show PyBullet's window (needs a display; :class:`worlds.scene.NoDisplayError`).
+    main_tree : str, optional
+        The ``<BehaviorTree ID>`` of ``tree_path`` to run instead of its
+        ``main_tree_to_execute`` (a file saved by Groot2 has none).
+    groot_port : int, optional
+        Serve the run's status live to Groot2 on this port
+        (:class:`planner.groot_publisher.GrootPublisher`; needs ``out``).
 
     Raises
     ------
@@ -360,7 +369,10 @@ def run_episode(
     # The loader writes constant port values to the blackboard: clear it first, not after.
     py_trees.blackboard.Blackboard.clear()
     # Without a tree file, the shipped tree for the world's task.
-    root = load_tree(tree_path) if tree_path is not None else default_tree(task_steps(world))
+    if tree_path is not None:
+        root = load_tree(tree_path, main_tree_id=main_tree)
+    else:
+        root = default_tree(task_steps(world))
     lib = library if library is not None else load_library(world)
     with SimWorld(world, gui=gui) as sim:
         recorder = _Recorder(sim, moves, stepped)
@@ -368,12 +380,26 @@ def run_episode(
             lambda tree: tree.add_post_tick_handler(recorder)
         ]
         log: RunLog | None = None
+        btlog: BtLog | None = None
+        publisher: Any = None
         anim: Animation | None = None
         replaced: list[str] = []
         if out is not None:
             out.mkdir(parents=True, exist_ok=True)
             replaced = clear_outputs(out)
             log = RunLog(out / "run.jsonl", clock=sim.time)
+            btlog = BtLog(out / "run.btlog", root, clock=sim.time)  # the same changes, for Groot2
+            log.add_status_listener(btlog.record)
+            if groot_port is not None:
+                from planner.groot_publisher import GrootPublisher
+
+                try:
+                    publisher = GrootPublisher(btlog.tree, groot_port)
+                except Exception:
+                    log.close()
+                    btlog.close()
+                    raise
+                log.add_status_listener(publisher.record)
             hooks.append(log.attach)
             if animation:
                 table = world.table.size
@@ -407,6 +433,10 @@ def run_episode(
         finally:
             if log is not None:
                 log.close()
+            if btlog is not None:
+                btlog.close()
+            if publisher is not None:
+                publisher.close()
         objects = [name for name, _ in recorder.finals]
         errors_m, errors_deg = recorder.column("error_m"), recorder.column("error_deg")
         ok, failure = judge(result, sim, objects, errors_m, errors_deg)
@@ -431,6 +461,7 @@ def run_episode(
         report.physics_wall_s = sim.scene.physics_wall_s
         if out is not None:
             report.outputs["run_log"] = str(out / "run.jsonl")
+            report.outputs["groot_log"] = str(out / "run.btlog")
             title = f"{world.name}: {'success' if ok else 'failure: ' + failure}"
             # The verdict is made: a figure that cannot be written costs that figure alone.
             try:

@@ -28,7 +28,9 @@ def bound_object(world: World) -> str | None:
     return world.task[0].object if world.task else None
 
 
-def preflight_problems(world: World, world_file: str, tree: Path | None = None) -> list[str]:
+def preflight_problems(
+    world: World, world_file: str, tree: Path | None = None, main_tree: str | None = None
+) -> list[str]:
     """Every problem found without simulating, one line each, each naming its file.
 
     Parameters
@@ -41,6 +43,8 @@ def preflight_problems(world: World, world_file: str, tree: Path | None = None) 
         The tree to run: checked itself, its moves against the world's task and its grasps
         against the objects. Without one, the default tree's grasps are used (its moves
         follow the world's task).
+    main_tree : str, optional
+        The ``<BehaviorTree ID>`` of ``tree`` to run instead of its ``main_tree_to_execute``.
 
     Returns
     -------
@@ -50,11 +54,14 @@ def preflight_problems(world: World, world_file: str, tree: Path | None = None) 
     import planner.leaves  # noqa: F401  (registers the leaves a tree may use)
 
     if tree is not None:
-        tree_problems = validate_tree(tree)
+        tree_problems = validate_tree(tree, main_tree_id=main_tree)
         if tree_problems:
             return [str(p) for p in tree_problems]
     try:
-        doc = read_tree_document(tree if tree is not None else PICK_AND_PLACE_XML)
+        if tree is not None:
+            doc = read_tree_document(tree, main_tree_id=main_tree)
+        else:
+            doc = read_tree_document(PICK_AND_PLACE_XML)
     except TreeFileError as err:
         return [str(p) for p in err.problems]
     lines = [p.format(world_file) for p in feasibility_problems(world, tree_grasps(doc))]
@@ -94,14 +101,14 @@ def move_skill_problems(world: World, world_file: str) -> list[str]:
     return problems
 
 
-def validate_cli(world_file: str, tree: str | None = None) -> int:
+def validate_cli(world_file: str, tree: str | None = None, main_tree: str | None = None) -> int:
     """``app.py validate WORLD [--tree T.xml]``: 0 and a summary, or 2 and one line per problem.
 
     Returns 1 on an internal error (message on stderr, never a traceback).
     """
     try:
         world = load_world(world_file)
-        problems = preflight_problems(world, world_file, Path(tree) if tree else None)
+        problems = preflight_problems(world, world_file, Path(tree) if tree else None, main_tree)
     except WorldFileError as err:
         print(err, file=sys.stderr)
         return 2

@@ -371,7 +371,9 @@ def run_trial(job: tuple[dict[str, Any], int, int]) -> dict[str, Any]:
         # worker starts without them; a forked one finds them registered already).
         register_leaves(base_data.get("leaves", ()))
         world, kinds = draw_trial(base, seed, trial)
-        report = run_episode(world, tree, out=None, animation=False)
+        report = run_episode(
+            world, tree, out=None, animation=False, main_tree=base_data.get("main_tree")
+        )
         record = report.summary()
         record.pop("outputs", None)
         failure = record["failure"] or ""
@@ -384,6 +386,7 @@ def run_trial(job: tuple[dict[str, Any], int, int]) -> dict[str, Any]:
             "trial": trial,
             "seed": seed,
             "tree": base_data["tree"],
+            **({"main_tree": base_data["main_tree"]} if base_data.get("main_tree") else {}),
             "obstacles": kinds,
             "failure": failure,
         }
@@ -407,9 +410,12 @@ def tree_key(tree: Path | None) -> str:
     return str(tree.resolve()) if tree is not None else ""
 
 
-def campaign_results(path: Path, seed: int, tree: Path | None) -> dict[int, dict[str, Any]]:
-    """The records in ``results.jsonl`` of one campaign: this seed, this tree (lines that are
-    not records are skipped: :func:`experiment.results.read_results` counts them).
+def campaign_results(
+    path: Path, seed: int, tree: Path | None, main_tree: str | None = None
+) -> dict[int, dict[str, Any]]:
+    """The records in ``results.jsonl`` of one campaign: this seed, this tree and main tree
+    (``--main-tree``; records without one ran the file's own) (lines that are not records are
+    skipped: :func:`experiment.results.read_results` counts them).
 
     Raises
     ------
@@ -420,7 +426,7 @@ def campaign_results(path: Path, seed: int, tree: Path | None) -> dict[int, dict
     return {
         r["trial"]: r  # a trial run twice (an interrupted write) counts once, the last
         for r in read_results(path).records
-        if r.get("seed") == seed and r.get("tree", "") == key
+        if r.get("seed") == seed and r.get("tree", "") == key and r.get("main_tree") == main_tree
     }
 
 
@@ -446,6 +452,7 @@ def run_campaign(
     tree: Path | None = None,
     on_notice: Callable[[str], None] | None = None,
     leaves: Sequence[str] = (),
+    main_tree: str | None = None,
 ) -> list[dict[str, Any]]:
     """Run trials ``0..n-1`` not yet in ``out/results.jsonl``; append each as it finishes.
 
@@ -470,6 +477,9 @@ def run_campaign(
     leaves : sequence of str
         ``--leaves`` sources (files or modules) of the tree's own leaves; every worker
         registers them (:func:`planner.user_leaves.register_leaves`).
+    main_tree : str, optional
+        The ``<BehaviorTree ID>`` of ``tree`` to run instead of its ``main_tree_to_execute``;
+        records name it, and a campaign resumes only the trials of the same one.
 
     Returns
     -------
@@ -489,7 +499,7 @@ def run_campaign(
         raise ResultsFileError(f"{out}: cannot make the folder: {err.strerror or err}") from None
     with campaign_lock(out):
         return _run_locked(
-            base, n, seed, out, workers, on_result, tree, on_notice or _quiet, leaves
+            base, n, seed, out, workers, on_result, tree, on_notice or _quiet, leaves, main_tree
         )
 
 
@@ -507,6 +517,7 @@ def _run_locked(
     tree: Path | None,
     on_notice: Callable[[str], None],
     leaves: Sequence[str],
+    main_tree: str | None = None,
 ) -> list[dict[str, Any]]:
     results = out / "results.jsonl"
     cut = repair_tail(results)
@@ -518,13 +529,14 @@ def _run_locked(
             f"{results}: skipped {earlier.skipped} line(s) that are not trial records; "
             "their trials run again"
         )
-    done = campaign_results(results, seed, tree)
+    done = campaign_results(results, seed, tree, main_tree)
     pending = [t for t in range(n) if t not in done]
     payload = {
         "world": base.model_dump(mode="json"),
         "source": str(base.source or ""),
         "tree": tree_key(tree),
         "leaves": [str(Path(s).resolve()) if s.endswith(".py") else s for s in leaves],
+        **({"main_tree": main_tree} if main_tree else {}),
     }
     jobs = [(payload, seed, t) for t in pending]
     finished = n - len(pending)

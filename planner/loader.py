@@ -23,6 +23,7 @@ from __future__ import annotations
 import os
 import re
 import tempfile
+import weakref
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -39,7 +40,19 @@ from planner.tree_reading import (
     read_tree_document_string,
 )
 
-__all__ = ["TreeFileError", "load_tree", "load_tree_string"]
+__all__ = ["TreeFileError", "load_tree", "load_tree_string", "subtree_ids"]
+
+#: For each root the loader built: the ``<BehaviorTree ID>`` of each named ``<SubTree>`` instance
+#: (by its name), where one name has one ID. Weak keys: a tree dropped is forgotten.
+_SUBTREE_IDS: weakref.WeakKeyDictionary[py_trees.behaviour.Behaviour, dict[str, str]] = (
+    weakref.WeakKeyDictionary()
+)
+
+
+def subtree_ids(root: py_trees.behaviour.Behaviour) -> dict[str, str] | None:
+    """``{instance name: subtree ID}`` of the SubTrees of a tree this module loaded (they are
+    inlined: no node stands for them), or None for a tree built otherwise."""
+    return _SUBTREE_IDS.get(root)
 
 
 def load_tree(
@@ -96,13 +109,20 @@ def _load(doc: TreeDocument, registry: Registry | None) -> py_trees.behaviour.Be
     try:
         with os.fdopen(handle, "w", encoding="utf-8") as out:
             out.write(text)
-        return parse_behaviour_tree_xml(
+        root = parse_behaviour_tree_xml(
             tmp, main_tree_id=doc.main_tree_id, node_registry=effective_registry(registry)
         )
     except Exception as exc:  # the parser and leaf constructors may raise anything
         raise TreeFileError([_build_problem(doc, exc)]) from exc
     finally:
         Path(tmp).unlink(missing_ok=True)
+    ids: dict[str, set[str]] = {}
+    for bt in doc.root.findall("BehaviorTree"):
+        for elem in bt.iter("SubTree"):
+            if "name" in elem.attrib and "ID" in elem.attrib:
+                ids.setdefault(elem.attrib["name"], set()).add(elem.attrib["ID"])
+    _SUBTREE_IDS[root] = {name: next(iter(i)) for name, i in ids.items() if len(i) == 1}
+    return root
 
 
 def _build_problem(doc: TreeDocument, exc: Exception) -> TreeProblem:

@@ -21,6 +21,8 @@ from __future__ import annotations
 
 import enum
 import inspect
+import os
+import re
 import xml.etree.ElementTree as ET
 from collections.abc import Iterable
 from typing import Any
@@ -29,8 +31,9 @@ import py_trees
 from py_trees.ports import PortInformation, PortsMixin, get_ports_registry
 
 from planner.tree_ports import Registry, registry_class, type_name
+from planner.tree_reading import read_tree_document
 
-__all__ = ["leaf_kind", "nodes_model_xml", "summary_line"]
+__all__ = ["add_node_model", "embed_nodes_model", "leaf_kind", "nodes_model_xml", "summary_line"]
 
 NODE_KINDS = ("Action", "Condition")
 
@@ -100,6 +103,21 @@ def _selected(
     return sorted(chosen, key=lambda item: item[0])
 
 
+def add_node_model(model: ET.Element, tag: str, cls: type[PortsMixin]) -> ET.Element:
+    """Append the model of one ports-enabled class, registered as ``tag``, to a
+    ``<TreeNodesModel>`` element: its kind, ports and description; the new element."""
+    node = ET.SubElement(model, leaf_kind(cls), {"ID": tag})
+    for name, info in cls.input_ports().items():
+        _port_element(node, "input_port", name, info)
+    for name, info in cls.output_ports().items():
+        _port_element(node, "output_port", name, info)
+    description = summary_line(cls)
+    if description:
+        fields = ET.SubElement(node, "MetadataFields")
+        ET.SubElement(fields, "Metadata", {"description": description})
+    return node
+
+
 def nodes_model_xml(
     registry: Registry | None = None,
     *,
@@ -126,14 +144,45 @@ def nodes_model_xml(
     root = ET.Element("root", {"BTCPP_format": "4"})
     model = ET.SubElement(root, "TreeNodesModel")
     for tag, cls in _selected(reg, include_all, packages):
-        node = ET.SubElement(model, leaf_kind(cls), {"ID": tag})
-        for name, info in cls.input_ports().items():
-            _port_element(node, "input_port", name, info)
-        for name, info in cls.output_ports().items():
-            _port_element(node, "output_port", name, info)
-        description = summary_line(cls)
-        if description:
-            fields = ET.SubElement(node, "MetadataFields")
-            ET.SubElement(fields, "Metadata", {"description": description})
+        add_node_model(model, tag, cls)
     ET.indent(root)
     return ET.tostring(root, encoding="unicode") + "\n"
+
+
+#: An embedded model, with the whitespace before it, in a tree file's text.
+_EMBEDDED = re.compile(r"\s*<TreeNodesModel\s*/>|\s*<TreeNodesModel>.*?</TreeNodesModel>", re.S)
+
+
+def embed_nodes_model(
+    path: str | os.PathLike[str],
+    registry: Registry | None = None,
+    *,
+    packages: Iterable[str] = ("planner",),
+) -> str:
+    """The text of a tree file with its ``<TreeNodesModel>`` made anew: the models, as
+    :func:`nodes_model_xml` writes them, of the leaves its trees use (those defined in
+    ``packages``), so Groot2 opens it with its nodes' kinds and ports.
+
+    The rest of the text (comments, layout) is kept; a model already there is replaced, else
+    the new one goes last in ``<root>``. The file itself is not written.
+
+    Raises
+    ------
+    planner.tree_problems.TreeFileError
+        If the file cannot be read, or is not XML.
+    """
+    doc = read_tree_document(path, registry)
+    used = {
+        elem.tag for bt in doc.root.findall("BehaviorTree") for elem in bt.iter() if elem is not bt
+    }
+    reg = get_ports_registry() if registry is None else registry
+    model = ET.Element("TreeNodesModel")
+    for tag, cls in _selected(reg, False, packages):
+        if tag in used:
+            add_node_model(model, tag, cls)
+    ET.indent(model, level=1)
+    block = "\n\n  " + ET.tostring(model, encoding="unicode")
+    with open(path, encoding="utf-8") as handle:
+        text = _EMBEDDED.sub("", handle.read())
+    end = text.rindex("</root>")
+    return text[:end].rstrip() + block + "\n" + text[end:]

@@ -249,8 +249,10 @@ def render_tree(root: py_trees.behaviour.Behaviour, fmt: str, show_status: bool 
     raise ValueError(f"render: expected format one of {', '.join(FORMATS)}, got {fmt!r}")
 
 
-def render_cli(path: str | os.PathLike[str], fmt: str, out: str | None = None) -> int:
-    """Load a tree file and print (or write to ``out``) its rendering.
+def render_cli(
+    path: str | os.PathLike[str], fmt: str, out: str | None = None, main_tree: str | None = None
+) -> int:
+    """Load a tree file (its ``main_tree`` if given) and print (or write to ``out``) its rendering.
 
     Returns 0 on success, 2 for a bad tree file or format (the reason goes to stderr).
     """
@@ -258,7 +260,7 @@ def render_cli(path: str | os.PathLike[str], fmt: str, out: str | None = None) -
         print(f"render: expected format one of {', '.join(FORMATS)}, got {fmt!r}", file=sys.stderr)
         return 2
     try:
-        root = load_tree(path)
+        root = load_tree(path, main_tree_id=main_tree)
     except TreeFileError as exc:
         print(exc, file=sys.stderr)
         return 2

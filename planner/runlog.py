@@ -7,13 +7,16 @@ One JSON object per line, stamped with the simulated time::
     {"t": 0.5, "tick": 3, "event": "write", "key": "/held", "client": "grip",
      "activity": "INITIALISED", "value": true}
 
-Statuses are compared after every tick (a visitor records the order nodes were ticked in; nodes
-stopped without being ticked follow in tree order). ``node`` names one node of the tree
-(:func:`node_labels`): its name, which for a tree loaded from XML is already its dotted path
-from the root, or, where several nodes share a name (a tree built in code), its path from the
-root. Writes come from py_trees' blackboard activity stream, which is drained after every
-tick. The file is flushed after every tick, so an interrupted run keeps everything up to its
-last tick.
+After every tick the log compares the status of the nodes that may have changed, and only
+those: the nodes ticked (a visitor records their order) and the nodes stopped (each node's
+``stop`` is wrapped while the log is attached; py_trees changes a status only in ``tick`` and
+``stop``), stopped ones not ticked following in tree order. Labels and tree order are worked
+out once at attach, and again only when a node not seen before turns up. ``node`` names one
+node of the tree (:func:`node_labels`): its name, which for a tree loaded from XML is already
+its dotted path from the root, or, where several nodes share a name (a tree built in code), its
+path from the root. Writes come from py_trees' blackboard activity stream, which is drained
+after every tick. The file is flushed after every tick, so an interrupted run keeps everything
+up to its last tick.
 """
 
 from __future__ import annotations
@@ -36,7 +39,10 @@ from py_trees.common import Status
 
 from planner.render import node_kind, node_type
 
-__all__ = ["RunLog", "json_safe", "node_labels"]
+__all__ = ["RunLog", "StatusListener", "json_safe", "node_labels"]
+
+#: Called with (node, status before, status after) for every status change a log records.
+StatusListener = Callable[[py_trees.behaviour.Behaviour, Status, Status], None]
 
 #: Blackboard activities that change a value.
 _WRITES = (ActivityType.WRITE.value, ActivityType.INITIALISED.value, ActivityType.UNSET.value)
@@ -165,6 +171,13 @@ class RunLog:
         self._statuses: dict[uuid.UUID, Status] = {}
         self._tree: py_trees.trees.BehaviourTree | None = None
         self._visitor = _VisitOrder()
+        # The tree as last indexed: id -> node, label, position in tree order.
+        self._root: py_trees.behaviour.Behaviour | None = None
+        self._nodes: dict[uuid.UUID, py_trees.behaviour.Behaviour] = {}
+        self._labels: dict[uuid.UUID, str] = {}
+        self._rank: dict[uuid.UUID, int] = {}
+        self._stopped: set[uuid.UUID] = set()
+        self._status_listeners: list[StatusListener] = []
         self._enabled_stream = False
         parent = os.path.dirname(self.path)
         if parent:
@@ -185,7 +198,8 @@ class RunLog:
         if self._tree is not None:
             raise RuntimeError(f"RunLog {self.path}: already attached to a tree")
         self._tree = tree
-        self._statuses = {node.id: node.status for node in tree.root.iterate()}
+        self._index(tree.root)
+        self._statuses = {node_id: node.status for node_id, node in self._nodes.items()}
         if Blackboard.activity_stream is None:
             Blackboard.enable_activity_stream(maximum_size=100_000)
             self._enabled_stream = True
@@ -214,19 +228,25 @@ class RunLog:
         ``root.tick_once()`` when ticking a bare root without a ``BehaviourTree``.
         """
         self.tick_count += 1
-        nodes = {node.id: node for node in root.iterate()}
-        labels = node_labels(root)
-        order = [i for i in dict.fromkeys(self._visitor.order) if i in nodes]
-        order += [i for i in nodes if i not in set(order)]
+        ticked = list(dict.fromkeys(self._visitor.order))
         self._visitor.order = []
+        if root is not self._root or any(i not in self._nodes for i in ticked):
+            # A new root, or a node added since: index the tree again and compare every node
+            # this once, as a node changed before it was indexed is in no record.
+            self._index(root)
+            self._stopped.update(self._nodes)
+        stopped = self._stopped.difference(ticked)
+        self._stopped.clear()  # the same set the wrapped stops add to
+        order = [i for i in ticked if i in self._nodes]
+        order += sorted((i for i in stopped if i in self._nodes), key=self._rank.__getitem__)
         for node_id in order:
-            node = nodes[node_id]
+            node = self._nodes[node_id]
             before = self._statuses.get(node_id, Status.INVALID)
             if node.status != before:
                 self.write(
                     {
                         "event": "status",
-                        "node": labels[node_id],
+                        "node": self._labels[node_id],
                         "kind": node_kind(node),
                         "type": node_type(node),
                         "from": before.value,
@@ -234,10 +254,48 @@ class RunLog:
                         "feedback": node.feedback_message,
                     }
                 )
+                for listener in self._status_listeners:
+                    listener(node, before, node.status)
             self._statuses[node_id] = node.status
         self._drain_blackboard()
         if self._file is not None:
             self._file.flush()
+
+    def add_status_listener(self, listener: StatusListener) -> None:
+        """Call ``listener(node, before, after)`` for every status change logged, in log order
+        (e.g. :class:`planner.btlog.BtLog`, which writes the same changes for Groot2)."""
+        self._status_listeners.append(listener)
+
+    def _index(self, root: py_trees.behaviour.Behaviour) -> None:
+        """Index the tree under ``root``: nodes, labels, tree order; wrap each node's ``stop``."""
+        self._unwrap_stops()
+        self._root = root
+        self._nodes = {}
+        self._rank = {}
+        for rank, node in enumerate(root.iterate()):
+            self._nodes[node.id] = node
+            self._rank[node.id] = rank
+            self._wrap_stop(node)
+        self._labels = node_labels(root)
+
+    def _wrap_stop(self, node: py_trees.behaviour.Behaviour) -> None:
+        original = node.stop  # bound: the class's own stop, with its overrides
+        stopped = self._stopped
+        node_id = node.id
+
+        def stop(new_status: Status = Status.INVALID) -> None:
+            stopped.add(node_id)
+            original(new_status)
+
+        # An instance attribute: composites call ``child.stop(...)``, which finds it first.
+        node.stop = stop  # type: ignore[method-assign]
+
+    def _unwrap_stops(self) -> None:
+        for node in self._nodes.values():
+            if "stop" in vars(node):
+                del node.stop
+        self._nodes = {}
+        self._root = None
 
     def _drain_blackboard(self) -> None:
         stream = Blackboard.activity_stream
@@ -260,6 +318,7 @@ class RunLog:
     # -- lifetime ---------------------------------------------------------------------
     def close(self) -> None:
         """Detach from the tree, flush and close the file (idempotent)."""
+        self._unwrap_stops()
         if self._tree is not None:
             if self._on_post_tick in self._tree.post_tick_handlers:
                 self._tree.post_tick_handlers.remove(self._on_post_tick)

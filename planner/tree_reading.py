@@ -205,7 +205,8 @@ def _read(
                     root.sourceline,
                     describe(root),
                     f'cannot tell the main tree: expected main_tree_to_execute="..." on <root> '
-                    f"naming one of the <BehaviorTree> IDs ({found})",
+                    f"(or --main-tree ID; a file saved by Groot2 has none) naming one of the "
+                    f"<BehaviorTree> IDs ({found})",
                 )
             )
     elif main_id not in trees:
@@ -306,6 +307,9 @@ def _translate(elem: ET.Element, registry: Registry, problems: list[TreeProblem]
     def problem(message: str) -> None:
         problems.append(TreeProblem(elem.sourcefile, elem.sourceline, describe(elem), message))
 
+    # Groot2's editor attributes mean nothing to a run, on any node (a registered leaf's too).
+    for key in _IGNORED_ATTRIBUTES & elem.attrib.keys():
+        del elem.attrib[key]
     if elem.tag in ("root", "BehaviorTree", "TreeNodesModel") or elem.tag in registry:
         return
     # Explicit form: <Action ID="Grasp" .../> is <Grasp .../>.

@@ -43,7 +43,10 @@ __all__ = [
 
 
 def validate_tree(
-    path: str | os.PathLike[str], registry: Registry | None = None
+    path: str | os.PathLike[str],
+    registry: Registry | None = None,
+    *,
+    main_tree_id: str | None = None,
 ) -> list[TreeProblem]:
     """Check a tree file without building it; return its problems (empty when it is fine).
 
@@ -51,9 +54,11 @@ def validate_tree(
     unknown, missing required and wrongly typed ports; output ports given literals; subtree
     IDs and their remapped ports; the main tree; child counts (decorators exactly one,
     control nodes at least one, leaves none); names the parser would duplicate; subtree cycles.
+    ``main_tree_id`` names the tree to check as the main one instead of ``main_tree_to_execute``
+    (a file saved by Groot2 has none).
     """
     try:
-        doc = read_tree_document(path, registry)
+        doc = read_tree_document(path, registry, main_tree_id)
     except TreeFileError as exc:
         return list(exc.problems)
     return check_tree_document(doc, registry)
@@ -70,20 +75,25 @@ def validate_tree_string(
     return check_tree_document(doc, registry)
 
 
-def tree_cli_validate(path: str | os.PathLike[str], registry: Registry | None = None) -> int:
+def tree_cli_validate(
+    path: str | os.PathLike[str],
+    registry: Registry | None = None,
+    *,
+    main_tree_id: str | None = None,
+) -> int:
     """Validate a tree file for the command line.
 
     Prints each problem on its own line to stderr and returns 2, or prints a one-line
     ``ok`` summary to stdout and returns 0.
     """
-    problems = validate_tree(path, registry)
+    problems = validate_tree(path, registry, main_tree_id=main_tree_id)
     if problems:
         for problem in problems:
             print(problem, file=sys.stderr)
         plural = "s" if len(problems) != 1 else ""
         print(f"{os.fspath(path)}: {len(problems)} problem{plural}", file=sys.stderr)
         return 2
-    doc = read_tree_document(path, registry)
+    doc = read_tree_document(path, registry, main_tree_id)
     n_nodes = sum(1 for bt in doc.root.findall("BehaviorTree") for _ in _nodes(bt))
     n_trees = len(doc.behaviour_trees())
     print(

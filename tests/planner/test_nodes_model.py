@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import xml.etree.ElementTree as ET
+from pathlib import Path
 from typing import ClassVar
 
 import py_trees
@@ -104,3 +105,46 @@ def test_decorators_and_controls_are_labelled() -> None:
     assert leaf_kind(SimTimeout) == "Decorator"
     assert leaf_kind(stub_leaves.StubCheck) == "Condition"
     assert leaf_kind(py_trees.composites.Sequence) == "Control"
+
+
+@pytest.mark.parametrize("name", ["pick_and_place.xml", "paper_composition.xml"])
+def test_shipped_trees_embed_the_model_app_nodes_writes(name: str) -> None:
+    import planner.leaves  # noqa: F401  (registers the leaves)
+    from planner.default_tree import PICK_AND_PLACE_XML
+    from planner.nodes_model import embed_nodes_model
+
+    path = PICK_AND_PLACE_XML.parent / name
+    text = path.read_text(encoding="utf-8")
+    # embedding again changes nothing: the file holds the model of the leaves it uses now
+    assert embed_nodes_model(path) == text, f"run: app.py nodes --embed {path}"
+    embedded = ET.fromstring(text.encode("utf-8")).find("TreeNodesModel")
+    assert embedded is not None
+    used = {
+        e.tag
+        for bt in ET.fromstring(text.encode("utf-8")).findall("BehaviorTree")
+        for e in bt.iter()
+    }
+    ours = {n.attrib["ID"]: n for n in model()}  # what `app.py nodes` prints
+    assert [n.attrib["ID"] for n in embedded] == sorted(used & set(ours))
+    for node in embedded:
+        assert ET.canonicalize(ET.tostring(node), strip_text=True) == ET.canonicalize(
+            ET.tostring(ours[node.attrib["ID"]]), strip_text=True
+        )
+
+
+def test_embed_replaces_a_model_and_keeps_the_rest(tmp_path: Path) -> None:
+    from planner.nodes_model import embed_nodes_model
+
+    path = tmp_path / "t.xml"
+    path.write_text(
+        '<root BTCPP_format="4">\n  <!-- keep me -->\n  <BehaviorTree ID="A">\n'
+        '    <StubCheck value="true"/>\n  </BehaviorTree>\n  <TreeNodesModel>\n'
+        '    <Action ID="Old"/>\n  </TreeNodesModel>\n</root>\n',
+        encoding="utf-8",
+    )
+    text = embed_nodes_model(path, packages=("tests.planner",))
+    assert "<!-- keep me -->" in text and 'ID="Old"' not in text
+    assert text.count("<TreeNodesModel>") == 1
+    embedded = ET.fromstring(text).find("TreeNodesModel")
+    assert embedded is not None
+    assert [(n.tag, n.attrib["ID"]) for n in embedded] == [("Condition", "StubCheck")]

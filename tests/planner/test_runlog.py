@@ -79,6 +79,7 @@ def test_status_changes_and_writes_per_tick(tmp_path: Path) -> None:
     assert next(r for r in records if r["event"] == "write")["client"] == "seq.count"
     assert py_trees.blackboard.Blackboard.activity_stream is None  # closed: stream given back
     assert tree.post_tick_handlers == [] and tree.visitors == []
+    assert not any("stop" in vars(node) for node in tree.root.iterate())  # unwrapped
 
 
 def test_writes_between_ticks_are_logged_with_the_next_tick(tmp_path: Path) -> None:
