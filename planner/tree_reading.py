@@ -14,7 +14,7 @@ from xml.parsers import expat
 from py_trees.parsers.behaviour_tree_xml import DECORATOR_NODES
 from py_trees.ports import get_ports_registry
 
-from planner.tree_ports import Registry
+from planner.tree_ports import Registry, builtin_nodes
 from planner.tree_problems import TreeFileError, TreeProblem
 
 #: Groot/BT.CPP bookkeeping attributes that carry no meaning for a run; dropped silently.
@@ -183,11 +183,15 @@ def _read(
                 source, root.sourceline, describe(root), "expected <root> as the document element"
             )
         )
+    unnamed = [bt for bt in root.findall("BehaviorTree") if "ID" not in bt.attrib]
+    if len(root.findall("BehaviorTree")) == 1 and unnamed:
+        # BT.CPP: a file's only <BehaviorTree> may go without an ID; it is the main tree.
+        unnamed[0].attrib["ID"] = UNNAMED_TREE_ID
     visited = {os.path.abspath(source)} if os.path.exists(source) else set()
     _inline_includes(root, base_dir, visited, problems)
     # Translate against the caller's registry only: a user-registered tag wins over a BT.CPP
     # spelling, but our own default Timeout still takes the BT.CPP ``msec`` spelling.
-    user = get_ports_registry() if registry is None else registry
+    user = {**builtin_nodes(), **(get_ports_registry() if registry is None else registry)}
     for bt in root.findall("BehaviorTree"):
         for elem in bt.iter():
             if elem is not bt:
@@ -221,6 +225,8 @@ def _read(
     return TreeDocument(source, root, main_id, problems)
 
 
+#: The ID given to a file's only ``<BehaviorTree>`` when it has none (as BT.CPP does).
+UNNAMED_TREE_ID = "MainTree"
 #: Longest Timeout a tree may ask for, ms: a day of simulated time.
 MAX_TIMEOUT_MS = 86_400_000
 #: Largest tree file read, bytes (the shipped trees are 5-10 KB).
@@ -295,6 +301,34 @@ def _inline_includes(
             root.append(bt)
 
 
+#: BT.CPP's pre-conditions (checked before a tick) and post-conditions (run after it).
+CONDITION_ATTRIBUTES = (
+    "_failureIf",
+    "_successIf",
+    "_skipIf",
+    "_while",
+    "_onSuccess",
+    "_onFailure",
+    "_onHalted",
+    "_post",
+)
+
+
+def _underscore_problem(key: str) -> str:
+    """What to say about a ``_``-attribute the loader cannot honour."""
+    if key in CONDITION_ATTRIBUTES:
+        return (
+            f"attribute '{key}': BT.CPP pre-/post-conditions are not supported yet (they need "
+            "the scripting language); express the condition with a condition leaf instead"
+        )
+    if key == "_autoremap":
+        return "attribute '_autoremap' (true) is not supported yet; remap subtree ports explicitly"
+    return (
+        f"unknown attribute '{key}'; expected one of the BT.CPP attributes "
+        f"{', '.join(CONDITION_ATTRIBUTES)}, _autoremap, _description"
+    )
+
+
 def _drop_attribute(elem: ET.Element, old: str) -> str | None:
     return elem.attrib.pop(old, None)
 
@@ -306,21 +340,25 @@ def _translate(elem: ET.Element, registry: Registry, problems: list[TreeProblem]
     def problem(message: str) -> None:
         problems.append(TreeProblem(elem.sourcefile, elem.sourceline, describe(elem), message))
 
-    if elem.tag in ("root", "BehaviorTree", "TreeNodesModel") or elem.tag in registry:
+    if elem.tag in ("root", "BehaviorTree", "TreeNodesModel"):
+        return
+    for key in [k for k in elem.attrib if k.startswith("_")]:
+        value = elem.attrib.pop(key)
+        if key in _IGNORED_ATTRIBUTES or (key == "_autoremap" and value.lower() == "false"):
+            continue
+        problem(_underscore_problem(key))
+    if elem.tag in ("SetBlackboard", "UnsetBlackboard"):
+        port = "output_key" if elem.tag == "SetBlackboard" else "key"
+        key = elem.attrib.get(port)
+        if key is not None and not key.startswith("{"):
+            elem.attrib[port] = "{" + key + "}"  # BT.CPP names the key bare
+    if elem.tag in registry:
         return
     # Explicit form: <Action ID="Grasp" .../> is <Grasp .../>.
     if elem.tag in ("Action", "Condition", "Control", "Decorator") and "ID" in elem.attrib:
         elem.tag = elem.attrib.pop("ID")
         if elem.tag in registry:
             return
-    for key in [k for k in elem.attrib if k.startswith("_")]:
-        value = elem.attrib.pop(key)
-        if key in _IGNORED_ATTRIBUTES or (key == "_autoremap" and value.lower() == "false"):
-            continue
-        problem(
-            f"attribute '{key}' (BT.CPP scripting/pre-/post-conditions/_autoremap) is not "
-            "supported by the py_trees parser; remap subtree ports explicitly"
-        )
     lower = elem.tag.lower()
     # BT.CPP's SequenceWithMemory (no restart after a failure) has no py_trees equivalent.
     if lower in ("sequence", "reactivesequence"):
@@ -336,10 +374,12 @@ def _translate(elem: ET.Element, registry: Registry, problems: list[TreeProblem]
         _translate_parallel(elem, problem)
     elif lower in ("retry", "retryuntilsuccessful"):
         elem.tag = "Retry"
+        attempts = elem.attrib.get("num_attempts")
+        if attempts is not None and (attempts.strip() == "-1" or attempts.startswith("{")):
+            elem.tag = "RetryForever"  # BT.CPP semantics, the count read when entered
+            return
         attempts = _drop_attribute(elem, "num_attempts")
         if attempts is not None:
-            if attempts.strip() == "-1":
-                problem('num_attempts="-1" (retry forever) is not supported; give a count >= 1')
             elem.attrib.setdefault("num_failures", attempts)
     elif lower == "timeout":
         elem.tag = "Timeout"
@@ -374,14 +414,15 @@ def _translate(elem: ET.Element, registry: Registry, problems: list[TreeProblem]
 
 def _translate_parallel(elem: ET.Element, problem: Callable[[str], None]) -> None:
     """Map BT.CPP ``success_count``/``failure_count`` to a py_trees policy (default: all)."""
-    success = elem.attrib.pop("success_count", None)
-    failure = elem.attrib.pop("failure_count", None)
+    success = elem.attrib.get("success_count")
+    failure = elem.attrib.get("failure_count")
     n_children = len(elem)
-    if failure is not None and failure.strip() != "1":
-        problem(
-            f'failure_count="{failure}" is not supported: py_trees\' Parallel fails as soon as '
-            'one child fails (failure_count="1")'
-        )
+    simple = success is None or success.strip() in ("-1", "1", str(n_children))
+    if (failure is not None and failure.strip() != "1") or not simple:
+        elem.tag = "ParallelCount"  # BT.CPP's thresholds, see planner.bt_controls
+        return
+    elem.attrib.pop("success_count", None)
+    elem.attrib.pop("failure_count", None)
     if success is None:
         # BT.CPP's default (and so an unannotated Groot tree's) is: succeed when all succeed.
         elem.attrib.setdefault("policy", "success_on_all")

@@ -120,10 +120,6 @@ def test_decorator_and_parallel_attributes() -> None:
     )
     got = problems_of(text)
     assert got == [
-        (3, "failure_count=\"2\" is not supported: py_trees' Parallel fails as soon as one child "
-            "fails (failure_count=\"1\")"),
-        (3, "success_count=\"2\" is not supported; expected 1 (any child) or -1 / 4 (all "
-            "children)"),
         (
             6,
             "attribute 'msec': expected a whole number of milliseconds from 1 to 86400000, "
