@@ -232,18 +232,21 @@ class ParallelCount(Control, register=False):
     def step(self) -> Step:
         """Tick the unfinished children, then count."""
         success_needed, failure_limit = self.thresholds()
-        for i in range(len(self.children)):
+        n = len(self.children)
+        for i in range(n):
             if i in self.done:
                 continue
             status = yield from self.tick_child(i)
-            if status != Status.RUNNING:
-                self.done[i] = status
-        successes = sum(s == Status.SUCCESS for s in self.done.values())
-        failures = len(self.done) - successes
-        if successes >= success_needed:
-            return Status.SUCCESS
-        if failures >= failure_limit or len(self.children) - failures < success_needed:
-            return Status.FAILURE
+            if status == Status.RUNNING:
+                continue
+            self.done[i] = status
+            # As BT.CPP, decide after each child: the rest are not ticked once it is decided.
+            successes = sum(s == Status.SUCCESS for s in self.done.values())
+            failures = len(self.done) - successes
+            if successes >= success_needed:
+                return Status.SUCCESS
+            if failures >= failure_limit or n - failures < success_needed:
+                return Status.FAILURE
         return Status.RUNNING
 
     def reset(self) -> None:
