@@ -349,9 +349,9 @@ def _translate(elem: ET.Element, registry: Registry, problems: list[TreeProblem]
         problem(_underscore_problem(key))
     if elem.tag in ("SetBlackboard", "UnsetBlackboard"):
         port = "output_key" if elem.tag == "SetBlackboard" else "key"
-        key = elem.attrib.get(port)
-        if key is not None and not key.startswith("{"):
-            elem.attrib[port] = "{" + key + "}"  # BT.CPP names the key bare
+        named = elem.attrib.get(port)
+        if named is not None and not named.startswith("{"):
+            elem.attrib[port] = "{" + named + "}"  # BT.CPP names the key bare
     if elem.tag in registry:
         return
     # Explicit form: <Action ID="Grasp" .../> is <Grasp .../>.

@@ -39,7 +39,8 @@ def test_if_then_else_is_not_reactive() -> None:
 
 def test_if_then_else_takes_the_else_branch_or_fails_without_one() -> None:
     t = Ticker(
-        f'<IfThenElse name="i">{leaf("c", "F")}{leaf("then", "S")}{leaf("else", "R,F")}</IfThenElse>'
+        f'<IfThenElse name="i">{leaf("c", "F")}{leaf("then", "S")}{leaf("else", "R,F")}'
+        "</IfThenElse>"
     )
     t.run(("i", "then", "else"), [(R, INV, R), (F, INV, F)])
     t2 = Ticker(f'<IfThenElse name="i">{leaf("c", "F")}{leaf("then", "S")}</IfThenElse>')
@@ -65,7 +66,8 @@ def test_while_do_else_with_two_children_fails_and_halts_on_a_false_condition() 
 def test_if_and_while_take_two_or_three_children(tag: str) -> None:
     with pytest.raises(TreeFileError, match=f"a {tag} node takes at most 3 children, found 4"):
         Ticker(
-            f'<{tag} name="i">{leaf("a", "S")}{leaf("b", "S")}{leaf("c", "S")}{leaf("d", "S")}</{tag}>'
+            f'<{tag} name="i">{leaf("a", "S")}{leaf("b", "S")}{leaf("c", "S")}{leaf("d", "S")}'
+            f"</{tag}>"
         )
     with pytest.raises(TreeFileError, match=f"a {tag} node needs at least 2 child, found 1"):
         Ticker(f'<{tag} name="i">{leaf("a", "S")}</{tag}>')

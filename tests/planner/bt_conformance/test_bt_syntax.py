@@ -18,7 +18,7 @@ def test_two_trees_without_ids_are_refused() -> None:
         '<root BTCPP_format="4"><BehaviorTree><AlwaysSuccess/></BehaviorTree>'
         "<BehaviorTree><AlwaysFailure/></BehaviorTree></root>"
     )
-    with pytest.raises(TreeFileError, match='expected an ID="..." attribute'):
+    with pytest.raises(TreeFileError, match=r'expected an ID="\.\.\." attribute'):
         load_tree_string(text, "two.xml")
 
 
