@@ -61,6 +61,10 @@ class ScriptError(ValueError):
         self.column = column
         self.reason = reason
 
+    def __reduce__(self) -> tuple[Any, tuple[str, int, str]]:
+        # picklable for worker processes: the default would call __init__(message)
+        return (type(self), (self.source, self.column, self.reason))
+
 
 class ScriptRuntimeError(RuntimeError):
     """A script that parsed but cannot run on these values: an undefined key, ``=`` on a
@@ -72,6 +76,10 @@ class ScriptRuntimeError(RuntimeError):
         self.source = source
         self.column = column
         self.reason = reason
+
+    def __reduce__(self) -> tuple[Any, tuple[str, int, str]]:
+        # picklable for worker processes: the default would call __init__(message)
+        return (type(self), (self.source, self.column, self.reason))
 
 
 class ScriptEnv(Protocol):
@@ -517,7 +525,7 @@ def truthy(value: Any) -> bool:
         if word in ("false", "0"):
             return False
     raise ScriptRuntimeError(
-        _text(value) if isinstance(value, str) else "",
+        "",
         1,
         f"a condition must give a number or a boolean, got {_kind(value)}",
     )

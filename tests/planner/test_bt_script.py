@@ -332,3 +332,53 @@ def test_random_unicode_only_ever_raises_script_errors(source: str) -> None:
         parse_script(source).evaluate(DictEnv({"a": 1}))
     except (ScriptError, ScriptRuntimeError):
         pass
+
+
+def test_errors_survive_pickling() -> None:
+    import pickle
+
+    for error in (ScriptError("x :=", 5, "expected a value"), ScriptRuntimeError("y", 1, "z")):
+        back = pickle.loads(pickle.dumps(error))
+        assert (type(back), back.source, back.column, back.reason, str(back)) == (
+            type(error),
+            error.source,
+            error.column,
+            error.reason,
+            str(error),
+        )
+
+
+class _ScopedEnv:
+    """A subtree blackboard over a root one, as a host would write it: '@key' goes to root."""
+
+    def __init__(self) -> None:
+        self.root: dict[str, Any] = {"speed": 2}
+        self.local: dict[str, Any] = {}
+
+    def _scope(self, key: str) -> tuple[dict[str, Any], str]:
+        return (self.root, key[1:]) if key.startswith("@") else (self.local, key)
+
+    def read(self, key: str) -> Any:
+        scope, name = self._scope(key)
+        return scope[name]
+
+    def write(self, key: str, value: Any) -> None:
+        scope, name = self._scope(key)
+        scope[name] = value
+
+    def exists(self, key: str) -> bool:
+        scope, name = self._scope(key)
+        return name in scope
+
+    def enum(self, name: str) -> int | None:
+        return {"FAST": 10}.get(name)
+
+
+def test_a_host_environment_with_a_root_blackboard() -> None:
+    env = _ScopedEnv()
+    result = parse_script("@speed *= FAST; speed := @speed / 4; speed > 4 ? 'go' : 'wait'")
+    assert result.evaluate(env) == "go"
+    assert env.root == {"speed": 20}
+    assert env.local == {"speed": pytest.approx(5.0)}
+    with pytest.raises(ScriptRuntimeError, match="'@missing' does not exist yet"):
+        parse_script("@missing = 1").evaluate(env)
