@@ -29,6 +29,7 @@ from pathlib import Path
 import py_trees
 from py_trees.parsers.behaviour_tree_xml import parse_behaviour_tree_xml
 
+from planner.bt_scripting import attach_conditions
 from planner.tree_checks import check_tree_document
 from planner.tree_ports import Registry, effective_registry
 from planner.tree_problems import TreeFileError, TreeProblem
@@ -96,13 +97,16 @@ def _load(doc: TreeDocument, registry: Registry | None) -> py_trees.behaviour.Be
     try:
         with os.fdopen(handle, "w", encoding="utf-8") as out:
             out.write(text)
-        return parse_behaviour_tree_xml(
+        root = parse_behaviour_tree_xml(
             tmp, main_tree_id=doc.main_tree_id, node_registry=effective_registry(registry)
         )
     except Exception as exc:  # the parser and leaf constructors may raise anything
         raise TreeFileError([_build_problem(doc, exc)]) from exc
     finally:
         Path(tmp).unlink(missing_ok=True)
+    trees = doc.behaviour_trees()
+    attach_conditions(trees[doc.main_tree_id], root, trees, "/")
+    return root
 
 
 def _build_problem(doc: TreeDocument, exc: Exception) -> TreeProblem:

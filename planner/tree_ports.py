@@ -20,6 +20,7 @@ from py_trees.ports_utils import convert_str_to_type
 from planner.bt_controls import BUILTIN_CONTROLS
 from planner.bt_decorators import BUILTIN_DECORATORS
 from planner.bt_leaves import BUILTIN_LEAVES
+from planner.bt_scripting import BUILTIN_SCRIPT_NODES
 from planner.bt_switch import BUILTIN_SWITCHES
 from planner.decorators import SimTimeout
 
@@ -46,7 +47,13 @@ def effective_registry(registry: Registry | None = None) -> dict[str, Any]:
 def builtin_nodes() -> dict[str, Any]:
     """BT.CPP's built-in nodes that py_trees lacks, by tag (:mod:`planner.bt_leaves`,
     :mod:`planner.bt_controls`, :mod:`planner.bt_decorators`, :mod:`planner.bt_switch`)."""
-    return {**BUILTIN_LEAVES, **BUILTIN_CONTROLS, **BUILTIN_DECORATORS, **BUILTIN_SWITCHES}
+    return {
+        **BUILTIN_LEAVES,
+        **BUILTIN_CONTROLS,
+        **BUILTIN_DECORATORS,
+        **BUILTIN_SWITCHES,
+        **BUILTIN_SCRIPT_NODES,
+    }
 
 
 def registry_class(entry: Any) -> type | None:

@@ -14,6 +14,7 @@ from xml.parsers import expat
 from py_trees.parsers.behaviour_tree_xml import DECORATOR_NODES
 from py_trees.ports import get_ports_registry
 
+from planner.bt_script import Script, ScriptError, parse_script
 from planner.tree_ports import Registry, builtin_nodes
 from planner.tree_problems import TreeFileError, TreeProblem
 
@@ -32,6 +33,8 @@ class SourceElement(ET.Element):
     sourceline: int
     source_tag: str
     source_attrib: dict[str, str]
+    #: BT.CPP pre/post-condition attributes, parsed (the py_trees parser never sees them).
+    conditions: dict[str, Script]
 
 
 def describe(elem: ET.Element) -> str:
@@ -67,6 +70,7 @@ def _parse_xml(data: bytes | str, source: str) -> SourceElement:
         elem.sourceline = parser.CurrentLineNumber
         elem.source_tag = tag
         elem.source_attrib = dict(attrib)
+        elem.conditions = {}
         if stack:
             stack[-1].append(elem)
         else:
@@ -314,13 +318,35 @@ CONDITION_ATTRIBUTES = (
 )
 
 
+def _parse(source: str, attribute: str, problem: Callable[[str], None]) -> Script | None:
+    """Parse a script attribute at validate time; a problem names its column."""
+    try:
+        return parse_script(source)
+    except ScriptError as exc:
+        problem(f"attribute '{attribute}': column {exc.column} in the script: {exc.reason}")
+        return None
+
+
+def _translate_script_node(elem: SourceElement, problem: Callable[[str], None]) -> None:
+    """Check the script of Script/ScriptCondition/Precondition; name Precondition's
+    ``if``/``else`` (Python keywords) ``condition``/``otherwise``."""
+    tag = (
+        elem.attrib.get("ID", elem.tag)
+        if elem.tag in ("Action", "Condition", "Decorator")
+        else elem.tag
+    )
+    if tag in ("Script", "ScriptCondition") and "code" in elem.attrib:
+        _parse(elem.attrib["code"], "code", problem)
+    elif tag == "Precondition":
+        if "if" in elem.attrib:
+            elem.attrib["condition"] = elem.attrib.pop("if")
+            _parse(elem.attrib["condition"], "if", problem)
+        if "else" in elem.attrib:
+            elem.attrib["otherwise"] = elem.attrib.pop("else")
+
+
 def _underscore_problem(key: str) -> str:
     """What to say about a ``_``-attribute the loader cannot honour."""
-    if key in CONDITION_ATTRIBUTES:
-        return (
-            f"attribute '{key}': BT.CPP pre-/post-conditions are not supported yet (they need "
-            "the scripting language); express the condition with a condition leaf instead"
-        )
     if key == "_autoremap":
         return "attribute '_autoremap' (true) is not supported yet; remap subtree ports explicitly"
     return (
@@ -346,7 +372,13 @@ def _translate(elem: ET.Element, registry: Registry, problems: list[TreeProblem]
         value = elem.attrib.pop(key)
         if key in _IGNORED_ATTRIBUTES or (key == "_autoremap" and value.lower() == "false"):
             continue
+        if key in CONDITION_ATTRIBUTES:
+            script = _parse(value, key, problem)
+            if script is not None:
+                elem.conditions[key] = script
+            continue
         problem(_underscore_problem(key))
+    _translate_script_node(elem, problem)
     if elem.tag in ("SetBlackboard", "UnsetBlackboard"):
         port = "output_key" if elem.tag == "SetBlackboard" else "key"
         named = elem.attrib.get(port)

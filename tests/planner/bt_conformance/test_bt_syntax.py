@@ -22,13 +22,6 @@ def test_two_trees_without_ids_are_refused() -> None:
         load_tree_string(text, "two.xml")
 
 
-def test_condition_attribute_on_a_leaf_is_not_an_unknown_port() -> None:
-    with pytest.raises(TreeFileError) as err:
-        Ticker('<StubScripted name="a" script="S" _skipIf="x == 1"/>')
-    assert "unknown port" not in str(err.value)
-    assert "'_skipIf': BT.CPP pre-/post-conditions are not supported yet" in str(err.value)
-
-
 def test_unknown_underscore_attribute_is_named() -> None:
     with pytest.raises(TreeFileError, match="unknown attribute '_skipif'; expected one of"):
         Ticker('<AlwaysFailure name="a" _skipif="x"/>')
