@@ -17,6 +17,7 @@ from py_trees.ports import get_ports_registry
 from planner.bt_script import Script, ScriptError, parse_script
 from planner.tree_ports import Registry, builtin_nodes
 from planner.tree_problems import TreeFileError, TreeProblem
+from planner.tree_syntax import rewrite_port_syntax
 
 #: Groot/BT.CPP bookkeeping attributes that carry no meaning for a run; dropped silently.
 _IGNORED_ATTRIBUTES = frozenset({"_description", "_uid", "_fullpath"})
@@ -35,6 +36,8 @@ class SourceElement(ET.Element):
     source_attrib: dict[str, str]
     #: BT.CPP pre/post-condition attributes, parsed (the py_trees parser never sees them).
     conditions: dict[str, Script]
+    #: ``_autoremap="true"`` (a ``<SubTree>``).
+    autoremap: bool
 
 
 def describe(elem: ET.Element) -> str:
@@ -71,6 +74,7 @@ def _parse_xml(data: bytes | str, source: str) -> SourceElement:
         elem.source_tag = tag
         elem.source_attrib = dict(attrib)
         elem.conditions = {}
+        elem.autoremap = False
         if stack:
             stack[-1].append(elem)
         else:
@@ -226,6 +230,7 @@ def _read(
                 f"main tree '{main_id}' not found; expected one of the <BehaviorTree> IDs: {found}",
             )
         )
+    rewrite_port_syntax(root, main_id)
     return TreeDocument(source, root, main_id, problems)
 
 
@@ -348,7 +353,7 @@ def _translate_script_node(elem: SourceElement, problem: Callable[[str], None]) 
 def _underscore_problem(key: str) -> str:
     """What to say about a ``_``-attribute the loader cannot honour."""
     if key == "_autoremap":
-        return "attribute '_autoremap' (true) is not supported yet; remap subtree ports explicitly"
+        return "attribute '_autoremap': expected true or false"
     return (
         f"unknown attribute '{key}'; expected one of the BT.CPP attributes "
         f"{', '.join(CONDITION_ATTRIBUTES)}, _autoremap, _description"
@@ -371,6 +376,9 @@ def _translate(elem: ET.Element, registry: Registry, problems: list[TreeProblem]
     for key in [k for k in elem.attrib if k.startswith("_")]:
         value = elem.attrib.pop(key)
         if key in _IGNORED_ATTRIBUTES or (key == "_autoremap" and value.lower() == "false"):
+            continue
+        if key == "_autoremap" and value.strip().lower() == "true":
+            elem.autoremap = True  # expanded by planner.tree_syntax
             continue
         if key in CONDITION_ATTRIBUTES:
             script = _parse(value, key, problem)
