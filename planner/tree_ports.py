@@ -20,6 +20,7 @@ from py_trees.ports_utils import convert_str_to_type
 from planner.bt_controls import BUILTIN_CONTROLS
 from planner.bt_decorators import BUILTIN_DECORATORS
 from planner.bt_leaves import BUILTIN_LEAVES
+from planner.bt_loops import BUILTIN_LOOPS
 from planner.bt_scripting import BUILTIN_SCRIPT_NODES
 from planner.bt_switch import BUILTIN_SWITCHES
 from planner.decorators import SimTimeout
@@ -53,6 +54,7 @@ def builtin_nodes() -> dict[str, Any]:
         **BUILTIN_DECORATORS,
         **BUILTIN_SWITCHES,
         **BUILTIN_SCRIPT_NODES,
+        **BUILTIN_LOOPS,
     }
 
 
