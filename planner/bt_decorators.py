@@ -15,7 +15,7 @@ from py_trees.common import Status
 from py_trees.ports import PortInformation
 
 from planner.bt_leaves import StringPorts
-from planner.decorators import Clock, clock_from_setup
+from planner.decorators import Clock, SimTimeout, clock_from_setup
 
 __all__ = ["BUILTIN_DECORATORS", "Delay", "KeepRunningUntilFailure", "RetryForever", "RunOnce"]
 
@@ -163,3 +163,55 @@ BUILTIN_DECORATORS: dict[str, type[Behaviour]] = {
     "Delay": Delay,
     "RetryForever": RetryForever,
 }
+
+
+class TimeoutFromKey(StringPorts, SimTimeout, register=False):
+    """BT.CPP ``Timeout msec="{key}"``: :class:`~planner.decorators.SimTimeout` whose
+    milliseconds are read from the blackboard each time it is entered."""
+
+    INPUT_PORTS = {
+        "msec": PortInformation(data_type=int, required=True, description="time allowed, ms"),
+    }
+
+    def initialise(self) -> None:
+        """Read the time allowed, start the timer."""
+        msec = int(self.get_input("msec"))
+        if msec <= 0:
+            raise ValueError(f"{self.name}: msec: expected a positive time in ms, got {msec}")
+        self.duration = msec / 1000.0
+        super().initialise()
+
+
+class RepeatFromKey(StringPorts, py_trees.decorators.Decorator, register=False):
+    """BT.CPP ``Repeat num_cycles="{key}"`` (or ``-1``, for ever): restart the child after each
+    success until it has succeeded ``num_cycles`` times (SUCCESS); a failure is FAILURE. The
+    count is read when the node is entered; between cycles it returns RUNNING."""
+
+    INPUT_PORTS = {
+        "num_cycles": PortInformation(data_type=int, required=True, description="-1: forever"),
+    }
+    OUTPUT_PORTS: dict[str, PortInformation] = {}
+
+    def __init__(self, name: str, child: Behaviour, **kwargs: Any) -> None:
+        super().__init__(name=name, child=child, **kwargs)
+        self.successes = 0
+        self.cycles = -1
+
+    def initialise(self) -> None:
+        """Read the count, start from zero."""
+        self.successes = 0
+        self.cycles = int(self.get_input("num_cycles"))
+
+    def update(self) -> Status:
+        """Count the child's successes."""
+        status = self.decorated.status
+        if status != Status.SUCCESS:
+            return status
+        self.successes += 1
+        if 0 <= self.cycles <= self.successes:
+            return Status.SUCCESS
+        return Status.RUNNING
+
+
+BUILTIN_DECORATORS["TimeoutFromKey"] = TimeoutFromKey
+BUILTIN_DECORATORS["RepeatFromKey"] = RepeatFromKey

@@ -423,6 +423,9 @@ def _translate(elem: ET.Element, registry: Registry, problems: list[TreeProblem]
             elem.attrib.setdefault("num_failures", attempts)
     elif lower == "timeout":
         elem.tag = "Timeout"
+        if elem.attrib.get("msec", "").startswith("{"):
+            elem.tag = "TimeoutFromKey"  # read from the blackboard when entered
+            return
         msec = _drop_attribute(elem, "msec")
         if msec is not None:
             ms: int | None
@@ -439,6 +442,10 @@ def _translate(elem: ET.Element, registry: Registry, problems: list[TreeProblem]
                 elem.attrib.setdefault("duration", repr(ms / 1000.0))
     elif lower == "repeat":
         elem.tag = "Repeat"
+        count = elem.attrib.get("num_cycles", "")
+        if count.startswith("{") or count.strip() == "-1":
+            elem.tag = "RepeatFromKey"
+            return
         cycles = _drop_attribute(elem, "num_cycles")
         if cycles is not None:
             elem.attrib.setdefault("num_success", cycles)

@@ -64,3 +64,23 @@ def test_retry_attempts_from_the_blackboard() -> None:
     )
     t.run(("s", "r"), [(R, R), (F, F)])
     assert t.nodes["a"].ticks == 2
+
+
+def test_timeout_msec_from_the_blackboard() -> None:
+    t = Ticker(
+        '<Sequence name="s"><SetBlackboard name="w" value="200" output_key="ms"/>'
+        f'<Timeout name="t" msec="{{ms}}">{leaf("a", "R")}</Timeout></Sequence>',
+        dt=0.1,
+    )
+    t.run(("t", "a"), [(R, R), (R, R), (F, INV)])  # t = 0, .1, .2
+    assert t.nodes["a"].halts == 1
+
+
+def test_repeat_cycles_from_the_blackboard_and_for_ever() -> None:
+    t = Ticker(
+        '<Sequence name="s"><SetBlackboard name="w" value="3" output_key="n"/>'
+        f'<Repeat name="r" num_cycles="{{n}}">{leaf("a", "S")}</Repeat></Sequence>'
+    )
+    t.run(("r",), [(R,), (R,), (S,)])
+    t2 = Ticker(f'<Repeat name="r" num_cycles="-1">{leaf("a", "S,S,S,F")}</Repeat>')
+    t2.run(("r",), [(R,), (R,), (R,), (F,)])
