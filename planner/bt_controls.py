@@ -215,23 +215,28 @@ class ParallelCount(Control, register=False):
         super().__init__(name=name, children=children, **kwargs)
         self.done: dict[int, Status] = {}
 
-    def thresholds(self) -> tuple[int, int]:
-        """(successes needed, failures that end it), -1 turned into the number of children."""
+    def thresholds(self) -> tuple[int, int] | None:
+        """(successes needed, failures that end it), -1 turned into the number of children;
+        None (and the reason in ``feedback_message``) if they cannot be met."""
         n = len(self.children)
         success = int(self.get_input("success_count"))
         failure = int(self.get_input("failure_count"))
         success = n if success < 0 else success
         failure = n if failure < 0 else failure
         if not (1 <= success <= n and 1 <= failure <= n):
-            raise ValueError(
-                f"{self.name}: success_count {success} and failure_count {failure}: expected "
-                f"-1 or 1 to {n} (the number of children)"
+            self.feedback_message = (
+                f"success_count {success} and failure_count {failure}: expected -1 or 1 to "
+                f"{n} (the number of children)"
             )
+            return None
         return success, failure
 
     def step(self) -> Step:
         """Tick the unfinished children, then count."""
-        success_needed, failure_limit = self.thresholds()
+        limits = self.thresholds()
+        if limits is None:
+            return Status.FAILURE
+        success_needed, failure_limit = limits
         n = len(self.children)
         for i in range(n):
             if i in self.done:

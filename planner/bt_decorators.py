@@ -167,7 +167,8 @@ BUILTIN_DECORATORS: dict[str, type[Behaviour]] = {
 
 class TimeoutFromKey(StringPorts, SimTimeout, register=False):
     """BT.CPP ``Timeout msec="{key}"``: :class:`~planner.decorators.SimTimeout` whose
-    milliseconds are read from the blackboard each time it is entered."""
+    milliseconds are read from the blackboard each time it is entered (0 or less: the child
+    gets one tick)."""
 
     INPUT_PORTS = {
         "msec": PortInformation(data_type=int, required=True, description="time allowed, ms"),
@@ -175,10 +176,8 @@ class TimeoutFromKey(StringPorts, SimTimeout, register=False):
 
     def initialise(self) -> None:
         """Read the time allowed, start the timer."""
-        msec = int(self.get_input("msec"))
-        if msec <= 0:
-            raise ValueError(f"{self.name}: msec: expected a positive time in ms, got {msec}")
-        self.duration = msec / 1000.0
+        # A non-positive time read at run time allows one tick of the child, never a crash.
+        self.duration = max(int(self.get_input("msec")), 0) / 1000.0
         super().initialise()
 
 

@@ -348,6 +348,11 @@ def _translate_script_node(elem: SourceElement, problem: Callable[[str], None]) 
             _parse(elem.attrib["condition"], "if", problem)
         if "else" in elem.attrib:
             elem.attrib["otherwise"] = elem.attrib.pop("else")
+            if elem.attrib["otherwise"] not in ("SUCCESS", "FAILURE", "RUNNING"):
+                problem(
+                    "attribute 'else': expected SUCCESS, FAILURE or RUNNING, got "
+                    f"'{elem.attrib['otherwise'][:40]}'"
+                )
 
 
 def _underscore_problem(key: str) -> str:
@@ -467,6 +472,18 @@ def _translate_parallel(elem: ET.Element, problem: Callable[[str], None]) -> Non
     simple = success is None or success.strip() in ("-1", "1", str(n_children))
     if (failure is not None and failure.strip() != "1") or not simple:
         elem.tag = "ParallelCount"  # BT.CPP's thresholds, see planner.bt_controls
+        for name, value in (("success_count", success), ("failure_count", failure)):
+            if value is None or value.startswith("{"):
+                continue
+            try:
+                count = int(value)
+            except ValueError:
+                continue  # the port's type check names it
+            if count != -1 and not 1 <= count <= n_children:
+                problem(
+                    f"attribute '{name}': expected -1 (all) or 1 to {n_children} (the number "
+                    f"of children), got {count}"
+                )
         return
     elem.attrib.pop("success_count", None)
     elem.attrib.pop("failure_count", None)

@@ -136,7 +136,16 @@ def test_parallel_fails_when_success_is_out_of_reach() -> None:
     t.run(("p", "b"), [(F, INV)])
 
 
-def test_parallel_counts_beyond_the_children_are_refused_at_run() -> None:
-    t = Ticker(f'<Parallel name="p" success_count="5">{leaf("a", "S")}{leaf("b", "S")}</Parallel>')
-    with pytest.raises(ValueError, match="expected -1 or 1 to 2"):
-        t.tick("p")
+def test_parallel_counts_beyond_the_children_are_refused_at_validate() -> None:
+    with pytest.raises(TreeFileError, match=r"'success_count': expected -1 \(all\) or 1 to 2"):
+        Ticker(f'<Parallel name="p" success_count="5">{leaf("a", "S")}{leaf("b", "S")}</Parallel>')
+
+
+def test_parallel_counts_from_the_blackboard_out_of_range_fail_the_node() -> None:
+    t = Ticker(
+        '<Sequence name="s"><SetBlackboard name="w" value="9" output_key="k"/>'
+        f'<Parallel name="p" success_count="{{k}}">{leaf("a", "S")}{leaf("b", "S")}</Parallel>'
+        "</Sequence>"
+    )
+    t.run(("p",), [(F,)])
+    assert "expected -1 or 1 to 2" in t.nodes["p"].feedback_message

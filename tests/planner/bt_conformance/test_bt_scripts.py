@@ -137,3 +137,8 @@ def test_a_condition_that_cannot_run_fails_the_node() -> None:
     t = Ticker(leaf("a", "S", '_skipIf="nothere"'))
     t.run(("a",), [(F,)])
     assert "nothere" in t.nodes["a"].feedback_message
+
+
+def test_precondition_else_must_be_a_status() -> None:
+    with pytest.raises(TreeFileError, match="attribute 'else': expected SUCCESS, FAILURE or"):
+        Ticker(f'<Precondition name="p" if="true" else="MAYBE">{leaf("a", "S")}</Precondition>')
