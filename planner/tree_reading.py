@@ -14,10 +14,16 @@ from xml.parsers import expat
 from py_trees.parsers.behaviour_tree_xml import DECORATOR_NODES
 from py_trees.ports import get_ports_registry
 
-from planner.bt_script import Script, ScriptError, parse_script
+from planner.bt_script import Script
 from planner.tree_ports import Registry, builtin_nodes
 from planner.tree_problems import TreeFileError, TreeProblem
-from planner.tree_syntax import rewrite_port_syntax
+from planner.tree_syntax import (
+    CONDITION_ATTRIBUTES,
+    parse_attribute_script,
+    rewrite_port_syntax,
+    translate_script_node,
+    underscore_problem,
+)
 
 #: Groot/BT.CPP bookkeeping attributes that carry no meaning for a run; dropped silently.
 _IGNORED_ATTRIBUTES = frozenset({"_description", "_uid", "_fullpath"})
@@ -310,61 +316,6 @@ def _inline_includes(
             root.append(bt)
 
 
-#: BT.CPP's pre-conditions (checked before a tick) and post-conditions (run after it).
-CONDITION_ATTRIBUTES = (
-    "_failureIf",
-    "_successIf",
-    "_skipIf",
-    "_while",
-    "_onSuccess",
-    "_onFailure",
-    "_onHalted",
-    "_post",
-)
-
-
-def _parse(source: str, attribute: str, problem: Callable[[str], None]) -> Script | None:
-    """Parse a script attribute at validate time; a problem names its column."""
-    try:
-        return parse_script(source)
-    except ScriptError as exc:
-        problem(f"attribute '{attribute}': column {exc.column} in the script: {exc.reason}")
-        return None
-
-
-def _translate_script_node(elem: SourceElement, problem: Callable[[str], None]) -> None:
-    """Check the script of Script/ScriptCondition/Precondition; name Precondition's
-    ``if``/``else`` (Python keywords) ``condition``/``otherwise``."""
-    tag = (
-        elem.attrib.get("ID", elem.tag)
-        if elem.tag in ("Action", "Condition", "Decorator")
-        else elem.tag
-    )
-    if tag in ("Script", "ScriptCondition") and "code" in elem.attrib:
-        _parse(elem.attrib["code"], "code", problem)
-    elif tag == "Precondition":
-        if "if" in elem.attrib:
-            elem.attrib["condition"] = elem.attrib.pop("if")
-            _parse(elem.attrib["condition"], "if", problem)
-        if "else" in elem.attrib:
-            elem.attrib["otherwise"] = elem.attrib.pop("else")
-            if elem.attrib["otherwise"] not in ("SUCCESS", "FAILURE", "RUNNING"):
-                problem(
-                    "attribute 'else': expected SUCCESS, FAILURE or RUNNING, got "
-                    f"'{elem.attrib['otherwise'][:40]}'"
-                )
-
-
-def _underscore_problem(key: str) -> str:
-    """What to say about a ``_``-attribute the loader cannot honour."""
-    if key == "_autoremap":
-        return "attribute '_autoremap': expected true or false"
-    return (
-        f"unknown attribute '{key}'; expected one of the BT.CPP attributes "
-        f"{', '.join(CONDITION_ATTRIBUTES)}, _autoremap, _description"
-    )
-
-
 def _drop_attribute(elem: ET.Element, old: str) -> str | None:
     return elem.attrib.pop(old, None)
 
@@ -386,12 +337,12 @@ def _translate(elem: ET.Element, registry: Registry, problems: list[TreeProblem]
             elem.autoremap = True  # expanded by planner.tree_syntax
             continue
         if key in CONDITION_ATTRIBUTES:
-            script = _parse(value, key, problem)
+            script = parse_attribute_script(value, key, problem)
             if script is not None:
                 elem.conditions[key] = script
             continue
-        problem(_underscore_problem(key))
-    _translate_script_node(elem, problem)
+        problem(underscore_problem(key))
+    translate_script_node(elem, problem)
     if elem.tag in ("SetBlackboard", "UnsetBlackboard"):
         port = "output_key" if elem.tag == "SetBlackboard" else "key"
         named = elem.attrib.get(port)

@@ -9,14 +9,27 @@
 * SubTree port defaults declared in ``<TreeNodesModel><SubTree ID=..><input_port name=..
   default=..>``: a port the ``<SubTree>`` does not give takes the default (as py_trees takes
   a ``<BehaviorTree>``'s own attributes as defaults).
+
+It also parses, at validate time, the scripts of ``Script``/``ScriptCondition``/``Precondition``
+and of the pre/post-condition attributes (a problem names the column in the script).
 """
 
 from __future__ import annotations
 
 import re
 import xml.etree.ElementTree as ET
+from collections.abc import Callable
 
-__all__ = ["ROOT_PREFIX", "rewrite_port_syntax"]
+from planner.bt_script import Script, ScriptError, parse_script
+
+__all__ = [
+    "CONDITION_ATTRIBUTES",
+    "ROOT_PREFIX",
+    "parse_attribute_script",
+    "rewrite_port_syntax",
+    "translate_script_node",
+    "underscore_problem",
+]
 
 #: The name a ``{@key}`` is passed down under.
 ROOT_PREFIX = "ROOT__"
@@ -98,3 +111,60 @@ def _model_defaults(root: ET.Element, trees: dict[str, ET.Element]) -> None:
                 name, default = port.attrib.get("name"), port.attrib.get("default")
                 if port.tag.endswith("_port") and name and default is not None:
                     bt.attrib.setdefault(name, default)
+
+
+#: BT.CPP's pre-conditions (checked before a tick) and post-conditions (run after it).
+CONDITION_ATTRIBUTES = (
+    "_failureIf",
+    "_successIf",
+    "_skipIf",
+    "_while",
+    "_onSuccess",
+    "_onFailure",
+    "_onHalted",
+    "_post",
+)
+
+
+def parse_attribute_script(
+    source: str, attribute: str, problem: Callable[[str], None]
+) -> Script | None:
+    """Parse a script attribute at validate time; a problem names its column."""
+    try:
+        return parse_script(source)
+    except ScriptError as exc:
+        problem(f"attribute '{attribute}': column {exc.column} in the script: {exc.reason}")
+        return None
+
+
+def translate_script_node(elem: ET.Element, problem: Callable[[str], None]) -> None:
+    """Check the script of Script/ScriptCondition/Precondition; name Precondition's
+    ``if``/``else`` (Python keywords) ``condition``/``otherwise``."""
+    tag = (
+        elem.attrib.get("ID", elem.tag)
+        if elem.tag in ("Action", "Condition", "Decorator")
+        else elem.tag
+    )
+    if tag in ("Script", "ScriptCondition") and "code" in elem.attrib:
+        parse_attribute_script(elem.attrib["code"], "code", problem)
+    elif tag == "Precondition":
+        if "if" in elem.attrib:
+            elem.attrib["condition"] = elem.attrib.pop("if")
+            parse_attribute_script(elem.attrib["condition"], "if", problem)
+        if "else" in elem.attrib:
+            elem.attrib["otherwise"] = elem.attrib.pop("else")
+            if elem.attrib["otherwise"] not in ("SUCCESS", "FAILURE", "RUNNING"):
+                problem(
+                    "attribute 'else': expected SUCCESS, FAILURE or RUNNING, got "
+                    f"'{elem.attrib['otherwise'][:40]}'"
+                )
+
+
+def underscore_problem(key: str) -> str:
+    """What to say about a ``_``-attribute the loader cannot honour."""
+    if key == "_autoremap":
+        return "attribute '_autoremap': expected true or false"
+    return (
+        f"unknown attribute '{key}'; expected one of the BT.CPP attributes "
+        f"{', '.join(CONDITION_ATTRIBUTES)}, _autoremap, _description"
+    )
