@@ -16,10 +16,28 @@ import py_trees
 from py_trees.common import Status
 from py_trees.ports import PortInformation, PortsMixin
 
-__all__ = ["Clock", "SimTimeout"]
+__all__ = ["Clock", "SimTimeout", "clock_from_setup"]
 
 #: A clock: returns the current (simulated) time in seconds.
 Clock = Callable[[], float]
+
+
+def clock_from_setup(name: str, kwargs: dict[str, Any], current: Clock) -> Clock:
+    """The clock given to ``setup(clock=...)``, else ``current``.
+
+    Raises
+    ------
+    TypeError
+        If ``clock`` is given but is not callable.
+    """
+    clock = kwargs.get("clock")
+    if clock is None:
+        return current
+    if not callable(clock):
+        raise TypeError(
+            f"{name}: clock: expected a callable returning seconds, got {type(clock).__name__}"
+        )
+    return clock
 
 
 class SimTimeout(PortsMixin, py_trees.decorators.Decorator, register=False):
@@ -71,14 +89,7 @@ class SimTimeout(PortsMixin, py_trees.decorators.Decorator, register=False):
         TypeError
             If ``clock`` is given but is not callable.
         """
-        clock = kwargs.get("clock")
-        if clock is not None:
-            if not callable(clock):
-                raise TypeError(
-                    f"{self.name}: clock: expected a callable returning seconds, "
-                    f"got {type(clock).__name__}"
-                )
-            self.clock = clock
+        self.clock = clock_from_setup(self.name, kwargs, self.clock)
 
     def initialise(self) -> None:
         """Start the timer: the decorator is being entered afresh."""

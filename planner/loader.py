@@ -30,6 +30,7 @@ from pathlib import Path
 import py_trees
 from py_trees.parsers.behaviour_tree_xml import parse_behaviour_tree_xml
 
+from planner.bt_scripting import attach_conditions
 from planner.tree_checks import check_tree_document
 from planner.tree_ports import Registry, effective_registry
 from planner.tree_problems import TreeFileError, TreeProblem
@@ -122,6 +123,8 @@ def _load(doc: TreeDocument, registry: Registry | None) -> py_trees.behaviour.Be
             if "name" in elem.attrib and "ID" in elem.attrib:
                 ids.setdefault(elem.attrib["name"], set()).add(elem.attrib["ID"])
     _SUBTREE_IDS[root] = {name: next(iter(i)) for name, i in ids.items() if len(i) == 1}
+    trees = doc.behaviour_trees()
+    attach_conditions(trees[doc.main_tree_id], root, trees, "/")
     return root
 
 

@@ -11,6 +11,8 @@ import py_trees
 from py_trees.parsers.behaviour_tree_xml import DECORATOR_NODES
 from py_trees.ports import PortInformation, PortsMixin
 
+from planner.bt_controls import CHILD_COUNTS
+from planner.bt_switch import SWITCH_CHILD_COUNTS
 from planner.tree_ports import (
     Registry,
     constructor_params,
@@ -213,7 +215,8 @@ class _Checker:
         if issubclass(cls, py_trees.decorators.Decorator):
             self.check_children(elem, 1, 1, "decorator")
         elif issubclass(cls, py_trees.composites.Composite):
-            self.check_children(elem, 1, None, "control node")
+            low, high = {**CHILD_COUNTS, **SWITCH_CHILD_COUNTS}.get(elem.tag, (1, None))
+            self.check_children(elem, low, high, f"{elem.tag} node")
         elif len(elem):
             self.add(elem, f"a leaf takes no children, found {len(elem)}")
 

@@ -17,6 +17,12 @@ import py_trees
 from py_trees.ports import PortsMixin, get_ports_registry
 from py_trees.ports_utils import convert_str_to_type
 
+from planner.bt_controls import BUILTIN_CONTROLS
+from planner.bt_decorators import BUILTIN_DECORATORS
+from planner.bt_leaves import BUILTIN_LEAVES
+from planner.bt_loops import BUILTIN_LOOPS
+from planner.bt_scripting import BUILTIN_SCRIPT_NODES
+from planner.bt_switch import BUILTIN_SWITCHES
 from planner.decorators import SimTimeout
 
 #: Registry entries: a :class:`~py_trees.ports.PortsMixin` class or a ``functools.partial`` of one.
@@ -30,11 +36,26 @@ def effective_registry(registry: Registry | None = None) -> dict[str, Any]:
 
     ``registry`` (default: py_trees' global ports registry, i.e. every imported concrete
     ports-enabled behaviour) plus ``Timeout`` -> :class:`~planner.decorators.SimTimeout`
-    unless ``registry`` defines its own ``Timeout``.
+    and BT.CPP's built-in nodes (:func:`builtin_nodes`), unless ``registry`` defines its own.
     """
     reg = dict(get_ports_registry() if registry is None else registry)
     reg.setdefault("Timeout", SimTimeout)
+    for tag, cls in builtin_nodes().items():
+        reg.setdefault(tag, cls)
     return reg
+
+
+def builtin_nodes() -> dict[str, Any]:
+    """BT.CPP's built-in nodes that py_trees lacks, by tag (:mod:`planner.bt_leaves`,
+    :mod:`planner.bt_controls`, :mod:`planner.bt_decorators`, :mod:`planner.bt_switch`)."""
+    return {
+        **BUILTIN_LEAVES,
+        **BUILTIN_CONTROLS,
+        **BUILTIN_DECORATORS,
+        **BUILTIN_SWITCHES,
+        **BUILTIN_SCRIPT_NODES,
+        **BUILTIN_LOOPS,
+    }
 
 
 def registry_class(entry: Any) -> type | None:

@@ -14,8 +14,16 @@ from xml.parsers import expat
 from py_trees.parsers.behaviour_tree_xml import DECORATOR_NODES
 from py_trees.ports import get_ports_registry
 
-from planner.tree_ports import Registry
+from planner.bt_script import Script
+from planner.tree_ports import Registry, builtin_nodes
 from planner.tree_problems import TreeFileError, TreeProblem
+from planner.tree_syntax import (
+    CONDITION_ATTRIBUTES,
+    parse_attribute_script,
+    rewrite_port_syntax,
+    translate_script_node,
+    underscore_problem,
+)
 
 #: Groot/BT.CPP bookkeeping attributes that carry no meaning for a run; dropped silently.
 _IGNORED_ATTRIBUTES = frozenset({"_description", "_uid", "_fullpath"})
@@ -32,6 +40,10 @@ class SourceElement(ET.Element):
     sourceline: int
     source_tag: str
     source_attrib: dict[str, str]
+    #: BT.CPP pre/post-condition attributes, parsed (the py_trees parser never sees them).
+    conditions: dict[str, Script]
+    #: ``_autoremap="true"`` (a ``<SubTree>``).
+    autoremap: bool
 
 
 def describe(elem: ET.Element) -> str:
@@ -67,6 +79,8 @@ def _parse_xml(data: bytes | str, source: str) -> SourceElement:
         elem.sourceline = parser.CurrentLineNumber
         elem.source_tag = tag
         elem.source_attrib = dict(attrib)
+        elem.conditions = {}
+        elem.autoremap = False
         if stack:
             stack[-1].append(elem)
         else:
@@ -183,11 +197,15 @@ def _read(
                 source, root.sourceline, describe(root), "expected <root> as the document element"
             )
         )
+    unnamed = [bt for bt in root.findall("BehaviorTree") if "ID" not in bt.attrib]
+    if len(root.findall("BehaviorTree")) == 1 and unnamed:
+        # BT.CPP: a file's only <BehaviorTree> may go without an ID; it is the main tree.
+        unnamed[0].attrib["ID"] = UNNAMED_TREE_ID
     visited = {os.path.abspath(source)} if os.path.exists(source) else set()
     _inline_includes(root, base_dir, visited, problems)
     # Translate against the caller's registry only: a user-registered tag wins over a BT.CPP
     # spelling, but our own default Timeout still takes the BT.CPP ``msec`` spelling.
-    user = get_ports_registry() if registry is None else registry
+    user = {**builtin_nodes(), **(get_ports_registry() if registry is None else registry)}
     for bt in root.findall("BehaviorTree"):
         for elem in bt.iter():
             if elem is not bt:
@@ -219,9 +237,12 @@ def _read(
                 f"main tree '{main_id}' not found; expected one of the <BehaviorTree> IDs: {found}",
             )
         )
+    rewrite_port_syntax(root, main_id)
     return TreeDocument(source, root, main_id, problems)
 
 
+#: The ID given to a file's only ``<BehaviorTree>`` when it has none (as BT.CPP does).
+UNNAMED_TREE_ID = "MainTree"
 #: Longest Timeout a tree may ask for, ms: a day of simulated time.
 MAX_TIMEOUT_MS = 86_400_000
 #: Largest tree file read, bytes (the shipped trees are 5-10 KB).
@@ -307,24 +328,34 @@ def _translate(elem: ET.Element, registry: Registry, problems: list[TreeProblem]
     def problem(message: str) -> None:
         problems.append(TreeProblem(elem.sourcefile, elem.sourceline, describe(elem), message))
 
-    # Groot2's editor attributes mean nothing to a run, on any node (a registered leaf's too).
-    for key in _IGNORED_ATTRIBUTES & elem.attrib.keys():
-        del elem.attrib[key]
-    if elem.tag in ("root", "BehaviorTree", "TreeNodesModel") or elem.tag in registry:
+    if elem.tag in ("root", "BehaviorTree", "TreeNodesModel"):
+        return
+    for key in [k for k in elem.attrib if k.startswith("_")]:
+        value = elem.attrib.pop(key)
+        if key in _IGNORED_ATTRIBUTES or (key == "_autoremap" and value.lower() == "false"):
+            continue
+        if key == "_autoremap" and value.strip().lower() == "true":
+            elem.autoremap = True  # expanded by planner.tree_syntax
+            continue
+        if key in CONDITION_ATTRIBUTES:
+            script = parse_attribute_script(value, key, problem)
+            if script is not None:
+                elem.conditions[key] = script
+            continue
+        problem(underscore_problem(key))
+    translate_script_node(elem, problem)
+    if elem.tag in ("SetBlackboard", "UnsetBlackboard"):
+        port = "output_key" if elem.tag == "SetBlackboard" else "key"
+        named = elem.attrib.get(port)
+        if named is not None and not named.startswith("{"):
+            elem.attrib[port] = "{" + named + "}"  # BT.CPP names the key bare
+    if elem.tag in registry:
         return
     # Explicit form: <Action ID="Grasp" .../> is <Grasp .../>.
     if elem.tag in ("Action", "Condition", "Control", "Decorator") and "ID" in elem.attrib:
         elem.tag = elem.attrib.pop("ID")
         if elem.tag in registry:
             return
-    for key in [k for k in elem.attrib if k.startswith("_")]:
-        value = elem.attrib.pop(key)
-        if key in _IGNORED_ATTRIBUTES or (key == "_autoremap" and value.lower() == "false"):
-            continue
-        problem(
-            f"attribute '{key}' (BT.CPP scripting/pre-/post-conditions/_autoremap) is not "
-            "supported by the py_trees parser; remap subtree ports explicitly"
-        )
     lower = elem.tag.lower()
     # BT.CPP's SequenceWithMemory (no restart after a failure) has no py_trees equivalent.
     if lower in ("sequence", "reactivesequence"):
@@ -340,13 +371,18 @@ def _translate(elem: ET.Element, registry: Registry, problems: list[TreeProblem]
         _translate_parallel(elem, problem)
     elif lower in ("retry", "retryuntilsuccessful"):
         elem.tag = "Retry"
+        attempts = elem.attrib.get("num_attempts")
+        if attempts is not None and (attempts.strip() == "-1" or attempts.startswith("{")):
+            elem.tag = "RetryForever"  # BT.CPP semantics, the count read when entered
+            return
         attempts = _drop_attribute(elem, "num_attempts")
         if attempts is not None:
-            if attempts.strip() == "-1":
-                problem('num_attempts="-1" (retry forever) is not supported; give a count >= 1')
             elem.attrib.setdefault("num_failures", attempts)
     elif lower == "timeout":
         elem.tag = "Timeout"
+        if elem.attrib.get("msec", "").startswith("{"):
+            elem.tag = "TimeoutFromKey"  # read from the blackboard when entered
+            return
         msec = _drop_attribute(elem, "msec")
         if msec is not None:
             ms: int | None
@@ -363,6 +399,10 @@ def _translate(elem: ET.Element, registry: Registry, problems: list[TreeProblem]
                 elem.attrib.setdefault("duration", repr(ms / 1000.0))
     elif lower == "repeat":
         elem.tag = "Repeat"
+        count = elem.attrib.get("num_cycles", "")
+        if count.startswith("{") or count.strip() == "-1":
+            elem.tag = "RepeatFromKey"
+            return
         cycles = _drop_attribute(elem, "num_cycles")
         if cycles is not None:
             elem.attrib.setdefault("num_success", cycles)
@@ -378,14 +418,27 @@ def _translate(elem: ET.Element, registry: Registry, problems: list[TreeProblem]
 
 def _translate_parallel(elem: ET.Element, problem: Callable[[str], None]) -> None:
     """Map BT.CPP ``success_count``/``failure_count`` to a py_trees policy (default: all)."""
-    success = elem.attrib.pop("success_count", None)
-    failure = elem.attrib.pop("failure_count", None)
+    success = elem.attrib.get("success_count")
+    failure = elem.attrib.get("failure_count")
     n_children = len(elem)
-    if failure is not None and failure.strip() != "1":
-        problem(
-            f'failure_count="{failure}" is not supported: py_trees\' Parallel fails as soon as '
-            'one child fails (failure_count="1")'
-        )
+    simple = success is None or success.strip() in ("-1", "1", str(n_children))
+    if (failure is not None and failure.strip() != "1") or not simple:
+        elem.tag = "ParallelCount"  # BT.CPP's thresholds, see planner.bt_controls
+        for name, value in (("success_count", success), ("failure_count", failure)):
+            if value is None or value.startswith("{"):
+                continue
+            try:
+                count = int(value)
+            except ValueError:
+                continue  # the port's type check names it
+            if count != -1 and not 1 <= count <= n_children:
+                problem(
+                    f"attribute '{name}': expected -1 (all) or 1 to {n_children} (the number "
+                    f"of children), got {count}"
+                )
+        return
+    elem.attrib.pop("success_count", None)
+    elem.attrib.pop("failure_count", None)
     if success is None:
         # BT.CPP's default (and so an unannotated Groot tree's) is: succeed when all succeed.
         elem.attrib.setdefault("policy", "success_on_all")

@@ -139,3 +139,34 @@ class FakeClock:
 
     def advance(self) -> None:
         self.now += self.dt
+
+
+class StubScripted(BehaviourWithPorts):
+    """Return the statuses in ``script`` one per tick (``"R,R,S"``: RUNNING, RUNNING,
+    SUCCESS), then the last one for ever; counts its ticks and its halts."""
+
+    NODE_TYPE: ClassVar[str] = "Action"
+    INPUT_PORTS = {
+        "script": PortInformation(data_type=str, required=True, description="e.g. R,R,S"),
+    }
+    OUTPUT_PORTS: dict[str, PortInformation] = {}
+    _CODES: ClassVar[dict[str, Status]] = {
+        "S": Status.SUCCESS,
+        "F": Status.FAILURE,
+        "R": Status.RUNNING,
+    }
+
+    def __init__(self, name: str, **kwargs: Any) -> None:
+        super().__init__(name=name, **kwargs)
+        self.ticks = 0
+        self.halts = 0
+
+    def update(self) -> Status:
+        codes = [c.strip() for c in str(self.get_input("script")).split(",")]
+        status = self._CODES[codes[min(self.ticks, len(codes) - 1)]]
+        self.ticks += 1
+        return status
+
+    def terminate(self, new_status: Status) -> None:
+        if new_status == Status.INVALID and self.status == Status.RUNNING:
+            self.halts += 1

@@ -120,10 +120,6 @@ def test_decorator_and_parallel_attributes() -> None:
     )
     got = problems_of(text)
     assert got == [
-        (3, "failure_count=\"2\" is not supported: py_trees' Parallel fails as soon as one child "
-            "fails (failure_count=\"1\")"),
-        (3, "success_count=\"2\" is not supported; expected 1 (any child) or -1 / 4 (all "
-            "children)"),
         (
             6,
             "attribute 'msec': expected a whole number of milliseconds from 1 to 86400000, "
@@ -159,16 +155,18 @@ def test_duplicate_names_and_subtree_cycles() -> None:
     ]  # fmt: skip
 
 
-def test_unsupported_btcpp_features_are_named() -> None:
+def test_btcpp_condition_and_autoremap_attributes_are_checked() -> None:
     text = wrap(
-        """    <Sequence name="s" _skipIf="x == 1">
-      <SubTree ID="Sub" name="sub" _autoremap="true"/>
+        """    <Sequence name="s" _skipIf="x == (1">
+      <SubTree ID="Sub" name="sub" _autoremap="maybe"/>
     </Sequence>""",
         extra='  <BehaviorTree ID="Sub"><StubCheck name="c" value="{v}"/></BehaviorTree>\n',
     )
     messages = [m for _, m in problems_of(text)]
-    assert any("'_skipIf'" in m and "not supported" in m for m in messages)
-    assert any("'_autoremap'" in m for m in messages)
+    assert any(
+        m.startswith("attribute '_skipIf': column 8 in the script: expected ')'") for m in messages
+    )
+    assert "attribute '_autoremap': expected true or false" in messages
 
 
 def test_structure_problems() -> None:

@@ -1,0 +1,151 @@
+"""BT.CPP control nodes, status of each node at each tick, halts included."""
+
+from __future__ import annotations
+
+import pytest
+
+from planner.loader import TreeFileError
+from tests.planner.bt_conformance.conftest import INV, F, R, S, Ticker
+
+
+def leaf(name: str, script: str) -> str:
+    return f'<StubScripted name="{name}" script="{script}"/>'
+
+
+def test_sequence_with_memory_skips_succeeded_children_and_keeps_its_place_on_failure() -> None:
+    t = Ticker(
+        f'<SequenceWithMemory name="q">{leaf("a", "S")}{leaf("b", "R,F,S")}</SequenceWithMemory>'
+    )
+    t.run(("q", "a", "b"), [(R, S, R), (F, S, F), (S, S, S)])
+    # After the failure the next tick went on at b: a was ticked only once.
+    assert (t.nodes["a"].ticks, t.nodes["b"].ticks) == (1, 3)
+
+
+def test_reactive_sequence_halts_a_running_later_child_when_an_earlier_one_fails() -> None:
+    t = Ticker(f'<ReactiveSequence name="q">{leaf("a", "S,F")}{leaf("b", "R")}</ReactiveSequence>')
+    t.run(("q", "a", "b"), [(R, S, R), (F, F, INV)])
+    assert t.nodes["b"].halts == 1
+
+
+def test_if_then_else_is_not_reactive() -> None:
+    t = Ticker(
+        f'<IfThenElse name="i">{leaf("c", "S,F")}{leaf("then", "R,R,S")}{leaf("else", "S")}'
+        "</IfThenElse>"
+    )
+    # The condition is ticked once; the then-branch runs to its end although c would fail now.
+    t.run(("i", "c", "then", "else"), [(R, S, R, INV), (R, S, R, INV), (S, S, S, INV)])
+    assert t.nodes["c"].ticks == 1
+
+
+def test_if_then_else_takes_the_else_branch_or_fails_without_one() -> None:
+    t = Ticker(
+        f'<IfThenElse name="i">{leaf("c", "F")}{leaf("then", "S")}{leaf("else", "R,F")}'
+        "</IfThenElse>"
+    )
+    t.run(("i", "then", "else"), [(R, INV, R), (F, INV, F)])
+    t2 = Ticker(f'<IfThenElse name="i">{leaf("c", "F")}{leaf("then", "S")}</IfThenElse>')
+    t2.run(("i", "then"), [(F, INV)])
+
+
+def test_while_do_else_halts_the_branch_no_longer_selected() -> None:
+    t = Ticker(
+        f'<WhileDoElse name="w">{leaf("c", "S,S,F,F")}{leaf("do", "R")}{leaf("else", "R,S")}'
+        "</WhileDoElse>"
+    )
+    t.run(("w", "do", "else"), [(R, R, INV), (R, R, INV), (R, INV, R), (S, INV, S)])
+    assert t.nodes["do"].halts == 1
+
+
+def test_while_do_else_with_two_children_fails_and_halts_on_a_false_condition() -> None:
+    t = Ticker(f'<WhileDoElse name="w">{leaf("c", "S,F")}{leaf("do", "R")}</WhileDoElse>')
+    t.run(("w", "do"), [(R, R), (F, INV)])
+    assert t.nodes["do"].halts == 1
+
+
+@pytest.mark.parametrize("tag", ["IfThenElse", "WhileDoElse"])
+def test_if_and_while_take_two_or_three_children(tag: str) -> None:
+    with pytest.raises(TreeFileError, match=f"a {tag} node takes at most 3 children, found 4"):
+        Ticker(
+            f'<{tag} name="i">{leaf("a", "S")}{leaf("b", "S")}{leaf("c", "S")}{leaf("d", "S")}'
+            f"</{tag}>"
+        )
+    with pytest.raises(TreeFileError, match=f"a {tag} node needs at least 2 child, found 1"):
+        Ticker(f'<{tag} name="i">{leaf("a", "S")}</{tag}>')
+
+
+def test_try_catch_runs_the_catch_after_a_failure_and_fails() -> None:
+    t = Ticker(
+        f'<TryCatch name="t">{leaf("a", "S")}{leaf("b", "R,F")}{leaf("catch", "R,S")}</TryCatch>'
+    )
+    t.run(("t", "a", "b", "catch"), [(R, S, R, INV), (R, S, F, R), (F, S, F, S)])
+
+
+def test_try_catch_succeeds_without_running_the_catch() -> None:
+    t = Ticker(f'<TryCatch name="t">{leaf("a", "R,S")}{leaf("catch", "S")}</TryCatch>')
+    t.run(("t", "a", "catch"), [(R, R, INV), (S, S, INV)])
+    assert t.nodes["catch"].ticks == 0
+
+
+def test_parallel_all_waits_for_every_child_then_counts_failures() -> None:
+    t = Ticker(
+        f'<ParallelAll name="p" max_failures="2">{leaf("a", "F")}{leaf("b", "R,S")}'
+        f"{leaf('c', 'R,R,F')}</ParallelAll>"
+    )
+    t.run(("p", "a", "b", "c"), [(R, F, R, R), (R, F, S, R), (F, F, S, F)])
+    assert t.nodes["a"].ticks == 1  # a finished child is not ticked again
+
+
+def test_parallel_all_succeeds_below_max_failures() -> None:
+    t = Ticker(
+        f'<ParallelAll name="p" max_failures="2">{leaf("a", "F")}{leaf("b", "S")}</ParallelAll>'
+    )
+    t.run(("p",), [(S,)])
+
+
+def test_parallel_failure_count_above_one() -> None:
+    t = Ticker(
+        f'<Parallel name="p" success_count="1" failure_count="2">{leaf("a", "F")}'
+        f"{leaf('b', 'R,F')}{leaf('c', 'R')}</Parallel>"
+    )
+    # One failure is tolerated; the second ends it: c is not ticked again, and halted.
+    t.run(("p", "a", "b", "c"), [(R, F, R, R), (F, F, F, INV)])
+    assert (t.nodes["c"].halts, t.nodes["c"].ticks) == (1, 1)
+
+
+def test_parallel_with_all_needed_fails_at_the_first_failure() -> None:
+    t = Ticker(
+        f'<Parallel name="p" success_count="-1" failure_count="2">{leaf("a", "R,F")}'
+        f"{leaf('b', 'R')}</Parallel>"
+    )
+    t.run(("p", "a", "b"), [(R, R, R), (F, F, INV)])
+
+
+def test_parallel_success_count_two_of_three() -> None:
+    t = Ticker(
+        f'<Parallel name="p" success_count="2" failure_count="2">{leaf("a", "R,S")}'
+        f"{leaf('b', 'R,R,S')}{leaf('c', 'R')}</Parallel>"
+    )
+    t.run(("p", "a", "b", "c"), [(R, R, R, R), (R, S, R, R), (S, S, S, INV)])
+
+
+def test_parallel_fails_when_success_is_out_of_reach() -> None:
+    t = Ticker(
+        f'<Parallel name="p" success_count="3" failure_count="3">{leaf("a", "F")}'
+        f"{leaf('b', 'R')}{leaf('c', 'R')}</Parallel>"
+    )
+    t.run(("p", "b"), [(F, INV)])
+
+
+def test_parallel_counts_beyond_the_children_are_refused_at_validate() -> None:
+    with pytest.raises(TreeFileError, match=r"'success_count': expected -1 \(all\) or 1 to 2"):
+        Ticker(f'<Parallel name="p" success_count="5">{leaf("a", "S")}{leaf("b", "S")}</Parallel>')
+
+
+def test_parallel_counts_from_the_blackboard_out_of_range_fail_the_node() -> None:
+    t = Ticker(
+        '<Sequence name="s"><SetBlackboard name="w" value="9" output_key="k"/>'
+        f'<Parallel name="p" success_count="{{k}}">{leaf("a", "S")}{leaf("b", "S")}</Parallel>'
+        "</Sequence>"
+    )
+    t.run(("p",), [(F,)])
+    assert "expected -1 or 1 to 2" in t.nodes["p"].feedback_message

@@ -1,0 +1,74 @@
+"""BT.CPP built-in leaves: AlwaysSuccess, AlwaysFailure, Sleep (simulated ms), SetBlackboard,
+UnsetBlackboard."""
+
+from __future__ import annotations
+
+import py_trees
+import pytest
+
+from planner.loader import TreeFileError
+from tests.planner.bt_conformance.conftest import INV, F, R, S, Ticker
+
+
+def test_always_success_and_failure() -> None:
+    t = Ticker(
+        '<Sequence name="s"><AlwaysSuccess name="a"/><AlwaysFailure name="b"/>'
+        '<StubScripted name="c" script="S"/></Sequence>'
+    )
+    t.run(("s", "a", "b", "c"), [(F, S, F, INV), (F, S, F, INV)])
+
+
+def test_always_success_is_not_mistaken_for_a_decorator() -> None:
+    Ticker('<AlwaysSuccess name="a"/>')  # no "did you mean FailureIsSuccess"
+
+
+def test_always_failure_takes_no_ports() -> None:
+    with pytest.raises(TreeFileError, match="unknown port 'speed'"):
+        Ticker('<AlwaysFailure name="a" speed="2"/>')
+
+
+def test_sleep_runs_for_its_simulated_milliseconds() -> None:
+    t = Ticker('<Sleep name="z" msec="250"/>', dt=0.1)  # ticks at t = 0, .1, .2, .3
+    t.run(("z",), [(R,), (R,), (R,), (S,)])
+
+
+def test_sleep_restarts_after_a_halt() -> None:
+    t = Ticker(
+        '<ReactiveFallback name="f"><StubScripted name="c" script="F,S,F"/>'
+        '<Sleep name="z" msec="150"/></ReactiveFallback>',
+        dt=0.1,
+    )
+    # t=0 sleep starts; t=.1 the condition succeeds and halts it; t=.2 it starts afresh.
+    t.run(("f", "z"), [(R, R), (S, INV), (R, R), (R, R), (S, S)])
+
+
+def test_sleep_msec_from_the_blackboard() -> None:
+    t = Ticker(
+        '<Sequence name="s"><SetBlackboard name="w" value="100" output_key="{ms}"/>'
+        '<Sleep name="z" msec="{ms}"/></Sequence>',
+        dt=0.1,
+    )
+    t.run(("s", "z"), [(R, R), (S, S)])
+
+
+def test_sleep_rejects_a_non_integer() -> None:
+    with pytest.raises(TreeFileError, match="port 'msec': cannot convert 'soon' to int"):
+        Ticker('<Sleep name="z" msec="soon"/>')
+
+
+@pytest.mark.parametrize("key", ["answer", "{answer}"])
+def test_set_blackboard_writes_a_literal(key: str) -> None:
+    t = Ticker(f'<SetBlackboard name="w" value="42" output_key="{key}"/>')
+    t.run(("w",), [(S,)])
+    assert py_trees.blackboard.Blackboard.get("/answer") == "42"
+
+
+def test_set_blackboard_copies_another_key_and_unset_removes_it() -> None:
+    t = Ticker(
+        '<Sequence name="s"><SetBlackboard name="a" value="7" output_key="src"/>'
+        '<SetBlackboard name="b" value="{src}" output_key="dst"/>'
+        '<UnsetBlackboard name="u" key="src"/></Sequence>'
+    )
+    t.run(("s", "a", "b", "u"), [(S, S, S, S)])
+    assert py_trees.blackboard.Blackboard.get("/dst") == "7"
+    assert not py_trees.blackboard.Blackboard.exists("/src")

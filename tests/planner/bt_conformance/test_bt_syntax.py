@@ -1,0 +1,95 @@
+"""BT.CPP syntax: a lone <BehaviorTree> without ID; attributes not supported are named."""
+
+from __future__ import annotations
+
+import py_trees
+import pytest
+
+from planner.loader import TreeFileError, load_tree_string
+from tests.planner.bt_conformance.conftest import F, R, S, Ticker
+
+
+def test_single_behavior_tree_without_id_is_the_main_tree() -> None:
+    t = Ticker('<Sequence name="s"><StubScripted name="a" script="R,S"/></Sequence>', single=True)
+    t.run(("s", "a"), [(R, R), (S, S)])
+
+
+def test_two_trees_without_ids_are_refused() -> None:
+    text = (
+        '<root BTCPP_format="4"><BehaviorTree><AlwaysSuccess/></BehaviorTree>'
+        "<BehaviorTree><AlwaysFailure/></BehaviorTree></root>"
+    )
+    with pytest.raises(TreeFileError, match=r'expected an ID="\.\.\." attribute'):
+        load_tree_string(text, "two.xml")
+
+
+def test_unknown_underscore_attribute_is_named() -> None:
+    with pytest.raises(TreeFileError, match="unknown attribute '_skipif'; expected one of"):
+        Ticker('<AlwaysFailure name="a" _skipif="x"/>')
+
+
+def test_explicit_action_form_of_a_builtin() -> None:
+    t = Ticker('<Action ID="AlwaysFailure" name="a"/>')
+    t.run(("a",), [(F,)])
+
+
+def _load(text: str) -> py_trees.behaviour.Behaviour:
+    root = load_tree_string(text, "ports.xml")
+    py_trees.trees.BehaviourTree(root).setup()
+    return root
+
+
+def test_same_name_remap() -> None:
+    root = _load(
+        '<root BTCPP_format="4"><BehaviorTree><Sequence name="s">'
+        '<StubCounter name="a" ticks="1" count="{=}"/></Sequence></BehaviorTree></root>'
+    )
+    root.tick_once()
+    assert py_trees.blackboard.Blackboard.get("/count") == 1
+
+
+def test_root_key_from_a_nested_subtree() -> None:
+    root = _load(
+        '<root BTCPP_format="4" main_tree_to_execute="T">'
+        '<BehaviorTree ID="T"><Sequence name="s"><SubTree ID="A" name="a"/>'
+        '<StubCounter name="m" ticks="1" count="{mine}"/></Sequence></BehaviorTree>'
+        '<BehaviorTree ID="A"><SubTree ID="B" name="b"/></BehaviorTree>'
+        '<BehaviorTree ID="B"><StubCounter name="deep" ticks="1" count="{@hits}"/></BehaviorTree>'
+        "</root>"
+    )
+    root.tick_once()
+    assert root.status == S
+    assert py_trees.blackboard.Blackboard.get("/hits") == 1
+    assert py_trees.blackboard.Blackboard.get("/mine") == 1
+
+
+def test_autoremap_shares_every_key_of_the_subtree() -> None:
+    root = _load(
+        '<root BTCPP_format="4" main_tree_to_execute="T">'
+        '<BehaviorTree ID="T"><Sequence name="s"><SubTree ID="A" name="a" _autoremap="true"/>'
+        '<SubTree ID="A" name="b"/></Sequence></BehaviorTree>'
+        '<BehaviorTree ID="A"><StubCounter name="c" ticks="1" count="{n}"/></BehaviorTree>'
+        "</root>"
+    )
+    root.tick_once()
+    assert py_trees.blackboard.Blackboard.get("/n") == 1  # autoremapped: the caller's key
+    assert py_trees.blackboard.Blackboard.get("/b/n") == 1  # not remapped: the subtree's own
+
+
+def test_subtree_port_default_from_the_tree_nodes_model() -> None:
+    root = _load(
+        '<root BTCPP_format="4" main_tree_to_execute="T">'
+        '<BehaviorTree ID="T"><Sequence name="s"><SubTree ID="A" name="a" out="{got}"/>'
+        '<SubTree ID="A" name="b" out="{got2}" limit="3"/></Sequence></BehaviorTree>'
+        '<BehaviorTree ID="A"><StubCounter name="c" ticks="{limit}" count="{out}"/></BehaviorTree>'
+        '<TreeNodesModel><SubTree ID="A"><input_port name="limit" default="2"/>'
+        '<output_port name="out"/></SubTree></TreeNodesModel></root>'
+    )
+    statuses = []
+    for _ in range(4):
+        root.tick_once()
+        statuses.append(root.status)
+    # a counts to the model's default 2, b to its own 3 (b starts in a's last tick).
+    assert statuses == [R, R, R, S]
+    assert py_trees.blackboard.Blackboard.get("/got") == 2
+    assert py_trees.blackboard.Blackboard.get("/got2") == 3
