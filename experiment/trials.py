@@ -27,8 +27,8 @@ import json
 import math
 import os
 import signal
-from collections import Counter
-from collections.abc import Callable, Iterable, Sequence
+import socket
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 from types import TracebackType
@@ -37,12 +37,18 @@ from typing import Any
 import numpy as np
 import pybullet as pb
 
+from experiment.records import campaign_key, owned_by
 from experiment.results import (
     ResultsFileError,
     campaign_lock,
     read_results,
     repair_tail,
 )
+
+# Re-exported: the summary lives below the simulation, for reports that need no PyBullet.
+from experiment.summary import composition_label as composition_label
+from experiment.summary import reason_of as reason_of
+from experiment.summary import summarise as summarise
 from planner.user_leaves import register_leaves
 from skills.turns import grip_yaw, lateral_quarter_turns, turn_steps
 from worlds.adapters import robot_capabilities
@@ -371,56 +377,63 @@ def run_trial(job: tuple[dict[str, Any], int, int]) -> dict[str, Any]:
         # worker starts without them; a forked one finds them registered already).
         register_leaves(base_data.get("leaves", ()))
         world, kinds = draw_trial(base, seed, trial)
+        where = _layout_of(world)
         report = run_episode(world, tree, out=None, animation=False)
         record = report.summary()
         record.pop("outputs", None)
         failure = record["failure"] or ""
     except Exception as err:  # a trial that crashes is a failed trial with its reason
         record = {"success": False, "sim_time_s": 0.0, "wall_time_s": 0.0}
-        kinds = []
+        kinds, where = [], {}
         failure = f"error: {type(err).__name__}: {err}"
     record.update(
         {
             "trial": trial,
-            "seed": seed,
-            "tree": base_data["tree"],
+            **base_data.get("key", {"seed": seed}),
             "obstacles": kinds,
+            **where,
             "failure": failure,
+            "backend": base_data.get("backend", "local"),
+            "host": socket.gethostname(),
         }
     )
     return record
 
 
-def reason_of(failure: str) -> str:
-    """A failure's category for the summary table."""
-    if not failure:
-        return "success"
-    if failure.startswith("obstacle contact"):
-        touching = failure.split(": ", 1)[1] if ": " in failure else ""
-        parts = {p.split(" ~ ")[0] for p in touching.split(", ") if p}
-        return "obstacle contact: " + "/".join(sorted(parts))
-    return failure.split(":")[0].split(" placed")[0]
+def _layout_of(world: World) -> dict[str, Any]:
+    """Where a trial's object started and its moves' goals were (m), for reports."""
+    start = world.objects[0].pose.position
+    goals = [list(m.goal.position) for step in world.task for m in step.moves]
+    return {"start": list(start), "goals": goals}
 
 
-def tree_key(tree: Path | None) -> str:
-    """How records name the tree their trials ran: its absolute path, "" for the default."""
-    return str(tree.resolve()) if tree is not None else ""
+def campaign_of(
+    base: World, seed: int, tree: Path | None, leaves: Sequence[str] = ()
+) -> dict[str, Any]:
+    """The key of the campaign of ``base``, ``seed``, ``tree`` and the tree's own ``leaves``
+    (:func:`experiment.records.campaign_key`)."""
+    settings = {"leaves": [_leaf_source(s) for s in leaves]} if leaves else {}
+    return campaign_key(base.name, base.model_dump(mode="json"), tree, seed, settings)
 
 
-def campaign_results(path: Path, seed: int, tree: Path | None) -> dict[int, dict[str, Any]]:
-    """The records in ``results.jsonl`` of one campaign: this seed, this tree (lines that are
-    not records are skipped: :func:`experiment.results.read_results` counts them).
+def _leaf_source(source: str) -> str:
+    return str(Path(source).resolve()) if source.endswith(".py") else source
+
+
+def campaign_results(path: Path, key: dict[str, Any]) -> dict[int, dict[str, Any]]:
+    """The records in ``results.jsonl`` of one campaign (``key``: :func:`campaign_of`);
+    records of other campaigns are ignored, as are lines that are not records
+    (:func:`experiment.results.read_results` counts them).
 
     Raises
     ------
     ResultsFileError
         If the file is a folder or unreadable.
     """
-    key = tree_key(tree)
     return {
         r["trial"]: r  # a trial run twice (an interrupted write) counts once, the last
         for r in read_results(path).records
-        if r.get("seed") == seed and r.get("tree", "") == key
+        if owned_by(r, key)
     }
 
 
@@ -464,7 +477,8 @@ def run_campaign(
         Progress callback, in the parent process.
     tree : Path, optional
         Behaviour tree XML every trial runs (default: the paper's tree built in code).
-        Records remember it: a campaign resumes only the trials of the same seed and tree.
+        Records remember it: a campaign resumes only the trials of its own world, seed, tree
+        and leaves (:func:`campaign_of`); other records in the file are kept and ignored.
     on_notice : callable (text), optional
         Told of what was repaired or skipped in an earlier ``results.jsonl``.
     leaves : sequence of str
@@ -518,13 +532,15 @@ def _run_locked(
             f"{results}: skipped {earlier.skipped} line(s) that are not trial records; "
             "their trials run again"
         )
-    done = campaign_results(results, seed, tree)
+    key = campaign_of(base, seed, tree, leaves)
+    done = campaign_results(results, key)
     pending = [t for t in range(n) if t not in done]
     payload = {
         "world": base.model_dump(mode="json"),
         "source": str(base.source or ""),
-        "tree": tree_key(tree),
-        "leaves": [str(Path(s).resolve()) if s.endswith(".py") else s for s in leaves],
+        "tree": str(tree.resolve()) if tree is not None else "",
+        "key": key,
+        "leaves": [_leaf_source(s) for s in leaves],
     }
     jobs = [(payload, seed, t) for t in pending]
     finished = n - len(pending)
@@ -562,40 +578,3 @@ def _run_locked(
             finally:
                 pool.join()
     return [done[t] for t in range(n) if t in done]
-
-
-def composition_label(composition: dict[str, float]) -> str:
-    """A placed move's composition in words: the pick-and-place weight and avoidance gain."""
-    weight = composition.get("transport_weight", math.nan)
-    gain = composition.get("avoid_gain", math.nan)
-    avoid = "no avoidance" if gain == 0.0 else f"avoidance x{gain:g}"
-    return f"pick-and-place x{weight:g}, {avoid}"
-
-
-def summarise(records: Iterable[dict[str, Any]]) -> dict[str, Any]:
-    """Counts of successes and failure reasons, mean times."""
-    recs = list(records)
-    reasons = Counter(reason_of(r.get("failure", "")) for r in recs)
-    successes = reasons.pop("success", 0)
-    sim = sum(float(r.get("sim_time_s") or 0.0) for r in recs)
-    wall = sum(float(r.get("wall_time_s") or 0.0) for r in recs)
-    dists = [r["min_obstacle_distance_m"] for r in recs if r.get("min_obstacle_distance_m")]
-    carried = Counter(
-        composition_label(c) for r in recs for c in r.get("compositions") or () if c is not None
-    )
-    return {
-        "trials": len(recs),
-        "successes": successes,
-        "failure_reasons": dict(sorted(reasons.items(), key=lambda kv: (-kv[1], kv[0]))),
-        "compositions": dict(sorted(carried.items(), key=lambda kv: (-kv[1], kv[0]))),
-        # A negative clearance is a contact PyBullet may not report (a fixed base in a sphere).
-        "obstacle_contacts": sum(
-            1
-            for r in recs
-            if r.get("obstacle_contacts") or (r.get("min_obstacle_distance_m") or 0.0) < 0.0
-        ),
-        "min_obstacle_distance_m": min(dists) if dists else None,
-        "sim_time_s": round(sim, 2),
-        "wall_time_s": round(wall, 2),
-        "realtime_factor": round(sim / wall, 2) if wall > 0 else math.nan,
-    }
