@@ -368,6 +368,9 @@ def _run_command(args: argparse.Namespace) -> int:
     from worlds.scene import NoDisplayError
 
     world = _load_world_or_exit(args.world)
+    if args.address and args.backend != "ray":
+        print("--address: expected only with --backend ray", file=sys.stderr)
+        return EXIT_BAD_INPUT
     if _register_leaves(args) is None:
         return EXIT_BAD_INPUT
     _preflight_or_exit(world, args.world, args.tree)
@@ -440,6 +443,9 @@ def _trials_command(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
         return EXIT_BAD_INPUT
+    if args.address and args.backend != "ray":
+        print("--address: expected only with --backend ray", file=sys.stderr)
+        return EXIT_BAD_INPUT
     if _register_leaves(args) is None:
         return EXIT_BAD_INPUT
     _preflight_or_exit(world, args.world, args.tree)  # one message now, not one per trial
@@ -486,7 +492,17 @@ def _trials_command(args: argparse.Namespace) -> int:
             tree,
             on_notice=notice,
             leaves=args.leaves,
+            backend=args.backend,
+            address=args.address,
         )
+    except ImportError as err:  # --backend ray without Ray installed
+        bar.close()
+        print(f"--backend ray: {err}; install it with pip install -e '.[cluster]'", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except RuntimeError as err:  # Ray gave up on a trial
+        bar.close()
+        print(printable(err), file=sys.stderr)
+        return EXIT_BAD_INPUT
     except ResultsFileError as err:  # a folder that is not one, or another campaign in it
         bar.close()
         print(err, file=sys.stderr)
@@ -656,6 +672,17 @@ def build_parser() -> argparse.ArgumentParser:
         type=int,
         default=max(1, (os.cpu_count() or 1)),
         help="worker processes (default: one per core)",
+    )
+    trials.add_argument(
+        "--backend",
+        choices=["local", "ray"],
+        default="local",
+        help="where trials run: a local pool of --workers processes (default), or Ray",
+    )
+    trials.add_argument(
+        "--address",
+        help="with --backend ray: the cluster's address (ray start --head prints it); "
+        "default: a local Ray of --workers CPUs",
     )
     trials.add_argument("--out", default="out/trials", help="folder of results.jsonl")
     trials.add_argument("--json", action="store_true", help="print a JSON summary as the last line")

@@ -369,6 +369,11 @@ def run_trial(job: tuple[dict[str, Any], int, int]) -> dict[str, Any]:
     from experiment.episode import run_episode
 
     base_data, seed, trial = job
+    die = base_data.get("die_once")
+    if die and die[0] == trial and not Path(die[1]).exists():
+        # Test-only (DUET_TEST_DIE_ONCE): this worker dies on its first attempt of the trial.
+        Path(die[1]).write_text(str(os.getpid()), encoding="utf-8")
+        os._exit(1)
     source = Path(base_data["source"]) if base_data["source"] else None
     base = world_from_data(base_data["world"], source)
     tree = Path(base_data["tree"]) if base_data["tree"] else None
@@ -437,6 +442,61 @@ def campaign_results(path: Path, key: dict[str, Any]) -> dict[int, dict[str, Any
     }
 
 
+#: Where a campaign's trials can run.
+BACKENDS = ("local", "ray")
+#: Times Ray runs a trial again whose worker died (a killed process, a lost node).
+RAY_RETRIES = 3
+
+
+def _run_on_ray(
+    jobs: list[tuple[dict[str, Any], int, int]],
+    workers: int,
+    address: str | None,
+    keep: Callable[[dict[str, Any]], None],
+) -> None:
+    """Run ``jobs`` as Ray tasks, handing each record to ``keep`` here as it arrives.
+
+    A task whose worker dies is run again by Ray (``RAY_RETRIES``); its record arrives once.
+    Without ``address`` a local Ray of ``workers`` CPUs is started, whose workers import this
+    project from its folder.
+    """
+    import ray
+
+    from experiment.records import PROJECT
+
+    started = not ray.is_initialized()
+    if started:
+        if address:
+            ray.init(address=address, log_to_driver=False)
+        else:
+            ray.init(
+                num_cpus=workers,
+                include_dashboard=False,
+                log_to_driver=False,
+                runtime_env={"env_vars": {"PYTHONPATH": str(PROJECT)}},
+            )
+    task = ray.remote(num_cpus=1, max_retries=RAY_RETRIES)(run_trial)
+    pending = [task.remote(job) for job in jobs]
+    try:
+        while pending:
+            ready, pending = ray.wait(pending, num_returns=1)
+            for ref in ready:
+                try:
+                    record = ray.get(ref)
+                except ray.exceptions.RayError as err:
+                    raise RuntimeError(
+                        f"ray: a trial's worker failed {RAY_RETRIES + 1} times: {err}"
+                    ) from None
+                keep(record)
+    except BaseException:  # Ctrl-C included: stop what is running, keep what finished
+        for ref in pending:
+            ray.cancel(ref, force=True)
+        raise
+    finally:
+        if started:
+            ray.shutdown()
+
+
 def _worker_init() -> None:
     """In a worker: leave Ctrl-C to the parent (which ends the pool), and die with it."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
@@ -459,6 +519,8 @@ def run_campaign(
     tree: Path | None = None,
     on_notice: Callable[[str], None] | None = None,
     leaves: Sequence[str] = (),
+    backend: str = "local",
+    address: str | None = None,
 ) -> list[dict[str, Any]]:
     """Run trials ``0..n-1`` not yet in ``out/results.jsonl``; append each as it finishes.
 
@@ -484,6 +546,12 @@ def run_campaign(
     leaves : sequence of str
         ``--leaves`` sources (files or modules) of the tree's own leaves; every worker
         registers them (:func:`planner.user_leaves.register_leaves`).
+    backend : {"local", "ray"}
+        Where trials run: a pool of ``workers`` processes here, or Ray tasks (a local Ray
+        of ``workers`` CPUs, or the cluster at ``address``). Records are the same either way
+        but for ``wall_time_s``, ``host`` and ``backend``; only this process writes them.
+    address : str, optional
+        A Ray cluster's address (``ray start --head`` prints it; "auto" finds a local one).
 
     Returns
     -------
@@ -501,9 +569,21 @@ def run_campaign(
         out.mkdir(parents=True, exist_ok=True)
     except OSError as err:
         raise ResultsFileError(f"{out}: cannot make the folder: {err.strerror or err}") from None
+    if backend not in BACKENDS:
+        raise ValueError(f"run_campaign: expected backend in {BACKENDS}, got {backend!r}")
     with campaign_lock(out):
         return _run_locked(
-            base, n, seed, out, workers, on_result, tree, on_notice or _quiet, leaves
+            base,
+            n,
+            seed,
+            out,
+            workers,
+            on_result,
+            tree,
+            on_notice or _quiet,
+            leaves,
+            backend,
+            address,
         )
 
 
@@ -521,6 +601,8 @@ def _run_locked(
     tree: Path | None,
     on_notice: Callable[[str], None],
     leaves: Sequence[str],
+    backend: str,
+    address: str | None,
 ) -> list[dict[str, Any]]:
     results = out / "results.jsonl"
     cut = repair_tail(results)
@@ -535,13 +617,18 @@ def _run_locked(
     key = campaign_of(base, seed, tree, leaves)
     done = campaign_results(results, key)
     pending = [t for t in range(n) if t not in done]
-    payload = {
+    payload: dict[str, Any] = {
         "world": base.model_dump(mode="json"),
         "source": str(base.source or ""),
         "tree": str(tree.resolve()) if tree is not None else "",
         "key": key,
         "leaves": [_leaf_source(s) for s in leaves],
+        "backend": backend,
     }
+    die = os.environ.get("DUET_TEST_DIE_ONCE", "")
+    if backend == "ray" and ":" in die:  # test-only: see run_trial
+        at, marker = die.split(":", 1)
+        payload["die_once"] = (int(at), marker)
     jobs = [(payload, seed, t) for t in pending]
     finished = n - len(pending)
     try:
@@ -560,7 +647,9 @@ def _run_locked(
             if on_result is not None:
                 on_result(rec, finished, n)
 
-        if workers <= 1:
+        if backend == "ray":
+            _run_on_ray(jobs, workers, address, keep)
+        elif workers <= 1:
             for job in jobs:
                 keep(run_trial(job))
         else:
