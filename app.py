@@ -368,9 +368,6 @@ def _run_command(args: argparse.Namespace) -> int:
     from worlds.scene import NoDisplayError
 
     world = _load_world_or_exit(args.world)
-    if args.address and args.backend != "ray":
-        print("--address: expected only with --backend ray", file=sys.stderr)
-        return EXIT_BAD_INPUT
     if _register_leaves(args) is None:
         return EXIT_BAD_INPUT
     _preflight_or_exit(world, args.world, args.tree)
