@@ -471,8 +471,10 @@ def _run_command(args: argparse.Namespace) -> int:
 
 def _trials_command(args: argparse.Namespace) -> int:
     """The paper's experiment: N trials of three moves with new obstacles, judged, resumable."""
+    from experiment.progress import Progress
     from experiment.results import ResultsFileError
-    from experiment.trials import campaign_results, reason_of, run_campaign, summarise
+    from experiment.summary import summary_lines
+    from experiment.trials import campaign_of, campaign_results, reason_of, run_campaign, summarise
 
     world = _load_world_or_exit(args.world)
     if not (1 <= args.n <= 1_000_000 and 1 <= args.workers <= 1024):
@@ -481,6 +483,9 @@ def _trials_command(args: argparse.Namespace) -> int:
             f"{args.workers}",
             file=sys.stderr,
         )
+        return EXIT_BAD_INPUT
+    if args.address and args.backend != "ray":
+        print("--address: expected only with --backend ray", file=sys.stderr)
         return EXIT_BAD_INPUT
     if _register_leaves(args) is None:
         return EXIT_BAD_INPUT
@@ -497,24 +502,22 @@ def _trials_command(args: argparse.Namespace) -> int:
             return EXIT_BAD_INPUT
     out = _out_folder_or_exit(Path(args.out))
     try:
-        earlier = campaign_results(out / "results.jsonl", args.seed, tree, args.main_tree).values()
+        key = campaign_of(world, args.seed, tree, args.leaves, args.main_tree)
+        earlier = campaign_results(out / "results.jsonl", key).values()
     except ResultsFileError as err:
         print(err, file=sys.stderr)
         return EXIT_BAD_INPUT
     tally = {"ok": sum(1 for r in earlier if r.get("success"))}
 
+    bar = Progress(sys.stderr)
+
     def progress(rec: dict[str, Any], finished: int, total: int) -> None:
         tally["ok"] += int(bool(rec.get("success")))
-        width = 30
-        filled = int(width * finished / total)
-        bar = "#" * filled + "." * (width - filled)
         what = "ok" if rec.get("success") else reason_of(rec.get("failure", ""))
-        print(
-            f"\r[{bar}] {finished}/{total}  successes {tally['ok']}  "
-            f"(trial {rec['trial']}: {printable(what)})".ljust(100),
-            end="",
-            file=sys.stderr,
-            flush=True,
+        bar.update(
+            finished,
+            total,
+            f"successes {tally['ok']}  (trial {rec['trial']}: {printable(what)})",
         )
 
     def notice(text: str) -> None:
@@ -531,28 +534,38 @@ def _trials_command(args: argparse.Namespace) -> int:
             tree,
             on_notice=notice,
             leaves=args.leaves,
+            backend=args.backend,
+            address=args.address,
             main_tree=args.main_tree,
         )
+    except ImportError as err:  # --backend ray without Ray installed
+        bar.close()
+        print(f"--backend ray: {err}; install it with pip install -e '.[cluster]'", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except RuntimeError as err:  # Ray gave up on a trial
+        bar.close()
+        print(printable(err), file=sys.stderr)
+        return EXIT_BAD_INPUT
     except ResultsFileError as err:  # a folder that is not one, or another campaign in it
-        print(f"\n{err}", file=sys.stderr)
+        bar.close()
+        print(err, file=sys.stderr)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
+        bar.close()
         print(
-            f"\ninterrupted: finished trials are in {out / 'results.jsonl'}; "
+            f"interrupted: finished trials are in {out / 'results.jsonl'}; "
             "run the same command again to resume",
             file=sys.stderr,
         )
         return 130
-    print(file=sys.stderr)
+    bar.close()
     summary = summarise(records)
     print(
         f"{summary['successes']} of {summary['trials']} trials succeeded "
         f"(the paper: 16 of 20); results in {out / 'results.jsonl'}"
     )
-    print(f"  {'outcome':<44} trials")
-    print(f"  {'success':<44} {summary['successes']}")
-    for reason, count in summary["failure_reasons"].items():
-        print(f"  {printable(reason)[:44]:<44} {count}")
+    for line in summary_lines(summary):
+        print(line)
     print(f"  {'moves placed with':<44} moves")
     for label, count in summary["compositions"].items():
         print(f"  {label[:44]:<44} {count}")
@@ -568,6 +581,48 @@ def _trials_command(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps(summary))
     return EXIT_OK if summary["successes"] == summary["trials"] else EXIT_FAILURE
+
+
+def _report_command(args: argparse.Namespace) -> int:
+    """A campaign's outcome table with Wilson 95 % intervals, and its picture."""
+    from experiment.report import read_campaigns, report_figure, report_summaries
+    from experiment.results import ResultsFileError
+    from experiment.summary import summary_lines
+
+    out = Path(args.out)
+    try:
+        found = read_campaigns(out)
+    except ResultsFileError as err:
+        print(err, file=sys.stderr)
+        return EXIT_BAD_INPUT
+    if found.skipped:
+        print(
+            f"warning: {found.path}: skipped {found.skipped} line(s) that are not trial records",
+            file=sys.stderr,
+        )
+    summaries = report_summaries(found.campaigns)
+    for summary in summaries:
+        print(f"{printable(summary['campaign'])}: {summary['trials']} trials")
+        for line in summary_lines(summary):
+            print(line)
+        dist = summary["min_obstacle_distance_m"]
+        print(
+            f"  trials with any obstacle contact: {summary['obstacle_contacts']}; closest "
+            f"approach {'n/a' if dist is None else f'{dist * 1000:.1f} mm'}"
+        )
+    figure = out / "report.png" if out.is_dir() else out.with_name(f"{out.stem}_report.png")
+    try:
+        report_figure(found.campaigns, figure)
+        print(f"  picture: {figure}")
+    except OSError as err:
+        print(f"not written: {figure}: {err.strerror or err}", file=sys.stderr)
+    if args.json:
+        print(
+            json.dumps(
+                {"results": str(found.path), "skipped_lines": found.skipped, "campaigns": summaries}
+            )
+        )
+    return EXIT_OK
 
 
 def _actions() -> list[Any]:
@@ -697,11 +752,28 @@ def build_parser() -> argparse.ArgumentParser:
         default=max(1, (os.cpu_count() or 1)),
         help="worker processes (default: one per core)",
     )
+    trials.add_argument(
+        "--backend",
+        choices=["local", "ray"],
+        default="local",
+        help="where trials run: a local pool of --workers processes (default), or Ray",
+    )
+    trials.add_argument(
+        "--address",
+        help="with --backend ray: the cluster's address (ray start --head prints it); "
+        "default: a local Ray of --workers CPUs",
+    )
     trials.add_argument("--out", default="out/trials", help="folder of results.jsonl")
     trials.add_argument("--json", action="store_true", help="print a JSON summary as the last line")
     _add_main_tree_option(trials)
     _add_leaves_option(trials)
     trials.set_defaults(handler=_trials_command)
+    report = sub.add_parser(
+        "report", help="a campaign's outcomes with Wilson 95 %% intervals, and report.png"
+    )
+    report.add_argument("out", help="campaign folder (of results.jsonl) or a results .jsonl file")
+    report.add_argument("--json", action="store_true", help="print a JSON summary as the last line")
+    report.set_defaults(handler=_report_command)
     skills = sub.add_parser("skills", help="list a skill library")
     skills.add_argument("--library", help="library folder (default: learnt from skills/demos)")
     skills.add_argument("--json", action="store_true", help="print JSON")

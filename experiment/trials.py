@@ -27,8 +27,8 @@ import json
 import math
 import os
 import signal
-from collections import Counter
-from collections.abc import Callable, Iterable, Sequence
+import socket
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 from types import TracebackType
@@ -37,12 +37,18 @@ from typing import Any
 import numpy as np
 import pybullet as pb
 
+from experiment.records import campaign_key, owned_by
 from experiment.results import (
     ResultsFileError,
     campaign_lock,
     read_results,
     repair_tail,
 )
+
+# Re-exported: the summary lives below the simulation, for reports that need no PyBullet.
+from experiment.summary import composition_label as composition_label
+from experiment.summary import reason_of as reason_of
+from experiment.summary import summarise as summarise
 from planner.user_leaves import register_leaves
 from skills.turns import grip_yaw, lateral_quarter_turns, turn_steps
 from worlds.adapters import robot_capabilities
@@ -363,6 +369,11 @@ def run_trial(job: tuple[dict[str, Any], int, int]) -> dict[str, Any]:
     from experiment.episode import run_episode
 
     base_data, seed, trial = job
+    die = base_data.get("die_once")
+    if die and die[0] == trial and not Path(die[1]).exists():
+        # Test-only (DUET_TEST_DIE_ONCE): this worker dies on its first attempt of the trial.
+        Path(die[1]).write_text(str(os.getpid()), encoding="utf-8")
+        os._exit(1)
     source = Path(base_data["source"]) if base_data["source"] else None
     base = world_from_data(base_data["world"], source)
     tree = Path(base_data["tree"]) if base_data["tree"] else None
@@ -371,6 +382,7 @@ def run_trial(job: tuple[dict[str, Any], int, int]) -> dict[str, Any]:
         # worker starts without them; a forked one finds them registered already).
         register_leaves(base_data.get("leaves", ()))
         world, kinds = draw_trial(base, seed, trial)
+        where = _layout_of(world)
         report = run_episode(
             world, tree, out=None, animation=False, main_tree=base_data.get("main_tree")
         )
@@ -379,55 +391,118 @@ def run_trial(job: tuple[dict[str, Any], int, int]) -> dict[str, Any]:
         failure = record["failure"] or ""
     except Exception as err:  # a trial that crashes is a failed trial with its reason
         record = {"success": False, "sim_time_s": 0.0, "wall_time_s": 0.0}
-        kinds = []
+        kinds, where = [], {}
         failure = f"error: {type(err).__name__}: {err}"
     record.update(
         {
             "trial": trial,
-            "seed": seed,
-            "tree": base_data["tree"],
-            **({"main_tree": base_data["main_tree"]} if base_data.get("main_tree") else {}),
+            **base_data.get("key", {"seed": seed}),
             "obstacles": kinds,
+            **where,
             "failure": failure,
+            "backend": base_data.get("backend", "local"),
+            "host": socket.gethostname(),
         }
     )
     return record
 
 
-def reason_of(failure: str) -> str:
-    """A failure's category for the summary table."""
-    if not failure:
-        return "success"
-    if failure.startswith("obstacle contact"):
-        touching = failure.split(": ", 1)[1] if ": " in failure else ""
-        parts = {p.split(" ~ ")[0] for p in touching.split(", ") if p}
-        return "obstacle contact: " + "/".join(sorted(parts))
-    return failure.split(":")[0].split(" placed")[0]
+def _layout_of(world: World) -> dict[str, Any]:
+    """Where a trial's object started and its moves' goals were (m), for reports."""
+    start = world.objects[0].pose.position
+    goals = [list(m.goal.position) for step in world.task for m in step.moves]
+    return {"start": list(start), "goals": goals}
 
 
-def tree_key(tree: Path | None) -> str:
-    """How records name the tree their trials ran: its absolute path, "" for the default."""
-    return str(tree.resolve()) if tree is not None else ""
+def campaign_of(
+    base: World,
+    seed: int,
+    tree: Path | None,
+    leaves: Sequence[str] = (),
+    main_tree: str | None = None,
+) -> dict[str, Any]:
+    """The key of the campaign of ``base``, ``seed``, ``tree``, the tree's own ``leaves`` and
+    the ``main_tree`` run of it (:func:`experiment.records.campaign_key`)."""
+    settings: dict[str, Any] = {"leaves": [_leaf_source(s) for s in leaves]} if leaves else {}
+    if main_tree:
+        settings["main_tree"] = main_tree
+    return campaign_key(base.name, base.model_dump(mode="json"), tree, seed, settings)
 
 
-def campaign_results(
-    path: Path, seed: int, tree: Path | None, main_tree: str | None = None
-) -> dict[int, dict[str, Any]]:
-    """The records in ``results.jsonl`` of one campaign: this seed, this tree and main tree
-    (``--main-tree``; records without one ran the file's own) (lines that are not records are
-    skipped: :func:`experiment.results.read_results` counts them).
+def _leaf_source(source: str) -> str:
+    return str(Path(source).resolve()) if source.endswith(".py") else source
+
+
+def campaign_results(path: Path, key: dict[str, Any]) -> dict[int, dict[str, Any]]:
+    """The records in ``results.jsonl`` of one campaign (``key``: :func:`campaign_of`);
+    records of other campaigns are ignored, as are lines that are not records
+    (:func:`experiment.results.read_results` counts them).
 
     Raises
     ------
     ResultsFileError
         If the file is a folder or unreadable.
     """
-    key = tree_key(tree)
     return {
         r["trial"]: r  # a trial run twice (an interrupted write) counts once, the last
         for r in read_results(path).records
-        if r.get("seed") == seed and r.get("tree", "") == key and r.get("main_tree") == main_tree
+        if owned_by(r, key)
     }
+
+
+#: Where a campaign's trials can run.
+BACKENDS = ("local", "ray")
+#: Times Ray runs a trial again whose worker died (a killed process, a lost node).
+RAY_RETRIES = 3
+
+
+def _run_on_ray(
+    jobs: list[tuple[dict[str, Any], int, int]],
+    workers: int,
+    address: str | None,
+    keep: Callable[[dict[str, Any]], None],
+) -> None:
+    """Run ``jobs`` as Ray tasks, handing each record to ``keep`` here as it arrives.
+
+    A task whose worker dies is run again by Ray (``RAY_RETRIES``); its record arrives once.
+    Without ``address`` a local Ray of ``workers`` CPUs is started, whose workers import this
+    project from its folder.
+    """
+    import ray
+
+    from experiment.records import PROJECT
+
+    started = not ray.is_initialized()
+    if started:
+        if address:
+            ray.init(address=address, log_to_driver=False)
+        else:
+            ray.init(
+                num_cpus=workers,
+                include_dashboard=False,
+                log_to_driver=False,
+                runtime_env={"env_vars": {"PYTHONPATH": str(PROJECT)}},
+            )
+    task = ray.remote(num_cpus=1, max_retries=RAY_RETRIES)(run_trial)
+    pending = [task.remote(job) for job in jobs]
+    try:
+        while pending:
+            ready, pending = ray.wait(pending, num_returns=1)
+            for ref in ready:
+                try:
+                    record = ray.get(ref)
+                except ray.exceptions.RayError as err:
+                    raise RuntimeError(
+                        f"ray: a trial's worker failed {RAY_RETRIES + 1} times: {err}"
+                    ) from None
+                keep(record)
+    except BaseException:  # Ctrl-C included: stop what is running, keep what finished
+        for ref in pending:
+            ray.cancel(ref, force=True)
+        raise
+    finally:
+        if started:
+            ray.shutdown()
 
 
 def _worker_init() -> None:
@@ -452,6 +527,8 @@ def run_campaign(
     tree: Path | None = None,
     on_notice: Callable[[str], None] | None = None,
     leaves: Sequence[str] = (),
+    backend: str = "local",
+    address: str | None = None,
     main_tree: str | None = None,
 ) -> list[dict[str, Any]]:
     """Run trials ``0..n-1`` not yet in ``out/results.jsonl``; append each as it finishes.
@@ -471,15 +548,22 @@ def run_campaign(
         Progress callback, in the parent process.
     tree : Path, optional
         Behaviour tree XML every trial runs (default: the paper's tree built in code).
-        Records remember it: a campaign resumes only the trials of the same seed and tree.
+        Records remember it: a campaign resumes only the trials of its own world, seed, tree
+        and leaves (:func:`campaign_of`); other records in the file are kept and ignored.
     on_notice : callable (text), optional
         Told of what was repaired or skipped in an earlier ``results.jsonl``.
     leaves : sequence of str
         ``--leaves`` sources (files or modules) of the tree's own leaves; every worker
         registers them (:func:`planner.user_leaves.register_leaves`).
+    backend : {"local", "ray"}
+        Where trials run: a pool of ``workers`` processes here, or Ray tasks (a local Ray
+        of ``workers`` CPUs, or the cluster at ``address``). Records are the same either way
+        but for ``wall_time_s``, ``host`` and ``backend``; only this process writes them.
+    address : str, optional
+        A Ray cluster's address (``ray start --head`` prints it; "auto" finds a local one).
     main_tree : str, optional
         The ``<BehaviorTree ID>`` of ``tree`` to run instead of its ``main_tree_to_execute``;
-        records name it, and a campaign resumes only the trials of the same one.
+        it is part of the campaign's key, so a campaign resumes only trials of the same one.
 
     Returns
     -------
@@ -497,9 +581,22 @@ def run_campaign(
         out.mkdir(parents=True, exist_ok=True)
     except OSError as err:
         raise ResultsFileError(f"{out}: cannot make the folder: {err.strerror or err}") from None
+    if backend not in BACKENDS:
+        raise ValueError(f"run_campaign: expected backend in {BACKENDS}, got {backend!r}")
     with campaign_lock(out):
         return _run_locked(
-            base, n, seed, out, workers, on_result, tree, on_notice or _quiet, leaves, main_tree
+            base,
+            n,
+            seed,
+            out,
+            workers,
+            on_result,
+            tree,
+            on_notice or _quiet,
+            leaves,
+            backend,
+            address,
+            main_tree,
         )
 
 
@@ -517,6 +614,8 @@ def _run_locked(
     tree: Path | None,
     on_notice: Callable[[str], None],
     leaves: Sequence[str],
+    backend: str,
+    address: str | None,
     main_tree: str | None = None,
 ) -> list[dict[str, Any]]:
     results = out / "results.jsonl"
@@ -529,15 +628,22 @@ def _run_locked(
             f"{results}: skipped {earlier.skipped} line(s) that are not trial records; "
             "their trials run again"
         )
-    done = campaign_results(results, seed, tree, main_tree)
+    key = campaign_of(base, seed, tree, leaves, main_tree)
+    done = campaign_results(results, key)
     pending = [t for t in range(n) if t not in done]
-    payload = {
+    payload: dict[str, Any] = {
         "world": base.model_dump(mode="json"),
         "source": str(base.source or ""),
-        "tree": tree_key(tree),
-        "leaves": [str(Path(s).resolve()) if s.endswith(".py") else s for s in leaves],
+        "tree": str(tree.resolve()) if tree is not None else "",
+        "key": key,
+        "leaves": [_leaf_source(s) for s in leaves],
+        "backend": backend,
         **({"main_tree": main_tree} if main_tree else {}),
     }
+    die = os.environ.get("DUET_TEST_DIE_ONCE", "")
+    if backend == "ray" and ":" in die:  # test-only: see run_trial
+        at, marker = die.split(":", 1)
+        payload["die_once"] = (int(at), marker)
     jobs = [(payload, seed, t) for t in pending]
     finished = n - len(pending)
     try:
@@ -556,7 +662,9 @@ def _run_locked(
             if on_result is not None:
                 on_result(rec, finished, n)
 
-        if workers <= 1:
+        if backend == "ray":
+            _run_on_ray(jobs, workers, address, keep)
+        elif workers <= 1:
             for job in jobs:
                 keep(run_trial(job))
         else:
@@ -574,43 +682,3 @@ def _run_locked(
             finally:
                 pool.join()
     return [done[t] for t in range(n) if t in done]
-
-
-def composition_label(composition: dict[str, float]) -> str:
-    """A placed move's composition in words: the pick-and-place weight and avoidance gain."""
-    weight = composition.get("transport_weight", math.nan)
-    gain = composition.get("avoid_gain", math.nan)
-    avoid = "no avoidance" if gain == 0.0 else f"avoidance x{gain:g}"
-    return f"pick-and-place x{weight:g}, {avoid}"
-
-
-def summarise(records: Iterable[dict[str, Any]]) -> dict[str, Any]:
-    """Counts of successes and failure reasons, mean times."""
-    recs = list(records)
-    reasons = Counter(reason_of(r.get("failure", "")) for r in recs)
-    successes = reasons.pop("success", 0)
-    sim = sum(float(r.get("sim_time_s") or 0.0) for r in recs)
-    wall = sum(float(r.get("wall_time_s") or 0.0) for r in recs)
-    physics = sum(float(r.get("physics_wall_s") or 0.0) for r in recs)
-    dists = [r["min_obstacle_distance_m"] for r in recs if r.get("min_obstacle_distance_m")]
-    carried = Counter(
-        composition_label(c) for r in recs for c in r.get("compositions") or () if c is not None
-    )
-    return {
-        "trials": len(recs),
-        "successes": successes,
-        "failure_reasons": dict(sorted(reasons.items(), key=lambda kv: (-kv[1], kv[0]))),
-        "compositions": dict(sorted(carried.items(), key=lambda kv: (-kv[1], kv[0]))),
-        # A negative clearance is a contact PyBullet may not report (a fixed base in a sphere).
-        "obstacle_contacts": sum(
-            1
-            for r in recs
-            if r.get("obstacle_contacts") or (r.get("min_obstacle_distance_m") or 0.0) < 0.0
-        ),
-        "min_obstacle_distance_m": min(dists) if dists else None,
-        "sim_time_s": round(sim, 2),
-        "wall_time_s": round(wall, 2),
-        "realtime_factor": round(sim / wall, 2) if wall > 0 else math.nan,
-        # The physics engine's steps alone, in the same trials (records that lack it: nan).
-        "physics_only_realtime_factor": round(sim / physics, 2) if physics > 0 else math.nan,
-    }

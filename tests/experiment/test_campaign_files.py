@@ -13,13 +13,17 @@ from pathlib import Path
 import pytest
 
 from experiment.results import CampaignBusyError, campaign_lock, read_results, repair_tail
+from experiment.trials import campaign_of
+from worlds.world_file import load_world
 
 ROOT = Path(__file__).resolve().parents[2]
 WORLD = ROOT / "worlds" / "parcel_pick_place.yaml"
 
 
 def record(trial: int, seed: int = 0) -> str:
-    return json.dumps({"trial": trial, "seed": seed, "tree": "", "success": True}) + "\n"
+    """A record of the default world's campaign of ``seed`` with the default tree."""
+    key = campaign_of(load_world(WORLD), seed, None)
+    return json.dumps({"trial": trial, **key, "success": True}) + "\n"
 
 
 def trials(out: Path, n: int, *extra: str, **kwargs: object) -> subprocess.Popen[str]:

@@ -18,6 +18,7 @@ from experiment.trials import (
     Posture,
     RobotClearance,
     _box_gap,
+    campaign_of,
     campaign_results,
     draw_trial,
     move_postures,
@@ -26,7 +27,7 @@ from experiment.trials import (
 )
 from worlds.adapters import robot_capabilities
 from worlds.scene import lateral_grasp_palm_poses
-from worlds.world_file import World, load_world
+from worlds.world_file import World, load_world, world_from_data
 
 WORLDS = Path(__file__).resolve().parents[2] / "worlds"
 
@@ -173,18 +174,41 @@ def test_results_resume_and_summarise(tmp_path: Path) -> None:
     assert reason_of("move 2 placed 3.1 cm, 1.0 deg from its goal") == "move 2"
 
 
-def test_a_campaign_owns_the_records_of_its_seed_and_tree(tmp_path: Path) -> None:
+def test_a_campaign_owns_the_records_of_its_world_seed_and_tree(tmp_path: Path) -> None:
+    iiwa = load_world(WORLDS / "parcel_pick_place.yaml")
+    icub = load_world(WORLDS / "icub_parcel_pick_place.yaml")
+    tree = WORLDS.parent / "planner" / "trees" / "pick_and_place.xml"
+    key = campaign_of(iiwa, 0, None)
+    assert key["world"] == iiwa.name and len(key["world_sha256"]) == 64
+    with_tree = campaign_of(iiwa, 0, tree)
+    assert with_tree["tree"] == "planner/trees/pick_and_place.xml"  # relative: merges
+    assert len(with_tree["tree_sha256"]) == 64
     results = tmp_path / "results.jsonl"
     records = [
-        {"trial": 0, "seed": 0, "tree": "", "success": True},
-        {"trial": 1, "seed": 0, "tree": "/elsewhere.xml", "success": True},
-        {"trial": 0, "seed": 0, "tree": "", "success": False},  # run again: the last counts
-        {"trial": 2, "seed": 1, "tree": "", "success": True},
+        {"trial": 0, **key, "success": True},
+        {"trial": 1, **with_tree, "success": True},
+        {"trial": 0, **key, "success": False},  # run again: the last counts
+        {"trial": 2, **campaign_of(iiwa, 1, None), "success": True},
+        {"trial": 3, **campaign_of(icub, 0, None), "success": True},
+        {"trial": 4, "seed": 0, "tree": "", "success": True},  # an old record: no world
     ]
     results.write_text("".join(json.dumps(r) + "\n" for r in records), encoding="utf-8")
-    assert sorted(campaign_results(results, 0, None)) == [0]
-    assert campaign_results(results, 0, None)[0]["success"] is False
-    assert list(campaign_results(results, 1, None)) == [2]
+    assert sorted(campaign_results(results, key)) == [0]
+    assert campaign_results(results, key)[0]["success"] is False
+    assert list(campaign_results(results, with_tree)) == [1]
+    assert list(campaign_results(results, campaign_of(iiwa, 1, None))) == [2]
+    assert list(campaign_results(results, campaign_of(icub, 0, None))) == [3]
+    # A world that differs in anything but its name is another campaign.
+    data = iiwa.model_dump(mode="json")
+    data["sim"]["seed"] = int(data["sim"].get("seed") or 0) + 1
+    assert not campaign_results(results, campaign_of(world_from_data(data, iiwa.source), 0, None))
+    # So is a tree file whose content changed, at the same path.
+    own = tmp_path / "tree.xml"
+    own.write_bytes(tree.read_bytes())
+    before = campaign_of(iiwa, 0, own)
+    own.write_bytes(tree.read_bytes() + b"\n")
+    assert campaign_of(iiwa, 0, own)["tree_sha256"] != before["tree_sha256"]
+    assert campaign_of(iiwa, 0, own)["tree"] == str(own)  # outside the project: as given
 
 
 def test_a_negative_clearance_counts_as_an_obstacle_contact() -> None:

@@ -1,0 +1,156 @@
+"""``app.py report``: a campaign's outcomes from its ``results.jsonl``, as a table and a picture.
+
+Reads records only (no PyBullet, no world file): any results file, old records included.
+The picture (``report.png``) shows where trials failed over the start and goal regions, the
+failure reasons, and each trial's closest approach to an obstacle.
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from experiment.records import group_of
+from experiment.results import ResultsFileError, read_results
+from experiment.summary import reason_of, summarise
+
+
+@dataclass(frozen=True)
+class Campaign:
+    """One campaign's records in a results file (a trial run twice counts once, the last)."""
+
+    label: str
+    records: list[dict[str, Any]]
+
+
+@dataclass(frozen=True)
+class CampaignFile:
+    """The campaigns of a results file and how many of its lines were not records."""
+
+    path: Path
+    campaigns: list[Campaign]
+    skipped: int
+
+
+def results_path(out: Path) -> Path:
+    """``out/results.jsonl``, or ``out`` itself when it is a results file.
+
+    Raises
+    ------
+    ResultsFileError
+        If neither exists.
+    """
+    if out.is_dir():
+        path = out / "results.jsonl"
+        if not path.exists():
+            raise ResultsFileError(f"{out}: expected a campaign folder with results.jsonl in it")
+        return path
+    if not out.exists():
+        raise ResultsFileError(f"{out}: no such campaign folder or results file")
+    return out
+
+
+def read_campaigns(out: Path) -> CampaignFile:
+    """Every campaign in ``out``'s results, in the order they first appear.
+
+    Raises
+    ------
+    ResultsFileError
+        If there is no results file, it cannot be read, or it holds no trial record.
+    """
+    path = results_path(out)
+    read = read_results(path)
+    if not read.records:
+        raise ResultsFileError(
+            f"{path}: expected trial records (JSON lines with trial, seed, success), found none"
+            + (f" ({read.skipped} line(s) were not records)" if read.skipped else "")
+        )
+    groups: dict[tuple[str, ...], dict[int, dict[str, Any]]] = {}
+    for rec in read.records:
+        groups.setdefault(group_of(rec), {})[rec["trial"]] = rec
+    campaigns = []
+    for by_trial in groups.values():
+        first = next(iter(by_trial.values()))
+        world = first.get("world") or "(world not recorded)"
+        tree = first.get("tree") or "default tree"
+        label = f"{world}, {tree}, seed {first.get('seed')}"
+        campaigns.append(Campaign(label, [by_trial[t] for t in sorted(by_trial)]))
+    return CampaignFile(path, campaigns, read.skipped)
+
+
+def report_figure(campaigns: list[Campaign], path: Path) -> None:
+    """Write the picture of ``campaigns`` to ``path`` (PNG)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    records = [r for c in campaigns for r in c.records]
+    fig, (where, why, near) = plt.subplots(1, 3, figsize=(15, 4.5))
+    placed = [r for r in records if isinstance(r.get("start"), list)]
+    for ok, colour, mark, label in ((True, "0.6", "o", "success"), (False, "red", "x", "failed")):
+        rows = [r for r in placed if bool(r.get("success")) == ok]
+        if not rows:
+            continue
+        where.scatter(
+            [r["start"][1] for r in rows],
+            [r["start"][0] for r in rows],
+            c=colour,
+            marker=mark,
+            s=18,
+            label=f"start, {label}",
+        )
+        goals = [g for r in rows for g in r.get("goals") or () if len(g) >= 2]
+        where.scatter(
+            [g[1] for g in goals],
+            [g[0] for g in goals],
+            c=colour,
+            marker=mark,
+            s=18,
+            alpha=0.5 if ok else 1.0,
+            label=f"goals, {label}",
+            edgecolors="none" if ok else None,
+        )
+    if placed:
+        where.invert_xaxis()  # +y to the robot's left, drawn on the left
+        where.set_aspect("equal", adjustable="datalim")
+        where.legend(fontsize=7, loc="best")
+    else:
+        where.text(
+            0.5, 0.5, "no positions in these records", ha="center", transform=where.transAxes
+        )
+    where.set(title="where trials failed (top view)", xlabel="y (m)", ylabel="x (m)")
+    reasons = Counter(reason_of(r.get("failure", "") or "") for r in records)
+    reasons.pop("success", None)
+    if reasons:
+        names = sorted(reasons, key=lambda k: (reasons[k], k))
+        why.barh([n[:40] for n in names], [reasons[n] for n in names], color="tab:red")
+        why.tick_params(axis="y", labelsize=7)
+    else:
+        why.text(0.5, 0.5, "no failures", ha="center", transform=why.transAxes)
+    why.set(title="failure reasons", xlabel="trials")
+    dist = [
+        (1000.0 * float(r["min_obstacle_distance_m"]), bool(r.get("success")))
+        for r in records
+        if isinstance(r.get("min_obstacle_distance_m"), int | float)
+    ]
+    if dist:
+        for ok, colour, label in ((True, "0.6", "success"), (False, "red", "failed")):
+            values = [d for d, s in dist if s == ok]
+            if values:
+                near.hist(values, bins=30, color=colour, alpha=0.8, label=label)
+        near.axvline(0.0, color="k", lw=0.8)
+        near.legend(fontsize=7)
+    else:
+        near.text(0.5, 0.5, "no distances recorded", ha="center", transform=near.transAxes)
+    near.set(title="closest approach per trial", xlabel="mm (below 0: overlap)", ylabel="trials")
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+
+
+def report_summaries(campaigns: list[Campaign]) -> list[dict[str, Any]]:
+    """:func:`experiment.summary.summarise` of each campaign, with its label."""
+    return [{"campaign": c.label, **summarise(c.records)} for c in campaigns]

@@ -1,0 +1,151 @@
+"""A campaign's summary from its records: outcomes, Wilson intervals, splits by condition.
+
+Pure Python over JSON records (no PyBullet), so that ``app.py report`` reads campaigns fast.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import Counter
+from collections.abc import Iterable
+from typing import Any
+
+#: The normal quantile of a two-sided 95 % interval.
+Z_95 = 1.959963984540054
+
+
+def wilson_interval(successes: int, trials: int, z: float = Z_95) -> tuple[float, float]:
+    """Wilson score interval of a success rate, as fractions in [0, 1].
+
+    Raises
+    ------
+    ValueError
+        If ``trials`` < 1 or ``successes`` is outside ``0..trials``.
+    """
+    if trials < 1 or not 0 <= successes <= trials:
+        raise ValueError(
+            f"wilson_interval: expected 0 <= successes <= trials and trials >= 1, "
+            f"got {successes} of {trials}"
+        )
+    p = successes / trials
+    z2 = z * z
+    centre = (p + z2 / (2 * trials)) / (1 + z2 / trials)
+    half = z * math.sqrt(p * (1 - p) / trials + z2 / (4 * trials * trials)) / (1 + z2 / trials)
+    return max(0.0, centre - half), min(1.0, centre + half)
+
+
+def reason_of(failure: str) -> str:
+    """A failure's category for the summary table."""
+    if not failure:
+        return "success"
+    if failure.startswith("obstacle contact"):
+        touching = failure.split(": ", 1)[1] if ": " in failure else ""
+        parts = {p.split(" ~ ")[0] for p in touching.split(", ") if p}
+        return "obstacle contact: " + "/".join(sorted(parts))
+    return failure.split(":")[0].split(" placed")[0]
+
+
+def composition_label(composition: dict[str, float]) -> str:
+    """A placed move's composition in words: the pick-and-place weight and avoidance gain."""
+    weight = composition.get("transport_weight", math.nan)
+    gain = composition.get("avoid_gain", math.nan)
+    avoid = "no avoidance" if gain == 0.0 else f"avoidance x{gain:g}"
+    return f"pick-and-place x{weight:g}, {avoid}"
+
+
+def conditions(record: dict[str, Any]) -> dict[str, str]:
+    """The conditions a trial ran under, by axis: ``obstacles`` (how many spheres of each
+    kind, e.g. "1 ahead + 2 line") and ``mode`` where the record names one."""
+    out: dict[str, str] = {}
+    kinds = record.get("obstacles")
+    if isinstance(kinds, list) and kinds:
+        counts = Counter(str(k) for k in kinds if k != "none")
+        out["obstacles"] = " + ".join(f"{n} {k}" for k, n in sorted(counts.items())) or "none"
+    mode = record.get("mode")
+    if isinstance(mode, str) and mode:
+        out["mode"] = mode
+    return out
+
+
+def _rate(successes: int, trials: int) -> dict[str, Any]:
+    lo, hi = wilson_interval(successes, trials)
+    return {
+        "trials": trials,
+        "successes": successes,
+        "success_interval_95": [round(lo, 4), round(hi, 4)],
+    }
+
+
+def summarise(records: Iterable[dict[str, Any]]) -> dict[str, Any]:
+    """Counts of successes and failure reasons with a Wilson 95 % interval, the same split by
+    condition (:func:`conditions`), mean times."""
+    recs = list(records)
+    reasons = Counter(reason_of(r.get("failure", "") or "") for r in recs)
+    successes = reasons.pop("success", 0)
+    sim = sum(float(r.get("sim_time_s") or 0.0) for r in recs)
+    wall = sum(float(r.get("wall_time_s") or 0.0) for r in recs)
+    physics = sum(float(r.get("physics_wall_s") or 0.0) for r in recs)
+    dists = [
+        r["min_obstacle_distance_m"] for r in recs if r.get("min_obstacle_distance_m") is not None
+    ]
+    carried = Counter(
+        composition_label(c) for r in recs for c in r.get("compositions") or () if c is not None
+    )
+    split: dict[str, dict[str, list[int]]] = {}
+    for r in recs:
+        for axis, value in conditions(r).items():
+            tally = split.setdefault(axis, {}).setdefault(value, [0, 0])
+            tally[0] += int(bool(r.get("success")))
+            tally[1] += 1
+    interval = wilson_interval(successes, len(recs)) if recs else (math.nan, math.nan)
+    return {
+        "trials": len(recs),
+        "successes": successes,
+        "success_interval_95": [round(interval[0], 4), round(interval[1], 4)],
+        "failure_reasons": dict(sorted(reasons.items(), key=lambda kv: (-kv[1], kv[0]))),
+        "by_condition": {
+            axis: {value: _rate(ok, n) for value, (ok, n) in sorted(values.items())}
+            for axis, values in sorted(split.items())
+        },
+        "compositions": dict(sorted(carried.items(), key=lambda kv: (-kv[1], kv[0]))),
+        # A negative clearance is a contact PyBullet may not report (a fixed base in a sphere).
+        "obstacle_contacts": sum(
+            1
+            for r in recs
+            if r.get("obstacle_contacts") or (r.get("min_obstacle_distance_m") or 0.0) < 0.0
+        ),
+        "min_obstacle_distance_m": min(dists) if dists else None,
+        "sim_time_s": round(sim, 2),
+        "wall_time_s": round(wall, 2),
+        "realtime_factor": round(sim / wall, 2) if wall > 0 else math.nan,
+        # The physics engine's steps alone, in the same trials (records that lack it: nan).
+        "physics_only_realtime_factor": round(sim / physics, 2) if physics > 0 else math.nan,
+    }
+
+
+def summary_lines(summary: dict[str, Any]) -> list[str]:
+    """The outcome table of :func:`summarise`'s summary, as printed lines."""
+    lo, hi = summary["success_interval_95"]
+    lines = [f"  {'outcome':<44} trials"]
+    lines.append(
+        f"  {'success':<44} {summary['successes']} of {summary['trials']} "
+        f"(Wilson 95 %: {100 * lo:.1f}-{100 * hi:.1f} %)"
+    )
+    for reason, count in summary["failure_reasons"].items():
+        lines.append(f"  {_printable(reason)[:44]:<44} {count}")
+    for axis, values in summary["by_condition"].items():
+        lines.append(f"  {'by ' + axis:<44} successes")
+        for value, rate in values.items():
+            a, b = rate["success_interval_95"]
+            lines.append(
+                f"  {'  ' + _printable(value)[:42]:<44} {rate['successes']} of {rate['trials']} "
+                f"({100 * a:.1f}-{100 * b:.1f} %)"
+            )
+    return lines
+
+
+def _printable(text: object) -> str:
+    """Text safe for a terminal: control characters shown escaped."""
+    import unicodedata
+
+    return "".join(repr(ch)[1:-1] if unicodedata.category(ch)[0] == "C" else ch for ch in str(text))

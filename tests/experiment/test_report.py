@@ -1,0 +1,103 @@
+"""``app.py report``: old and new records, campaigns sharing a file, bad input."""
+
+from __future__ import annotations
+
+import json
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from experiment.records import outcome
+from experiment.results import read_results
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def app(*args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, str(ROOT / "app.py"), *args],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+
+
+def test_report_reads_old_records_and_draws_them(tmp_path: Path) -> None:
+    old = tmp_path / "results.jsonl"
+    shutil.copy(ROOT / "bench" / "results" / "trials_yaw_seed0_n100.jsonl", old)
+    with open(old, "a", encoding="utf-8") as fh:
+        fh.write("not a record\n")
+    done = app("report", str(tmp_path), "--json")
+    assert done.returncode == 0, done.stderr
+    assert "skipped 1 line(s) that are not trial records" in done.stderr
+    assert "96 of 100 (Wilson 95 %: 90.2-98.4 %)" in done.stdout
+    summary = json.loads(done.stdout.splitlines()[-1])
+    (campaign,) = summary["campaigns"]
+    assert campaign["success_interval_95"] == pytest.approx([0.9016, 0.9843], abs=1e-4)
+    assert summary["skipped_lines"] == 1
+    assert (tmp_path / "report.png").stat().st_size > 10_000
+
+
+@pytest.mark.parametrize(
+    ("content", "message"),
+    [
+        (None, "no such campaign folder or results file"),
+        ("", "expected trial records"),
+        ("{\n[1, 2]\n", r"found none \(2 line\(s\) were not records\)"),
+    ],
+)
+def test_report_refuses_what_holds_no_campaign(
+    tmp_path: Path, content: str | None, message: str
+) -> None:
+    target = tmp_path / "results.jsonl"
+    if content is not None:
+        target.write_text(content, encoding="utf-8")
+    done = app("report", str(target if content is None else tmp_path))
+    assert done.returncode == 2
+    assert "Traceback" not in done.stderr
+    assert re.search(message, done.stderr), done.stderr
+
+
+@pytest.mark.sim
+def test_two_worlds_in_one_folder_never_take_each_others_records(tmp_path: Path) -> None:
+    worlds = ["parcel_pick_place.yaml", "icub_parcel_pick_place.yaml"]
+    runs = [
+        app(
+            "trials",
+            str(ROOT / "worlds" / w),
+            "--n",
+            "1",
+            "--workers",
+            "1",
+            "--out",
+            str(tmp_path),
+            "--json",
+        )
+        for w in worlds
+    ]
+    for done in runs:
+        assert done.returncode in (0, 1), done.stderr
+        assert json.loads(done.stdout.splitlines()[-1])["trials"] == 1
+    records = read_results(tmp_path / "results.jsonl").records
+    assert [r["world"] for r in records] == ["parcel_pick_place", "icub_parcel_pick_place"]
+    assert records[0]["world_sha256"] != records[1]["world_sha256"]
+    assert all(r["backend"] == "local" and r["host"] and len(r["goals"]) == 3 for r in records)
+    # The iCub's campaign ran its own trial 0, not the iiwa's: different starts.
+    assert records[0]["start"] != records[1]["start"]
+    # The same command again owns its record and runs nothing.
+    again = app("trials", str(ROOT / "worlds" / worlds[1]), "--n", "1", "--out", str(tmp_path))
+    assert again.returncode in (0, 1)
+    assert len(read_results(tmp_path / "results.jsonl").records) == 2
+    report = app("report", str(tmp_path), "--json")
+    assert report.returncode == 0, report.stderr
+    labels = [c["campaign"] for c in json.loads(report.stdout.splitlines()[-1])["campaigns"]]
+    assert [label.split(",")[0] for label in labels] == [
+        "parcel_pick_place",
+        "icub_parcel_pick_place",
+    ]
+    assert outcome(records[0]).keys() >= {"trial", "world", "success"}

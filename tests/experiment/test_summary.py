@@ -1,0 +1,88 @@
+"""Campaign summaries: Wilson intervals, splits by condition, progress off and on a terminal."""
+
+from __future__ import annotations
+
+import io
+
+import pytest
+from numpy.testing import assert_allclose
+
+from experiment.progress import Progress
+from experiment.summary import conditions, summarise, summary_lines, wilson_interval
+
+
+def test_wilson_interval_matches_the_issue_and_the_paper() -> None:
+    # The issue's lower bounds for zero failures, and the paper's 16 of 20 (58-92 %).
+    assert_allclose(wilson_interval(100, 100)[0], 0.963, atol=5e-4)
+    assert_allclose(wilson_interval(300, 300)[0], 0.987, atol=5e-4)
+    assert_allclose(wilson_interval(1000, 1000)[0], 0.996, atol=5e-4)
+    assert_allclose(wilson_interval(16, 20), (0.584, 0.919), atol=5e-4)
+    assert_allclose(wilson_interval(0, 10), (0.0, 0.2775), atol=5e-4)
+    with pytest.raises(ValueError, match="expected 0 <= successes <= trials"):
+        wilson_interval(3, 2)
+    with pytest.raises(ValueError, match="trials >= 1"):
+        wilson_interval(0, 0)
+
+
+def test_the_summary_splits_outcomes_by_obstacle_kind() -> None:
+    records = [
+        {"trial": 0, "seed": 0, "success": True, "obstacles": ["line", "none", "ahead"]},
+        {
+            "trial": 1,
+            "seed": 0,
+            "success": False,
+            "obstacles": ["ahead", "line", "none"],
+            "failure": "obstacle contact: parcel ~ ball_1",
+        },
+        {"trial": 2, "seed": 0, "success": True, "obstacles": ["line", "line", "line"]},
+        {
+            "trial": 3,
+            "seed": 0,
+            "success": True,
+            "obstacles": ["line", "line", "line"],
+            "mode": "hard",
+        },
+        {"trial": 4, "seed": 0, "success": True},  # an old record says nothing of them
+    ]
+    assert conditions(records[0]) == {"obstacles": "1 ahead + 1 line"}
+    assert conditions(records[4]) == {}
+    s = summarise(records)
+    assert s["successes"] == 4 and s["trials"] == 5
+    assert_allclose(s["success_interval_95"], wilson_interval(4, 5), atol=1e-4)
+    split = s["by_condition"]["obstacles"]
+    assert split["1 ahead + 1 line"]["trials"] == 2 and split["1 ahead + 1 line"]["successes"] == 1
+    assert split["3 line"]["successes"] == 2
+    assert_allclose(split["3 line"]["success_interval_95"], wilson_interval(2, 2), atol=1e-4)
+    assert s["by_condition"]["mode"] == {
+        "hard": {"trials": 1, "successes": 1, "success_interval_95": [0.2065, 1.0]}
+    }
+    text = "\n".join(summary_lines(s))
+    assert "4 of 5 (Wilson 95 %: 37.5-96.4 %)" in text
+    assert "obstacle contact: parcel" in text and "1 of 2" in text
+
+
+class Terminal(io.StringIO):
+    def isatty(self) -> bool:
+        return True
+
+
+def test_progress_updates_in_place_only_on_a_terminal() -> None:
+    log = io.StringIO()
+    bar = Progress(log, step_percent=10.0)
+    for done in range(1, 101):
+        bar.update(done, 100, f"trial {done}")
+    bar.close()
+    lines = log.getvalue().splitlines()
+    assert "\r" not in log.getvalue()
+    assert (
+        len(lines) == 10 and lines[0].startswith("10/100 (10 %)") and lines[-1].startswith("100/")
+    )
+    tty = Terminal()
+    bar = Progress(tty)
+    for done in range(1, 4):
+        bar.update(done, 3, "ok")
+    bar.close()
+    assert tty.getvalue().count("\r") == 3 and tty.getvalue().endswith("\n")
+    assert "[" + "#" * 30 + "] 3/3" in tty.getvalue()
+    with pytest.raises(ValueError, match="step_percent"):
+        Progress(log, step_percent=0.0)
