@@ -142,7 +142,7 @@ TWO_TREES = """<?xml version="1.0" encoding="UTF-8"?>
 def test_trials_run_the_main_tree_named_and_keep_campaigns_apart(tmp_path: Path) -> None:
     import json
 
-    from experiment.trials import campaign_results, run_trial
+    from experiment.trials import campaign_of, campaign_results, run_trial
     from worlds.world_file import load_world
 
     tree = tmp_path / "two.xml"
@@ -150,14 +150,17 @@ def test_trials_run_the_main_tree_named_and_keep_campaigns_apart(tmp_path: Path)
     world = load_world(WORLD)
     payload = {"world": world.model_dump(mode="json"), "source": str(world.source),
                "tree": str(tree), "leaves": []}  # fmt: skip
-    select = run_trial(({**payload, "main_tree": "Select"}, 0, 0))
-    check = run_trial(({**payload, "main_tree": "Check"}, 0, 0))
+    keys = {name: campaign_of(world, 0, tree, (), name) for name in ("Select", "Check")}
+    select = run_trial(({**payload, "main_tree": "Select", "key": keys["Select"]}, 0, 0))
+    check = run_trial(({**payload, "main_tree": "Check", "key": keys["Check"]}, 0, 0))
     assert (select["tree_status"], check["tree_status"]) == ("SUCCESS", "FAILURE")
-    assert (select["main_tree"], check["main_tree"]) == ("Select", "Check")
+    named = (select["settings"]["main_tree"], check["settings"]["main_tree"])
+    assert named == ("Select", "Check")
     results = tmp_path / "results.jsonl"
     results.write_text(json.dumps(select) + "\n" + json.dumps(check) + "\n", encoding="utf-8")
-    assert campaign_results(results, 0, tree, "Check")[0]["tree_status"] == "FAILURE"
-    assert campaign_results(results, 0, tree) == {}  # the file's own main tree: none ran
+    assert campaign_results(results, keys["Check"])[0]["tree_status"] == "FAILURE"
+    # The file's own main tree: none ran.
+    assert campaign_results(results, campaign_of(world, 0, tree)) == {}
     with pytest.raises(SystemExit) as stop:  # which tree? the file does not say
         app.main(["trials", str(WORLD), "--tree", str(tree), "--n", "1", "--out", str(tmp_path)])
     assert stop.value.code == app.EXIT_BAD_INPUT
