@@ -251,7 +251,7 @@ def _skills_command(args: argparse.Namespace) -> int:
 def _teach_command(args: argparse.Namespace) -> int:
     """Learn a skill from a demonstration CSV into a library; report recognition first."""
     from skills.demos.io import DemoFileError, read_demo_csv
-    from skills.library import LibraryFileError
+    from skills.library import LibraryFileError, check_save_target
     from skills.pose_dmp import fit_pose
     from skills.recognition import DEFAULT_THRESHOLD, recognise
     from skills.scaling import Scaling
@@ -280,6 +280,7 @@ def _teach_command(args: argparse.Namespace) -> int:
         return EXIT_BAD_INPUT
     folder = Path(args.library)
     try:
+        check_save_target(folder)
         demo_file = read_demo_csv(args.demo)
         library = _load_library(str(folder) if (folder / "library.json").exists() else None)
     except (DemoFileError, LibraryFileError) as err:
@@ -348,7 +349,14 @@ def _teach_command(args: argparse.Namespace) -> int:
             print(f"--name: {err}", file=sys.stderr)
             return EXIT_BAD_INPUT
         library.add(skill)
-        library.save(folder)
+        try:
+            library.save(folder)
+        except OSError as err:  # a read-only parent, a full disk: nothing half-written stays
+            print(
+                f"{folder}: expected to save the library, got {err.strerror or err}",
+                file=sys.stderr,
+            )
+            return EXIT_BAD_INPUT
         summary["added"] = name
         summary["label"] = label
         summary["action"] = action.value
