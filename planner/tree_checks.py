@@ -11,6 +11,7 @@ import py_trees
 from py_trees.parsers.behaviour_tree_xml import DECORATOR_NODES
 from py_trees.ports import PortInformation, PortsMixin
 
+from planner.tree_limits import subtree_cycle_problems, tree_size_problems
 from planner.tree_ports import (
     Registry,
     constructor_params,
@@ -301,9 +302,7 @@ class _Checker:
             if bt_id not in self.trees:
                 return
             if bt_id in stack:
-                cycle = " -> ".join([*stack[stack.index(bt_id) :], bt_id])
-                self.add(elem, f"subtree cycle {cycle}; a tree cannot contain itself")
-                return
+                return  # a cycle: planner.tree_limits reports it, named or not
             name = elem.attrib.get("name")
             if name is None:
                 return  # the parser names it with a fresh uuid: nothing inside can clash
@@ -343,4 +342,9 @@ def check_tree_document(doc: TreeDocument, registry: Registry | None = None) -> 
     registry : mapping tag -> class, optional
         As for :func:`effective_registry`.
     """
-    return [*doc.problems, *_Checker(doc, registry).run()]
+    # The size limits first, and alone when they fail: the checks below walk the tree (and
+    # expand its subtrees) recursively, which only a bounded tree allows.
+    limits = tree_size_problems(doc)
+    if limits:
+        return [*doc.problems, *limits]
+    return [*doc.problems, *_Checker(doc, registry).run(), *subtree_cycle_problems(doc)]

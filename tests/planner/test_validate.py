@@ -153,9 +153,9 @@ def test_duplicate_names_and_subtree_cycles() -> None:
     assert problems_of(text) == [
         (5, "duplicate node name 's.same' (also at line 4); py_trees needs unique names: rename "
             "one or name its parent"),
-        (12, "subtree cycle Loop -> Loop2 -> Loop; a tree cannot contain itself"),
         (8, "duplicate node name 's.twice.leaf' (also at line 13); py_trees needs unique names: "
             "rename one or name its parent"),
+        (12, "subtree cycle Loop -> Loop2 -> Loop; a tree cannot contain itself"),
     ]  # fmt: skip
 
 
