@@ -29,6 +29,7 @@ from planner.port import Move
 from planner.render import render_tree
 from planner.runlog import RunLog
 from planner.runner import RunResult, run_tree
+from planner.tree_dataflow import TASK_OBJECT_KEY
 from skills.default_library import build_default_library
 from skills.library import SkillLibrary
 from worlds.sim_world import SimWorld, task_moves
@@ -396,7 +397,7 @@ def run_episode(
                 lib,
                 1.0 / world.sim.control_hz,
                 world.sim.max_sim_time_s,
-                {"/object": world.task[0].object},
+                {TASK_OBJECT_KEY: world.task[0].object},
                 on_tick=on_tick,
                 attach=tuple(hooks),
                 max_wall_time=world.sim.max_wall_time_s,

@@ -13,6 +13,7 @@ import sys
 from pathlib import Path
 
 from planner.default_tree import PICK_AND_PLACE_XML
+from planner.tree_objects import check_tree_objects
 from planner.tree_problems import TreeFileError
 from planner.tree_reading import read_tree_document
 from planner.tree_task import check_tree_moves, tree_grasps
@@ -64,6 +65,8 @@ def preflight_problems(world: World, world_file: str, tree: Path | None = None) 
         # is what a tree's move indices count.
         moves = {step.object: len(task_moves(spec, step.object)) for step in spec.task}
         lines += [str(p) for p in check_tree_moves(doc, moves, bound_object(world))]
+        names = [o.name for o in world.objects]
+        lines += [str(p) for p in check_tree_objects(doc, names)]
     return lines + move_skill_problems(world, world_file)
 
 

@@ -11,6 +11,7 @@ import py_trees
 from py_trees.parsers.behaviour_tree_xml import DECORATOR_NODES
 from py_trees.ports import PortInformation, PortsMixin
 
+from planner.tree_dataflow import dataflow_problems
 from planner.tree_limits import subtree_cycle_problems, tree_size_problems
 from planner.tree_ports import (
     Registry,
@@ -347,4 +348,9 @@ def check_tree_document(doc: TreeDocument, registry: Registry | None = None) -> 
     limits = tree_size_problems(doc)
     if limits:
         return [*doc.problems, *limits]
-    return [*doc.problems, *_Checker(doc, registry).run(), *subtree_cycle_problems(doc)]
+    return [
+        *doc.problems,
+        *_Checker(doc, registry).run(),
+        *subtree_cycle_problems(doc),
+        *dataflow_problems(doc, registry),
+    ]

@@ -49,6 +49,11 @@ def test_good_trees_have_no_problems(name: str) -> None:
             [
                 (7, '<SubTree ID="Grap" name="g1">', "unknown subtree 'Grap'"),
                 (8, '<SubTree ID="Grip" name="g2">', "unknown port 'forse' of subtree 'Grip'"),
+                (
+                    3,
+                    '<StubGrasp name="grip">',
+                    "reads {force} (blackboard key /g2/force), which nothing writes",
+                ),
             ],
         ),
         ("bad_syntax.xml", [(5, "", "XML syntax error: mismatched tag")]),
@@ -105,6 +110,9 @@ def test_ports_literals_keys_and_children() -> None:
         (5, "port 'position': cannot convert '0.1; 0.2; x' to list[float]"),
         (6, "a leaf takes no children, found 1"),
         (7, "name 'e.f': expected no '.' (py_trees joins parent names with '.')"),
+        (6, "port 'position' reads {pos} (blackboard key /pos), which nothing writes: expected "
+            "a node's output port, a SetBlackboard or a script to write it, or a key the run "
+            "sets before the first tick ({object} at the top level)"),
     ]  # fmt: skip
 
 
