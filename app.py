@@ -253,6 +253,7 @@ def _teach_command(args: argparse.Namespace) -> int:
     from skills.demos.io import DemoFileError, read_demo_csv
     from skills.library import LibraryFileError, check_save_target
     from skills.pose_dmp import fit_pose
+    from skills.pose_model import check_pose_demonstration
     from skills.recognition import DEFAULT_THRESHOLD, recognise
     from skills.scaling import Scaling
     from skills.skill import Provenance, check_label, learnt_skill
@@ -287,6 +288,11 @@ def _teach_command(args: argparse.Namespace) -> int:
         print(err, file=sys.stderr)
         return EXIT_BAD_INPUT
     demo = demo_file.demonstration
+    try:
+        check_pose_demonstration(demo)  # before recognition compares it with anything
+    except ValueError as err:
+        print(err, file=sys.stderr)  # the message starts with the file
+        return EXIT_BAD_INPUT
     threshold = DEFAULT_THRESHOLD if args.threshold is None else args.threshold
     if not -1.0 <= threshold <= 1.0:
         print(

@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from skills.pose_model import DURATION_RANGE_S, MAX_POSITION_M
 from skills.scaling import Scaling
 from skills.skill import SkillKind
 
@@ -93,8 +94,8 @@ PARAMS: Mapping[SkillKind, Mapping[str, Number | Choice]] = {
         "orientation_scaling": _SCALINGS,
         "min_amplitude": Number(0.0, 100.0, "m"),
         "min_rotation": Number(0.0, 10.0, "rad"),
-        # A demonstration shorter than a millisecond makes tau^2 vanish in every acceleration.
-        "demo_tau": Number(1e-3, 3600.0, "s"),
+        # What fit_pose learns from (a millisecond to an hour).
+        "demo_tau": Number(*DURATION_RANGE_S, "s"),
     },
     SkillKind.OBSTACLE_STEERING: {
         "gamma": _GAIN,
@@ -119,7 +120,7 @@ PARAMS: Mapping[SkillKind, Mapping[str, Number | Choice]] = {
     SkillKind.FORCE_TRACKING: {},
 }
 
-_POSITION = ArraySpec((3,), -100.0, 100.0, "m")
+_POSITION = ArraySpec((3,), -MAX_POSITION_M, MAX_POSITION_M, "m")
 _QUATERNION = ArraySpec((4,), -1.0 - UNIT_TOLERANCE, 1.0 + UNIT_TOLERANCE, unit_norm=True)
 _WEIGHTS = ArraySpec(("n", 3), -ANY_BOUND, ANY_BOUND)
 
