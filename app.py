@@ -455,6 +455,13 @@ def _trials_command(args: argparse.Namespace) -> int:
     if _register_leaves(args) is None:
         return EXIT_BAD_INPUT
     _preflight_or_exit(world, args.world, args.tree)  # one message now, not one per trial
+    from experiment.trials import TrialLayoutError, check_trial_layout
+
+    try:
+        check_trial_layout(world, args.seed, args.world)
+    except TrialLayoutError as err:
+        print(err, file=sys.stderr)
+        return EXIT_BAD_INPUT
     tree = Path(args.tree) if args.tree else None
     if tree is not None:
         from planner.loader import TreeFileError, load_tree

@@ -124,6 +124,10 @@ def judge(
     tree said.
     """
     s = sim.safety
+    if s.spawned_inside:
+        # First: what it causes (a drop, a contact) is not the reason.
+        where = "; ".join(f"{o} inside {', '.join(b)}" for o, b in sorted(s.spawned_inside.items()))
+        return False, f"obstacle spawned inside a body: {where}"
     if s.dropped:
         return False, f"dropped {s.dropped_object}" if s.dropped_object else "dropped"
     if s.obstacle_contacts:
