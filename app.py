@@ -146,12 +146,21 @@ def _validate_command(args: argparse.Namespace) -> int:
             except TreeFileError as err:
                 print(err, file=sys.stderr)
                 return EXIT_BAD_INPUT
+    from planner.tree_dataflow import RUN_WRITES
     from planner.validate import tree_cli_validate
 
     codes = []
     for path in args.files:
         if path.lower().endswith(".xml"):
-            codes.append(tree_cli_validate(path, registry, main_tree_id=args.main_tree))
+            codes.append(
+                tree_cli_validate(
+                    path,
+                    registry,
+                    main_tree_id=args.main_tree,
+                    # a tree for another robot (--nodes) runs under its own host's keys
+                    run_keys=None if args.nodes else RUN_WRITES,
+                )
+            )
         else:
             from experiment.preflight import validate_cli  # the world's checks need PyBullet
 
@@ -285,8 +294,9 @@ def _skills_command(args: argparse.Namespace) -> int:
 def _teach_command(args: argparse.Namespace) -> int:
     """Learn a skill from a demonstration CSV into a library; report recognition first."""
     from skills.demos.io import DemoFileError, read_demo_csv
-    from skills.library import LibraryFileError
+    from skills.library import LibraryFileError, check_save_target
     from skills.pose_dmp import fit_pose
+    from skills.pose_model import check_pose_demonstration
     from skills.recognition import DEFAULT_THRESHOLD, recognise
     from skills.scaling import Scaling
     from skills.skill import Provenance, check_label, learnt_skill
@@ -314,12 +324,18 @@ def _teach_command(args: argparse.Namespace) -> int:
         return EXIT_BAD_INPUT
     folder = Path(args.library)
     try:
+        check_save_target(folder)
         demo_file = read_demo_csv(args.demo)
         library = _load_library(str(folder) if (folder / "library.json").exists() else None)
     except (DemoFileError, LibraryFileError) as err:
         print(err, file=sys.stderr)
         return EXIT_BAD_INPUT
     demo = demo_file.demonstration
+    try:
+        check_pose_demonstration(demo)  # before recognition compares it with anything
+    except ValueError as err:
+        print(err, file=sys.stderr)  # the message starts with the file
+        return EXIT_BAD_INPUT
     threshold = DEFAULT_THRESHOLD if args.threshold is None else args.threshold
     if not -1.0 <= threshold <= 1.0:
         print(
@@ -382,7 +398,14 @@ def _teach_command(args: argparse.Namespace) -> int:
             print(f"--name: {err}", file=sys.stderr)
             return EXIT_BAD_INPUT
         library.add(skill)
-        library.save(folder)
+        try:
+            library.save(folder)
+        except OSError as err:  # a read-only parent, a full disk: nothing half-written stays
+            print(
+                f"{folder}: expected to save the library, got {err.strerror or err}",
+                file=sys.stderr,
+            )
+            return EXIT_BAD_INPUT
         summary["added"] = name
         summary["label"] = label
         summary["action"] = action.value
@@ -491,12 +514,20 @@ def _trials_command(args: argparse.Namespace) -> int:
         return EXIT_BAD_INPUT
     # one message now, not one per trial
     _preflight_or_exit(world, args.world, args.tree, args.main_tree)
+    from experiment.trials import TrialLayoutError, check_trial_layout
+
+    try:
+        check_trial_layout(world, args.seed, args.world)
+    except TrialLayoutError as err:
+        print(err, file=sys.stderr)
+        return EXIT_BAD_INPUT
     tree = Path(args.tree) if args.tree else None
     if tree is not None:
         from planner.loader import TreeFileError, load_tree
+        from planner.tree_dataflow import RUN_WRITES
 
         try:
-            load_tree(tree, main_tree_id=args.main_tree)
+            load_tree(tree, main_tree_id=args.main_tree, run_keys=RUN_WRITES)
         except TreeFileError as err:
             print(err, file=sys.stderr)
             return EXIT_BAD_INPUT

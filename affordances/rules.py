@@ -125,6 +125,17 @@ PARAM_SKILLS: Mapping[str, Action] = MappingProxyType(
     }
 )
 
+#: What each known parameter may be: (low, high, unit, low end open). A squeeze of 0 N holds
+#: nothing and a speed of -1 m/s is no speed; gains of 0 switch a skill off, which is allowed.
+PARAM_RANGES: Mapping[str, tuple[float, float, str, bool]] = MappingProxyType(
+    {
+        "squeeze_force_n": (0.0, 1000.0, "N", True),
+        "max_speed": (0.0, 10.0, "m/s", True),
+        "obstacle_gain": (0.0, 100.0, "", False),
+        "link_gain": (0.0, 100.0, "", False),
+    }
+)
+
 #: A fact's value: text, a number, or a set of words.
 FactValue = str | float | frozenset[str]
 Facts = Mapping[Fact, FactValue]
@@ -398,14 +409,25 @@ def _params(value: Any, where: _Where, field: str) -> dict[str, ParamValue]:
     for key, item in value.items():
         if not isinstance(key, str):
             raise where.error(field, f"expected string keys, got {shown(key)}")
-        params[key] = _param_value(item, where, f"{field}.{key}")
+        params[key] = _param_value(item, where, f"{field}.{key}", key)
     return params
 
 
-def _param_value(value: Any, where: _Where, field: str) -> float | str:
-    if isinstance(value, str):
+def _param_value(value: Any, where: _Where, field: str, name: str) -> float | str:
+    """A parameter's value; a known parameter (:data:`PARAM_RANGES`) must be in its range."""
+    if isinstance(value, str) and name not in PARAM_RANGES:
         return value
-    return _number(value, where, field)
+    number = _number(value, where, field)
+    if name in PARAM_RANGES:
+        low, high, unit, open_low = PARAM_RANGES[name]
+        above = number > low if open_low else number >= low
+        if not (above and number <= high):
+            left = "(" if open_low else "["
+            units = f" {unit}" if unit else ""
+            raise where.error(
+                field, f"expected {name} in {left}{low:g}, {high:g}]{units}, got {shown(value)}"
+            )
+    return number
 
 
 def _effect(item: Any, where: _Where, field: str) -> Effect:
@@ -448,7 +470,7 @@ def _effect(item: Any, where: _Where, field: str) -> Effect:
         raise where.error(f"{field}.param", f"expected a parameter name, got {shown(name)}")
     if "value" not in item:
         raise where.error(f"{field}.value", "missing; a param effect needs a value")
-    value = _param_value(item["value"], where, f"{field}.value")
+    value = _param_value(item["value"], where, f"{field}.value", name)
     if "skill" in item:
         action = Action(_member(item["skill"], Action, where, f"{field}.skill"))
     elif name in PARAM_SKILLS:

@@ -30,6 +30,7 @@ from planner.port import Move
 from planner.render import render_tree
 from planner.runlog import RunLog
 from planner.runner import RunResult, run_tree
+from planner.tree_dataflow import RUN_WRITES, TASK_OBJECT_KEY
 from skills.default_library import build_default_library
 from skills.library import SkillLibrary
 from worlds.sim_world import SimWorld, task_moves
@@ -127,6 +128,10 @@ def judge(
     tree said.
     """
     s = sim.safety
+    if s.spawned_inside:
+        # First: what it causes (a drop, a contact) is not the reason.
+        where = "; ".join(f"{o} inside {', '.join(b)}" for o, b in sorted(s.spawned_inside.items()))
+        return False, f"obstacle spawned inside a body: {where}"
     if s.dropped:
         return False, f"dropped {s.dropped_object}" if s.dropped_object else "dropped"
     if s.obstacle_contacts:
@@ -370,7 +375,7 @@ def run_episode(
     py_trees.blackboard.Blackboard.clear()
     # Without a tree file, the shipped tree for the world's task.
     if tree_path is not None:
-        root = load_tree(tree_path, main_tree_id=main_tree)
+        root = load_tree(tree_path, main_tree_id=main_tree, run_keys=RUN_WRITES)
     else:
         root = default_tree(task_steps(world))
     lib = library if library is not None else load_library(world)
@@ -425,7 +430,7 @@ def run_episode(
                 lib,
                 1.0 / world.sim.control_hz,
                 world.sim.max_sim_time_s,
-                {"/object": world.task[0].object},
+                {TASK_OBJECT_KEY: world.task[0].object},
                 on_tick=on_tick,
                 attach=tuple(hooks),
                 max_wall_time=world.sim.max_wall_time_s,

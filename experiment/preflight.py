@@ -13,6 +13,8 @@ import sys
 from pathlib import Path
 
 from planner.default_tree import PICK_AND_PLACE_XML
+from planner.tree_dataflow import RUN_WRITES
+from planner.tree_objects import check_tree_objects
 from planner.tree_problems import TreeFileError
 from planner.tree_reading import read_tree_document
 from planner.tree_task import check_tree_moves, tree_grasps
@@ -54,7 +56,7 @@ def preflight_problems(
     import planner.leaves  # noqa: F401  (registers the leaves a tree may use)
 
     if tree is not None:
-        tree_problems = validate_tree(tree, main_tree_id=main_tree)
+        tree_problems = validate_tree(tree, main_tree_id=main_tree, run_keys=RUN_WRITES)
         if tree_problems:
             return [str(p) for p in tree_problems]
     try:
@@ -71,6 +73,8 @@ def preflight_problems(
         # is what a tree's move indices count.
         moves = {step.object: len(task_moves(spec, step.object)) for step in spec.task}
         lines += [str(p) for p in check_tree_moves(doc, moves, bound_object(world))]
+        names = [o.name for o in world.objects]
+        lines += [str(p) for p in check_tree_objects(doc, names)]
     return lines + move_skill_problems(world, world_file)
 
 

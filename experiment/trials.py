@@ -364,6 +364,36 @@ def _draw_sphere(
     raise RuntimeError(f"{name}: could not place a sphere clear of the start and goal")
 
 
+class TrialLayoutError(ValueError):
+    """A world whose ``trials`` section no trial can be drawn from; one message, not one per
+    trial."""
+
+
+def check_trial_layout(base: World, seed: int, label: str) -> None:
+    """Raise :class:`TrialLayoutError` (naming ``label``, the world file) unless trials can be
+    drawn from ``base``: a box object to grasp, and trial 0 of ``seed`` drawn as every trial
+    is (its obstacles placed clear of the box and of the robot holding it).
+
+    A layout that cannot place a sphere once (``clearance: 5``) cannot place it in any trial;
+    drawing one costs a fraction of a second, and tells before a campaign starts.
+    """
+    obj = base.objects[0]
+    if obj.shape.type != "box":
+        raise TrialLayoutError(
+            f"{label}: objects[0].shape: expected a box object for trials (their obstacles "
+            f"and grasps are drawn around a box), got a {obj.shape.type} ({obj.name!r})"
+        )
+    try:
+        draw_trial(base, seed, 0)
+    except RuntimeError as err:
+        layout = base.trials
+        raise TrialLayoutError(
+            f"{label}: trials: expected a layout whose obstacles can be drawn, got none for "
+            f"trial 0 ({err}); lower trials.clearance ({layout.clearance:g} m) or "
+            f"trials.robot_clearance ({layout.robot_clearance:g} m), or move the regions apart"
+        ) from None
+
+
 def run_trial(job: tuple[dict[str, Any], int, int]) -> dict[str, Any]:
     """Run one trial in this process; returns its JSON-ready record (never raises)."""
     from experiment.episode import run_episode

@@ -38,6 +38,7 @@ from py_trees.behaviour import Behaviour
 
 import planner.leaves  # noqa: F401  (registers the leaves the file uses)
 from planner.loader import load_tree, load_tree_string
+from planner.tree_dataflow import RUN_WRITES
 
 __all__ = ["PICK_AND_PLACE_XML", "TaskStep", "default_tree", "pick_and_place_xml", "task_xml"]
 
@@ -182,7 +183,7 @@ def default_tree(task: int | Sequence[TaskStep] = 3) -> Behaviour:
     """
     if isinstance(task, int):
         if task == 3:
-            return load_tree(PICK_AND_PLACE_XML)
+            return load_tree(PICK_AND_PLACE_XML, run_keys=RUN_WRITES)
         return load_tree_string(
             pick_and_place_xml(task), source=f"{PICK_AND_PLACE_XML} ({task} moves)"
         )

@@ -25,6 +25,7 @@ import re
 import tempfile
 import weakref
 import xml.etree.ElementTree as ET
+from collections.abc import Collection
 from pathlib import Path
 
 import py_trees
@@ -61,8 +62,13 @@ def load_tree(
     registry: Registry | None = None,
     *,
     main_tree_id: str | None = None,
+    run_keys: Collection[str] | None = None,
 ) -> py_trees.behaviour.Behaviour:
     """Build the main tree of an XML file and return its root behaviour.
+
+    ``run_keys``: for a tree Duet will run, the blackboard keys the run sets before the first
+    tick; a port reading a key nothing writes is then refused
+    (:func:`planner.tree_checks.check_tree_document`).
 
     Parameters
     ----------
@@ -85,7 +91,7 @@ def load_tree(
         For anything wrong with the file; ``str()`` lists ``file:line: <Tag name="..">: what
         was expected`` one per line (XML syntax errors give ``file:line:col``).
     """
-    return _load(read_tree_document(path, registry, main_tree_id), registry)
+    return _load(read_tree_document(path, registry, main_tree_id), registry, run_keys)
 
 
 def load_tree_string(
@@ -94,13 +100,17 @@ def load_tree_string(
     registry: Registry | None = None,
     *,
     main_tree_id: str | None = None,
+    run_keys: Collection[str] | None = None,
 ) -> py_trees.behaviour.Behaviour:
     """Build a tree from XML text; ``source`` labels it in messages (see :func:`load_tree`)."""
-    return _load(read_tree_document_string(text, source, registry, main_tree_id), registry)
+    doc = read_tree_document_string(text, source, registry, main_tree_id)
+    return _load(doc, registry, run_keys)
 
 
-def _load(doc: TreeDocument, registry: Registry | None) -> py_trees.behaviour.Behaviour:
-    problems = check_tree_document(doc, registry)
+def _load(
+    doc: TreeDocument, registry: Registry | None, run_keys: Collection[str] | None = None
+) -> py_trees.behaviour.Behaviour:
+    problems = check_tree_document(doc, registry, run_keys=run_keys)
     if problems:
         raise TreeFileError(problems)
     assert doc.main_tree_id is not None  # a document without one has a problem above

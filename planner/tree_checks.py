@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import difflib
 import xml.etree.ElementTree as ET
+from collections.abc import Collection
 from typing import Any
 
 import py_trees
@@ -13,6 +14,8 @@ from py_trees.ports import PortInformation, PortsMixin
 
 from planner.bt_controls import CHILD_COUNTS
 from planner.bt_switch import SWITCH_CHILD_COUNTS
+from planner.tree_dataflow import dataflow_problems
+from planner.tree_limits import subtree_cycle_problems, tree_size_problems
 from planner.tree_ports import (
     Registry,
     constructor_params,
@@ -304,9 +307,7 @@ class _Checker:
             if bt_id not in self.trees:
                 return
             if bt_id in stack:
-                cycle = " -> ".join([*stack[stack.index(bt_id) :], bt_id])
-                self.add(elem, f"subtree cycle {cycle}; a tree cannot contain itself")
-                return
+                return  # a cycle: planner.tree_limits reports it, named or not
             name = elem.attrib.get("name")
             if name is None:
                 return  # the parser names it with a fresh uuid: nothing inside can clash
@@ -336,7 +337,12 @@ def _is_parent(cls: type) -> bool:
     return issubclass(cls, (py_trees.decorators.Decorator, py_trees.composites.Composite))
 
 
-def check_tree_document(doc: TreeDocument, registry: Registry | None = None) -> list[TreeProblem]:
+def check_tree_document(
+    doc: TreeDocument,
+    registry: Registry | None = None,
+    *,
+    run_keys: Collection[str] | None = None,
+) -> list[TreeProblem]:
     """Return every problem in a read document (reading problems first).
 
     Parameters
@@ -345,5 +351,20 @@ def check_tree_document(doc: TreeDocument, registry: Registry | None = None) -> 
         From :func:`read_tree_document`.
     registry : mapping tag -> class, optional
         As for :func:`effective_registry`.
+    run_keys : collection of str, optional
+        For a tree Duet will run: the blackboard keys the run sets before the first tick
+        (:data:`planner.tree_dataflow.RUN_WRITES`); a port reading a key that neither they nor
+        any node writes is then a problem. Without it (a BT.CPP tree whose host may set any
+        key, a conformance test that sets them) reads are not checked.
     """
-    return [*doc.problems, *_Checker(doc, registry).run()]
+    # The size limits first, and alone when they fail: the checks below walk the tree (and
+    # expand its subtrees) recursively, which only a bounded tree allows.
+    limits = tree_size_problems(doc)
+    if limits:
+        return [*doc.problems, *limits]
+    return [
+        *doc.problems,
+        *_Checker(doc, registry).run(),
+        *subtree_cycle_problems(doc),
+        *(dataflow_problems(doc, registry, run_keys) if run_keys is not None else ()),
+    ]

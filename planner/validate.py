@@ -17,7 +17,7 @@ from __future__ import annotations
 import os
 import sys
 import xml.etree.ElementTree as ET
-from collections.abc import Iterator
+from collections.abc import Collection, Iterator
 
 from planner.tree_checks import check_tree_document
 from planner.tree_ports import Registry, effective_registry
@@ -47,6 +47,7 @@ def validate_tree(
     registry: Registry | None = None,
     *,
     main_tree_id: str | None = None,
+    run_keys: Collection[str] | None = None,
 ) -> list[TreeProblem]:
     """Check a tree file without building it; return its problems (empty when it is fine).
 
@@ -55,24 +56,29 @@ def validate_tree(
     IDs and their remapped ports; the main tree; child counts (decorators exactly one,
     control nodes at least one, leaves none); names the parser would duplicate; subtree cycles.
     ``main_tree_id`` names the tree to check as the main one instead of ``main_tree_to_execute``
-    (a file saved by Groot2 has none).
+    (a file saved by Groot2 has none). ``run_keys``: for a tree Duet will run, the keys the
+    run sets (:func:`planner.tree_checks.check_tree_document`).
     """
     try:
         doc = read_tree_document(path, registry, main_tree_id)
     except TreeFileError as exc:
         return list(exc.problems)
-    return check_tree_document(doc, registry)
+    return check_tree_document(doc, registry, run_keys=run_keys)
 
 
 def validate_tree_string(
-    text: str, source: str = "<string>", registry: Registry | None = None
+    text: str,
+    source: str = "<string>",
+    registry: Registry | None = None,
+    *,
+    run_keys: Collection[str] | None = None,
 ) -> list[TreeProblem]:
     """Check tree XML given as a string (see :func:`validate_tree`)."""
     try:
         doc = read_tree_document_string(text, source, registry)
     except TreeFileError as exc:
         return list(exc.problems)
-    return check_tree_document(doc, registry)
+    return check_tree_document(doc, registry, run_keys=run_keys)
 
 
 def tree_cli_validate(
@@ -80,13 +86,14 @@ def tree_cli_validate(
     registry: Registry | None = None,
     *,
     main_tree_id: str | None = None,
+    run_keys: Collection[str] | None = None,
 ) -> int:
     """Validate a tree file for the command line.
 
     Prints each problem on its own line to stderr and returns 2, or prints a one-line
     ``ok`` summary to stdout and returns 0.
     """
-    problems = validate_tree(path, registry, main_tree_id=main_tree_id)
+    problems = validate_tree(path, registry, main_tree_id=main_tree_id, run_keys=run_keys)
     if problems:
         for problem in problems:
             print(problem, file=sys.stderr)

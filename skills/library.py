@@ -17,6 +17,7 @@ from __future__ import annotations
 import json
 import os
 import shutil
+import stat
 import tempfile
 import zipfile
 from collections.abc import Iterator, Mapping
@@ -26,6 +27,7 @@ from typing import Any
 import numpy as np
 
 from skills.skill import Provenance, Skill, SkillKind, check_label, model_from_data
+from skills.skill_data import SkillDataError, check_skill_data, finite_within, short_repr
 from skills.types import Array
 from skills.vocabulary import Action, AffordanceElement, Space
 
@@ -35,6 +37,11 @@ VERSION = 2
 READABLE_VERSIONS = (1, 2)
 META_FILE = "library.json"
 ARRAYS_FILE = "arrays.npz"
+#: Largest ``library.json`` read (the shipped one is ~10 kB).
+MAX_META_BYTES = 16 * 2**20
+#: Largest total the arrays of ``arrays.npz`` may expand to (a zip can claim far more than
+#: its own size).
+MAX_ARRAY_BYTES = 256 * 2**20
 
 
 class LibraryFileError(ValueError):
@@ -55,11 +62,15 @@ class SkillLibrary:
             self.add(s)
 
     def add(self, skill: Skill, replace: bool = False) -> None:
-        """Add ``skill``; a name already present is an error unless ``replace``."""
+        """Add ``skill``; a name already present, or data out of bounds, is a ValueError."""
         if skill.name in self._skills and not replace:
             raise ValueError(
                 f"skill name: expected a new name, got {skill.name!r} (already present)"
             )
+        try:
+            check_skill_data(skill.kind, skill.params, skill.arrays)
+        except SkillDataError as err:
+            raise ValueError(f"skill {skill.name!r}: {err}") from None
         self._skills[skill.name] = skill
 
     def __len__(self) -> int:
@@ -145,7 +156,7 @@ class SkillLibrary:
 
     def save(self, folder: str | os.PathLike[str]) -> Path:
         """Write the library to ``folder`` atomically (replacing an existing library there)."""
-        target = Path(folder)
+        target = check_save_target(folder)
         target.parent.mkdir(parents=True, exist_ok=True)
         tmp = Path(tempfile.mkdtemp(dir=target.parent, prefix=f".{target.name}.new-"))
         try:
@@ -193,26 +204,36 @@ class SkillLibrary:
         root = Path(folder)
         meta_path = root / META_FILE
         if not root.is_dir():
-            raise LibraryFileError(root, "", "a skill library folder", "no such folder")
-        try:
-            meta = json.loads(meta_path.read_text(encoding="utf-8"))
-        except FileNotFoundError:
-            raise LibraryFileError(meta_path, "", "a library.json file", "no such file") from None
-        except json.JSONDecodeError as err:
-            raise LibraryFileError(
-                f"{meta_path}:{err.lineno}:{err.colno}", "", "valid JSON", err.msg
-            ) from None
+            what = "a file" if root.exists() else "no such folder"
+            raise LibraryFileError(root, "", "a skill library folder", what)
+        meta = _read_meta(meta_path)
         arrays = _load_arrays(root / ARRAYS_FILE)
         return SkillLibrary(_parse_metadata(meta, meta_path, arrays, root / ARRAYS_FILE))
 
 
+def check_save_target(folder: str | os.PathLike[str]) -> Path:
+    """``folder`` if a library may be saved there: nothing yet, or a library folder.
+
+    Raises
+    ------
+    LibraryFileError
+        For a file, a link, or a folder that holds something other than a library (which
+        saving would replace); before anything is written. An empty folder is fine.
+    """
+    target = Path(folder)
+    expected = f"a skill library folder (with {META_FILE}) or nothing"
+    if target.is_symlink():
+        raise LibraryFileError(target, "", expected, "a link: not writing through it")
+    if target.exists() and not target.is_dir():
+        raise LibraryFileError(target, "", expected, "a file: not overwriting it")
+    if target.is_dir() and not (target / META_FILE).is_file() and any(target.iterdir()):
+        raise LibraryFileError(target, "", expected, "another folder: not overwriting it")
+    return target
+
+
 def _swap_in(new: Path, target: Path) -> None:
     if target.exists():
-        if not (target / META_FILE).exists():
-            raise FileExistsError(
-                f"{target}: expected a skill library folder (with {META_FILE}) or nothing, "
-                "got another folder: not overwriting it"
-            )
+        check_save_target(target)
         old = Path(tempfile.mkdtemp(dir=target.parent, prefix=f".{target.name}.old-"))
         os.replace(target, old / "lib")
         os.replace(new, target)
@@ -221,13 +242,67 @@ def _swap_in(new: Path, target: Path) -> None:
         os.replace(new, target)
 
 
+def _regular_file(path: Path, what: str, limit: int) -> None:
+    """Refuse a missing file, a folder, a device or a file over ``limit`` bytes, unread."""
+    try:
+        info = path.stat()
+    except FileNotFoundError:
+        raise LibraryFileError(path, "", what, "no such file") from None
+    except OSError as err:
+        raise LibraryFileError(path, "", what, err.strerror or err) from None
+    if not stat.S_ISREG(info.st_mode):
+        got = "a folder" if stat.S_ISDIR(info.st_mode) else "not a regular file"
+        raise LibraryFileError(path, "", what, got)
+    if info.st_size > limit:
+        raise LibraryFileError(path, "", f"{what} of at most {limit} bytes", info.st_size)
+
+
+def _unique_keys(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    seen: dict[str, Any] = {}
+    for key, value in pairs:
+        if key in seen:
+            raise ValueError(f"a key given once, got {key!r} twice")
+        seen[key] = value
+    return seen
+
+
+def _read_meta(path: Path) -> Any:
+    _regular_file(path, "a library.json file", MAX_META_BYTES)
+    try:
+        text = path.read_bytes().decode("utf-8")
+    except OSError as err:
+        raise LibraryFileError(path, "", "a readable file", err.strerror or err) from None
+    except UnicodeDecodeError as err:
+        raise LibraryFileError(
+            path, "", "UTF-8 text", f"byte 0x{err.object[err.start]:02x} at offset {err.start}"
+        ) from None
+    try:
+        return json.loads(text, object_pairs_hook=_unique_keys)
+    except json.JSONDecodeError as err:
+        raise LibraryFileError(
+            f"{path}:{err.lineno}:{err.colno}", "", "valid JSON", err.msg
+        ) from None
+    except RecursionError:
+        raise LibraryFileError(path, "", "JSON nested to a sane depth", "too deep") from None
+    except ValueError as err:  # a repeated key, from _unique_keys
+        raise LibraryFileError(path, "", *str(err).split(", got ", 1)) from None
+
+
 def _load_arrays(path: Path) -> dict[str, Array]:
+    _regular_file(path, "an arrays.npz file", MAX_ARRAY_BYTES)
+    try:
+        with zipfile.ZipFile(path) as archive:
+            claimed = sum(i.file_size for i in archive.infolist())
+    except (zipfile.BadZipFile, OSError) as err:
+        raise LibraryFileError(path, "", "an NPZ archive (a zip of .npy arrays)", err) from None
+    if claimed > MAX_ARRAY_BYTES:
+        raise LibraryFileError(
+            path, "", f"arrays of at most {MAX_ARRAY_BYTES} bytes in all", f"{claimed} bytes"
+        )
     try:
         with np.load(path, allow_pickle=False) as npz:
             return {k: npz[k] for k in npz.files}
-    except FileNotFoundError:
-        raise LibraryFileError(path, "", "an arrays.npz file", "no such file") from None
-    except (zipfile.BadZipFile, ValueError, OSError) as err:
+    except (zipfile.BadZipFile, ValueError, OSError, EOFError) as err:
         raise LibraryFileError(path, "", "a readable NPZ archive", err) from None
 
 
@@ -259,6 +334,25 @@ def _as_tuple(kind: type | tuple[type, ...]) -> tuple[type, ...]:
     return kind if isinstance(kind, tuple) else (kind,)
 
 
+def _provenance(entry: Mapping[str, Any], file: Path, field: str) -> Provenance:
+    prov = _need(entry, "provenance", dict, file, field, "an object")
+    where = f"{field}.provenance"
+    demos = _need(prov, "demonstrations", list, file, where, "a list")
+    for j, d in enumerate(demos):
+        if not isinstance(d, str):
+            raise LibraryFileError(file, f"{where}.demonstrations[{j}]", "a file name", repr(d))
+    fit = _need(prov, "fit", dict, file, where, "an object")
+    for k, v in fit.items():
+        if isinstance(v, bool) or not isinstance(v, int | float) or not finite_within(v, 1e300):
+            raise LibraryFileError(file, f"{where}.fit.{k}", "a finite number", short_repr(v))
+    return Provenance(
+        tuple(demos),
+        _need(prov, "learnt_at", str, file, where, "a time stamp"),
+        _need(prov, "method", str, file, where, "a description"),
+        dict(fit),
+    )
+
+
 def _parse_metadata(
     meta: Any, file: Path, arrays: Mapping[str, Array], arrays_file: Path
 ) -> list[Skill]:
@@ -276,6 +370,8 @@ def _parse_metadata(
     entries = meta.get("skills")
     if not isinstance(entries, list):
         raise LibraryFileError(file, "skills", "a list of skills", repr(entries))
+    if not entries:
+        raise LibraryFileError(file, "skills", "at least one skill", "an empty list")
     keys = {"name", "action", "space", "kind", "elements", "params", "arrays", "provenance"}
     if version >= 2:
         keys.add("label")
@@ -323,13 +419,14 @@ def _parse_metadata(
                     arrays_file, key, "an array named in library.json", "nothing (missing)"
                 )
             own[str(a)] = arrays[key]
-        prov = _need(entry, "provenance", dict, file, field, "an object")
-        provenance = Provenance(
-            tuple(_need(prov, "demonstrations", list, file, f"{field}.provenance", "a list")),
-            _need(prov, "learnt_at", str, file, f"{field}.provenance", "a time stamp"),
-            _need(prov, "method", str, file, f"{field}.provenance", "a description"),
-            dict(_need(prov, "fit", dict, file, f"{field}.provenance", "an object")),
-        )
+        provenance = _provenance(entry, file, field)
+        try:
+            check_skill_data(kind, params, own)
+        except SkillDataError as err:
+            if err.field.startswith("arrays."):  # named as arrays.npz keys them
+                key = f"{name}/{err.field.removeprefix('arrays.')}"
+                raise LibraryFileError(arrays_file, key, err.expected, err.got) from None
+            raise LibraryFileError(file, f"{field}.{err.field}", err.expected, err.got) from None
         try:
             skill = Skill(name, action, space, kind, elements, params, own, provenance, label)
             if kind is SkillKind.LEARNT_DMP:

@@ -109,6 +109,45 @@ def _vec3(v: ArrayLike, name: str) -> Array:
     return arr
 
 
+#: Farthest a demonstrated position may be from the origin, m (a workspace, not an orbit).
+MAX_POSITION_M = 100.0
+#: Shortest and longest demonstration learnt, s: below a millisecond tau^2 vanishes in every
+#: acceleration; an hour is far beyond any manipulation.
+DURATION_RANGE_S = (1e-3, 3600.0)
+#: Least motion a demonstration must show to be learnt: a translation (m) or a rotation (rad).
+MIN_MOTION = (1e-3, 1e-2)
+
+
+def check_pose_demonstration(demo: Demonstration) -> None:
+    """Raise ValueError unless ``demo`` is a motion a pose DMP can learn.
+
+    Its positions within :data:`MAX_POSITION_M` of the origin, its duration within
+    :data:`DURATION_RANGE_S`, and some motion: a translation or a rotation at least
+    :data:`MIN_MOTION` (a motionless recording has no shape to learn).
+    """
+    far = float(np.max(np.abs(demo.positions)))
+    if far > MAX_POSITION_M:
+        raise ValueError(
+            f"{demo.name}: positions: expected within {MAX_POSITION_M:g} m of the origin, "
+            f"got {far:.3g} m"
+        )
+    low, high = DURATION_RANGE_S
+    if not low <= demo.duration <= high:
+        raise ValueError(
+            f"{demo.name}: t: expected a duration from {low:g} s to {high:g} s, "
+            f"got {demo.duration:.3g} s"
+        )
+    travel = float(np.max(np.ptp(demo.positions, axis=0)))
+    assert demo.orientations is not None
+    turn = float(np.max(quat.angle_between(demo.orientations[0], demo.orientations)))
+    if travel < MIN_MOTION[0] and turn < MIN_MOTION[1]:
+        raise ValueError(
+            f"{demo.name}: expected a motion (a translation of at least {MIN_MOTION[0]:g} m "
+            f"or a rotation of at least {MIN_MOTION[1]:g} rad), got {travel:.3g} m and "
+            f"{turn:.3g} rad: the demonstration does not move"
+        )
+
+
 def fit_pose(
     demos: Demonstration | Sequence[Demonstration],
     params: DMPParams | None = None,
@@ -135,7 +174,8 @@ def fit_pose(
     Raises
     ------
     ValueError
-        If a demonstration has no orientations or its positions are not 3-D.
+        If a demonstration has no orientations, its positions are not 3-D, or it is not a
+        motion to learn (:func:`check_pose_demonstration`).
     """
     demo_list = [demos] if isinstance(demos, Demonstration) else list(demos)
     for d in demo_list:
@@ -143,6 +183,7 @@ def fit_pose(
             raise ValueError(f"{d.name}: positions: expected shape (N, 3), got {d.positions.shape}")
         if d.orientations is None:
             raise ValueError(f"{d.name}: orientations: expected (N, 4) quaternions, got none")
+        check_pose_demonstration(d)
     p = params or DMPParams()
     check_demonstrations(demo_list, p.n_basis)
     basis = p.basis()

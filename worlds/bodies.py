@@ -8,6 +8,7 @@ on the order bodies are created in).
 from __future__ import annotations
 
 import os
+import socket
 import sys
 from collections.abc import Sequence
 
@@ -158,6 +159,29 @@ def shape_ids(client: int, shape: ShapeSpec, rgba: Sequence[float]) -> tuple[int
     return col, vis
 
 
+def x_display_reachable(display: str, timeout_s: float = 2.0) -> bool:
+    """Whether an X server accepts connections at ``display`` (``:0``, ``host:10.0``).
+
+    Connects to its socket (``/tmp/.X11-unix/X<n>`` for a local display, TCP port 6000 + n
+    for a host) and closes it again; no X protocol is spoken.
+    """
+    host, _, rest = display.rpartition(":")
+    number = rest.split(".", 1)[0]
+    if not number.isdigit():
+        return False
+    try:
+        if host in ("", "unix"):
+            with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as sock:
+                sock.settimeout(timeout_s)
+                sock.connect(f"/tmp/.X11-unix/X{number}")
+        else:
+            with socket.create_connection((host, 6000 + int(number)), timeout=timeout_s):
+                pass
+    except OSError:
+        return False
+    return True
+
+
 class NoDisplayError(RuntimeError):
     """PyBullet's window was asked for where there is no display."""
 
@@ -172,8 +196,19 @@ def connect(gui: bool) -> int:
     """
     if not gui:
         return int(pb.connect(pb.DIRECT))
-    if not os.environ.get("DISPLAY") and sys.platform.startswith("linux"):
-        raise NoDisplayError("--gui: expected a display (DISPLAY is not set); run without --gui")
+    display = os.environ.get("DISPLAY", "")
+    if sys.platform.startswith("linux"):
+        if not display:
+            raise NoDisplayError(
+                "--gui: expected a display (DISPLAY is not set); run without --gui"
+            )
+        # PyBullet's C code exits the process (status 1) when it cannot reach the X server:
+        # ask the server's socket first.
+        if not x_display_reachable(display):
+            raise NoDisplayError(
+                f"--gui: expected a display, but nothing answers at DISPLAY={display!r}; "
+                "run without --gui"
+            )
     client = int(pb.connect(pb.GUI))
     if client < 0:
         raise NoDisplayError("--gui: PyBullet could not open a window on this display")

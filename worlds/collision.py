@@ -695,3 +695,24 @@ def _hit(
     if margin > 0.0:
         return bool(fcl.distance(probe, obstacle, fcl.DistanceRequest()) < margin)
     return bool(fcl.collide(probe, obstacle, fcl.CollisionRequest(), fcl.CollisionResult()))
+
+
+def penetration_depth(
+    shape_a: ShapeSpec,
+    pose_a: tuple[ArrayLike, ArrayLike],
+    shape_b: ShapeSpec,
+    pose_b: tuple[ArrayLike, ArrayLike],
+) -> float:
+    """How deep two shapes at their poses (position (3,), quaternion (4,) scalar-last, world
+    frame) interpenetrate, m; 0 when they are apart or only touch."""
+    objects = []
+    for shape, (position, quaternion) in ((shape_a, pose_a), (shape_b, pose_b)):
+        geometry = _shape_geometry(shape)[0]
+        rotation = quat.to_matrix(np.asarray(quaternion, dtype=float))
+        transform = fcl.Transform(rotation, np.asarray(position, dtype=float))
+        objects.append(fcl.CollisionObject(geometry, transform))
+    request = fcl.CollisionRequest(num_max_contacts=1, enable_contact=True)
+    result = fcl.CollisionResult()
+    if not fcl.collide(objects[0], objects[1], request, result) or not result.contacts:
+        return 0.0
+    return max(float(result.contacts[0].penetration_depth), 0.0)

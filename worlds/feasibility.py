@@ -9,6 +9,7 @@ what would otherwise fail only after seconds of simulation:
 - a goal off the table: the object's centre must be over the table top's footprint (so its
   weight rests on the table) and at the height where it rests on the top, within
   :data:`REST_TOLERANCE_M` (lower is inside the table; higher drops it on release);
+- a body that starts sunk into the table or inside another (:mod:`worlds.placement`);
 - a goal out of reach: each palm of a grasp the reasoner offers, placed at the goal, must lie
   inside its arm's reach sphere (:func:`worlds.robots.reach.arm_reach`). The palms are taken
   at the contact faces' centres; the sphere bounds every posture, so a goal it refuses is out
@@ -22,13 +23,14 @@ from __future__ import annotations
 from collections.abc import Collection, Mapping
 from dataclasses import replace
 
-import numpy as np
-
 from affordances.actions import GRASP_ORDER
 from affordances.config import ReasonerConfig
 from affordances.physics import GraspOption, HardAssessment, assess
 from skills.vocabulary import Arm, GraspType
 from worlds.adapters import object_contexts, robot_capabilities
+from worlds.placement import fmt as _fmt
+from worlds.placement import resting_half_height, start_problems
+from worlds.placement import vec as _vec
 from worlds.robots import robot_model_of
 from worlds.robots.reach import ArmReach, arm_reach
 from worlds.spec import MoveSpec, ObjectSpec, TableSpec, WorldSpec
@@ -38,22 +40,6 @@ from worlds.world_file import World, as_world_spec
 #: How far a goal's height may be from the object resting on the table top, m: a centimetre
 #: is half the 2 cm a placement is judged by.
 REST_TOLERANCE_M = 0.01
-
-
-def _fmt(value: float) -> str:
-    return f"{value:.3g}"
-
-
-def _vec(values: tuple[float, ...] | np.ndarray) -> str:
-    return "[" + ", ".join(_fmt(float(v)) for v in values) + "]"
-
-
-def resting_half_height(obj: ObjectSpec, quaternion: tuple[float, float, float, float]) -> float:
-    """Half the object's extent along world z when turned by ``quaternion``, m."""
-    x, y, z, w = quaternion
-    # Third row of the rotation matrix: how much of each body axis points up.
-    row = np.array([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)])
-    return 0.5 * float(np.abs(row) @ np.asarray(obj.shape.extents(), dtype=float))
 
 
 def _table_problem(obj: ObjectSpec, move: MoveSpec, table: TableSpec) -> tuple[str, str] | None:
@@ -139,6 +125,7 @@ def feasibility_problems(
     index = {obj.name: k for k, obj in enumerate(spec.scene.objects)}
     problems: list[WorldFileProblem] = []
     graspable: dict[str, bool] = {}
+    bad_goals: set[tuple[int, int]] = set()
 
     def usable(options: tuple[GraspOption, ...]) -> list[GraspOption]:
         return [o for o in options if grasps is None or o.grasp in grasps]
@@ -161,6 +148,7 @@ def feasibility_problems(
             table = _table_problem(obj, move, spec.scene.table)
             if table is not None:
                 problems.append(WorldFileProblem(field, *table))
+                bad_goals.add((i, j))
                 continue
             if not graspable[obj.name]:
                 continue
@@ -173,7 +161,7 @@ def feasibility_problems(
                 problems.append(
                     WorldFileProblem(field, "a goal within the arms' reach", str(misses[0]))
                 )
-    return problems
+    return start_problems(spec, bad_goals) + problems
 
 
 def check_feasible(world: World | WorldSpec, file: str) -> None:

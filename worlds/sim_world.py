@@ -104,6 +104,9 @@ class SafetyRecord:
     drop_time : float or None
     dropped_object : str
         The object that fell first ("" if none did).
+    spawned_inside : dict
+        ``obstacle -> [bodies]``: an obstacle switched on where an object or an arm already
+        was (PyBullet would push it out at once, or, for a fixed base, never).
     """
 
     obstacle_contacts: dict[str, int] = field(default_factory=dict)
@@ -113,6 +116,7 @@ class SafetyRecord:
     dropped: bool = False
     drop_time: float | None = None
     dropped_object: str = ""
+    spawned_inside: dict[str, list[str]] = field(default_factory=dict)
 
 
 def task_moves(spec: WorldSpec, name: str) -> tuple[Move, ...]:
@@ -346,9 +350,20 @@ class SimWorld:
 
     # -- obstacles and collision -------------------------------------------------------------
     def set_active_obstacles(self, names: Iterable[str]) -> None:
-        """Exactly these obstacles are present (placed between moves, while nothing touches)."""
-        self.scene.set_active_obstacles(names)
+        """Exactly these obstacles are present (placed between moves, while nothing touches).
+
+        One switched on inside an object or an arm is recorded in
+        ``safety.spawned_inside``: the run's verdict names it, instead of what it causes.
+        """
+        wanted = set(names)
+        new = wanted - self.scene.active_obstacles
+        self.scene.set_active_obstacles(wanted)
         self.collision.sync()
+        if new:
+            for obstacle, bodies in self.scene.obstacle_overlaps().items():
+                inside = [b for b in bodies if b != "table"]
+                if obstacle in new and inside:
+                    self.safety.spawned_inside.setdefault(obstacle, inside)
 
     def obstacles(self) -> tuple[ObstacleInfo, ...]:
         """The active obstacles."""

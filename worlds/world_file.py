@@ -136,11 +136,27 @@ def _read_text(path: Path, label: str) -> str:
         raise WorldFileError(label, [WorldFileProblem(None, expected, received)]) from None
 
 
+class _DuplicateKey(ValueError):
+    """A JSON object giving one key twice (json keeps the last, silently)."""
+
+
+def _unique_keys(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for key, value in pairs:
+        if key in out:
+            raise _DuplicateKey(f"the key {key[:60]!r}")
+        out[key] = value
+    return out
+
+
 def _parse(text: str, path: Path, label: str) -> Any:
     """Parse YAML (or JSON for ``.json`` files), reporting syntax errors with line:column."""
     if path.suffix.lower() == ".json":
         try:
-            return json.loads(text)
+            return json.loads(text, object_pairs_hook=_unique_keys)
+        except _DuplicateKey as exc:
+            problem = WorldFileProblem(None, "each key once per object", f"{exc} twice")
+            raise WorldFileError(label, [problem]) from None
         except json.JSONDecodeError as exc:
             problem = WorldFileProblem(None, "invalid JSON", exc.msg, exc.lineno, exc.colno)
             raise WorldFileError(label, [problem]) from None

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import functools
+from collections.abc import Callable
 from typing import Any, ClassVar
 
 import py_trees
@@ -17,6 +19,36 @@ DEFAULT_CONTROL_DT = 1.0 / 60.0
 #: Squeeze force per palm a grasp reaches and a move is composed with, unless the plan's hold
 #: skill asks for more, N.
 SQUEEZE_FORCE_N = 15.0
+#: What a leaf meeting an impossible value raises: a name the world does not have, a number
+#: out of range, nothing on a port. The leaf fails with it as its feedback, so the tree's
+#: fallbacks (and the run's verdict) see a failure instead of the run ending in a traceback.
+IMPOSSIBLE_VALUE_ERRORS: tuple[type[Exception], ...] = (
+    LookupError,
+    ValueError,
+    TypeError,
+    ArithmeticError,
+    NoDataAvailable,
+)
+
+
+def _failing_softly(hook: Callable[..., Any], name: str) -> Callable[..., Any]:
+    """``hook`` (a leaf's ``initialise`` or ``update``), failing the leaf on an impossible value."""
+
+    @functools.wraps(hook)
+    def guarded(self: WorldLeaf) -> Any:
+        if name == "update" and self._impossible is not None:
+            message, self._impossible = self._impossible, None
+            return self.fail(message)
+        try:
+            return hook(self)
+        except IMPOSSIBLE_VALUE_ERRORS as err:
+            message = f"cannot {name}: {type(err).__name__}: {err}"
+            if name == "update":
+                return self.fail(message)
+            self._impossible = message  # the tick's update reports it
+            return None
+
+    return guarded
 
 
 class WorldLeaf(BehaviourWithPorts):
@@ -34,8 +66,15 @@ class WorldLeaf(BehaviourWithPorts):
     #: The port's roles the leaf asks the world for (all of them unless a leaf says fewer).
     WORLD_ROLES: ClassVar[tuple[type, ...]] = (WorldPort,)
 
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        for hook in ("initialise", "update"):
+            if hook in cls.__dict__:
+                setattr(cls, hook, _failing_softly(cls.__dict__[hook], hook))
+
     def __init__(self, name: str, **kwargs: Any) -> None:
         super().__init__(name=name, **kwargs)
+        self._impossible: str | None = None
         self._world: WorldPort | None = None
         self._library: SkillLibrary | None = None
         self.control_dt = DEFAULT_CONTROL_DT

@@ -58,7 +58,8 @@ def read_demo_csv(path: str | os.PathLike[str]) -> DemoFile:
     p = Path(path)
     label = str(path)
     try:
-        text = p.read_text(encoding="utf-8")
+        # utf-8-sig: a spreadsheet's byte order mark is not part of the first column's name.
+        text = p.read_text(encoding="utf-8-sig")
     except FileNotFoundError:
         raise DemoFileError(
             f"{label}: expected a demonstration CSV file, got no such file"

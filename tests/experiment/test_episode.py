@@ -51,8 +51,9 @@ def test_an_obstacle_inside_the_robot_fails_the_run_on_fcl_clearance(tmp_path: P
     report = run_episode(load_world(world_file), out=None, animation=False)
     assert not report.success
     assert report.min_obstacle_distance_m < 0.0
-    assert report.failure.startswith("obstacle penetration: ")
-    assert "ball_right" in report.failure and "mm (FCL)" in report.failure
+    # The sphere is switched on inside the base: that is the reason given (issue 15, item 17);
+    # the penetration FCL measured after it is judged in tests/experiment/test_hostile_runs.py.
+    assert report.failure == "obstacle spawned inside a body: ball_right inside left_arm"
 
 
 def test_outputs_never_write_through_a_link_and_say_what_they_replaced(tmp_path: Path) -> None:

@@ -7,13 +7,15 @@ from pathlib import Path
 import pytest
 
 import tests.planner.stub_leaves  # noqa: F401  (registers the stub leaves)
+from planner.tree_dataflow import RUN_WRITES
 from planner.validate import TreeProblem, tree_cli_validate, validate_tree, validate_tree_string
 
 TREES = Path(__file__).resolve().parents[1] / "data" / "trees"
 
 
 def problems_of(text: str) -> list[tuple[int | None, str]]:
-    return [(p.line, p.message) for p in validate_tree_string(text, source="t.xml")]
+    problems = validate_tree_string(text, source="t.xml", run_keys=RUN_WRITES)
+    return [(p.line, p.message) for p in problems]
 
 
 def wrap(body: str, extra: str = "") -> str:
@@ -49,6 +51,11 @@ def test_good_trees_have_no_problems(name: str) -> None:
             [
                 (7, '<SubTree ID="Grap" name="g1">', "unknown subtree 'Grap'"),
                 (8, '<SubTree ID="Grip" name="g2">', "unknown port 'forse' of subtree 'Grip'"),
+                (
+                    3,
+                    '<StubGrasp name="grip">',
+                    "reads {force} (blackboard key /g2/force), which nothing writes",
+                ),
             ],
         ),
         ("bad_syntax.xml", [(5, "", "XML syntax error: mismatched tag")]),
@@ -63,7 +70,7 @@ def test_good_trees_have_no_problems(name: str) -> None:
     ],
 )
 def test_bad_trees(name: str, expected: list[tuple[int, str, str]]) -> None:
-    problems = validate_tree(TREES / name)
+    problems = validate_tree(TREES / name, run_keys=RUN_WRITES)
     assert [(p.line, p.node) for p in problems] == [(line, node) for line, node, _ in expected]
     for problem, (_, _, text) in zip(problems, expected, strict=True):
         assert text in problem.message
@@ -105,6 +112,9 @@ def test_ports_literals_keys_and_children() -> None:
         (5, "port 'position': cannot convert '0.1; 0.2; x' to list[float]"),
         (6, "a leaf takes no children, found 1"),
         (7, "name 'e.f': expected no '.' (py_trees joins parent names with '.')"),
+        (6, "port 'position' reads {pos} (blackboard key /pos), which nothing writes: expected "
+            "a node's output port, a SetBlackboard or a script to write it, or a key the run "
+            "sets before the first tick ({object} at the top level)"),
     ]  # fmt: skip
 
 
@@ -149,9 +159,9 @@ def test_duplicate_names_and_subtree_cycles() -> None:
     assert problems_of(text) == [
         (5, "duplicate node name 's.same' (also at line 4); py_trees needs unique names: rename "
             "one or name its parent"),
-        (12, "subtree cycle Loop -> Loop2 -> Loop; a tree cannot contain itself"),
         (8, "duplicate node name 's.twice.leaf' (also at line 13); py_trees needs unique names: "
             "rename one or name its parent"),
+        (12, "subtree cycle Loop -> Loop2 -> Loop; a tree cannot contain itself"),
     ]  # fmt: skip
 
 

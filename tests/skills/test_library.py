@@ -103,7 +103,10 @@ def test_save_replaces_atomically_and_refuses_foreign_folders(tmp_path: Path) ->
     other = tmp_path / "photos"
     other.mkdir()
     (other / "cat.jpg").write_bytes(b"x")
-    with pytest.raises(FileExistsError, match="not overwriting it"):
+    with pytest.raises(
+        LibraryFileError,
+        match=r"photos: expected a skill library folder .*got another folder: not overwriting it",
+    ):
         lib.save(other)
     assert (other / "cat.jpg").exists()
 
@@ -136,7 +139,7 @@ def _corrupt(tmp_path: Path, edit: object) -> Path:
         ),
         (
             lambda m: m["skills"][0]["params"].update(n_basis=7),
-            r"skills\[0\]: expected a consistent",
+            r"arrays.npz: pick_place/centres: expected shape \(7,\), got \(50,\)",
         ),
         (
             lambda m: m["skills"].append(m["skills"][0]),

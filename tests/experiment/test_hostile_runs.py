@@ -1,0 +1,92 @@
+"""Failure reasons that name their cause (issue 15, item 17)."""
+
+from __future__ import annotations
+
+import socket
+from pathlib import Path
+from types import SimpleNamespace
+from typing import Any
+
+import pytest
+from py_trees.common import Status
+
+from experiment.episode import judge
+from experiment.trials import TrialLayoutError, check_trial_layout
+from planner.runner import RunResult
+from worlds.bodies import x_display_reachable
+from worlds.sim_world import SafetyRecord, SimWorld
+from worlds.world_file import load_world, world_from_data
+
+DEFAULT = Path(__file__).resolve().parents[2] / "worlds" / "parcel_pick_place.yaml"
+
+
+def _world(edit: Any) -> Any:
+    world = load_world(DEFAULT)
+    data = world.model_dump(mode="json")
+    edit(data)
+    return world_from_data(data, world.source)
+
+
+def test_an_obstacle_spawned_inside_a_body_is_the_reason_not_what_it_caused() -> None:
+    safety = SafetyRecord(dropped=True, dropped_object="parcel")
+    safety.spawned_inside["ball_right"] = ["parcel"]
+    sim: Any = SimpleNamespace(safety=safety)
+    ok, failure = judge(
+        RunResult(Status.FAILURE, 3.0, 1.0, 180, "x"), sim, ["parcel"], [None], [None]
+    )
+    assert (ok, failure) == (False, "obstacle spawned inside a body: ball_right inside parcel")
+
+
+def test_a_negative_fcl_clearance_fails_the_run_when_nothing_spawned_inside() -> None:
+    safety = SafetyRecord(min_obstacle_distance_m=-0.04, closest="left_arm/base ~ ball_right")
+    sim: Any = SimpleNamespace(safety=safety)
+    ok, failure = judge(RunResult(Status.SUCCESS, 3.0, 1.0, 180, ""), sim, ["parcel"], [0.0], [0.0])
+    assert not ok
+    assert failure == "obstacle penetration: left_arm/base ~ ball_right overlap by 40.0 mm (FCL)"
+
+
+@pytest.mark.sim
+def test_switching_on_an_obstacle_inside_the_parcel_is_recorded() -> None:
+    def inside(data: dict[str, Any]) -> None:
+        data["obstacles"][0]["position"] = list(data["objects"][0]["pose"]["position"])
+
+    with SimWorld(_world(inside)) as sim:
+        sim.set_active_obstacles(["ball_left"])
+        assert sim.safety.spawned_inside == {}
+        sim.set_active_obstacles(["ball_right"])
+        assert sim.safety.spawned_inside == {"ball_right": ["parcel"]}
+
+
+@pytest.mark.sim
+def test_a_trials_layout_that_cannot_be_drawn_is_one_error() -> None:
+    def far(data: dict[str, Any]) -> None:
+        data["trials"]["clearance"] = 5.0
+
+    with pytest.raises(
+        TrialLayoutError,
+        match=r"w\.yaml: trials: expected a layout whose "
+        r"obstacles can be drawn, got none for trial 0 .*trials\.clearance \(5 m\)",
+    ):
+        check_trial_layout(_world(far), 0, "w.yaml")
+
+    def cylinder(data: dict[str, Any]) -> None:
+        data["objects"][0]["shape"] = {"type": "cylinder", "radius": 0.1, "height": 0.15}
+
+    with pytest.raises(
+        TrialLayoutError,
+        match=r"objects\[0\]\.shape: expected a box object "
+        r"for trials .*got a cylinder \('parcel'\)",
+    ):
+        check_trial_layout(_world(cylinder), 0, "w.yaml")
+    check_trial_layout(load_world(DEFAULT), 0, "w.yaml")
+
+
+def test_a_display_nothing_answers_at_is_not_reachable(tmp_path: Path) -> None:
+    assert not x_display_reachable(":987")
+    assert not x_display_reachable("nonsense")
+    with socket.socket() as server:
+        server.bind(("127.0.0.1", 0))
+        server.listen(1)
+        port = server.getsockname()[1]
+        if port >= 6000:
+            assert x_display_reachable(f"127.0.0.1:{port - 6000}")

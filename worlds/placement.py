@@ -1,0 +1,151 @@
+"""Where a world's bodies start: nothing sunk into the table, nothing inside anything else.
+
+A world file can put two objects in one place, an obstacle through an object, or the parcel
+half inside the table. PyBullet then pushes the bodies apart with a jolt on the first step
+(or, for a static obstacle, never: the object stays impaled), and the run fails for a reason
+that names neither. These checks find it from the numbers alone, before anything is built:
+
+- an object over the table whose bottom is more than :data:`SINK_TOLERANCE_M` below the top;
+- two objects interpenetrating at their start poses by more than :data:`OVERLAP_TOLERANCE_M`;
+- an obstacle of a move interpenetrating the moved object where that move starts (its
+  initial pose, or the previous move's goal), or any object at its start pose if the obstacle
+  is there from the first move.
+
+Shapes are compared exactly (FCL, :func:`worlds.collision.penetration_depth`), so objects
+standing side by side, or one stacked on another, pass.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Collection
+
+import numpy as np
+
+from worlds.collision import penetration_depth
+from worlds.spec import ObjectSpec, ObstacleSpec, WorldSpec
+from worlds.world_errors import WorldFileProblem
+
+#: How far below the table top an object's bottom may start, m (a millimetre of numerical
+#: slack; PyBullet resolves that without a jolt).
+SINK_TOLERANCE_M = 0.001
+#: How deep two bodies may interpenetrate at the start, m (touching is fine).
+OVERLAP_TOLERANCE_M = 0.002
+
+Quat = tuple[float, float, float, float]
+_UPRIGHT: Quat = (0.0, 0.0, 0.0, 1.0)
+
+
+def fmt(value: float) -> str:
+    """A length or angle for a message, to three significant figures."""
+    return f"{value:.3g}"
+
+
+def vec(values: tuple[float, ...] | np.ndarray) -> str:
+    """A vector for a message: ``[0.6, 0, 0.675]``."""
+    return "[" + ", ".join(fmt(float(v)) for v in values) + "]"
+
+
+def resting_half_height(obj: ObjectSpec, quaternion: Quat) -> float:
+    """Half the object's extent along world z when turned by ``quaternion``, m."""
+    x, y, z, w = quaternion
+    # Third row of the rotation matrix: how much of each body axis points up.
+    row = np.array([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)])
+    return 0.5 * float(np.abs(row) @ np.asarray(obj.shape.extents(), dtype=float))
+
+
+def start_problems(
+    spec: WorldSpec, bad_goals: Collection[tuple[int, int]] = ()
+) -> list[WorldFileProblem]:
+    """Every body that starts sunk into the table or inside another body.
+
+    Parameters
+    ----------
+    spec : WorldSpec
+    bad_goals : collection of (step, move) index pairs
+        Goals already reported (off the table, in the air): the move after one starts from
+        nowhere the object can be, so its obstacles are not checked against it.
+
+    Returns
+    -------
+    list of WorldFileProblem
+        Fields are paths in the world file (``objects[1].pose.position``).
+    """
+    problems: list[WorldFileProblem] = []
+    objects = spec.scene.objects
+    table = spec.scene.table
+    tx, ty, top = table.position
+    for k, obj in enumerate(objects):
+        x, y, z = obj.position
+        over = abs(x - tx) <= table.size[0] / 2.0 and abs(y - ty) <= table.size[1] / 2.0
+        half = resting_half_height(obj, obj.quaternion)
+        if over and z - half < top - SINK_TOLERANCE_M:
+            problems.append(
+                WorldFileProblem(
+                    f"objects[{k}].pose.position",
+                    f"z >= {fmt(top + half)} m, so {obj.name} stands on the table top "
+                    f"({fmt(top)} m + half its height {fmt(half)} m)",
+                    f"z = {fmt(z)} m: {fmt(top - (z - half))} m of it inside the table",
+                )
+            )
+    for k, obj in enumerate(objects):
+        for other in objects[:k]:
+            depth = _depth(obj, obj.position, obj.quaternion, other)
+            if depth > OVERLAP_TOLERANCE_M:
+                problems.append(
+                    WorldFileProblem(
+                        f"objects[{k}].pose.position",
+                        f"{obj.name} clear of {other.name} at the start",
+                        f"{vec(obj.position)}: {fmt(depth * 1000)} mm inside {other.name} "
+                        f"at {vec(other.position)}",
+                    )
+                )
+    obstacles = {o.name: (i, o) for i, o in enumerate(spec.scene.obstacles)}
+    by_name = {obj.name: obj for obj in objects}
+    for i, step in enumerate(spec.task):
+        obj = by_name[step.object]
+        position, quaternion = obj.position, obj.quaternion
+        for j, move in enumerate(step.moves):
+            at = "its start pose" if j == 0 else f"the goal of move {j - 1}, where move {j} starts"
+            for name in move.obstacles if (i, j - 1) not in bad_goals else ():
+                o, obstacle = obstacles[name]
+                depth = _obstacle_depth(obstacle, obj, position, quaternion)
+                if depth > OVERLAP_TOLERANCE_M:
+                    problems.append(
+                        WorldFileProblem(
+                            f"obstacles[{o}].position",
+                            f"{name} clear of {obj.name} at {at} (task[{i}].moves[{j}])",
+                            f"{vec(obstacle.position)}: {fmt(depth * 1000)} mm inside "
+                            f"{obj.name} at {vec(position)}",
+                        )
+                    )
+            position, quaternion = move.goal_position, move.goal_quaternion
+    return problems
+
+
+def _depth(
+    obj: ObjectSpec, position: tuple[float, float, float], quaternion: Quat, other: ObjectSpec
+) -> float:
+    return penetration_depth(
+        obj.shape, (position, quaternion), other.shape, (other.position, other.quaternion)
+    )
+
+
+def _obstacle_depth(
+    obstacle: ObstacleSpec,
+    obj: ObjectSpec,
+    position: tuple[float, float, float],
+    quaternion: Quat,
+) -> float:
+    return penetration_depth(
+        obstacle.shape, (obstacle.position, _UPRIGHT), obj.shape, (position, quaternion)
+    )
+
+
+__all__ = [
+    "OVERLAP_TOLERANCE_M",
+    "SINK_TOLERANCE_M",
+    "fmt",
+    "resting_half_height",
+    "start_problems",
+    "vec",
+]
