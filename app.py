@@ -70,8 +70,16 @@ def _demo_command(args: argparse.Namespace) -> int:
     fig.suptitle("Pose DMP learnt from one demonstration, generalised to new starts and goals")
     fig.tight_layout()
     path = out / "dmp_demo.png"
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    from planner.atomic_file import atomic_path
+
+    try:
+        with atomic_path(path) as temporary:
+            fig.savefig(temporary, dpi=120)
+    except OSError as err:
+        print(f"{path}: cannot write it: {err.strerror or err}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    finally:
+        plt.close(fig)
     errs = [
         float(np.linalg.norm(tr.positions[-1] - g))
         for tr, (_, g) in zip(rollouts, goals, strict=True)
@@ -202,7 +210,14 @@ def _nodes_command(args: argparse.Namespace) -> int:
         return EXIT_OK
     text = nodes_model_xml(packages=packages)
     if args.out:
-        Path(args.out).write_text(text, encoding="utf-8")
+        from planner.atomic_file import atomic_open
+
+        try:
+            with atomic_open(args.out) as handle:
+                handle.write(text)
+        except OSError as err:
+            print(f"--out {args.out}: cannot write it: {err.strerror or err}", file=sys.stderr)
+            return EXIT_BAD_INPUT
         print(f"wrote {args.out}")
     else:
         print(text)

@@ -303,11 +303,19 @@ class _Where:
         return RuleFileError(f"{where}: field {shown(field)}: {message}")
 
 
+#: Largest magnitude any number in a rule file may have: beyond what a mass, a size, a speed
+#: or a weight can mean (and a 400-digit integer would not even convert to a float).
+MAX_MAGNITUDE = 1e9
+
+
 def _number(value: Any, where: _Where, field: str) -> float:
     if isinstance(value, bool) or not isinstance(value, int | float):
         raise where.error(field, f"expected a number, got {shown(value)}")
-    if not math.isfinite(value):
-        raise where.error(field, f"expected a finite number, got {shown(value)}")
+    finite = abs(value) <= MAX_MAGNITUDE if isinstance(value, int) else math.isfinite(value)
+    if not finite or abs(float(value)) > MAX_MAGNITUDE:
+        raise where.error(
+            field, f"expected a finite number within +-{MAX_MAGNITUDE:g}, got {shown(value)}"
+        )
     return float(value)
 
 

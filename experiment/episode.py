@@ -22,6 +22,7 @@ from py_trees.common import Status
 
 import planner.leaves  # noqa: F401  (registers the leaves for the XML loader)
 from experiment.figures import Animation, MoveTrace, demonstrated_path, trajectory_figure
+from planner.atomic_file import atomic_open, stale_temporaries
 from planner.btlog import BtLog
 from planner.default_tree import TaskStep, default_tree
 from planner.loader import load_tree
@@ -316,6 +317,8 @@ def clear_outputs(out: Path) -> list[str]:
     output would overwrite whatever it points at, outside ``out``."""
     removed = []
     for name in OUTPUT_NAMES:
+        for stale in stale_temporaries(out, name):  # a killed run's, never renamed into place
+            stale.unlink()
         path = out / name
         if path.is_symlink() or path.is_file():
             path.unlink()
@@ -465,7 +468,10 @@ def run_episode(
         report.replaced_outputs = replaced
         report.physics_wall_s = sim.scene.physics_wall_s
         if out is not None:
-            report.outputs["run_log"] = str(out / "run.jsonl")
+            if log is not None and log.error is not None:
+                report.output_errors.append(log.error)
+            else:
+                report.outputs["run_log"] = str(out / "run.jsonl")
             report.outputs["groot_log"] = str(out / "run.btlog")
             title = f"{world.name}: {'success' if ok else 'failure: ' + failure}"
             # The verdict is made: a figure that cannot be written costs that figure alone.
@@ -483,7 +489,8 @@ def run_episode(
                 except OSError as err:
                     report.output_errors.append(f"{out / 'animation.gif'}: {err.strerror or err}")
             try:
-                (out / "tree.svg").write_text(render_tree(root, "svg"), encoding="utf-8")
+                with atomic_open(out / "tree.svg") as handle:
+                    handle.write(render_tree(root, "svg"))
                 report.outputs["tree"] = str(out / "tree.svg")
             except OSError as err:
                 report.output_errors.append(f"{out / 'tree.svg'}: {err.strerror or err}")

@@ -21,6 +21,7 @@ import pybullet as pb
 from numpy.typing import ArrayLike
 from scipy.spatial import ConvexHull
 
+from planner.atomic_file import atomic_path
 from skills import quaternion as quat
 from skills.pose_dmp import pose_rollout
 from skills.skill import Skill, SkillKind
@@ -302,8 +303,11 @@ def trajectory_figure(traces: Sequence[MoveTrace], path: Path, title: str) -> Pa
     fig.suptitle(title)
     fig.tight_layout(rect=(0.0, 0.05 / rows, 1.0, 1.0))
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    try:
+        with atomic_path(path) as temporary:  # never half a figure under its name
+            fig.savefig(temporary, dpi=110)
+    finally:
+        plt.close(fig)
     return path
 
 
@@ -396,12 +400,14 @@ class Animation:
 
         images = [Image.fromarray(f) for f in self.frames]
         path.parent.mkdir(parents=True, exist_ok=True)
-        images[0].save(
-            path,
-            save_all=True,
-            append_images=images[1:],
-            duration=int(self.period * 1000),
-            loop=0,
-            optimize=True,
-        )
+        with atomic_path(path) as temporary:
+            images[0].save(
+                temporary,
+                format="GIF",
+                save_all=True,
+                append_images=images[1:],
+                duration=int(self.period * 1000),
+                loop=0,
+                optimize=True,
+            )
         return path

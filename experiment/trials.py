@@ -684,9 +684,19 @@ def _run_locked(
 
         def keep(rec: dict[str, Any]) -> None:
             nonlocal finished
-            fh.write(json.dumps(rec) + "\n")
-            fh.flush()
-            os.fsync(fh.fileno())
+            try:
+                fh.write(json.dumps(rec) + "\n")
+                fh.flush()
+                os.fsync(fh.fileno())
+            except OSError as err:  # a full disk: the trials before this one are kept whole
+                try:
+                    fh.close()  # its buffer cannot be written either; do not try again
+                except OSError:
+                    pass
+                raise ResultsFileError(
+                    f"{results}: cannot append trial {rec['trial']}: {err.strerror or err} "
+                    "(the trials recorded before it are kept; run again to resume)"
+                ) from None
             done[int(rec["trial"])] = rec
             finished += 1
             if on_result is not None:

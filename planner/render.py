@@ -17,6 +17,7 @@ import py_trees
 from py_trees.common import Status
 from py_trees.ports_utils import get_base_name
 
+from planner.atomic_file import atomic_open
 from planner.loader import TreeFileError, load_tree
 
 __all__ = ["FORMATS", "node_kind", "node_type", "render_cli", "render_tree", "short_name"]
@@ -269,7 +270,7 @@ def render_cli(
         sys.stdout.write(text)
     else:
         try:
-            with open(out, "w", encoding="utf-8") as handle:
+            with atomic_open(out) as handle:
                 handle.write(text)
         except OSError as exc:
             print(f"{out}: cannot write: {exc.strerror}", file=sys.stderr)

@@ -29,6 +29,7 @@ import time
 import uuid
 from collections import Counter
 from collections.abc import Callable
+from pathlib import Path
 from types import TracebackType
 from typing import IO, Any
 
@@ -37,6 +38,7 @@ import py_trees
 from py_trees.blackboard import ActivityType, Blackboard
 from py_trees.common import Status
 
+from planner.atomic_file import commit, temporary_beside
 from planner.render import node_kind, node_type
 
 __all__ = ["RunLog", "StatusListener", "json_safe", "node_labels"]
@@ -182,7 +184,18 @@ class RunLog:
         parent = os.path.dirname(self.path)
         if parent:
             os.makedirs(parent, exist_ok=True)
-        self._file: IO[str] | None = open(self.path, "w", encoding="utf-8", buffering=1)
+        #: Why the log could not be written (a full disk), or None; the run goes on without it.
+        self.error: str | None = None
+        # Written beside the final name and renamed over it on close: a run killed midway,
+        # or a disk that fills up, never leaves half a log named run.jsonl.
+        self._temporary = temporary_beside(Path(self.path))
+        self._file: IO[str] | None = open(self._temporary, "w", encoding="utf-8", buffering=1)
+
+    @property
+    def writing_path(self) -> Path:
+        """Where the log is being written until :meth:`close` renames it to ``path`` (each
+        tick is flushed there, to follow a run live)."""
+        return Path(self._temporary)
 
     # -- wiring -----------------------------------------------------------------------
     def attach(self, tree: py_trees.trees.BehaviourTree) -> RunLog:
@@ -217,9 +230,14 @@ class RunLog:
         """Write one record (a JSON-safe dict) as a line; ``t`` and ``tick`` are added first."""
         if self._file is None:
             raise RuntimeError(f"RunLog {self.path}: closed; expected an open log")
+        if self.error is not None:
+            return  # the disk refused an earlier line: the log is abandoned
         line = {"t": json_safe(float(self.clock()), self.decimals), "tick": self.tick_count}
         line.update(record)
-        self._file.write(json.dumps(line, allow_nan=False) + "\n")
+        try:
+            self._file.write(json.dumps(line, allow_nan=False) + "\n")
+        except OSError as err:
+            self._abandon(err)
 
     def record_tick(self, root: py_trees.behaviour.Behaviour) -> None:
         """Log the status changes and blackboard writes since the last tick, then flush.
@@ -258,8 +276,21 @@ class RunLog:
                     listener(node, before, node.status)
             self._statuses[node_id] = node.status
         self._drain_blackboard()
+        if self._file is not None and self.error is None:
+            try:
+                self._file.flush()
+            except OSError as err:
+                self._abandon(err)
+
+    def _abandon(self, err: OSError) -> None:
+        """Stop logging after a write failed: the partial log is removed, never committed."""
+        self.error = f"{self.path}: {err.strerror or err}"
         if self._file is not None:
-            self._file.flush()
+            try:
+                self._file.close()
+            except OSError:
+                pass  # the buffered rest cannot be written either
+        Path(self._temporary).unlink(missing_ok=True)
 
     def add_status_listener(self, listener: StatusListener) -> None:
         """Call ``listener(node, before, after)`` for every status change logged, in log order
@@ -329,7 +360,12 @@ class RunLog:
             Blackboard.disable_activity_stream()
             self._enabled_stream = False
         if self._file is not None:
-            self._file.close()
+            if self.error is None:
+                try:
+                    self._file.close()
+                    commit(self._temporary, Path(self.path))
+                except OSError as err:
+                    self._abandon(err)
             self._file = None
 
     def __enter__(self) -> RunLog:

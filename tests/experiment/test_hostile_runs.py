@@ -90,3 +90,37 @@ def test_a_display_nothing_answers_at_is_not_reachable(tmp_path: Path) -> None:
         port = server.getsockname()[1]
         if port >= 6000:
             assert x_display_reachable(f"127.0.0.1:{port - 6000}")
+
+
+@pytest.mark.sim
+def test_a_full_disk_during_a_campaign_is_exit_2_keeping_the_trials_before(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import errno
+    import os
+
+    import app
+    import experiment.trials as trials
+
+    def quick(job: tuple[dict[str, Any], int, int]) -> dict[str, Any]:
+        return {"trial": job[2], "seed": job[1], "tree": "", "success": True, "failure": ""}
+
+    writes = {"n": 0}
+    real_fsync = os.fsync
+
+    def fsync(fd: int) -> None:
+        writes["n"] += 1
+        if writes["n"] > 1:
+            raise OSError(errno.ENOSPC, "No space left on device")
+        real_fsync(fd)
+
+    monkeypatch.setattr(trials, "run_trial", quick)
+    monkeypatch.setattr(os, "fsync", fsync)
+    out = tmp_path / "campaign"
+    code = app.main(["trials", str(DEFAULT), "--n", "3", "--workers", "1", "--out", str(out)])
+    assert code == 2
+    err = capsys.readouterr().err
+    assert "results.jsonl: cannot append trial 1: No space left on device" in err
+    monkeypatch.setattr(os, "fsync", real_fsync)
+    lines = (out / "results.jsonl").read_text(encoding="utf-8").splitlines()
+    assert '"trial": 0' in lines[0]

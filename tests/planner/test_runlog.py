@@ -50,9 +50,13 @@ def test_status_changes_and_writes_per_tick(tmp_path: Path) -> None:
         for _ in range(3):
             tree.tick()
             clock.advance()
-        flushed = read(path)  # readable before close: flushed per tick
+        # Readable before close, beside the final name (flushed per tick); renamed to it on
+        # close, so run.jsonl is never half a log (issue 15, item 13).
+        assert not path.exists()
+        flushed = read(log.writing_path)
     records = read(path)
     assert flushed == records
+    assert sorted(p.name for p in path.parent.iterdir()) == ["run.jsonl"]
     status = [
         (r["tick"], r["t"], r["node"], r["kind"], r["type"], r["from"], r["to"])
         for r in records
