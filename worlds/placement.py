@@ -7,9 +7,9 @@ that names neither. These checks find it from the numbers alone, before anything
 
 - an object over the table whose bottom is more than :data:`SINK_TOLERANCE_M` below the top;
 - two objects interpenetrating at their start poses by more than :data:`OVERLAP_TOLERANCE_M`;
-- an obstacle of a move interpenetrating the moved object where that move starts (its
-  initial pose, or the previous move's goal), or any object at its start pose if the obstacle
-  is there from the first move.
+- an obstacle of a move interpenetrating any object where it stands when that move starts:
+  the moved object at its start or its previous goal, the others at their start poses or
+  where their own moves left them.
 
 Shapes are compared exactly (FCL, :func:`worlds.collision.penetration_depth`), so objects
 standing side by side, or one stacked on another, pass.
@@ -32,6 +32,7 @@ SINK_TOLERANCE_M = 0.001
 OVERLAP_TOLERANCE_M = 0.002
 
 Quat = tuple[float, float, float, float]
+Vec3 = tuple[float, float, float]
 _UPRIGHT: Quat = (0.0, 0.0, 0.0, 1.0)
 
 
@@ -62,8 +63,8 @@ def start_problems(
     ----------
     spec : WorldSpec
     bad_goals : collection of (step, move) index pairs
-        Goals already reported (off the table, in the air): the move after one starts from
-        nowhere the object can be, so its obstacles are not checked against it.
+        Goals already reported (off the table, in the air): after one, the object is nowhere
+        it can be, so no obstacle is checked against it.
 
     Returns
     -------
@@ -101,24 +102,36 @@ def start_problems(
                 )
     obstacles = {o.name: (i, o) for i, o in enumerate(spec.scene.obstacles)}
     by_name = {obj.name: obj for obj in objects}
+    # Where each object is as the task goes on: its start pose until its moves, then the
+    # goal of its last move (a goal already reported off the table: no longer known).
+    poses: dict[str, tuple[Vec3, Quat] | None] = {
+        obj.name: (obj.position, obj.quaternion) for obj in objects
+    }
     for i, step in enumerate(spec.task):
-        obj = by_name[step.object]
-        position, quaternion = obj.position, obj.quaternion
         for j, move in enumerate(step.moves):
-            at = "its start pose" if j == 0 else f"the goal of move {j - 1}, where move {j} starts"
-            for name in move.obstacles if (i, j - 1) not in bad_goals else ():
+            for name in move.obstacles:
                 o, obstacle = obstacles[name]
-                depth = _obstacle_depth(obstacle, obj, position, quaternion)
-                if depth > OVERLAP_TOLERANCE_M:
-                    problems.append(
-                        WorldFileProblem(
-                            f"obstacles[{o}].position",
-                            f"{name} clear of {obj.name} at {at} (task[{i}].moves[{j}])",
-                            f"{vec(obstacle.position)}: {fmt(depth * 1000)} mm inside "
-                            f"{obj.name} at {vec(position)}",
+                for body, pose in poses.items():
+                    if pose is None:
+                        continue
+                    depth = _obstacle_depth(obstacle, by_name[body], *pose)
+                    if depth > OVERLAP_TOLERANCE_M:
+                        moved = body == step.object
+                        at = (
+                            ("at its start pose" if j == 0 else f"at the goal of move {j - 1}")
+                            if moved
+                            else "where it stands"
                         )
-                    )
-            position, quaternion = move.goal_position, move.goal_quaternion
+                        problems.append(
+                            WorldFileProblem(
+                                f"obstacles[{o}].position",
+                                f"{name} clear of {body} {at} when task[{i}].moves[{j}] starts",
+                                f"{vec(obstacle.position)}: {fmt(depth * 1000)} mm inside "
+                                f"{body} at {vec(pose[0])}",
+                            )
+                        )
+            good = (i, j) not in bad_goals
+            poses[step.object] = (move.goal_position, move.goal_quaternion) if good else None
     return problems
 
 

@@ -1,0 +1,80 @@
+"""Bodies that start sunk into the table or inside each other (issue 15, item 19)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from worlds.placement import start_problems
+from worlds.world_file import load_world, world_from_data, world_spec
+
+ROOT = Path(__file__).resolve().parents[2]
+DEFAULT = ROOT / "worlds" / "parcel_pick_place.yaml"
+TWO = ROOT / "tests" / "data" / "worlds" / "two_parcels.yaml"
+
+
+def problems(path: Path, edit: Callable[[dict[str, Any]], None]) -> list[tuple[str | None, str]]:
+    world = load_world(path)
+    data = world.model_dump(mode="json")
+    edit(data)
+    spec = world_spec(world_from_data(data, world.source))
+    return [(p.field, f"expected {p.expected}, got {p.received}") for p in start_problems(spec)]
+
+
+def test_the_shipped_worlds_start_clear() -> None:
+    assert problems(DEFAULT, lambda d: None) == []
+    assert problems(TWO, lambda d: None) == []
+
+
+def test_a_parcel_sunk_into_the_table() -> None:
+    def sink(d: dict[str, Any]) -> None:
+        d["objects"][0]["pose"]["position"][2] = 0.65
+
+    assert problems(DEFAULT, sink) == [
+        ("objects[0].pose.position",
+         "expected z >= 0.675 m, so parcel stands on the table top (0.6 m + half its height "
+         "0.075 m), got z = 0.65 m: 0.025 m of it inside the table"),
+    ]  # fmt: skip
+
+
+def test_a_parcel_turned_on_its_side_rests_higher() -> None:
+    def turn(d: dict[str, Any]) -> None:
+        d["objects"][0]["pose"]["rpy_deg"] = [90.0, 0.0, 0.0]  # its 0.3 m side now upright
+
+    ((field, message),) = problems(DEFAULT, turn)
+    assert field == "objects[0].pose.position"
+    assert message.startswith("expected z >= 0.75 m")
+
+
+@pytest.mark.parametrize(("dx", "clear"), [(0.20, True), (0.19, False)])
+def test_two_objects_side_by_side_pass_and_overlapping_do_not(dx: float, clear: bool) -> None:
+    def twin(d: dict[str, Any]) -> None:
+        other = dict(d["objects"][0], name="twin")
+        other["pose"] = dict(other["pose"], position=[0.55 + dx, 0.0, 0.675])
+        d["objects"].append(other)
+
+    found = problems(DEFAULT, twin)
+    assert found == [] if clear else found[0][0] == "objects[1].pose.position"
+    if not clear:
+        assert (
+            "expected twin clear of parcel at the start, got [0.74, 0, 0.675]: 10 mm"
+            in (found[0][1])
+        )
+
+
+def test_an_obstacle_in_the_way_of_any_object_when_its_move_starts() -> None:
+    def post_on_the_right_parcel(d: dict[str, Any]) -> None:
+        d["obstacles"][0]["position"] = [0.72, -0.22, 0.70]
+        d["task"][0]["moves"][0]["obstacles"] = ["post"]
+        for move in d["task"][1]["moves"]:
+            move["obstacles"] = []
+
+    (found,) = problems(TWO, post_on_the_right_parcel)
+    assert found == (
+        "obstacles[0].position",
+        "expected post clear of parcel_right where it stands when task[0].moves[0] starts, "
+        "got [0.72, -0.22, 0.7]: 130 mm inside parcel_right at [0.72, -0.22, 0.675]",
+    )
