@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import errno
 import json
+import tempfile
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -218,3 +219,40 @@ def test_fuzzed_arrays_and_parameters_load_or_raise_library_file_error(
     # Whatever passes is usable: a model builds and its numbers are finite.
     model = model_from_data(params, arrays)
     assert np.all(np.isfinite(model.position.forcing.weights))
+
+
+_ARRAYS = st.one_of(
+    st.lists(st.floats(allow_nan=True, allow_infinity=True, width=64), max_size=200).map(
+        np.array
+    ),
+    st.sampled_from(
+        [np.zeros((0,)), np.zeros((50, 3, 1)), np.array(["x"]), np.array([True] * 50),
+         np.full(50, 1e300), np.arange(150).reshape(50, 3)]
+    ),
+)  # fmt: skip
+
+
+@settings(
+    max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+@given(
+    key=st.sampled_from([f"pick_place/{k}" for k in _ARRAY_KEYS] + ["hold/reference_object"]),
+    value=_ARRAYS,
+)
+def test_fuzzed_library_files_load_or_raise_library_file_error(
+    saved: Path, key: str, value: Any
+) -> None:
+    """An arrays.npz holding anything under a skill's key: a library, or one clear error."""
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp) / "lib"
+        folder.mkdir()
+        for f in saved.iterdir():
+            (folder / f.name).write_bytes(f.read_bytes())
+        _edit_array(folder, key, value)
+        try:
+            lib = SkillLibrary.load(folder)
+        except LibraryFileError as err:
+            assert "arrays.npz" in str(err) and "expected" in str(err)
+            return
+        for skill in lib:
+            assert all(np.all(np.isfinite(a)) for a in skill.arrays.values())
