@@ -504,6 +504,10 @@ def _run_command(args: argparse.Namespace) -> int:
         print(f"not written: {problem}", file=sys.stderr)
     if args.json:
         print(json.dumps(s))
+    if report.output_errors:
+        # The verdict is out; an output the run could not write (a full disk, a read-only
+        # file) is still an input/output error the caller must see.
+        return EXIT_BAD_INPUT
     return EXIT_OK if report.success else EXIT_FAILURE
 
 

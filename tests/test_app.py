@@ -101,3 +101,24 @@ def test_out_naming_a_file_and_absurd_campaigns_are_one_line_and_exit_2(
     assert exit_code(["trials", DEFAULT, "--n", str(10**12), "--out", str(tmp_path / "t")]) == 2
     assert "--n, --workers: expected whole numbers 1..1000000" in capsys.readouterr().err
     assert a_file.read_text(encoding="utf-8") == "not a folder"  # nothing lost
+
+
+@pytest.mark.sim
+def test_a_run_whose_figure_cannot_be_written_prints_its_verdict_then_exits_2(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import errno
+
+    import experiment.episode
+
+    def full_disk(*args: object, **kwargs: object) -> Path:
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(experiment.episode, "trajectory_figure", full_disk)
+    code = exit_code(["run", DEFAULT, "--no-animation", "--out", str(tmp_path), "--json"])
+    out, err = capsys.readouterr()
+    assert code == app.EXIT_BAD_INPUT
+    assert "trajectories.png: No space left on device" in err and "not written" in err
+    summary = json.loads(out.splitlines()[-1])  # the verdict and the summary came first
+    assert summary["success"] is True
+    assert (tmp_path / "run.jsonl").is_file()
