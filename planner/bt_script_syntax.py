@@ -15,7 +15,21 @@ INT64_MIN = -(2**63)
 INT64_MAX = 2**63 - 1
 
 
-class ScriptError(ValueError):
+class _AtColumn(Exception):
+    """What both script errors carry: the script, the 1-based column and the reason."""
+
+    def __init__(self, source: str, column: int, reason: str) -> None:
+        super().__init__(f"column {column}: {reason}")
+        self.source = source
+        self.column = column
+        self.reason = reason
+
+    def __reduce__(self) -> tuple[Any, tuple[str, int, str]]:
+        # picklable for worker processes: the default would call __init__(message)
+        return (type(self), (self.source, self.column, self.reason))
+
+
+class ScriptError(_AtColumn, ValueError):
     """A script that does not parse.
 
     Attributes
@@ -28,31 +42,11 @@ class ScriptError(ValueError):
         What is wrong and what was expected.
     """
 
-    def __init__(self, source: str, column: int, reason: str) -> None:
-        super().__init__(f"column {column}: {reason}")
-        self.source = source
-        self.column = column
-        self.reason = reason
 
-    def __reduce__(self) -> tuple[Any, tuple[str, int, str]]:
-        # picklable for worker processes: the default would call __init__(message)
-        return (type(self), (self.source, self.column, self.reason))
-
-
-class ScriptRuntimeError(RuntimeError):
+class ScriptRuntimeError(_AtColumn, RuntimeError):
     """A script that parsed but cannot run on these values: an undefined key, ``=`` on a
     missing entry, operands of the wrong type, an overflow. Same attributes as
     :class:`ScriptError`; ``column`` points at the operator or the key."""
-
-    def __init__(self, source: str, column: int, reason: str) -> None:
-        super().__init__(f"column {column}: {reason}")
-        self.source = source
-        self.column = column
-        self.reason = reason
-
-    def __reduce__(self) -> tuple[Any, tuple[str, int, str]]:
-        # picklable for worker processes: the default would call __init__(message)
-        return (type(self), (self.source, self.column, self.reason))
 
 
 # ---------------------------------------------------------------------------------------------

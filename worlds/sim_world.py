@@ -391,11 +391,9 @@ class SimWorld:
         )
         # The forearms are predicted by carrying them rigidly with the palms, which misses the
         # elbow's swing: they get extra clearance so that a doubtful path is not trusted.
+        doubt = forearm_doubt(palm_positions, palm_orientations)
         arms = self.collision.check_attached_links(
-            palm_positions,
-            palm_orientations,
-            4,
-            margin_m + forearm_doubt(palm_positions, palm_orientations),
+            palm_positions, palm_orientations, 4, margin_m + doubt
         )
         pts = np.concatenate((object_positions, palm_positions.reshape(-1, 3)))
         d, _ = self.collision.query(pts)
@@ -404,8 +402,7 @@ class SimWorld:
         what = "clear"
         if first is not None:
             if arms[first] and not check.collides[first]:
-                doubt = forearm_doubt(palm_positions, palm_orientations)[first]
-                what = f"a forearm within {margin_m + doubt:.3f} m"
+                what = f"a forearm within {margin_m + doubt[first]:.3f} m"
             else:
                 what = f"palm or object within {margin_m:g} m"
             what += f" at step {first}"

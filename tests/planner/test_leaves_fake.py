@@ -435,10 +435,14 @@ class LeaningWorld(FakeWorld):
         return force
 
 
-def test_release_opens_further_when_the_object_leans_on_a_palm(library: SkillLibrary) -> None:
+def _release_on_leaning(
+    library: SkillLibrary, lean_m: float, max_ticks: int
+) -> tuple[Status, Release, LeaningWorld]:
+    """Grasp, then release in a world whose object leans on the left palm for ``lean_m``."""
     world = LeaningWorld(
         objects=[FakeObject("parcel", np.array([0.20, 0.30, 0.15]))], moves=paper_moves()
     )
+    world.lean_m = lean_m
     select(world, library)
     approach_and_grasp(world, library)
     world.found = world.palm_pose(Arm.LEFT).position.copy()
@@ -450,29 +454,21 @@ def test_release_opens_further_when_the_object_leans_on_a_palm(library: SkillLib
         from_state="{state}",
         to_state="{state}",
     )
-    log = tick_until(leaf, world, DT, max_ticks=2000)
-    assert log.final == Status.SUCCESS, log.feedback
+    log = tick_until(leaf, world, DT, max_ticks=max_ticks)
+    assert isinstance(leaf, Release)
+    return log.final, leaf, world
+
+
+def test_release_opens_further_when_the_object_leans_on_a_palm(library: SkillLibrary) -> None:
+    final, leaf, world = _release_on_leaning(library, 0.08, 2000)
+    assert final == Status.SUCCESS, leaf.feedback_message
     # One opening of 5 cm leaves the palm pressed; the release opened again and cleared it.
     assert leaf.reopenings == 1
+    assert world.found is not None
     assert np.linalg.norm(world.palm_pose(Arm.LEFT).position - world.found) > world.lean_m
     # An object that never lets go ends the release's retries without a success.
-    world = LeaningWorld(
-        objects=[FakeObject("parcel", np.array([0.20, 0.30, 0.15]))], moves=paper_moves()
-    )
-    world.lean_m = 10.0
-    select(world, library)
-    approach_and_grasp(world, library)
-    world.found = world.palm_pose(Arm.LEFT).position.copy()
-    leaf = ready(
-        Release("release"),
-        world,
-        library,
-        object="parcel",
-        from_state="{state}",
-        to_state="{state}",
-    )
-    log = tick_until(leaf, world, DT, max_ticks=1500)
-    assert log.final == Status.RUNNING
+    final, leaf, world = _release_on_leaning(library, 10.0, 1500)
+    assert final == Status.RUNNING
     assert leaf.reopenings == MAX_REOPENINGS
     assert "2.0 N" in leaf.feedback_message
 
