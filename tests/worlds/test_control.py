@@ -378,3 +378,31 @@ def test_relinearising_on_joint_motion_keeps_a_long_move_accurate() -> None:
     assert errors[0.01] < 0.002
     # Never re-linearised, the 20 cm move ends off target: the tolerance is what fixes it.
     assert errors[0.0] > 5 * errors[0.01]
+
+
+@pytest.mark.sim
+@pytest.mark.parametrize("degrees_from_limit", [5.0, 8.0])
+def test_a_wrist_near_its_limit_does_not_turn_the_palm(degrees_from_limit: float) -> None:
+    # A turned grip holds the left wrist (joint 6) a few degrees from its limit. The joint-limit
+    # repulsion acts on the joint, so within its band it turns the palm off its command: with a
+    # 0.15 rad band, 2.9 degrees at 5 degrees from the limit, unloaded (and 6-8 under a squeeze,
+    # enough to roll a held box out of the palms).
+    with Scene(SceneSpec(objects=())) as scene:
+        spec = scene.robot.arms[Arm.LEFT]
+        body, client = scene.robot_ids[spec.body], scene.client
+        q = np.radians([-12.0, 89.0, -1.0, -18.0, 106.0, 0.0, -62.0])
+        q[5] = spec.lower[5] + np.radians(degrees_from_limit)
+        for joint, value in zip(spec.joint_indices, q, strict=True):
+            pb.resetJointState(body, joint, float(value), 0.0, physicsClientId=client)
+        link = pb.getLinkState(
+            body, spec.palm_link, computeForwardKinematics=1, physicsClientId=client
+        )
+        position, quaternion = np.array(link[4]), np.array(link[5])
+        scene.controller.set_rest_posture(Arm.LEFT, q)
+        scene.controller.set_command(Arm.LEFT, PalmCommand(position, quaternion))
+        scene.controller.refresh()
+        scene.step(240)
+        state = scene.palm_state(Arm.LEFT)
+        turned = np.linalg.norm(quat.rotation_error(quaternion, state.quaternion))
+        assert np.degrees(turned) < 0.2
+        assert np.linalg.norm(state.position - position) < 5e-4
