@@ -129,6 +129,9 @@ def _node_uses(
     outputs: set[str] = set()
     if cls is not None and issubclass(cls, PortsMixin):
         inputs, outputs = set(cls.input_ports()), set(cls.output_ports())
+    # A port that watches whether a key is written (WasEntryUpdated) reads no value: a key
+    # nothing writes is its answer, not a crash.
+    watched = set(getattr(cls, "WATCHED_PORTS", ()))
     # A node of no known type reads nothing we can tell (its tag is reported apart); a
     # py_trees decorator reads the keys given to its parameters.
     reads = ports or elem.tag in _DECORATORS
@@ -155,7 +158,7 @@ def _node_uses(
                 uses.append(PortUse(elem, attr, "read", value, Binding(None, value, elem)))
             continue
         direction: Literal["read", "write"] = "write" if attr in outputs else "read"
-        if direction == "read" and not reads:
+        if direction == "read" and (not reads or attr in watched):
             continue
         uses.append(PortUse(elem, attr, direction, name, _resolve(name, ns, remap)))
     return uses

@@ -15,6 +15,7 @@ from py_trees.parsers.behaviour_tree_xml import DECORATOR_NODES
 from py_trees.ports import get_ports_registry
 
 from planner.bt_script import Script
+from planner.bt_updated import BUILTIN_UPDATED
 from planner.tree_ports import Registry, builtin_nodes
 from planner.tree_problems import TreeFileError, TreeProblem
 from planner.tree_syntax import (
@@ -317,6 +318,14 @@ def _inline_includes(
             root.append(bt)
 
 
+#: Built-in nodes whose port names a key, which BT.CPP lets a tree write bare (``key="x"``).
+_BARE_KEY_PORTS = {
+    "SetBlackboard": "output_key",
+    "UnsetBlackboard": "key",
+    **dict.fromkeys(BUILTIN_UPDATED, "entry"),
+}
+
+
 def _drop_attribute(elem: ET.Element, old: str) -> str | None:
     return elem.attrib.pop(old, None)
 
@@ -344,8 +353,9 @@ def _translate(elem: ET.Element, registry: Registry, problems: list[TreeProblem]
             continue
         problem(underscore_problem(key))
     translate_script_node(elem, problem)
-    if elem.tag in ("SetBlackboard", "UnsetBlackboard"):
-        port = "output_key" if elem.tag == "SetBlackboard" else "key"
+    explicit = elem.tag in ("Action", "Condition", "Control", "Decorator")
+    port = _BARE_KEY_PORTS.get(elem.attrib.get("ID", "") if explicit else elem.tag)
+    if port is not None:
         named = elem.attrib.get(port)
         if named is not None and not named.startswith("{"):
             elem.attrib[port] = "{" + named + "}"  # BT.CPP names the key bare
