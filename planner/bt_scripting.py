@@ -4,6 +4,7 @@ pre/post-condition attributes every node may carry, run with :mod:`planner.bt_sc
 Keys in a script name entries of the node's blackboard namespace (``x`` in the main tree is
 ``/x``, in a subtree named ``sub`` it is ``/sub/x``); ``@x`` is always the root's ``/x``.
 A script that fails at run time makes the node FAILURE, the reason in ``feedback_message``.
+Enum names registered by the host (:mod:`planner.script_enums`) read as their integers.
 
 Conditions (BT.CPP ``TreeNode::executeTick``): before a tick of a node that is not RUNNING,
 ``_failureIf`` (true: FAILURE), ``_successIf`` (SUCCESS), ``_skipIf`` (SKIPPED) and
@@ -27,6 +28,7 @@ from py_trees.ports import PortInformation
 from planner.bt_decorators import skipped_status
 from planner.bt_leaves import StringPorts
 from planner.bt_script import Script, ScriptRuntimeError, parse_script, truthy
+from planner.script_enums import script_enum
 
 __all__ = ["BUILTIN_SCRIPT_NODES", "BlackboardEnv", "install_conditions"]
 
@@ -55,7 +57,7 @@ class BlackboardEnv:
         return Blackboard.exists(self.key(key))
 
     def enum(self, name: str) -> int | None:
-        return None
+        return script_enum(name)
 
 
 def run_script(script: Script, namespace: str) -> tuple[Any, str]:
