@@ -318,6 +318,9 @@ def _inline_includes(
             root.append(bt)
 
 
+#: BT.CPP's spellings of a boolean attribute (``convertFromString<bool>``).
+_TRUE = frozenset({"true", "True", "TRUE", "1"})
+_FALSE = frozenset({"false", "False", "FALSE", "0"})
 #: Built-in nodes whose port names a key, which BT.CPP lets a tree write bare (``key="x"``).
 _BARE_KEY_PORTS = {
     "SetBlackboard": "output_key",
@@ -341,9 +344,9 @@ def _translate(elem: ET.Element, registry: Registry, problems: list[TreeProblem]
         return
     for key in [k for k in elem.attrib if k.startswith("_")]:
         value = elem.attrib.pop(key)
-        if key in _IGNORED_ATTRIBUTES or (key == "_autoremap" and value.lower() == "false"):
+        if key in _IGNORED_ATTRIBUTES or (key == "_autoremap" and value.strip() in _FALSE):
             continue
-        if key == "_autoremap" and value.strip().lower() == "true":
+        if key == "_autoremap" and value.strip() in _TRUE:
             elem.autoremap = True  # expanded by planner.tree_syntax
             continue
         if key in CONDITION_ATTRIBUTES:
