@@ -131,3 +131,31 @@ def test_autoremap_and_a_model_port_cover_keys_only_scripts_use() -> None:
     root.tick_once()
     assert root.status == S
     assert py_trees.blackboard.Blackboard.get("/value") == 1
+
+
+def test_bare_less_than_and_ampersands_in_attributes_read_as_bt_cpp_reads_them() -> None:
+    # tinyxml2, BT.CPP's parser, takes them; BT.CPP's own examples write scripts so.
+    text = (
+        '\n  <?xml version="1.0"?>\n<root BTCPP_format="4"><BehaviorTree>'
+        '<Sequence name="s"><Script name="a" code="A := 1; ok := A<2 && A>0 &amp;&amp; true"/>'
+        '<StubScripted name="b" script="S" _skipIf="A<2"/></Sequence></BehaviorTree></root>'
+    )
+    root = _load(text)
+    root.tick_once()
+    assert py_trees.blackboard.Blackboard.get("/ok") is True
+    assert root.status == S and root.children[1].ticks == 0  # skipped: A < 2
+
+
+def test_xml_that_is_broken_either_way_reports_the_first_error() -> None:
+    # The '<' in the value is expat's error; read leniently, the missing </Sequence> is.
+    with pytest.raises(TreeFileError, match=r"ports.xml:2:29: XML syntax error: not well-formed"):
+        _load('<root BTCPP_format="4">\n<BehaviorTree><Sequence a="x<y"></BehaviorTree></root>')
+
+
+def test_white_space_around_a_key_is_trimmed() -> None:
+    root = _load(
+        '<root BTCPP_format="4"><BehaviorTree><Sequence name="s">'
+        '<StubCounter name="a" ticks="1" count=" {n}  "/></Sequence></BehaviorTree></root>'
+    )
+    root.tick_once()
+    assert py_trees.blackboard.Blackboard.get("/n") == 1
