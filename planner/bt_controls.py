@@ -168,8 +168,18 @@ class WhileDoElse(Control, register=False):
 class TryCatch(Control, register=False):
     """All children but the last are the try block, ticked as a sequence with memory; if one
     fails, the last child (the catch) is ticked until it finishes and the node then FAILS,
-    whatever the catch returned. SUCCESS when the try block succeeds. ``catch_on_halt`` is
-    not supported (a halt never runs the catch)."""
+    whatever the catch returned. SUCCESS when the try block succeeds.
+
+    ``catch_on_halt="true"``: a halt while the try block runs halts the try block, then ticks
+    the catch once, there and then, and halts it if it is still RUNNING (BT.CPP 4.x
+    ``TryCatchNode::halt``: a best-effort clean-up). A halt during the catch only halts it.
+    """
+
+    INPUT_PORTS = {
+        "catch_on_halt": PortInformation(
+            data_type=bool, default_value=False, description="run the catch when halted"
+        ),
+    }
 
     def __init__(self, name: str, children: list[Behaviour] | None = None, **kwargs: Any):
         super().__init__(name=name, children=children, **kwargs)
@@ -196,6 +206,23 @@ class TryCatch(Control, register=False):
         """Start again from the first child."""
         self.index = 0
         self.catching = False
+
+    def stop(self, new_status: Status = Status.INVALID) -> None:
+        """A halt of the running try block runs the catch once if ``catch_on_halt``."""
+        if (
+            new_status == Status.INVALID
+            and self.status == Status.RUNNING
+            and not self.catching
+            and self.get_input("catch_on_halt")
+        ):
+            *tries, catch = self.children
+            for child in tries:
+                halt(child)
+            for _ in catch.tick():
+                pass
+            if catch.status == Status.RUNNING:
+                halt(catch)
+        super().stop(new_status)
 
 
 class ParallelCount(Control, register=False):

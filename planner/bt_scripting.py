@@ -4,6 +4,7 @@ pre/post-condition attributes every node may carry, run with :mod:`planner.bt_sc
 Keys in a script name entries of the node's blackboard namespace (``x`` in the main tree is
 ``/x``, in a subtree named ``sub`` it is ``/sub/x``); ``@x`` is always the root's ``/x``.
 A script that fails at run time makes the node FAILURE, the reason in ``feedback_message``.
+Enum names registered by the host (:mod:`planner.script_enums`) read as their integers.
 
 Conditions (BT.CPP ``TreeNode::executeTick``): before a tick of a node that is not RUNNING,
 ``_failureIf`` (true: FAILURE), ``_successIf`` (SUCCESS), ``_skipIf`` (SKIPPED) and
@@ -16,7 +17,7 @@ tick that ends in SUCCESS ``_onSuccess`` runs, after FAILURE ``_onFailure``, aft
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping
 from typing import Any
 
 import py_trees
@@ -27,6 +28,8 @@ from py_trees.ports import PortInformation
 from planner.bt_decorators import skipped_status
 from planner.bt_leaves import StringPorts
 from planner.bt_script import Script, ScriptRuntimeError, parse_script, truthy
+from planner.script_enums import script_enum
+from planner.tree_bindings import Binding, subtree_bindings
 
 __all__ = ["BUILTIN_SCRIPT_NODES", "BlackboardEnv", "install_conditions"]
 
@@ -34,40 +37,67 @@ Behaviour = py_trees.behaviour.Behaviour
 
 
 class BlackboardEnv:
-    """A :class:`planner.bt_script.ScriptEnv` over py_trees' blackboard at ``namespace``."""
+    """A :class:`planner.bt_script.ScriptEnv` over py_trees' blackboard at ``namespace``.
 
-    def __init__(self, namespace: str = "/") -> None:
+    ``remap`` is the table of the subtree instance the script runs in
+    (:func:`planner.tree_bindings.subtree_bindings`): a port given ``{parent_key}`` reads and
+    writes the caller's key, as in BT.CPP; a port given a literal reads it until the script
+    writes its own value, which stays in the subtree.
+    """
+
+    def __init__(self, namespace: str = "/", remap: Mapping[str, Binding] | None = None) -> None:
         self.namespace = namespace or "/"
+        self.remap: Mapping[str, Binding] = remap or {}
 
     def key(self, key: str) -> str:
         """The absolute blackboard key a script key names."""
         if key.startswith("@"):
             return "/" + key[1:]
+        bound = self.remap.get(key)
+        if bound is not None and bound.key is not None:
+            return bound.key
         return Blackboard.absolute_name(self.namespace, key)
 
+    def _literal(self, key: str) -> str | None:
+        bound = None if key.startswith("@") else self.remap.get(key)
+        return bound.literal if bound is not None else None
+
     def read(self, key: str) -> Any:
-        return Blackboard.get(self.key(key))
+        try:
+            return Blackboard.get(self.key(key))
+        except KeyError:
+            literal = self._literal(key)
+            if literal is None:
+                raise
+            return literal
 
     def write(self, key: str, value: Any) -> None:
         Blackboard.set(self.key(key), value)
 
     def exists(self, key: str) -> bool:
-        return Blackboard.exists(self.key(key))
+        return Blackboard.exists(self.key(key)) or self._literal(key) is not None
 
     def enum(self, name: str) -> int | None:
-        return None
+        return script_enum(name)
 
 
-def run_script(script: Script, namespace: str) -> tuple[Any, str]:
+def run_script(
+    script: Script, namespace: str, remap: Mapping[str, Binding] | None = None
+) -> tuple[Any, str]:
     """Evaluate; return (value, "") or (None, the reason it failed)."""
     try:
-        return script.evaluate(BlackboardEnv(namespace)), ""
+        return script.evaluate(BlackboardEnv(namespace, remap)), ""
     except (ScriptRuntimeError, KeyError) as exc:
         return None, f"script {script.source!r}: {exc}"
 
 
 def _namespace(node: Behaviour) -> str:
     return str(getattr(node, "_subtree_namespace", "/") or "/")
+
+
+def _run(node: Behaviour, script: Script) -> tuple[Any, str]:
+    """Run a script node's script in its subtree instance (namespace and table)."""
+    return run_script(script, _namespace(node), getattr(node, "script_remap", None))
 
 
 class ScriptNode(StringPorts, py_trees.behaviour.Behaviour, register=False):
@@ -79,10 +109,12 @@ class ScriptNode(StringPorts, py_trees.behaviour.Behaviour, register=False):
     def __init__(self, name: str, code: str, **kwargs: Any) -> None:
         super().__init__(name=name, **kwargs)
         self.script = parse_script(code)
+        #: The subtree instance's table (set by :func:`attach_conditions`).
+        self.script_remap: Mapping[str, Binding] = {}
 
     def update(self) -> Status:
         """Run it."""
-        _, error = run_script(self.script, _namespace(self))
+        _, error = _run(self, self.script)
         self.feedback_message = error
         return Status.FAILURE if error else Status.SUCCESS
 
@@ -92,7 +124,7 @@ class ScriptCondition(ScriptNode, register=False):
 
     def update(self) -> Status:
         """Evaluate and test it."""
-        value, error = run_script(self.script, _namespace(self))
+        value, error = _run(self, self.script)
         if not error:
             try:
                 return Status.SUCCESS if truthy(value) else Status.FAILURE
@@ -116,6 +148,7 @@ class Precondition(StringPorts, py_trees.decorators.Decorator, register=False):
     ) -> None:
         super().__init__(name=name, child=child, **kw)
         self.script = parse_script(condition)
+        self.script_remap: Mapping[str, Binding] = {}
         if otherwise not in ("SUCCESS", "FAILURE", "RUNNING"):
             raise ValueError(f"{name}: else: expected SUCCESS, FAILURE or RUNNING, got {otherwise}")
         self.otherwise = Status[otherwise]
@@ -123,7 +156,7 @@ class Precondition(StringPorts, py_trees.decorators.Decorator, register=False):
     def tick(self) -> Iterator[Behaviour]:
         """Check the script when entered, then pass the child's ticks through."""
         if self.status != Status.RUNNING:
-            value, error = run_script(self.script, _namespace(self))
+            value, error = _run(self, self.script)
             if not error:
                 try:
                     passed = truthy(value)
@@ -150,13 +183,18 @@ BUILTIN_SCRIPT_NODES: dict[str, type[Behaviour]] = {
 _SKIP = "skip"
 
 
-def install_conditions(node: Behaviour, conditions: dict[str, Script], namespace: str) -> None:
+def install_conditions(
+    node: Behaviour,
+    conditions: dict[str, Script],
+    namespace: str,
+    remap: Mapping[str, Binding] | None = None,
+) -> None:
     """Give ``node`` BT.CPP's pre/post conditions (see the module's notes), in place."""
     original_tick = node.tick
     original_stop = node.stop
 
     def run(attr: str) -> tuple[Any, str]:
-        return run_script(conditions[attr], namespace)
+        return run_script(conditions[attr], namespace, remap)
 
     def check(attr: str) -> tuple[bool, str]:
         value, error = run(attr)
@@ -227,24 +265,39 @@ def install_conditions(node: Behaviour, conditions: dict[str, Script], namespace
     setattr(node, "stop", stop)  # noqa: B010
 
 
-def attach_conditions(elem: Any, node: Behaviour, trees: dict[str, Any], namespace: str) -> None:
+def attach_conditions(
+    elem: Any,
+    node: Behaviour,
+    trees: dict[str, Any],
+    namespace: str,
+    remap: Mapping[str, Binding] | None = None,
+) -> None:
     """Walk a built tree beside the elements it was built from (one node per element, a
-    ``<SubTree>`` standing for its tree's root) and install each element's conditions."""
+    ``<SubTree>`` standing for its tree's root): install each element's conditions, and give
+    each script node its subtree instance's table (``script_remap``)."""
+    table: Mapping[str, Binding] = remap or {}
     while elem.tag in ("SubTree", "BehaviorTree"):
         if elem.tag == "SubTree":
             ports = [n for n in node.iterate() if hasattr(n, "_subtree_namespace")]
             inner = _namespace(ports[0]) if ports else namespace
-            # The subtree's own conditions apply to its root node.
+            # The subtree's own conditions apply to its root node, in the caller's instance.
             conditions = getattr(elem, "conditions", {})
             if conditions:
-                install_conditions(node, conditions, namespace)
-            elem, namespace = trees[elem.attrib["ID"]], inner
+                install_conditions(node, conditions, namespace, table)
+            tree = trees[elem.attrib["ID"]]
+            table = subtree_bindings(elem, tree, namespace, table)
+            elem, namespace = tree, inner
         else:
             elem = next(iter(elem))
+    if isinstance(node, ScriptNode | Precondition):
+        node.script_remap = table
     conditions = getattr(elem, "conditions", {})
     if conditions:
         install_conditions(
-            node, conditions, _namespace(node) if hasattr(node, "_subtree_namespace") else namespace
+            node,
+            conditions,
+            _namespace(node) if hasattr(node, "_subtree_namespace") else namespace,
+            table,
         )
     for child_elem, child in zip(list(elem), node.children, strict=False):
-        attach_conditions(child_elem, child, trees, namespace)
+        attach_conditions(child_elem, child, trees, namespace, table)

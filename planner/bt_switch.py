@@ -2,7 +2,8 @@
 
 ``SwitchN`` has N+1 children: the child of the first ``case_i`` equal to ``variable`` is
 ticked, the last child when none is (the default). Values compare as numbers when both parse
-as numbers, else as text. When the choice changes, the child running before is halted.
+as numbers (an enum name registered by the host, :mod:`planner.script_enums`, as its
+integer), else as text. When the choice changes, the child running before is halted.
 
 ``AsyncSequence`` is BT.CPP's Sequence (memory while running) that returns RUNNING after each
 child's success instead of ticking the next child in the same tick; ``AsyncFallback`` the same
@@ -18,16 +19,25 @@ from py_trees.common import Status
 from py_trees.ports import PortInformation
 
 from planner.bt_controls import Control, Step, halt
+from planner.script_enums import script_enum
 
 __all__ = ["BUILTIN_SWITCHES", "AsyncFallback", "AsyncSequence", "switch_class"]
 
 
 def same_value(a: Any, b: Any) -> bool:
-    """BT.CPP's switch comparison: as numbers when both are numbers, else as text."""
+    """BT.CPP's switch comparison: as numbers when both are numbers (a registered enum name,
+    :mod:`planner.script_enums`, being its integer), else as text."""
+    if str(a) == str(b):
+        return True
     try:
-        return float(a) == float(b)
+        return _number(a) == _number(b)
     except (TypeError, ValueError):
-        return str(a) == str(b)
+        return False
+
+
+def _number(value: Any) -> float:
+    enum = script_enum(value) if isinstance(value, str) else None
+    return float(enum if enum is not None else value)
 
 
 class _Switch(Control, register=False):

@@ -28,6 +28,7 @@ from planner.tree_ports import (
 )
 from planner.tree_problems import TreeProblem
 from planner.tree_reading import TreeDocument, describe, source_file, source_line
+from planner.tree_syntax import script_keys
 
 COMPOSITES = ("Sequence", "Selector", "Parallel")
 #: Parallel policies the py_trees parser can build (``success_on_selected`` needs a child list).
@@ -224,11 +225,13 @@ class _Checker:
             self.add(elem, f"a leaf takes no children, found {len(elem)}")
 
     def subtree_ports(self, bt_id: str) -> set[str]:
-        """Names a ``<SubTree>`` may remap: the tree's own attributes and the keys it uses."""
+        """Names a ``<SubTree>`` may remap: the tree's own attributes, the ports its
+        ``<TreeNodesModel>`` entry declares, and the keys its nodes and scripts use."""
         if bt_id in self._subtree_ports:
             return self._subtree_ports[bt_id]
         bt = self.trees[bt_id]
         ports = {k for k in bt.attrib if k not in ("ID", "name")}
+        ports |= getattr(bt, "model_ports", set())
         self._subtree_ports[bt_id] = ports  # guards recursion through cycles
         for elem in bt.iter():
             if elem is bt:
@@ -237,6 +240,7 @@ class _Checker:
                 is_key, bad = key_problem(value)
                 if is_key and not bad:
                     ports.add(value[1:-1])
+            ports |= script_keys(elem)
         return ports
 
     def check_subtree(self, elem: ET.Element) -> None:

@@ -27,6 +27,7 @@ from typing import Literal
 from py_trees.parsers.behaviour_tree_xml import DECORATOR_NODES
 from py_trees.ports import PortsMixin
 
+from planner.tree_bindings import Binding, resolve, subtree_bindings
 from planner.tree_ports import Registry, effective_registry, key_problem, registry_class
 from planner.tree_problems import TreeProblem
 from planner.tree_reading import TreeDocument, describe, source_file, source_line
@@ -44,15 +45,6 @@ _ASSIGNMENT = re.compile(r"(@?[A-Za-z_]\w*)\s*(?::=|[-+*/]?=)(?!=)")
 
 
 @dataclass(frozen=True)
-class Binding:
-    """What a key name means in one subtree instance: an absolute key or a constant."""
-
-    key: str | None  # absolute blackboard key, e.g. "/first_object/state"
-    literal: str | None  # the constant a <SubTree> port was given
-    origin: ET.Element | None = None  # where the constant was written
-
-
-@dataclass(frozen=True)
 class PortUse:
     """One attribute of one node instance that reads or writes the blackboard (or a literal).
 
@@ -65,12 +57,6 @@ class PortUse:
     direction: Literal["read", "write"]
     name: str  # the key as written, without braces (or the literal)
     binding: Binding
-
-
-def _resolve(name: str, namespace: str, remap: dict[str, Binding]) -> Binding:
-    if name.startswith("@"):  # BT.CPP: the root blackboard
-        return Binding("/" + name[1:], None)
-    return remap.get(name) or Binding(namespace.rstrip("/") + "/" + name, None)
 
 
 def _key_name(value: str) -> str | None:
@@ -100,12 +86,7 @@ def port_uses(doc: TreeDocument, registry: Registry | None = None) -> list[PortU
             if bt_id not in trees or bt_id in chain:
                 continue  # reported by the other checks
             bt = trees[bt_id]
-            inner: dict[str, Binding] = {}
-            for k, v in {**bt.attrib, **elem.attrib}.items():
-                if k in ("ID", "name") or k.startswith("_"):
-                    continue
-                name = _key_name(v)
-                inner[k] = _resolve(name, ns, remap) if name is not None else Binding(None, v, elem)
+            inner = subtree_bindings(elem, bt, ns, remap)
             label = elem.attrib.get("name")
             if label is None:
                 unnamed += 1
@@ -129,6 +110,9 @@ def _node_uses(
     outputs: set[str] = set()
     if cls is not None and issubclass(cls, PortsMixin):
         inputs, outputs = set(cls.input_ports()), set(cls.output_ports())
+    # A port that watches whether a key is written (WasEntryUpdated) reads no value: a key
+    # nothing writes is its answer, not a crash.
+    watched = set(getattr(cls, "WATCHED_PORTS", ()))
     # A node of no known type reads nothing we can tell (its tag is reported apart); a
     # py_trees decorator reads the keys given to its parameters.
     reads = ports or elem.tag in _DECORATORS
@@ -137,17 +121,17 @@ def _node_uses(
     for attr, script in conditions.items():
         if attr in SCRIPT_ATTRIBUTES:
             for name in sorted(script.keys_written()):
-                uses.append(PortUse(elem, attr, "write", name, _resolve(name, ns, remap)))
+                uses.append(PortUse(elem, attr, "write", name, resolve(name, ns, remap)))
     for attr, value in elem.attrib.items():
         if attr == "name":
             continue
         if attr in SCRIPT_ATTRIBUTES and attr not in conditions:
             for name in _ASSIGNMENT.findall(value):
-                uses.append(PortUse(elem, attr, "write", name, _resolve(name, ns, remap)))
+                uses.append(PortUse(elem, attr, "write", name, resolve(name, ns, remap)))
             continue
         if elem.tag == "SetBlackboard" and attr == "output_key":
             name = _key_name(value) or value
-            uses.append(PortUse(elem, attr, "write", name, _resolve(name, ns, remap)))
+            uses.append(PortUse(elem, attr, "write", name, resolve(name, ns, remap)))
             continue
         name = _key_name(value)
         if name is None:
@@ -155,9 +139,9 @@ def _node_uses(
                 uses.append(PortUse(elem, attr, "read", value, Binding(None, value, elem)))
             continue
         direction: Literal["read", "write"] = "write" if attr in outputs else "read"
-        if direction == "read" and not reads:
+        if direction == "read" and (not reads or attr in watched):
             continue
-        uses.append(PortUse(elem, attr, direction, name, _resolve(name, ns, remap)))
+        uses.append(PortUse(elem, attr, direction, name, resolve(name, ns, remap)))
     return uses
 
 

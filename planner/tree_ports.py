@@ -23,6 +23,7 @@ from planner.bt_leaves import BUILTIN_LEAVES
 from planner.bt_loops import BUILTIN_LOOPS
 from planner.bt_scripting import BUILTIN_SCRIPT_NODES
 from planner.bt_switch import BUILTIN_SWITCHES
+from planner.bt_updated import BUILTIN_UPDATED
 from planner.decorators import SimTimeout
 
 #: Registry entries: a :class:`~py_trees.ports.PortsMixin` class or a ``functools.partial`` of one.
@@ -47,7 +48,8 @@ def effective_registry(registry: Registry | None = None) -> dict[str, Any]:
 
 def builtin_nodes() -> dict[str, Any]:
     """BT.CPP's built-in nodes that py_trees lacks, by tag (:mod:`planner.bt_leaves`,
-    :mod:`planner.bt_controls`, :mod:`planner.bt_decorators`, :mod:`planner.bt_switch`)."""
+    :mod:`planner.bt_controls`, :mod:`planner.bt_decorators`, :mod:`planner.bt_switch`,
+    :mod:`planner.bt_scripting`, :mod:`planner.bt_loops`, :mod:`planner.bt_updated`)."""
     return {
         **BUILTIN_LEAVES,
         **BUILTIN_CONTROLS,
@@ -55,6 +57,7 @@ def builtin_nodes() -> dict[str, Any]:
         **BUILTIN_SWITCHES,
         **BUILTIN_SCRIPT_NODES,
         **BUILTIN_LOOPS,
+        **BUILTIN_UPDATED,
     }
 
 

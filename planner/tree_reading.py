@@ -5,6 +5,7 @@ translated into the tags py_trees' parser builds."""
 from __future__ import annotations
 
 import os
+import re
 import xml.etree.ElementTree as ET
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -15,6 +16,7 @@ from py_trees.parsers.behaviour_tree_xml import DECORATOR_NODES
 from py_trees.ports import get_ports_registry
 
 from planner.bt_script import Script
+from planner.bt_updated import BUILTIN_UPDATED
 from planner.tree_ports import Registry, builtin_nodes
 from planner.tree_problems import TreeFileError, TreeProblem
 from planner.tree_syntax import (
@@ -67,8 +69,76 @@ def source_file(elem: ET.Element, default: str) -> str:
     return getattr(elem, "sourcefile", default)
 
 
+_ENTITY = re.compile(r"&(?:#[0-9]+|#x[0-9a-fA-F]+|[A-Za-z_][\w.-]*);")
+
+
+def lenient_xml(text: str) -> str:
+    """The text as BT.CPP's XML parser (tinyxml2) reads it, made well-formed for expat: a bare
+    ``<`` or ``&`` in an attribute value (``_skipIf="A<2"``, ``if="a && b"``, as BT.CPP's
+    own examples write them) escaped, and an XML declaration after leading white space
+    blanked. Lines and everything else are kept."""
+    out: list[str] = []
+    i, n = 0, len(text)
+    start = len(text) - len(text.lstrip())
+    if start and text.startswith("<?xml", start):
+        end = text.find("?>", start)
+        if end >= 0:
+            text = text[:start] + " " * (end + 2 - start) + text[end + 2 :]
+    while i < n:
+        if (
+            text.startswith("<!--", i)
+            or text.startswith("<![CDATA[", i)
+            or text.startswith("<?", i)
+        ):
+            close = {"<!--": "-->", "<![CDATA[": "]]>", "<?": "?>"}
+            opener = next(o for o in close if text.startswith(o, i))
+            end = text.find(close[opener], i)
+            end = n if end < 0 else end + len(close[opener])
+            out.append(text[i:end])
+            i = end
+            continue
+        if text[i] != "<":
+            out.append(text[i])
+            i += 1
+            continue
+        # A tag: copy it, escaping inside its quoted values, up to the '>' outside quotes.
+        quote = ""
+        while i < n:
+            c = text[i]
+            if quote:
+                if c == quote:
+                    quote = ""
+                elif c == "<":
+                    c = "&lt;"
+                elif c == "&" and not _ENTITY.match(text, i):
+                    c = "&amp;"
+            elif c in "\"'":
+                quote = c
+            out.append(c)
+            i += 1
+            if not quote and c == ">":
+                break
+    return "".join(out)
+
+
 def _parse_xml(data: bytes | str, source: str) -> SourceElement:
-    """Parse XML text into :class:`SourceElement` s; raise TreeFileError on a syntax error."""
+    """Parse XML text into :class:`SourceElement` s; raise TreeFileError on a syntax error.
+
+    Text expat refuses is read again through :func:`lenient_xml` (as BT.CPP would read it);
+    the error reported is the first one.
+    """
+    try:
+        return _parse_strict(data, source)
+    except TreeFileError:
+        try:
+            text = data.decode("utf-8") if isinstance(data, bytes) else data
+            return _parse_strict(lenient_xml(text), source)
+        except (UnicodeDecodeError, TreeFileError):
+            pass
+        raise
+
+
+def _parse_strict(data: bytes | str, source: str) -> SourceElement:
     parser = expat.ParserCreate()
     stack: list[SourceElement] = []
     document: list[SourceElement] = []
@@ -317,6 +387,19 @@ def _inline_includes(
             root.append(bt)
 
 
+#: ``" {key} "``: a blackboard key with white space around it.
+_SPACED_KEY = re.compile(r"\s*\{[^{}]+\}\s*")
+#: BT.CPP's spellings of a boolean attribute (``convertFromString<bool>``).
+_TRUE = frozenset({"true", "True", "TRUE", "1"})
+_FALSE = frozenset({"false", "False", "FALSE", "0"})
+#: Built-in nodes whose port names a key, which BT.CPP lets a tree write bare (``key="x"``).
+_BARE_KEY_PORTS = {
+    "SetBlackboard": "output_key",
+    "UnsetBlackboard": "key",
+    **dict.fromkeys(BUILTIN_UPDATED, "entry"),
+}
+
+
 def _drop_attribute(elem: ET.Element, old: str) -> str | None:
     return elem.attrib.pop(old, None)
 
@@ -330,11 +413,14 @@ def _translate(elem: ET.Element, registry: Registry, problems: list[TreeProblem]
 
     if elem.tag in ("root", "BehaviorTree", "TreeNodesModel"):
         return
+    for key, value in elem.attrib.items():
+        if value != value.strip() and _SPACED_KEY.fullmatch(value):
+            elem.attrib[key] = value.strip()  # BT.CPP trims a key's white space
     for key in [k for k in elem.attrib if k.startswith("_")]:
         value = elem.attrib.pop(key)
-        if key in _IGNORED_ATTRIBUTES or (key == "_autoremap" and value.lower() == "false"):
+        if key in _IGNORED_ATTRIBUTES or (key == "_autoremap" and value.strip() in _FALSE):
             continue
-        if key == "_autoremap" and value.strip().lower() == "true":
+        if key == "_autoremap" and value.strip() in _TRUE:
             elem.autoremap = True  # expanded by planner.tree_syntax
             continue
         if key in CONDITION_ATTRIBUTES:
@@ -344,8 +430,9 @@ def _translate(elem: ET.Element, registry: Registry, problems: list[TreeProblem]
             continue
         problem(underscore_problem(key))
     translate_script_node(elem, problem)
-    if elem.tag in ("SetBlackboard", "UnsetBlackboard"):
-        port = "output_key" if elem.tag == "SetBlackboard" else "key"
+    explicit = elem.tag in ("Action", "Condition", "Control", "Decorator")
+    port = _BARE_KEY_PORTS.get(elem.attrib.get("ID", "") if explicit else elem.tag)
+    if port is not None:
         named = elem.attrib.get(port)
         if named is not None and not named.startswith("{"):
             elem.attrib[port] = "{" + named + "}"  # BT.CPP names the key bare

@@ -27,6 +27,7 @@ __all__ = [
     "ROOT_PREFIX",
     "parse_attribute_script",
     "rewrite_port_syntax",
+    "script_keys",
     "translate_script_node",
     "underscore_problem",
 ]
@@ -44,7 +45,7 @@ def _trees(root: ET.Element) -> dict[str, ET.Element]:
 
 
 def _keys_used(bt: ET.Element) -> set[str]:
-    """Keys named ``{key}`` in a tree's attributes (not the tree's own)."""
+    """Keys named ``{key}`` in a tree's attributes (not the tree's own) and in its scripts."""
     keys: set[str] = set()
     for elem in bt.iter():
         if elem is bt:
@@ -53,7 +54,31 @@ def _keys_used(bt: ET.Element) -> set[str]:
             match = _KEY.match(value)
             if match and not match.group(1) and match.group(2):
                 keys.add(match.group(2))
+        keys |= script_keys(elem)
     return keys
+
+
+#: Attributes of the script nodes holding a script (Precondition's ``if`` as the reader names it).
+SCRIPT_CODE_ATTRIBUTES = {"Script": "code", "ScriptCondition": "code", "Precondition": "condition"}
+
+
+def script_keys(elem: ET.Element) -> set[str]:
+    """The keys (not ``@`` root keys) an element's scripts read or write: a script node's code
+    and its pre/post-condition attributes. A script that does not parse has none (the reader
+    reports it)."""
+    scripts = list(getattr(elem, "conditions", {}).values())
+    attr = SCRIPT_CODE_ATTRIBUTES.get(elem.tag)
+    if attr is not None and attr in elem.attrib:
+        try:
+            scripts.append(parse_script(elem.attrib[attr]))
+        except ScriptError:
+            pass
+    return {
+        key
+        for script in scripts
+        for key in script.keys_read() | script.keys_written()
+        if not key.startswith("@")
+    }
 
 
 def rewrite_port_syntax(root: ET.Element, main_id: str | None) -> None:
@@ -101,16 +126,21 @@ def rewrite_port_syntax(root: ET.Element, main_id: str | None) -> None:
 
 
 def _model_defaults(root: ET.Element, trees: dict[str, ET.Element]) -> None:
-    """Copy ``<TreeNodesModel><SubTree>`` port defaults onto the ``<BehaviorTree>``."""
+    """Copy ``<TreeNodesModel><SubTree>`` port defaults onto the ``<BehaviorTree>``; note
+    the ports it declares (``model_ports``) as ports a ``<SubTree>`` may give."""
     for model in root.findall("TreeNodesModel"):
         for entry in model.findall("SubTree"):
             bt = trees.get(entry.attrib.get("ID", ""))
             if bt is None:
                 continue
+            declared: set[str] = set()
             for port in entry:
                 name, default = port.attrib.get("name"), port.attrib.get("default")
-                if port.tag.endswith("_port") and name and default is not None:
-                    bt.attrib.setdefault(name, default)
+                if port.tag.endswith("_port") and name:
+                    declared.add(name)
+                    if default is not None:
+                        bt.attrib.setdefault(name, default)
+            bt.model_ports = declared  # type: ignore[attr-defined]
 
 
 #: BT.CPP's pre-conditions (checked before a tick) and post-conditions (run after it).
@@ -163,7 +193,7 @@ def translate_script_node(elem: ET.Element, problem: Callable[[str], None]) -> N
 def underscore_problem(key: str) -> str:
     """What to say about a ``_``-attribute the loader cannot honour."""
     if key == "_autoremap":
-        return "attribute '_autoremap': expected true or false"
+        return "attribute '_autoremap': expected true or false (or 1 or 0)"
     return (
         f"unknown attribute '{key}'; expected one of the BT.CPP attributes "
         f"{', '.join(CONDITION_ATTRIBUTES)}, _autoremap, _description"

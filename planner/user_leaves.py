@@ -15,6 +15,9 @@ the definitions in:
 
   names a module (all its ``WorldLeaf`` subclasses) or one ``WorldLeaf`` subclass.
 
+A module may also declare the enum names its trees' scripts use, ``SCRIPT_ENUMS`` (see
+:mod:`planner.script_enums`; a module of only enums is fine).
+
 Problems raise :class:`LeafSourceError`, naming the file, module or entry point and what was
 expected. The registration is global to the process: a worker process of a campaign calls
 :func:`register_leaves` again with the same sources (a forked one inherits it anyway).
@@ -38,6 +41,7 @@ from types import ModuleType
 from py_trees.ports import get_ports_registry, register_ports_class
 
 from planner.leaves import WorldLeaf
+from planner.script_enums import ScriptEnumError, register_script_enums
 
 #: The entry-point group an installed package ships leaves in.
 ENTRY_POINT_GROUP = "duet.leaves"
@@ -79,15 +83,30 @@ def register_leaves(
         with warnings.catch_warnings():  # a clash is refused below, with its reason
             warnings.simplefilter("ignore")
             module = _import_source(source)
-        registered += _register(_leaves_defined_in(module), f"--leaves {source}", before)
+        label = f"--leaves {source}"
+        enums = _register_enums(module, label)
+        registered += _register(_leaves_defined_in(module), label, before, enums)
     if entry_point_group is not None:
         for ep in entry_points(group=entry_point_group):
             before = get_ports_registry()
+            label = _entry_point_label(ep)
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
-                leaves = _leaves_of_entry_point(ep)
-            registered += _register(leaves, _entry_point_label(ep), before)
+                target = _load_entry_point(ep)
+            enums = _register_enums(target, label) if isinstance(target, ModuleType) else False
+            registered += _register(_leaves_of_entry_point(ep, target), label, before, enums)
     return registered
+
+
+def _register_enums(module: ModuleType, label: str) -> bool:
+    """Register the module's ``SCRIPT_ENUMS`` (:mod:`planner.script_enums`); whether it has."""
+    if not hasattr(module, "SCRIPT_ENUMS"):
+        return False
+    try:
+        register_script_enums(module.SCRIPT_ENUMS, label)
+    except ScriptEnumError as err:
+        raise LeafSourceError(str(err)) from None
+    return True
 
 
 def _import_source(source: str) -> ModuleType:
@@ -160,12 +179,17 @@ def _leaves_defined_in(module: ModuleType) -> list[type[WorldLeaf]]:
     ]
 
 
-def _leaves_of_entry_point(ep: EntryPoint) -> list[type[WorldLeaf]]:
-    label = _entry_point_label(ep)
+def _load_entry_point(ep: EntryPoint) -> object:
     try:
-        target = ep.load()
+        return ep.load()
     except Exception as err:  # an installed package may raise anything while importing
-        raise LeafSourceError(f"{label}: cannot load it: {_describe(err)}") from None
+        raise LeafSourceError(
+            f"{_entry_point_label(ep)}: cannot load it: {_describe(err)}"
+        ) from None
+
+
+def _leaves_of_entry_point(ep: EntryPoint, target: object) -> list[type[WorldLeaf]]:
+    label = _entry_point_label(ep)
     if isinstance(target, ModuleType):
         return _leaves_defined_in(target)
     if inspect.isclass(target) and issubclass(target, WorldLeaf):
@@ -182,15 +206,21 @@ def _entry_point_label(ep: EntryPoint) -> str:
 
 
 def _register(
-    leaves: Iterable[type[WorldLeaf]], label: str, before: dict[str, type]
+    leaves: Iterable[type[WorldLeaf]],
+    label: str,
+    before: dict[str, type],
+    has_enums: bool = False,
 ) -> list[type[WorldLeaf]]:
     """Register the concrete leaves (those with ports) under their class names.
 
     ``before`` is the registry as it was before the source was imported (defining a leaf
-    registers it at once): a name that was another class's is restored and refused.
+    registers it at once): a name that was another class's is restored and refused. A source
+    with ``SCRIPT_ENUMS`` (``has_enums``) may define no leaf.
     """
     found = list(leaves)
     concrete = [c for c in found if _has_ports(c)]
+    if not concrete and has_enums and not found:
+        return []
     if not concrete:
         abstract = f" ({', '.join(c.__name__ for c in found)} declare no ports)" if found else ""
         raise LeafSourceError(

@@ -17,6 +17,7 @@ import app
 import planner.user_leaves as user_leaves
 from planner.loader import TreeFileError, load_tree
 from planner.port import Move, Pose
+from planner.script_enums import clear_script_enums
 from planner.testing import FakeObject, FakeWorld, tick_until
 from planner.user_leaves import LeafSourceError, register_leaves
 from skills.library import SkillLibrary
@@ -189,6 +190,22 @@ def test_an_installed_entry_point_registers_its_leaves(
             r"got none \(Half declare no ports\)",
         ),
         (
+            'SCRIPT_ENUMS = {"RED": "1"}\n',
+            "enum_text.py",
+            r"--leaves .*enum_text.py: SCRIPT_ENUMS: RED: expected an integer, got '1'$",
+        ),
+        (
+            "SCRIPT_ENUMS = 3\n",
+            "enum_int.py",
+            r"SCRIPT_ENUMS: expected a dict of names to integers, an enum class or a list of "
+            r"those, got int$",
+        ),
+        (
+            'SCRIPT_ENUMS = [{"RED": 1}, {"RED": 2}]\n',
+            "enum_twice.py",
+            r"SCRIPT_ENUMS: RED: expected one value, got 1 and 2$",
+        ),
+        (
             LEAF.replace("HeightAtLeast", "Transport"),
             "clash.py",
             r"leaf Transport: expected a name no registered leaf has, got that of "
@@ -223,3 +240,73 @@ def test_a_module_that_is_not_there_is_named(registry_restored: None) -> None:
         match=r"--leaves no_such_pkg.leaves: expected .*no module named 'no_such_pkg'",
     ):
         register_leaves(["no_such_pkg.leaves"])
+
+
+ENUMS = """
+import enum
+
+
+class Color(enum.IntEnum):
+    RED = 1
+    BLUE = 2
+
+
+SCRIPT_ENUMS = [Color, {"THE_ANSWER": 42}]
+"""
+
+ENUM_TREE = """<root BTCPP_format="4">
+  <BehaviorTree>
+    <Sequence name="s">
+      <Script name="set" code="a := THE_ANSWER; color := BLUE"/>
+      <ScriptCondition name="is_blue" code="color == BLUE &amp;&amp; color != RED"/>
+      <Switch2 name="sw" variable="{color}" case_1="RED" case_2="BLUE">
+        <AlwaysFailure name="red"/>
+        <Script name="blue" code="picked := 2"/>
+        <AlwaysFailure name="other"/>
+      </Switch2>
+    </Sequence>
+  </BehaviorTree>
+</root>
+"""
+
+
+@pytest.fixture
+def enums_restored() -> Iterator[None]:
+    yield
+    clear_script_enums()
+
+
+def test_a_leaves_module_declares_the_enum_names_its_scripts_use(
+    tmp_path: Path, registry_restored: None, enums_restored: None
+) -> None:
+    path = tmp_path / "colours.py"
+    path.write_text(LEAF + ENUMS, encoding="utf-8")
+    tree_file = tmp_path / "enums.xml"
+    tree_file.write_text(ENUM_TREE, encoding="utf-8")
+
+    def run() -> Status:
+        py_trees.blackboard.Blackboard.clear()
+        tree = py_trees.trees.BehaviourTree(load_tree(tree_file))
+        tree.setup()
+        tree.tick()
+        return tree.root.status
+
+    # Unregistered, RED is a key nothing wrote: the script cannot run.
+    assert run() == Status.FAILURE
+    (cls,) = register_leaves([str(path)])
+    assert cls.__name__ == "HeightAtLeast"
+    assert run() == Status.SUCCESS
+    get = py_trees.blackboard.Blackboard.get
+    assert (get("/a"), get("/color"), get("/picked")) == (42, 2, 2)
+    # Registering the same source again (a worker) is no clash; a module of enums alone is
+    # a source too, and another value for a known name is refused.
+    register_leaves([str(path)])
+    only = tmp_path / "only_enums.py"
+    only.write_text('SCRIPT_ENUMS = {"GREEN": 3}\n', encoding="utf-8")
+    assert register_leaves([str(only)]) == []
+    other = tmp_path / "other.py"
+    other.write_text('SCRIPT_ENUMS = {"RED": 5}\n', encoding="utf-8")
+    with pytest.raises(
+        LeafSourceError, match=r"other.py: SCRIPT_ENUMS: RED: expected one value, got 1 and 5$"
+    ):
+        register_leaves([str(other)])

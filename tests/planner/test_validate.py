@@ -176,7 +176,7 @@ def test_btcpp_condition_and_autoremap_attributes_are_checked() -> None:
     assert any(
         m.startswith("attribute '_skipIf': column 8 in the script: expected ')'") for m in messages
     )
-    assert "attribute '_autoremap': expected true or false" in messages
+    assert "attribute '_autoremap': expected true or false (or 1 or 0)" in messages
 
 
 def test_structure_problems() -> None:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import py_trees
 import pytest
 
 from planner.loader import TreeFileError
@@ -84,6 +85,48 @@ def test_try_catch_succeeds_without_running_the_catch() -> None:
     t = Ticker(f'<TryCatch name="t">{leaf("a", "R,S")}{leaf("catch", "S")}</TryCatch>')
     t.run(("t", "a", "catch"), [(R, R, INV), (S, S, INV)])
     assert t.nodes["catch"].ticks == 0
+
+
+def _halted_try_catch(catch_on_halt: str, tries: str, catch: str) -> Ticker:
+    """A TryCatch under a ReactiveSequence whose gate fails at the second tick (a halt)."""
+    attr = f' catch_on_halt="{catch_on_halt}"' if catch_on_halt else ""
+    return Ticker(
+        f'<ReactiveSequence name="q">{leaf("gate", "S,F")}'
+        f'<TryCatch name="t"{attr}>{leaf("a", tries)}{leaf("catch", catch)}</TryCatch>'
+        "</ReactiveSequence>"
+    )
+
+
+def test_try_catch_halted_in_its_try_block_runs_the_catch_once_with_catch_on_halt() -> None:
+    t = _halted_try_catch("true", "R", "S")
+    t.run(("q", "t", "a", "catch"), [(R, R, R, INV), (F, INV, INV, INV)])
+    assert (t.nodes["a"].halts, t.nodes["catch"].ticks, t.nodes["catch"].halts) == (1, 1, 0)
+
+
+def test_try_catch_on_halt_halts_a_catch_still_running_after_its_one_tick() -> None:
+    t = _halted_try_catch("true", "R", "R")
+    t.run(("q", "t", "a", "catch"), [(R, R, R, INV), (F, INV, INV, INV)])
+    assert (t.nodes["catch"].ticks, t.nodes["catch"].halts) == (1, 1)
+
+
+@pytest.mark.parametrize("flag", ["", "false"])
+def test_try_catch_halted_without_catch_on_halt_never_runs_the_catch(flag: str) -> None:
+    t = _halted_try_catch(flag, "R", "S")
+    t.run(("q", "t", "a", "catch"), [(R, R, R, INV), (F, INV, INV, INV)])
+    assert (t.nodes["a"].halts, t.nodes["catch"].ticks) == (1, 0)
+
+
+def test_try_catch_halted_in_its_catch_halts_the_catch_without_ticking_it_again() -> None:
+    t = _halted_try_catch("true", "F", "R")
+    t.run(("q", "t", "a", "catch"), [(R, R, F, R), (F, INV, INV, INV)])
+    assert (t.nodes["catch"].ticks, t.nodes["catch"].halts) == (1, 1)
+
+
+def test_try_catch_on_halt_from_a_key() -> None:
+    py_trees.blackboard.Blackboard.set("/clean", "true")
+    t = _halted_try_catch("{clean}", "R", "S")
+    t.run(("q", "t"), [(R, R), (F, INV)])
+    assert t.nodes["catch"].ticks == 1
 
 
 def test_parallel_all_waits_for_every_child_then_counts_failures() -> None:

@@ -7,6 +7,7 @@ import py_trees
 import pytest
 
 from planner.loader import TreeFileError, load_tree_string
+from planner.script_enums import clear_script_enums, register_script_enums
 from tests.planner.bt_conformance.conftest import INV, F, R, S, Ticker
 
 get = py_trees.blackboard.Blackboard.get
@@ -142,3 +143,20 @@ def test_a_condition_that_cannot_run_fails_the_node() -> None:
 def test_precondition_else_must_be_a_status() -> None:
     with pytest.raises(TreeFileError, match="attribute 'else': expected SUCCESS, FAILURE or"):
         Ticker(f'<Precondition name="p" if="true" else="MAYBE">{leaf("a", "S")}</Precondition>')
+
+
+def test_registered_enum_names_read_as_integers_and_win_over_a_key() -> None:
+    register_script_enums({"RED": 1, "BLUE": 2}, "test")
+    try:
+        py_trees.blackboard.Blackboard.set("/BLUE", 7)
+        t = Ticker(
+            '<Sequence name="s"><Script name="a" code="c := BLUE; r := RED + 1"/>'
+            '<ScriptCondition name="is" code="c == 2"/></Sequence>'
+        )
+        t.run(("s", "is"), [(S, S)])
+        assert (get("/c"), get("/r")) == (2, 2)
+    finally:
+        clear_script_enums()
+    t2 = Ticker('<Script name="a" code="c := RED"/>')
+    t2.run(("a",), [(F,)])
+    assert "variable 'RED' not found on the blackboard" in t2.nodes["a"].feedback_message

@@ -93,3 +93,69 @@ def test_subtree_port_default_from_the_tree_nodes_model() -> None:
     assert statuses == [R, R, R, S]
     assert py_trees.blackboard.Blackboard.get("/got") == 2
     assert py_trees.blackboard.Blackboard.get("/got2") == 3
+
+
+def test_scripts_in_a_subtree_follow_its_port_remapping() -> None:
+    # BT.CPP's own tutorial on subtree ports: the subtree's scripts read and write the ports.
+    root = _load(
+        '<root BTCPP_format="4" main_tree_to_execute="T">'
+        '<BehaviorTree ID="T"><Sequence name="s">'
+        '<Script name="goal" code="move_goal := 5"/>'
+        '<SubTree ID="Move" name="m" target="{move_goal}" result="{move_result}" mode="fast"/>'
+        "</Sequence></BehaviorTree>"
+        '<BehaviorTree ID="Move"><Sequence name="q">'
+        '<ScriptCondition name="c" code="target == 5 &amp;&amp; mode == \'fast\'"/>'
+        "<Script name=\"r\" code=\"result := 'reached'; mode := 'slow'; own := 1\"/>"
+        "</Sequence></BehaviorTree></root>"
+    )
+    root.tick_once()
+    get = py_trees.blackboard.Blackboard.get
+    assert root.status == S
+    assert get("/move_result") == "reached"  # the caller's key
+    # A literal port reads as its text; what the subtree writes stays in its own namespace.
+    assert (get("/m/mode"), get("/m/own")) == ("slow", 1)
+    assert not py_trees.blackboard.Blackboard.exists("/result")
+
+
+def test_autoremap_and_a_model_port_cover_keys_only_scripts_use() -> None:
+    root = _load(
+        '<root BTCPP_format="4" main_tree_to_execute="T">'
+        '<BehaviorTree ID="T"><Sequence name="s"><Script name="v" code="value := 0"/>'
+        '<SubTree ID="A" name="a" _autoremap="1"/>'
+        '<SubTree ID="B" name="b" out="{from_b}"/></Sequence></BehaviorTree>'
+        '<BehaviorTree ID="A"><Script name="w" code="value += 1"/></BehaviorTree>'
+        '<BehaviorTree ID="B"><AlwaysSuccess name="nothing"/></BehaviorTree>'
+        '<TreeNodesModel><SubTree ID="B"><output_port name="out"/></SubTree></TreeNodesModel>'
+        "</root>"
+    )
+    root.tick_once()
+    assert root.status == S
+    assert py_trees.blackboard.Blackboard.get("/value") == 1
+
+
+def test_bare_less_than_and_ampersands_in_attributes_read_as_bt_cpp_reads_them() -> None:
+    # tinyxml2, BT.CPP's parser, takes them; BT.CPP's own examples write scripts so.
+    text = (
+        '\n  <?xml version="1.0"?>\n<root BTCPP_format="4"><BehaviorTree>'
+        '<Sequence name="s"><Script name="a" code="A := 1; ok := A<2 && A>0 &amp;&amp; true"/>'
+        '<StubScripted name="b" script="S" _skipIf="A<2"/></Sequence></BehaviorTree></root>'
+    )
+    root = _load(text)
+    root.tick_once()
+    assert py_trees.blackboard.Blackboard.get("/ok") is True
+    assert root.status == S and root.children[1].ticks == 0  # skipped: A < 2
+
+
+def test_xml_that_is_broken_either_way_reports_the_first_error() -> None:
+    # The '<' in the value is expat's error; read leniently, the missing </Sequence> is.
+    with pytest.raises(TreeFileError, match=r"ports.xml:2:29: XML syntax error: not well-formed"):
+        _load('<root BTCPP_format="4">\n<BehaviorTree><Sequence a="x<y"></BehaviorTree></root>')
+
+
+def test_white_space_around_a_key_is_trimmed() -> None:
+    root = _load(
+        '<root BTCPP_format="4"><BehaviorTree><Sequence name="s">'
+        '<StubCounter name="a" ticks="1" count=" {n}  "/></Sequence></BehaviorTree></root>'
+    )
+    root.tick_once()
+    assert py_trees.blackboard.Blackboard.get("/n") == 1
