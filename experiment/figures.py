@@ -19,7 +19,6 @@ from typing import Any
 import numpy as np
 import pybullet as pb
 from numpy.typing import ArrayLike
-from scipy.spatial import ConvexHull
 
 from planner.atomic_file import atomic_path
 from skills import quaternion as quat
@@ -179,6 +178,10 @@ def side_view(start: Array, goal: Array) -> View:
 
 def outline(shape: ShapeSpec, position: ArrayLike, orientation: ArrayLike, view: View) -> Array:
     """The shape's silhouette in a view, a closed polygon (M, 2) (a sphere's: its circle)."""
+    # Here, not at the top: scipy.spatial takes a fifth of a second to import, which a run
+    # would pay before its first tick for a figure drawn after its last.
+    from scipy.spatial import ConvexHull
+
     body = shape_points(shape)
     world = np.asarray(position, dtype=float) + quat.rotate(np.asarray(orientation, float), body)
     flat = view.project(world)
