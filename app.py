@@ -275,11 +275,11 @@ def _affordances_command(args: argparse.Namespace) -> int:
 
 def _load_library(folder: str | None) -> Any:
     """The library in ``folder``, or the default one learnt from the shipped demonstrations."""
-    from skills.default_library import build_default_library
+    from skills.default_library import default_library
     from skills.library import SkillLibrary
 
     if folder is None:
-        return build_default_library()
+        return default_library()
     return SkillLibrary.load(folder)
 
 

@@ -32,7 +32,7 @@ from planner.render import render_tree
 from planner.runlog import RunLog
 from planner.runner import RunResult, run_tree
 from planner.tree_dataflow import RUN_WRITES, TASK_OBJECT_KEY
-from skills.default_library import build_default_library
+from skills.default_library import default_library
 from skills.library import SkillLibrary
 from worlds.sim_world import SimWorld, task_moves
 from worlds.world_file import World, as_world_spec
@@ -101,7 +101,7 @@ class EpisodeReport:
 def load_library(world: World) -> SkillLibrary:
     """The world's skill library: the default one, or a folder (LibraryFileError if bad)."""
     if world.skills.library == "default":
-        return build_default_library()
+        return default_library()
     return SkillLibrary.load(world.resolve_path(world.skills.library))
 
 

@@ -19,7 +19,6 @@ from typing import Any
 import numpy as np
 import pybullet as pb
 from numpy.typing import ArrayLike
-from scipy.spatial import ConvexHull
 
 from planner.atomic_file import atomic_path
 from skills import quaternion as quat
@@ -177,13 +176,41 @@ def side_view(start: Array, goal: Array) -> View:
     )
 
 
+def convex_hull_2d(points: ArrayLike) -> Array:
+    """Indices of the corners of the convex hull of (N, 2) points, counter-clockwise from the
+    lowest-leftmost, points on an edge left out (Andrew's monotone chain); a hull of
+    collinear points is its two ends, of one point that point."""
+    pts = np.asarray(points, dtype=float)
+    order = np.lexsort((pts[:, 1], pts[:, 0]))
+    distinct = [int(order[0])]
+    for i in order[1:]:
+        if not np.array_equal(pts[i], pts[distinct[-1]]):
+            distinct.append(int(i))
+    if len(distinct) < 3:
+        return np.array(distinct, dtype=int)
+
+    def chain(indices: list[int]) -> list[int]:
+        out: list[int] = []
+        for i in indices:
+            while len(out) >= 2:
+                (ax, ay), (bx, by) = pts[out[-2]], pts[out[-1]]
+                cx, cy = pts[i]
+                if (bx - ax) * (cy - ay) - (by - ay) * (cx - ax) > 0.0:  # a left turn: keep b
+                    break
+                out.pop()
+            out.append(i)
+        return out
+
+    lower, upper = chain(distinct), chain(distinct[::-1])
+    return np.array(lower[:-1] + upper[:-1], dtype=int)
+
+
 def outline(shape: ShapeSpec, position: ArrayLike, orientation: ArrayLike, view: View) -> Array:
     """The shape's silhouette in a view, a closed polygon (M, 2) (a sphere's: its circle)."""
     body = shape_points(shape)
     world = np.asarray(position, dtype=float) + quat.rotate(np.asarray(orientation, float), body)
     flat = view.project(world)
-    hull = ConvexHull(flat)
-    return flat[hull.vertices]
+    return flat[convex_hull_2d(flat)]
 
 
 def headings(orientations: Array, view: View) -> Array:
@@ -254,17 +281,50 @@ def draw_move(ax: Any, tr: MoveTrace, view: View) -> list[Array]:
     return drawn
 
 
+#: The figure's margins, inches: left of the axes (tick labels and the vertical axis label),
+#: right, above the top row (the title), below the bottom row (the horizontal axis label
+#: and the legend), and between panels across and down.
+MARGINS_IN = {"left": 0.75, "right": 0.2, "top": 0.75, "bottom": 0.95, "across": 0.8, "down": 0.8}
+
+
 def trajectory_figure(traces: Sequence[MoveTrace], path: Path, title: str) -> Path:
     """Write the top and side views of every move to ``path`` (PNG); see the module's doc."""
     import matplotlib
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    # The grid from the start, not ax.grid() after: that restyles every tick made so far.
+    with matplotlib.rc_context({"axes.grid": True, "grid.alpha": 0.3}):
+        return _trajectory_figure(traces, path, title)
+
+
+def _trajectory_figure(traces: Sequence[MoveTrace], path: Path, title: str) -> Path:
+    # The object interface on an Agg canvas, not pyplot: no global figure to close.
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
 
     n = max(1, len(traces))
     cols = min(n, COLUMNS)
     rows = -(-n // cols)
-    fig, axes = plt.subplots(2 * rows, cols, figsize=(4.4 * cols, 7.8 * rows), squeeze=False)
+    width, height = 4.4 * cols, 7.8 * rows
+    m = MARGINS_IN
+    panel_w = (width - m["left"] - m["right"] - (cols - 1) * m["across"]) / cols
+    panel_h = (height - m["top"] - m["bottom"] - (2 * rows - 1) * m["down"]) / (2 * rows)
+    fig = Figure(figsize=(width, height))
+    FigureCanvasAgg(fig)
+    # Fixed margins, not tight_layout: that measures every label of every panel by drawing
+    # them, which took as long as drawing the figure itself.
+    axes = fig.subplots(
+        2 * rows,
+        cols,
+        squeeze=False,
+        gridspec_kw={
+            "left": m["left"] / width,
+            "right": 1.0 - m["right"] / width,
+            "top": 1.0 - m["top"] / height,
+            "bottom": m["bottom"] / height,
+            "wspace": m["across"] / panel_w,
+            "hspace": m["down"] / panel_h,
+        },
+    )
     top = top_view()
     tops: list[tuple[Any, list[Array]]] = []
     sides: list[tuple[Any, list[Array]]] = []
@@ -277,10 +337,9 @@ def trajectory_figure(traces: Sequence[MoveTrace], path: Path, title: str) -> Pa
         for ax, view in ((ax_top, top), (ax_side, side)):
             ax.set_xlabel(view.labels[0])
             ax.set_ylabel(view.labels[1])
-            ax.set_title(f"{tr.label}: {view.name}", fontsize=8)
+            ax.set_title(f"{tr.label}: {view.name}", fontsize=8, y=1.0)
             if view.mirrored:
                 ax.invert_xaxis()
-            ax.grid(alpha=0.3)
         if tr.demonstrated is None:
             ax_top.text(0.02, 0.02, "never carried", transform=ax_top.transAxes, fontsize=8)
     for k in range(len(traces), rows * cols):
@@ -298,16 +357,17 @@ def trajectory_figure(traces: Sequence[MoveTrace], path: Path, title: str) -> Pa
         legend.update({lab: h for h, lab in zip(handles, labels, strict=True) if lab not in legend})
     if legend:
         fig.legend(
-            legend.values(), legend.keys(), loc="lower center", ncol=min(len(legend), 6), fontsize=8
+            legend.values(),
+            legend.keys(),
+            loc="lower center",
+            ncol=min(len(legend), 6),
+            fontsize=8,
+            bbox_to_anchor=(0.5, 0.08 / height),
         )
-    fig.suptitle(title)
-    fig.tight_layout(rect=(0.0, 0.05 / rows, 1.0, 1.0))
+    fig.suptitle(title, y=1.0 - 0.25 / height)
     path.parent.mkdir(parents=True, exist_ok=True)
-    try:
-        with atomic_path(path) as temporary:  # never half a figure under its name
-            fig.savefig(temporary, dpi=110)
-    finally:
-        plt.close(fig)
+    with atomic_path(path) as temporary:  # never half a figure under its name
+        fig.savefig(temporary, dpi=110, format="png")
     return path
 
 

@@ -535,6 +535,83 @@ def _run_on_ray(
             ray.shutdown()
 
 
+#: Times the local pool runs a trial again whose worker died (killed, crashed), as Ray does.
+POOL_RETRIES = RAY_RETRIES
+
+
+def _run_on_pool(
+    jobs: list[tuple[dict[str, Any], int, int]],
+    workers: int,
+    keep: Callable[[dict[str, Any]], None],
+) -> None:
+    """Run ``jobs`` on a pool of ``workers`` forked processes, handing each record to ``keep``
+    here as it arrives.
+
+    A worker that dies mid-trial (killed, out of memory, a crash in compiled code) breaks
+    the pool: every trial running on it then, its own and the others', is run again on a new
+    pool, and each record arrives once, since a trial is done only when its record arrived.
+    At most one trial per worker is handed to the pool, so those running when it broke are
+    all that is run again. A trial running when its pool broke ``POOL_RETRIES + 1`` times
+    is a RuntimeError (as on Ray), not a campaign that never ends.
+    """
+    import multiprocessing as mp
+    from collections import deque
+    from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+    from concurrent.futures.process import BrokenProcessPool
+
+    queue = deque(jobs)
+    broken_runs: dict[int, int] = {}
+    while queue:
+        pool = ProcessPoolExecutor(
+            workers, mp_context=mp.get_context("fork"), initializer=_worker_init
+        )
+        running: dict[Future[dict[str, Any]], tuple[dict[str, Any], int, int]] = {}
+        lost: list[tuple[dict[str, Any], int, int]] = []
+        broken = False
+        try:
+            while running or (queue and not broken):
+                while queue and not broken and len(running) < workers:
+                    try:
+                        running[pool.submit(run_trial, queue[0])] = queue[0]
+                        queue.popleft()
+                    except BrokenProcessPool:  # it broke since the last result came
+                        broken = True
+                if not running:
+                    break
+                finished, _ = wait(running, return_when=FIRST_COMPLETED)
+                for future in finished:
+                    job = running.pop(future)
+                    try:
+                        record = future.result()
+                    except BrokenProcessPool:
+                        broken = True
+                        lost.append(job)
+                    else:
+                        keep(record)
+        except BaseException:  # Ctrl-C included: end the workers, keep what finished
+            _end_pool(pool)
+            raise
+        pool.shutdown(wait=True)
+        for _, _, trial in lost:
+            broken_runs[trial] = broken_runs.get(trial, 0) + 1
+            if broken_runs[trial] > POOL_RETRIES:
+                raise RuntimeError(
+                    f"local pool: trial {trial} was running when its worker died "
+                    f"{broken_runs[trial]} times (killed or crashed)"
+                )
+        queue.extendleft(reversed(lost))
+
+
+def _end_pool(pool: Any) -> None:
+    """Stop a process pool now, its running trials too (they have no record: they run again
+    when the campaign resumes)."""
+    processes = list((getattr(pool, "_processes", None) or {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    # Python 3.14 has ProcessPoolExecutor.terminate_workers(); before it, its processes.
+    for process in processes:
+        process.terminate()
+
+
 def _worker_init() -> None:
     """In a worker: leave Ctrl-C to the parent (which ends the pool), and die with it."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
@@ -671,7 +748,8 @@ def _run_locked(
         **({"main_tree": main_tree} if main_tree else {}),
     }
     die = os.environ.get("DUET_TEST_DIE_ONCE", "")
-    if backend == "ray" and ":" in die:  # test-only: see run_trial
+    # Test-only (see run_trial): where trials run in worker processes, never in this one.
+    if (backend == "ray" or workers > 1) and ":" in die:
         at, marker = die.split(":", 1)
         payload["die_once"] = (int(at), marker)
     jobs = [(payload, seed, t) for t in pending]
@@ -708,17 +786,5 @@ def _run_locked(
             for job in jobs:
                 keep(run_trial(job))
         else:
-            import multiprocessing as mp
-
-            ctx = mp.get_context("fork")
-            pool = ctx.Pool(workers, initializer=_worker_init)
-            try:
-                for rec in pool.imap_unordered(run_trial, jobs):
-                    keep(rec)
-                pool.close()
-            except BaseException:  # Ctrl-C included: end the workers, keep what finished
-                pool.terminate()
-                raise
-            finally:
-                pool.join()
+            _run_on_pool(jobs, workers, keep)
     return [done[t] for t in range(n) if t in done]

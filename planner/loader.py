@@ -20,15 +20,18 @@ Example::
 
 from __future__ import annotations
 
+import functools
 import os
 import re
 import tempfile
 import weakref
 import xml.etree.ElementTree as ET
-from collections.abc import Collection
+from collections.abc import Callable, Collection
 from pathlib import Path
+from typing import Any
 
 import py_trees
+import py_trees.ports_utils
 from py_trees.parsers.behaviour_tree_xml import parse_behaviour_tree_xml
 
 from planner.bt_scripting import attach_conditions
@@ -48,6 +51,37 @@ __all__ = ["TreeFileError", "load_tree", "load_tree_string", "subtree_ids"]
 #: (by its name), where one name has one ID. Weak keys: a tree dropped is forgotten.
 _SUBTREE_IDS: weakref.WeakKeyDictionary[py_trees.behaviour.Behaviour, dict[str, str]] = (
     weakref.WeakKeyDictionary()
+)
+
+
+def _once_per_class(
+    collect: Callable[[Callable[..., Any]], dict[str, Any]],
+) -> Callable[[Callable[..., Any]], dict[str, Any]]:
+    """``collect`` (py_trees' ``collect_type_hints``) computed once per class.
+
+    The parser asks for a class's constructor hints once per node, and each time walks the
+    class's MRO with ``inspect.signature``: half of building the default tree. A class's
+    hints do not change, so each class's are kept (weakly: a class dropped is forgotten) and
+    a copy handed out; anything but a class (a ``functools.partial``) is asked every time.
+    """
+    if getattr(collect, "_once_per_class", False):  # this module imported again
+        return collect
+    found: weakref.WeakKeyDictionary[type, dict[str, Any]] = weakref.WeakKeyDictionary()
+
+    @functools.wraps(collect)
+    def hints(constructor: Callable[..., Any]) -> dict[str, Any]:
+        if not isinstance(constructor, type):
+            return collect(constructor)
+        if constructor not in found:
+            found[constructor] = collect(constructor)
+        return dict(found[constructor])
+
+    hints._once_per_class = True  # type: ignore[attr-defined]
+    return hints
+
+
+py_trees.ports_utils.collect_type_hints = _once_per_class(  # type: ignore[assignment]
+    py_trees.ports_utils.collect_type_hints
 )
 
 

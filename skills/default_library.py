@@ -17,15 +17,18 @@ hold_lateral       relative    spring-damper and squeeze fitted to a held palm  
 
 from __future__ import annotations
 
+import sys
+import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from skills import file_cache
 from skills.couplings.steering_fit import AvoidanceDemo, fit_obstacle_steering
 from skills.demonstration import Demonstration
 from skills.demos.io import DemoFile, columns, read_demo_csv
-from skills.library import SkillLibrary
+from skills.library import ARRAYS_FILE, META_FILE, LibraryFileError, SkillLibrary
 from skills.pose_dmp import fit_pose
 from skills.scaling import Scaling
 from skills.skill import Provenance, Skill, SkillKind, learnt_skill
@@ -260,3 +263,70 @@ def build_default_library(demos_dir: Path = DEMOS_DIR) -> SkillLibrary:
         )
     )
     return lib
+
+
+#: The package whose source the learning runs: all of it keys the cached library.
+_SKILLS_DIR = Path(__file__).resolve().parent
+
+
+def default_library_key(demos_dir: Path = DEMOS_DIR) -> str:
+    """The name of the default library learnt from ``demos_dir``: a digest of everything the
+    learning reads (every CSV there, the source of the whole ``skills`` package, the Python,
+    numpy and scipy it runs on), so an edit to any of them is a new name."""
+    parts: list[bytes | str] = [sys.version, *file_cache.versions("numpy", "scipy")]
+    for path in sorted(demos_dir.glob("*.csv")):
+        parts += [path.name, path.read_bytes()]
+    return file_cache.content_key([*parts, *file_cache.source_files(_SKILLS_DIR)])
+
+
+def default_library(demos_dir: Path = DEMOS_DIR, cache_dir: Path | None = None) -> SkillLibrary:
+    """:func:`build_default_library`, learnt once per content and then read from the cache.
+
+    The learning is pure and deterministic, so the library read back is the one learnt (every
+    parameter and array bit for bit; :meth:`SkillLibrary.load` validates it as any library).
+    A cache that cannot be read or written costs the time of learning, never the library.
+
+    Parameters
+    ----------
+    demos_dir : Path
+        The demonstrations (:data:`DEMOS_DIR`).
+    cache_dir : Path, optional
+        Default: :func:`skills.file_cache.cache_folder` of ``"skills"``.
+    """
+    try:
+        folder = file_cache.cache_folder("skills", "cached skill libraries", cache_dir)
+        entry = folder / f"default_library_{default_library_key(demos_dir)}.bin"
+    except OSError:
+        return build_default_library(demos_dir)
+    payload = file_cache.read_entry(entry)
+    if payload is not None:
+        try:
+            return _unpacked(payload)
+        except (LibraryFileError, ValueError, OSError):
+            pass  # a payload of an older layout: learnt again below, and replaced
+    library = build_default_library(demos_dir)
+    try:
+        file_cache.write_entry(entry, _packed(library))
+    except OSError:
+        pass
+    return library
+
+
+def _packed(library: SkillLibrary) -> bytes:
+    """A library's two files as :meth:`SkillLibrary.save` writes them, in one payload."""
+    with tempfile.TemporaryDirectory(prefix="duet-library-") as tmp:
+        folder = library.save(Path(tmp) / "library")
+        meta, arrays = (folder / META_FILE).read_bytes(), (folder / ARRAYS_FILE).read_bytes()
+    return len(meta).to_bytes(8, "little") + meta + arrays
+
+
+def _unpacked(payload: bytes) -> SkillLibrary:
+    """The library :func:`_packed` packed, through :meth:`SkillLibrary.load`'s checks."""
+    size = int.from_bytes(payload[:8], "little")
+    if not 0 < size <= len(payload) - 8:
+        raise ValueError("cached library: expected the length of library.json first")
+    with tempfile.TemporaryDirectory(prefix="duet-library-") as tmp:
+        folder = Path(tmp)
+        (folder / META_FILE).write_bytes(payload[8 : 8 + size])
+        (folder / ARRAYS_FILE).write_bytes(payload[8 + size :])
+        return SkillLibrary.load(folder)

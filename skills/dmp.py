@@ -23,6 +23,7 @@ from numpy.typing import ArrayLike
 
 from skills.basis import DEFAULT_ALPHA_S, RBFBasis, make_basis, phase, phase_step
 from skills.demonstration import Demonstration
+from skills.kernel import kernel
 from skills.scaling import Scaling, scaling_matrix
 from skills.types import Array
 
@@ -362,6 +363,38 @@ class Trajectory:
         )
 
 
+@kernel
+def second_order_filter(a: Array, b0: float, u: Array, z: Array, out: Array) -> None:
+    """``out[k] = b0 u[k] - a[1] out[k-1] - a[2] out[k-2]`` per column, from the state ``z``.
+
+    The filter :func:`scipy.signal.lfilter` applies for ``b = [b0]``, ``a = [1, a1, a2]``,
+    in its own form (direct form II transposed, the numerator padded with zero taps to the
+    denominator's length) and order of operations, so each output rounds as lfilter's does:
+    ``y = z0 + b0 u; z0 = z1 + u 0 - a1 y; z1 = u 0 - a2 y``.
+
+    Parameters
+    ----------
+    a : ndarray, shape (3,)
+        ``[1, a1, a2]``.
+    b0 : float
+    u : ndarray, shape (N, D)
+        Inputs.
+    z : ndarray, shape (2, D)
+        Initial state (lfilter's ``zi``); left as it was.
+    out : ndarray, shape (N, D)
+        Written with the outputs.
+    """
+    zero = 0.0  # the padded taps b1 = b2 = 0, multiplied as lfilter multiplies them
+    for d in range(u.shape[1]):
+        z0, z1 = z[0, d], z[1, d]
+        for k in range(u.shape[0]):
+            x = u[k, d]
+            y = z0 + b0 * x
+            z0 = z1 + x * zero - y * a[1]
+            z1 = x * zero - y * a[2]
+            out[k, d] = y
+
+
 def linear_rollout(
     y0: Array,
     yd0: Array,
@@ -378,8 +411,9 @@ def linear_rollout(
 
         e[k+2] = (2 - D dt - K dt^2) e[k+1] - (1 - D dt) e[k] + dt^2 u[k+1]
 
-    so :func:`scipy.signal.lfilter` solves it in compiled code, matching step-by-step
-    integration to rounding error.
+    so a second-order linear filter solves it in compiled code (:func:`second_order_filter`,
+    the filter :func:`scipy.signal.lfilter` would apply), matching step-by-step integration
+    to rounding error.
 
     Parameters
     ----------
@@ -408,11 +442,9 @@ def linear_rollout(
         # Outputs e[2..n] driven by u[1..n-1], seeded with e[1], e[0] as past outputs.
         # Transposed direct-form state for past outputs e[1], e[0] (b has a single tap).
         zi = np.stack((-a[1] * e1 - a[2] * e0, -a[2] * e1))
-        # Imported here: scipy.signal takes about a second to import, which every command
-        # that only reads a tree (validate, nodes) would pay.
-        from scipy import signal
-
-        e[2:], _ = signal.lfilter(b, a, drive[1:], axis=0, zi=zi)
+        # Not scipy.signal.lfilter: importing scipy.signal (and scipy.stats with it) took a
+        # second of every run, for this one filter.
+        second_order_filter(a, float(b[0]), np.ascontiguousarray(drive[1:]), zi, e[2:])
     y = e + goal
     yd = np.empty_like(y)
     yd[0] = yd0

@@ -9,15 +9,19 @@ simulator. Checked statically, every import of every file counted (inside functi
 
 from __future__ import annotations
 
+import json
+import os
 import subprocess
 import sys
 from collections.abc import Callable
+from pathlib import Path
 
 import pytest
 
 from tests.import_graph import PACKAGES, Import, imports_of, is_project, module_files
 
 HEAVY = ("pybullet", "fcl", "trimesh")
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def _top(target: str) -> str:
@@ -117,3 +121,73 @@ def test_skills_imports_only_numpy_scipy_and_numba() -> None:
         [sys.executable, "-c", code], capture_output=True, text=True, check=True
     ).stdout.strip()
     assert out == "", f"skills imported {out}"
+
+
+#: Modules the run path never needs: plotting, the cluster and Groot2 extras, scipy's parts
+#: that only fitting, generating demonstrations or the report use, and mesh loading (its
+#: hulls come from the cache).
+NOT_ON_THE_RUN_PATH = (
+    "matplotlib",
+    "ray",
+    "zmq",
+    "scipy.signal",
+    "scipy.stats",
+    "scipy.optimize",
+    "scipy.spatial",
+    "scipy.ndimage",
+    "trimesh",
+)
+#: Not even for the figure at the end of a run.
+NOT_IN_A_RUN = ("matplotlib.pyplot", "ray", "zmq", "scipy.signal", "scipy.stats", "scipy.spatial")
+
+_RUN_UNTIL = """
+import json, os, sys
+import app
+import planner.runner as runner
+first_tick = runner.tick_tree
+def tick_tree(tree):
+    first_tick(tree)
+    if os.environ.get("STOP_AT_FIRST_TICK"):
+        print(json.dumps(sorted(sys.modules)), flush=True)
+        os._exit(0)
+    if not hasattr(tick_tree, "seen"):
+        tick_tree.seen = sorted(sys.modules)
+runner.tick_tree = tick_tree
+code = app.main(["run", "worlds/parcel_pick_place.yaml", "--out", sys.argv[1], "--no-animation"])
+print(json.dumps(tick_tree.seen))
+print(json.dumps(sorted(sys.modules)))
+sys.exit(code)
+"""
+
+
+def _loaded(names: list[str], banned: tuple[str, ...]) -> list[str]:
+    return sorted({b for b in banned for n in names if n == b or n.startswith(b + ".")})
+
+
+def test_importing_the_command_line_imports_no_package_of_a_command() -> None:
+    code = "import json, sys, app\nprint(json.dumps(sorted(sys.modules)))"
+    names = json.loads(
+        subprocess.run(
+            [sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=ROOT
+        ).stdout
+    )
+    heavy = ("numba", "pybullet", "pydantic", "py_trees", "scipy", *NOT_ON_THE_RUN_PATH)
+    assert _loaded(names, heavy) == []
+
+
+@pytest.mark.sim
+def test_a_run_imports_only_what_it_uses(tmp_path: Path) -> None:
+    env = {**os.environ, "XDG_CACHE_HOME": str(tmp_path / "cache")}
+    run = [sys.executable, "-c", _RUN_UNTIL, str(tmp_path / "out")]
+    # A cold cache: the mesh hulls and the skill library are computed, once.
+    cold = subprocess.run(
+        run, capture_output=True, text=True, cwd=ROOT, env={**env, "STOP_AT_FIRST_TICK": "1"}
+    )
+    assert cold.returncode == 0, cold.stderr[-2000:]
+    assert "trimesh" in json.loads(cold.stdout.splitlines()[-1])
+    warm = subprocess.run(run, capture_output=True, text=True, cwd=ROOT, env=env)
+    assert warm.returncode == 0, warm.stderr[-2000:]
+    at_first_tick, at_the_end = (json.loads(line) for line in warm.stdout.splitlines()[-2:])
+    assert _loaded(at_first_tick, NOT_ON_THE_RUN_PATH) == []
+    assert _loaded(at_the_end, NOT_IN_A_RUN) == []
+    assert "matplotlib" in at_the_end  # the figure was drawn

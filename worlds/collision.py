@@ -14,6 +14,7 @@ Poses in this module are (position (3,), quaternion (4,) scalar-last) pairs in t
 
 from __future__ import annotations
 
+import io
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -22,9 +23,9 @@ from typing import Any
 import fcl
 import numpy as np
 import pybullet as pb
-import trimesh
 from numpy.typing import ArrayLike, NDArray
 
+from skills import file_cache
 from skills import quaternion as quat
 from skills.types import Array
 from skills.vocabulary import Arm
@@ -46,26 +47,95 @@ def arm_group(arm: Arm) -> str:
 # Geometry helpers
 
 
-def _convex_from_mesh(mesh: trimesh.Trimesh) -> tuple[fcl.Convex, FloatArray]:
-    hull = mesh.convex_hull
-    faces = np.hstack([np.full((len(hull.faces), 1), 3), hull.faces]).ravel()
-    return fcl.Convex(np.asarray(hull.vertices, dtype=float), len(hull.faces), faces), np.asarray(
-        hull.vertices, dtype=float
-    )
+def _convex_from_hull(vertices: FloatArray, faces: NDArray[np.int64]) -> fcl.Convex:
+    """FCL's convex shape of a hull's vertices (V, 3) and triangles (F, 3)."""
+    flat = np.hstack([np.full((len(faces), 1), 3), faces]).ravel()
+    return fcl.Convex(vertices, len(faces), flat)
 
+
+#: Bump when what :func:`_mesh_hull` computes changes: it names the cached hulls.
+HULL_CACHE_VERSION = "1"
 
 _MESH_CACHE: dict[tuple[str, float], tuple[fcl.Convex, FloatArray]] = {}
+
+
+def _mesh_hull(path: Path, scale: float) -> tuple[FloatArray, NDArray[np.int64]]:
+    """The convex hull of a mesh file scaled by ``scale``: vertices (V, 3), m, and triangles
+    (F, 3), as trimesh computes it."""
+    import trimesh  # here: only a mesh not in the hull cache needs it (a second to import)
+
+    mesh = trimesh.load(path, force="mesh")
+    if not isinstance(mesh, trimesh.Trimesh):
+        raise ValueError(f"collision: expected a triangle mesh in {path}, got {type(mesh)}")
+    mesh = mesh.copy()
+    mesh.apply_scale(scale)
+    hull = mesh.convex_hull
+    return np.asarray(hull.vertices, dtype=float), np.asarray(hull.faces, dtype=np.int64)
+
+
+def _hull_from_payload(payload: bytes) -> tuple[FloatArray, NDArray[np.int64]] | None:
+    """A cached hull's arrays, or None if they are not a hull (then it is computed again)."""
+    try:
+        with np.load(io.BytesIO(payload), allow_pickle=False) as npz:
+            vertices, faces = npz["vertices"], npz["faces"]
+    except (ValueError, OSError, KeyError, EOFError):
+        return None
+    ok = (
+        vertices.dtype == np.float64
+        and vertices.ndim == 2
+        and vertices.shape[1] == 3
+        and faces.dtype == np.int64
+        and faces.ndim == 2
+        and faces.shape[1] == 3
+        and len(faces) > 0
+        and bool(np.all(np.isfinite(vertices)))
+        and int(faces.min()) >= 0
+        and int(faces.max()) < len(vertices)
+    )
+    return (vertices, faces) if ok else None
+
+
+def cached_mesh_hull(
+    path: Path, scale: float, cache_dir: Path | None = None
+) -> tuple[FloatArray, NDArray[np.int64]]:
+    """:func:`_mesh_hull`, computed once per mesh content and then read from the cache.
+
+    Named by the file's bytes, the scale and the versions of trimesh and scipy (its hull is
+    qhull's), so the hull read back is the one computed, bit for bit; a cache that cannot be
+    used costs the time of computing it, never the hull.
+    """
+    try:
+        data = path.read_bytes()
+    except OSError:
+        return _mesh_hull(path, scale)  # trimesh says what is wrong with the file
+    key = file_cache.content_key(
+        [HULL_CACHE_VERSION, repr(float(scale)), data, *file_cache.versions("trimesh", "scipy")]
+    )
+    try:
+        entry = file_cache.cache_folder("hulls", "cached collision hulls", cache_dir) / (
+            f"{path.stem[:40]}_{key}.npz.bin"
+        )
+    except OSError:
+        return _mesh_hull(path, scale)
+    payload = file_cache.read_entry(entry)
+    hull = _hull_from_payload(payload) if payload is not None else None
+    if hull is not None:
+        return hull
+    vertices, faces = _mesh_hull(path, scale)
+    buffer = io.BytesIO()
+    np.savez(buffer, vertices=vertices, faces=faces)
+    try:
+        file_cache.write_entry(entry, buffer.getvalue())
+    except OSError:
+        pass
+    return vertices, faces
 
 
 def _mesh_geometry(path: Path, scale: float) -> tuple[fcl.Convex, FloatArray]:
     key = (str(path), scale)
     if key not in _MESH_CACHE:
-        mesh = trimesh.load(path, force="mesh")
-        if not isinstance(mesh, trimesh.Trimesh):
-            raise ValueError(f"collision: expected a triangle mesh in {path}, got {type(mesh)}")
-        mesh = mesh.copy()
-        mesh.apply_scale(scale)
-        _MESH_CACHE[key] = _convex_from_mesh(mesh)
+        vertices, faces = cached_mesh_hull(path, scale)
+        _MESH_CACHE[key] = (_convex_from_hull(vertices, faces), vertices)
     return _MESH_CACHE[key]
 
 

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import numpy as np
-from scipy.ndimage import gaussian_filter1d
 
 from skills.types import Array
 
@@ -26,6 +25,9 @@ def tremor(n: int, dims: int, amplitude: float, smoothing: int, rng: np.random.G
     """
     if amplitude == 0.0:
         return np.zeros((n, dims))
+    # Here: skills.demos.io (a run reads its demonstrations) need not import scipy.ndimage.
+    from scipy.ndimage import gaussian_filter1d
+
     raw = gaussian_filter1d(rng.standard_normal((n, dims)), smoothing, axis=0, mode="nearest")
     raw *= amplitude / max(float(np.std(raw)), 1e-12)
     return raw * rest_window(np.linspace(0.0, 1.0, n))[:, None]

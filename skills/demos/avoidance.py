@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy import linalg
 
 from skills.couplings._checks import non_negative, positive, unit_vector, vector
 from skills.demos._smooth import min_jerk, tremor
@@ -49,6 +48,9 @@ def _min_jerk_through(
     for d in range(1, 5):
         rows.append(np.r_[_derivative_row(u_via, d), -_derivative_row(u_via, d)])
         rhs.append(np.zeros(3))
+    # Here: skills.demos.io (a run reads its demonstrations) need not import scipy.linalg.
+    from scipy import linalg
+
     coef = linalg.solve(np.array(rows), np.array(rhs))  # (12, 3)
     powers = u[:, None] ** np.arange(6)
     return np.where((u <= u_via)[:, None], powers @ coef[:6], powers @ coef[6:])

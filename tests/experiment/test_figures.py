@@ -17,6 +17,7 @@ from matplotlib.patches import Circle, Polygon
 
 from experiment.figures import (
     MoveTrace,
+    convex_hull_2d,
     demonstrated_path,
     draw_move,
     headings,
@@ -83,6 +84,25 @@ def test_footprints_are_to_scale_and_turned_with_the_object() -> None:
         span(outline(PARCEL, [0.5, 0.0, 0.7], quat.IDENTITY, along_45)),
         [(0.20 + 0.30) / np.sqrt(2.0), 0.15],
     )
+
+
+def test_the_hull_is_qhulls_corners_counter_clockwise() -> None:
+    spatial = pytest.importorskip("scipy.spatial")
+    rng = np.random.default_rng(4)
+    for n in (3, 8, 50, 400):
+        points = rng.normal(size=(n, 2))
+        corners = convex_hull_2d(points)
+        assert sorted(corners) == sorted(spatial.ConvexHull(points).vertices)
+        ring = points[corners]
+        edges = np.roll(ring, -1, axis=0) - ring
+        turns = (
+            edges[:, 0] * np.roll(edges, -1, axis=0)[:, 1]
+            - edges[:, 1] * np.roll(edges, -1, axis=0)[:, 0]
+        )
+        assert np.all(turns > 0.0)  # every corner a left turn: convex, counter-clockwise
+    square = np.array([[0, 0], [1, 0], [1, 1], [0, 1], [0.5, 0], [0.5, 0.5], [1, 1]], float)
+    assert sorted(convex_hull_2d(square)) == [0, 1, 2, 3]  # edge and inner points left out
+    assert list(convex_hull_2d(np.array([[0, 0], [1, 1], [2, 2.0]]))) == [0, 2]  # a segment
 
 
 def test_the_heading_is_the_objects_x_axis() -> None:

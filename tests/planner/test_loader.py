@@ -228,3 +228,29 @@ def test_explicit_registry_and_partials() -> None:
             '<root><BehaviorTree ID="A"><StubCheck name="c" value="1"/></BehaviorTree></root>',
             registry=registry,
         )
+
+
+def test_constructor_hints_are_read_once_per_class_and_handed_out_as_copies(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    import inspect
+
+    import py_trees.ports_utils
+
+    class Leaf:
+        def __init__(self, name: str, gain: float = 1.0) -> None:
+            del name, gain
+
+    calls: list[object] = []
+    signature = inspect.signature
+
+    def counted(obj: object, *args: object, **kwargs: object) -> inspect.Signature:
+        calls.append(obj)
+        return signature(obj, *args, **kwargs)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(py_trees.ports_utils.inspect, "signature", counted)
+    first = py_trees.ports_utils.collect_type_hints(Leaf)
+    first["gain"] = "changed"
+    again = py_trees.ports_utils.collect_type_hints(Leaf)
+    assert again == {"name": "str", "gain": "float"}  # annotations as written (postponed)
+    assert calls.count(Leaf.__init__) == 1

@@ -7,9 +7,16 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from skills.default_library import build_default_library, fit_grasp_maintenance
+from skills import file_cache
+from skills.default_library import (
+    build_default_library,
+    default_library,
+    default_library_key,
+    fit_grasp_maintenance,
+)
 from skills.demos.generate import TEACHER_DAMPING, TEACHER_STIFFNESS, write_all
 from skills.demos.io import DemoFileError, read_demo_csv, write_demo_csv
+from skills.library import SkillLibrary
 from skills.skill import SkillKind
 from skills.vocabulary import Action, Space
 
@@ -67,3 +74,59 @@ def test_demo_csv_errors_name_file_row_and_column(tmp_path: Path) -> None:
     np.testing.assert_allclose(back.demonstration.t, t, atol=1e-9)
     with pytest.raises(DemoFileError, match="expected columns force for this skill"):
         fit_grasp_maintenance(back)
+
+
+def _assert_same_library(a: SkillLibrary, b: SkillLibrary) -> None:
+    """Every skill field equal, every array with the same dtype, shape and bytes."""
+    assert a.names() == b.names()
+    for s in a:
+        t = b.get(s.name)
+        assert (s.label, s.action, s.space, s.kind, s.elements, s.provenance) == (
+            t.label,
+            t.action,
+            t.space,
+            t.kind,
+            t.elements,
+            t.provenance,
+        )
+        assert dict(s.params) == dict(t.params)
+        assert {k: type(v) for k, v in s.params.items()} == {
+            k: type(v) for k, v in t.params.items()
+        }
+        assert sorted(s.arrays) == sorted(t.arrays)
+        for k, v in s.arrays.items():
+            w = t.arrays[k]
+            assert (v.dtype, v.shape, v.tobytes()) == (w.dtype, w.shape, w.tobytes()), k
+
+
+def test_the_cached_library_is_the_learnt_one_bit_for_bit(tmp_path: Path) -> None:
+    learnt = build_default_library()
+    first = default_library(cache_dir=tmp_path)  # learns it and writes the entry
+    (entry,) = tmp_path.iterdir()
+    assert entry.name == f"default_library_{default_library_key()}.bin"
+    written = entry.stat().st_mtime_ns
+    second = default_library(cache_dir=tmp_path)  # reads it back
+    assert entry.stat().st_mtime_ns == written
+    _assert_same_library(learnt, first)
+    _assert_same_library(learnt, second)
+
+
+def test_a_damaged_cached_library_is_learnt_again(tmp_path: Path) -> None:
+    default_library(cache_dir=tmp_path)
+    (entry,) = tmp_path.iterdir()
+    data = bytearray(entry.read_bytes())
+    data[-20] ^= 0xFF  # inside arrays.npz
+    entry.write_bytes(bytes(data))
+    _assert_same_library(build_default_library(), default_library(cache_dir=tmp_path))
+    assert file_cache.read_entry(entry) is not None  # written again, whole
+
+
+def test_a_changed_demonstration_names_another_library(tmp_path: Path) -> None:
+    demos = tmp_path / "demos"
+    demos.mkdir()
+    for path in DEMOS.glob("*.csv"):
+        (demos / path.name).write_bytes(path.read_bytes())
+    assert default_library_key(demos) == default_library_key()
+    pick = demos / "pick_place.csv"
+    pick.write_bytes(pick.read_bytes() + b"\n")  # one more byte
+    assert default_library_key(demos) != default_library_key()

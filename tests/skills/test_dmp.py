@@ -15,6 +15,7 @@ from skills.dmp import (
     PositionDMP,
     fit_position,
     position_rollout,
+    second_order_filter,
 )
 from skills.interpreter import kernel_acceleration
 from skills.pose_dmp import (
@@ -332,3 +333,24 @@ def test_the_compiled_pose_dmp_steps_as_the_numpy_reference(demo: Demonstration)
             assert_allclose(a, b, rtol=1e-9, atol=1e-9)
         if i == 200:
             dmp.set_goal(demo.positions[-1])  # packs again
+
+
+def test_the_rollout_filter_is_lfilters_bit_for_bit() -> None:
+    # The filter linear_rollout runs in place of scipy.signal.lfilter: every output the same
+    # float, over DMP-like and arbitrary coefficients, inputs of many scales, zeros included.
+    signal = pytest.importorskip("scipy.signal")
+    rng = np.random.default_rng(17)
+    for trial in range(200):
+        n, dims = int(rng.integers(2, 300)), int(rng.integers(1, 7))
+        dt, alpha, tau = rng.choice([0.001, 0.005, 0.0123]), rng.uniform(1, 60), rng.uniform(0.2, 5)
+        k_gain, d_gain = alpha * alpha / 4.0 / tau**2, alpha / tau
+        a = np.array([1.0, -(2.0 - d_gain * dt - k_gain * dt * dt), 1.0 - d_gain * dt])
+        if trial % 5 == 0:
+            a[1:] = rng.uniform(-1.5, 1.5, size=2)
+        u = rng.standard_normal((n, dims)) * 10.0 ** rng.uniform(-3, 3, size=(1, dims))
+        u[rng.integers(0, n)] = 0.0
+        zi = rng.standard_normal((2, dims))
+        expected, _ = signal.lfilter([dt * dt], a, u, axis=0, zi=zi)
+        out = np.empty((n, dims))
+        second_order_filter(a, float(dt * dt), u, zi, out)
+        assert out.tobytes() == expected.tobytes(), trial

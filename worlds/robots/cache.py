@@ -15,22 +15,14 @@ import stat
 import tempfile
 from pathlib import Path
 
+from skills import file_cache
+
+_WHAT = "cached robot files"
+
 
 def default_cache_dir() -> Path:
     """The user's cache folder for generated robot files."""
-    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
-    return Path(base) / "duet" / "robots"
-
-
-def _private_folder(folder: Path) -> Path:
-    """``folder``, made if missing; refused if it is a link or another user's."""
-    folder.mkdir(parents=True, exist_ok=True, mode=0o700)
-    info = os.lstat(folder)
-    if stat.S_ISLNK(info.st_mode) or not stat.S_ISDIR(info.st_mode):
-        raise OSError(f"{folder}: expected a folder for cached robot files, got a link or a file")
-    if hasattr(os, "getuid") and info.st_uid != os.getuid():
-        raise OSError(f"{folder}: expected a folder of this user's for cached robot files")
-    return folder
+    return file_cache.default_cache_dir("robots")
 
 
 def _holds(path: Path, data: bytes) -> bool:
@@ -68,14 +60,8 @@ def cached_urdf(text: str, stem: str, cache_dir: Path | None = None) -> Path:
     """
     data = text.encode()
     digest = hashlib.sha256(data).hexdigest()[:16]
-    if cache_dir is not None:
-        folder = _private_folder(cache_dir)
-    else:
-        try:
-            folder = _private_folder(default_cache_dir())
-        except OSError:  # no writable home (a container, a sandbox): a private temporary one
-            uid = os.getuid() if hasattr(os, "getuid") else 0
-            folder = _private_folder(Path(tempfile.gettempdir()) / f"duet-robots-{uid}")
+    # By default the user's cache, else (no writable home) a private temporary folder.
+    folder = file_cache.cache_folder("robots", _WHAT, cache_dir)
     path = folder / f"{stem}_{digest}.urdf"
     if not _holds(path, data):
         fd, tmp = tempfile.mkstemp(dir=folder, prefix=f".{stem}_", suffix=".urdf")

@@ -19,8 +19,8 @@ from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
+from skills import quaternion as quat
 from skills.vocabulary import ARMS, Arm
 from worlds.robots.model import RobotModel
 
@@ -135,7 +135,9 @@ def chain_reach(
     -------
     ArmReach
     """
-    rotation = Rotation.from_quat(np.asarray(base2world_quaternion, dtype=float))
+    # skills.quaternion, not scipy's Rotation: importing scipy.spatial costs every run's
+    # start-up a fifth of a second for these few products.
+    rotation = quat.as_quaternions(base2world_quaternion, "base2world_quaternion")
     position = np.asarray(base2world_position, dtype=float)
     chain = _chain(urdf)
     origins: list[np.ndarray] = []
@@ -143,9 +145,9 @@ def chain_reach(
     # World frames with every joint at zero: the fixed points and segment lengths found below
     # do not depend on the posture.
     for joint in chain:
-        position = position + rotation.apply(joint.xyz)
-        rotation = rotation * Rotation.from_euler("xyz", joint.rpy)
-        axis = rotation.apply(joint.axis)
+        position = position + quat.rotate(rotation, joint.xyz)
+        rotation = quat.multiply(rotation, quat.from_rpy(joint.rpy))
+        axis = quat.rotate(rotation, joint.axis)
         origins.append(position)
         axes.append(axis / np.linalg.norm(axis))
     moving = [j.kind in _MOVING for j in chain]
