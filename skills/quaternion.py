@@ -185,21 +185,34 @@ def angular_velocity(q: ArrayLike, t: ArrayLike) -> Array:
     return 2.0 * multiply(qdot, conjugate(qc))[:, :3]
 
 
+# Each entry of the rotation matrix is ``2 (a b +- c d)``, a diagonal one ``1 - 2 (a b + c d)``
+# (:func:`matrix_floats`): per entry, row-major, the components ``a, b, c, d`` and the sign of
+# the second product. Gathered like this a batch is a handful of numpy calls, and every entry
+# is computed with the same operations in the same order as the scalar formula (same bits).
+_FACTORS = np.array(
+    [
+        [1, 0, 0, 0, 0, 1, 0, 1, 0],
+        [1, 1, 2, 1, 0, 2, 2, 2, 0],
+        [2, 2, 1, 2, 2, 0, 1, 0, 1],
+        [2, 3, 3, 3, 2, 3, 3, 3, 1],
+    ]
+)
+_SECOND_SIGN = np.array([1.0, -1.0, 1.0, 1.0, 1.0, -1.0, -1.0, 1.0, 1.0])
+_DIAGONAL = np.array([0, 4, 8])
+
+
 def to_matrix(q: ArrayLike) -> Array:
     """Rotation matrices ``(..., 3, 3)`` from unit quaternions ``(..., 4)``."""
     arr = np.asarray(q, dtype=float)
-    x, y, z, w = arr[..., 0], arr[..., 1], arr[..., 2], arr[..., 3]
-    m = np.empty((*arr.shape[:-1], 3, 3))
-    m[..., 0, 0] = 1 - 2 * (y * y + z * z)
-    m[..., 0, 1] = 2 * (x * y - z * w)
-    m[..., 0, 2] = 2 * (x * z + y * w)
-    m[..., 1, 0] = 2 * (x * y + z * w)
-    m[..., 1, 1] = 1 - 2 * (x * x + z * z)
-    m[..., 1, 2] = 2 * (y * z - x * w)
-    m[..., 2, 0] = 2 * (x * z - y * w)
-    m[..., 2, 1] = 2 * (y * z + x * w)
-    m[..., 2, 2] = 1 - 2 * (x * x + y * y)
-    return m
+    if arr.ndim == 1:
+        # One rotation: Python floats do the same IEEE arithmetic without numpy's per-call cost.
+        x, y, z, w = arr.tolist()
+        return np.array(matrix_floats((x, y, z, w))).reshape(3, 3)
+    f = arr[..., _FACTORS]  # (..., 4, 9)
+    # a - b is a + (-b) in IEEE arithmetic: the signed sum is the formula's difference.
+    m = 2 * (f[..., 0, :] * f[..., 1, :] + f[..., 2, :] * f[..., 3, :] * _SECOND_SIGN)
+    m[..., _DIAGONAL] = 1 - m[..., _DIAGONAL]
+    return m.reshape(*arr.shape[:-1], 3, 3)
 
 
 def rotate(q: ArrayLike, v: ArrayLike) -> Array:

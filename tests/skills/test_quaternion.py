@@ -61,6 +61,23 @@ def test_scalar_versions_match_vector_versions() -> None:
         )
 
 
+def test_batched_matrices_are_the_scalar_formula_to_the_bit() -> None:
+    # Batches of every shape and layout, with non-unit, signed-zero and tiny components: each
+    # entry must be the scalar formula's own floating-point result, not merely close to it.
+    q = np.concatenate(
+        (
+            RNG.normal(size=(200, 4)),
+            [[0.0, -0.0, 0.0, 1.0], [-0.0, -0.0, -0.0, -1.0], [1e-300, -1e-300, 3.0, 0.5]],
+        )
+    )
+    for batch in (q, q.reshape(-1, 1, 4), q.reshape(29, 7, 4)[:, ::-1], q[5]):
+        scalar = [quat.matrix_floats(tuple(qi.tolist())) for qi in batch.reshape(-1, 4)]
+        got = quat.to_matrix(batch)
+        assert got.shape == (*batch.shape[:-1], 3, 3)
+        assert got.tobytes() == np.array(scalar).reshape(got.shape).tobytes()
+    assert quat.to_matrix([0.0, 0.0, 0.0, 1.0]).tolist() == np.eye(3).tolist()
+
+
 def test_make_continuous_removes_sign_flips_only() -> None:
     angles = np.linspace(0, 3 * np.pi, 200)
     q = quat.from_axis_angle(np.array([0.0, 0.0, 1.0]), angles)
