@@ -257,6 +257,11 @@ class CollisionWorld:
             arm: self._index(f"{arm_group(arm)}/palm") for arm in (Arm.LEFT, Arm.RIGHT)
         }
         self._request = fcl.DistanceRequest(enable_nearest_points=True, enable_signed_distance=True)
+        # Each group's rows in element order (fixed once built; the obstacles' follow _active).
+        self._group_rows: dict[str, tuple[int, ...]] = {}
+        for i, element in enumerate(self._elements):
+            if element.group != OBSTACLES:
+                self._group_rows[element.group] = (*self._group_rows.get(element.group, ()), i)
         self.sync()
 
     # -- building ----------------------------------------------------------------------------
@@ -428,12 +433,12 @@ class CollisionWorld:
     def _rows(self, group: str) -> list[int]:
         if group == OBSTACLES:
             return list(self._active)
-        rows = [i for i, e in enumerate(self._elements) if e.group == group]
-        if not rows:
+        rows = self._group_rows.get(group)
+        if rows is None:
             raise ValueError(
                 f"CollisionWorld: expected a group in {list(self.group_names())}, got {group!r}"
             )
-        return rows
+        return list(rows)
 
     def colliding_pairs(self, groups: Iterable[str] | None = None) -> list[tuple[str, str]]:
         """Element pairs in contact or penetration, between different groups.
