@@ -53,21 +53,29 @@ def as_quaternions(q: ArrayLike, name: str = "quaternion") -> Array:
     return arr / norms
 
 
+# Each component of ``p * q`` is ``((pw q_i +- px q_j) +- py q_k) +- pz q_l``
+# (:func:`multiply_scalar`): per term (rows) and component (columns), the component of ``q``
+# and the term's sign. Gathered like this a batch is a handful of numpy calls, each component
+# computed with the same operations in the same order as the scalar formula (same bits).
+_P_TERMS = np.array([[3] * 4, [0] * 4, [1] * 4, [2] * 4])
+_Q_TERMS = np.array([[0, 1, 2, 3], [3, 2, 1, 0], [2, 3, 0, 1], [1, 0, 3, 2]])
+_TERM_SIGNS = np.array(
+    [[1.0, 1.0, 1.0, 1.0], [1.0, -1.0, 1.0, -1.0], [1.0, 1.0, -1.0, -1.0], [-1.0, 1.0, 1.0, -1.0]]
+)
+
+
 def multiply(p: ArrayLike, q: ArrayLike) -> Array:
     """Hamilton product ``p * q`` of scalar-last quaternions, shape ``(..., 4)``."""
     a = np.asarray(p, dtype=float)
     b = np.asarray(q, dtype=float)
-    px, py, pz, pw = a[..., 0], a[..., 1], a[..., 2], a[..., 3]
-    qx, qy, qz, qw = b[..., 0], b[..., 1], b[..., 2], b[..., 3]
-    return np.stack(
-        (
-            pw * qx + px * qw + py * qz - pz * qy,
-            pw * qy - px * qz + py * qw + pz * qx,
-            pw * qz + px * qy - py * qx + pz * qw,
-            pw * qw - px * qx - py * qy - pz * qz,
-        ),
-        axis=-1,
-    )
+    if a.ndim == 1 and b.ndim == 1:
+        # One pair: Python floats do the same IEEE arithmetic without numpy's per-call cost.
+        ax, ay, az, aw = a.tolist()
+        bx, by, bz, bw = b.tolist()
+        return np.array(multiply_scalar((ax, ay, az, aw), (bx, by, bz, bw)))
+    # a - b is a + (-b) in IEEE arithmetic: the signed sum is the formula's difference.
+    t = a[..., _P_TERMS] * b[..., _Q_TERMS] * _TERM_SIGNS  # (..., term, component)
+    return ((t[..., 0, :] + t[..., 1, :]) + t[..., 2, :]) + t[..., 3, :]
 
 
 def conjugate(q: ArrayLike) -> Array:
@@ -85,8 +93,9 @@ def log(q: ArrayLike) -> Array:
     """
     arr = np.asarray(q, dtype=float)
     v = arr[..., :3]
-    w = np.clip(arr[..., 3], -1.0, 1.0)
-    vnorm = np.linalg.norm(v, axis=-1)
+    # np.clip and np.linalg.norm(v, axis=-1) without their Python wrappers: the same ufuncs.
+    w = np.minimum(np.maximum(arr[..., 3], -1.0), 1.0)
+    vnorm = np.sqrt(np.add.reduce(v * v, axis=-1))
     angle = np.arctan2(vnorm, w)
     # angle / vnorm -> 1 as vnorm -> 0 (w -> 1); the series keeps it smooth near identity.
     scale = np.where(vnorm > _SMALL, angle / np.maximum(vnorm, _SMALL), 1.0)
@@ -111,6 +120,10 @@ def canonical(q: ArrayLike) -> Array:
     return np.where(arr[..., 3:4] < 0.0, -arr, arr)
 
 
+#: Conjugation as a product: negates the vector part (each -1 an exact negation).
+_CONJUGATE = np.array([-1.0, -1.0, -1.0, 1.0])
+
+
 def rotation_error(goal: ArrayLike, q: ArrayLike) -> Array:
     """Rotation vector ``2 log(goal * conj(q))`` taking ``q`` to ``goal`` the short way.
 
@@ -122,7 +135,8 @@ def rotation_error(goal: ArrayLike, q: ArrayLike) -> Array:
     ndarray, shape (..., 3)
         Rotation vector in the world frame, radians, norm in [0, pi].
     """
-    return 2.0 * log(canonical(multiply(goal, conjugate(q))))
+    # q's conjugate as a product with (-1, -1, -1, 1): the same negations as conjugate().
+    return 2.0 * log(canonical(multiply(goal, np.asarray(q, dtype=float) * _CONJUGATE)))
 
 
 def make_continuous(q: ArrayLike) -> Array:
@@ -185,21 +199,34 @@ def angular_velocity(q: ArrayLike, t: ArrayLike) -> Array:
     return 2.0 * multiply(qdot, conjugate(qc))[:, :3]
 
 
+# Each entry of the rotation matrix is ``2 (a b +- c d)``, a diagonal one ``1 - 2 (a b + c d)``
+# (:func:`matrix_floats`): per entry, row-major, the components ``a, b, c, d`` and the sign of
+# the second product. Gathered like this a batch is a handful of numpy calls, and every entry
+# is computed with the same operations in the same order as the scalar formula (same bits).
+_FACTORS = np.array(
+    [
+        [1, 0, 0, 0, 0, 1, 0, 1, 0],
+        [1, 1, 2, 1, 0, 2, 2, 2, 0],
+        [2, 2, 1, 2, 2, 0, 1, 0, 1],
+        [2, 3, 3, 3, 2, 3, 3, 3, 1],
+    ]
+)
+_SECOND_SIGN = np.array([1.0, -1.0, 1.0, 1.0, 1.0, -1.0, -1.0, 1.0, 1.0])
+_DIAGONAL = np.array([0, 4, 8])
+
+
 def to_matrix(q: ArrayLike) -> Array:
     """Rotation matrices ``(..., 3, 3)`` from unit quaternions ``(..., 4)``."""
     arr = np.asarray(q, dtype=float)
-    x, y, z, w = arr[..., 0], arr[..., 1], arr[..., 2], arr[..., 3]
-    m = np.empty((*arr.shape[:-1], 3, 3))
-    m[..., 0, 0] = 1 - 2 * (y * y + z * z)
-    m[..., 0, 1] = 2 * (x * y - z * w)
-    m[..., 0, 2] = 2 * (x * z + y * w)
-    m[..., 1, 0] = 2 * (x * y + z * w)
-    m[..., 1, 1] = 1 - 2 * (x * x + z * z)
-    m[..., 1, 2] = 2 * (y * z - x * w)
-    m[..., 2, 0] = 2 * (x * z - y * w)
-    m[..., 2, 1] = 2 * (y * z + x * w)
-    m[..., 2, 2] = 1 - 2 * (x * x + y * y)
-    return m
+    if arr.ndim == 1:
+        # One rotation: Python floats do the same IEEE arithmetic without numpy's per-call cost.
+        x, y, z, w = arr.tolist()
+        return np.array(matrix_floats((x, y, z, w))).reshape(3, 3)
+    f = arr[..., _FACTORS]  # (..., 4, 9)
+    # a - b is a + (-b) in IEEE arithmetic: the signed sum is the formula's difference.
+    m = 2 * (f[..., 0, :] * f[..., 1, :] + f[..., 2, :] * f[..., 3, :] * _SECOND_SIGN)
+    m[..., _DIAGONAL] = 1 - m[..., _DIAGONAL]
+    return m.reshape(*arr.shape[:-1], 3, 3)
 
 
 def rotate(q: ArrayLike, v: ArrayLike) -> Array:

@@ -251,6 +251,13 @@ class _Element:
     centre_local: FloatArray  # (3,) bounding-sphere centre in the shape frame
     radius: float
     centre: FloatArray  # (3,) bounding-sphere centre in the world frame
+    #: The pose (3, 3) and (3,) that ``obj`` is to have, world frame; None once it has it.
+    pending: tuple[Array, FloatArray] | None = None
+
+
+#: Per robot body: its id, its elements' link indices (-1 the base), its moving links, the
+#: elements' rows, and their shape frames in their links (positions (L, 3), rotations (L, 3, 3)).
+_LinkTrack = tuple[int, list[int], list[int], list[int], FloatArray, Array]
 
 
 class CollisionWorld:
@@ -266,8 +273,11 @@ class CollisionWorld:
         self.scene = scene
         c = scene.client
         self._elements: list[_Element] = []
-        # Robot links: per body, the link indices (with -1 the base) and their local shape frames.
-        self._link_tracks: list[tuple[int, list[int], list[int], FloatArray, FloatArray]] = []
+        # Robot links, per body (_LinkTrack).
+        self._link_tracks: list[_LinkTrack] = []
+        # What the last sync read from PyBullet, made into element poses at the first query.
+        self._read: tuple[list[tuple[Any, Any]], list[tuple[int, FloatArray, FloatArray]]] | None
+        self._read = None
         for arm in (Arm.LEFT, Arm.RIGHT):
             spec = scene.robot.arms[arm]
             body = scene.robot_ids[spec.body]
@@ -290,7 +300,9 @@ class CollisionWorld:
                     local_p.append(np.asarray(data[5], dtype=float))
                     local_q.append(np.asarray(data[6], dtype=float))
                     self._add(f"{group}/{link_name}{suffix}", group, geometry, centre, radius)
-            self._link_tracks.append((body, links, rows, np.array(local_p), np.array(local_q)))
+            moving = [link for link in links if link >= 0]
+            local_r = quat.to_matrix(np.array(local_q))  # constant: converted once
+            self._link_tracks.append((body, links, moving, rows, np.array(local_p), local_r))
 
         table = scene.spec.table
         geometry, centre, radius = _shape_geometry(ShapeSpec.box(table.size))
@@ -315,6 +327,11 @@ class CollisionWorld:
             arm: self._index(f"{arm_group(arm)}/palm") for arm in (Arm.LEFT, Arm.RIGHT)
         }
         self._request = fcl.DistanceRequest(enable_nearest_points=True, enable_signed_distance=True)
+        # Each group's rows in element order (fixed once built; the obstacles' follow _active).
+        self._group_rows: dict[str, tuple[int, ...]] = {}
+        for i, element in enumerate(self._elements):
+            if element.group != OBSTACLES:
+                self._group_rows[element.group] = (*self._group_rows.get(element.group, ()), i)
         self.sync()
 
     # -- building ----------------------------------------------------------------------------
@@ -338,8 +355,39 @@ class CollisionWorld:
 
     @staticmethod
     def _set_pose(element: _Element, position: FloatArray, rotation: Array) -> None:
-        element.obj.setTransform(fcl.Transform(rotation, position))
+        # The FCL transform waits for the first query of this element (see _fcl): most syncs
+        # are followed by a few pair queries, or none, not by one of every element.
+        element.pending = (rotation, position)
         element.centre = rotation @ element.centre_local + position
+
+    def _fcl(self, row: int) -> fcl.CollisionObject:
+        """The FCL object of element ``row``, at its pose of the last sync."""
+        element = self._elements[row]
+        if element.pending is not None:
+            rotation, position = element.pending
+            element.obj.setTransform(fcl.Transform(rotation, position))
+            element.pending = None
+        return element.obj
+
+    def _place(self) -> None:
+        """Pose the elements as the last :meth:`sync` read them (once, at the first query)."""
+        if self._read is None:
+            return
+        links_read, objects_read = self._read
+        self._read = None
+        for (_, links, moving, rows, local_p, local_r), (states, base) in zip(
+            self._link_tracks, links_read, strict=True
+        ):
+            by_link = {link: (s[0], s[1]) for link, s in zip(moving, states, strict=True)}
+            frame_p = np.array([by_link[link][0] if link >= 0 else base[0] for link in links])
+            frame_q = np.array([by_link[link][1] if link >= 0 else base[1] for link in links])
+            frame_r = quat.to_matrix(frame_q)
+            positions = np.einsum("nij,nj->ni", frame_r, local_p) + frame_p
+            rotations = frame_r @ local_r
+            for row, position, rotation in zip(rows, positions, rotations, strict=True):
+                self._set_pose(self._elements[row], position, rotation)
+        for row, position, quaternion in objects_read:
+            self._set_pose(self._elements[row], position, quat.to_matrix(quaternion))
 
     @property
     def element_names(self) -> tuple[str, ...]:
@@ -391,9 +439,10 @@ class CollisionWorld:
         if not self._active or n == 0:
             return collides
         margins = np.broadcast_to(np.asarray(margin, dtype=float), (n,))
-        obstacles = [self._elements[r] for r in self._active]
-        o_centre = np.array([o.centre for o in obstacles])
-        o_radius = np.array([o.radius for o in obstacles])
+        self._place()
+        obstacles = [self._fcl(r) for r in self._active]
+        o_centre = np.array([self._elements[r].centre for r in self._active])
+        o_radius = np.array([self._elements[r].radius for r in self._active])
         palm_r = quat.to_matrix(quaternions)  # (N, 2, 3, 3)
         for a, arm in enumerate((Arm.LEFT, Arm.RIGHT)):
             rows = self._rows(arm_group(arm))
@@ -405,8 +454,9 @@ class CollisionWorld:
             links = [r for r in rows if r != self._palm_rows[arm]][-distal_links:]
             for row in links:
                 element = self._elements[row]
-                offset = np.asarray(element.obj.getTranslation(), dtype=float) - positions[0, a]
-                rot = start2waypoint @ np.asarray(element.obj.getRotation(), dtype=float)
+                link = self._fcl(row)
+                offset = np.asarray(link.getTranslation(), dtype=float) - positions[0, a]
+                rot = start2waypoint @ np.asarray(link.getRotation(), dtype=float)
                 pos = start2waypoint @ offset + positions[:, a]
                 centres = np.einsum("nij,j->ni", rot, element.centre_local) + pos
                 gaps = (
@@ -418,9 +468,9 @@ class CollisionWorld:
                     if collides[w]:
                         continue
                     if o not in allowed:
-                        allowed[o] = _start_allowance(probe, rot[0], pos[0], obstacles[o].obj)
+                        allowed[o] = _start_allowance(probe, rot[0], pos[0], obstacles[o])
                     asked = min(float(margins[w]), allowed[o])
-                    collides[w] = _hit(probe, rot[w], pos[w], obstacles[o].obj, asked)
+                    collides[w] = _hit(probe, rot[w], pos[w], obstacles[o], asked)
         return collides
 
     def arm_links(self, arm: Arm) -> tuple[str, ...]:
@@ -431,23 +481,21 @@ class CollisionWorld:
     # -- keeping in step ---------------------------------------------------------------------
 
     def sync(self) -> None:
-        """Read link, object and obstacle poses from PyBullet (one getLinkStates per body)."""
+        """Read link, object and obstacle poses from PyBullet (one getLinkStates per body).
+
+        The poses read are turned into FCL transforms when a query first needs them, with the
+        same arithmetic: a sync that no query follows costs the reads alone.
+        """
         c = self.scene.client
-        for body, links, rows, local_p, local_q in self._link_tracks:
-            moving = [link for link in links if link >= 0]
-            states = pb.getLinkStates(body, moving, computeForwardKinematics=1, physicsClientId=c)
-            by_link = {link: (s[0], s[1]) for link, s in zip(moving, states, strict=True)}
-            base = pb.getBasePositionAndOrientation(body, physicsClientId=c)
-            frame_p = np.array([by_link[link][0] if link >= 0 else base[0] for link in links])
-            frame_q = np.array([by_link[link][1] if link >= 0 else base[1] for link in links])
-            frame_r = quat.to_matrix(frame_q)
-            positions = np.einsum("nij,nj->ni", frame_r, local_p) + frame_p
-            rotations = frame_r @ quat.to_matrix(local_q)
-            for row, position, rotation in zip(rows, positions, rotations, strict=True):
-                self._set_pose(self._elements[row], position, rotation)
-        for name, row in self._objects.items():
-            position, quaternion = self.scene.object_pose(name)
-            self._set_pose(self._elements[row], position, quat.to_matrix(quaternion))
+        links_read = [
+            (
+                pb.getLinkStates(body, moving, computeForwardKinematics=1, physicsClientId=c),
+                pb.getBasePositionAndOrientation(body, physicsClientId=c),
+            )
+            for body, _, moving, _, _, _ in self._link_tracks
+        ]
+        objects_read = [(row, *self.scene.object_pose(name)) for name, row in self._objects.items()]
+        self._read = (links_read, objects_read)
         self._active = [self._obstacles[name] for name in sorted(self.scene.active_obstacles)]
 
     # -- queries -----------------------------------------------------------------------------
@@ -455,12 +503,12 @@ class CollisionWorld:
     def _rows(self, group: str) -> list[int]:
         if group == OBSTACLES:
             return list(self._active)
-        rows = [i for i, e in enumerate(self._elements) if e.group == group]
-        if not rows:
+        rows = self._group_rows.get(group)
+        if rows is None:
             raise ValueError(
                 f"CollisionWorld: expected a group in {list(self.group_names())}, got {group!r}"
             )
-        return rows
+        return list(rows)
 
     def colliding_pairs(self, groups: Iterable[str] | None = None) -> list[tuple[str, str]]:
         """Element pairs in contact or penetration, between different groups.
@@ -476,6 +524,7 @@ class CollisionWorld:
             Element name pairs, in element order.
         """
         wanted = set(groups) if groups is not None else set(self.group_names())
+        self._place()
         active = set(self._active)
         rows = [
             i
@@ -490,7 +539,8 @@ class CollisionWorld:
             ea, eb = self._elements[rows[a]], self._elements[rows[b]]
             if ea.group == eb.group:
                 continue
-            if fcl.collide(ea.obj, eb.obj, fcl.CollisionRequest(), fcl.CollisionResult()):
+            objects = self._fcl(rows[a]), self._fcl(rows[b])
+            if fcl.collide(*objects, fcl.CollisionRequest(), fcl.CollisionResult()):
                 pairs.append((ea.name, eb.name))
         return pairs
 
@@ -506,6 +556,7 @@ class CollisionWorld:
             If a group is unknown or empty (no active obstacles).
         """
         rows_a, rows_b = self._rows(group_a), self._rows(group_b)
+        self._place()
         if not rows_a or not rows_b:
             raise ValueError(
                 f"CollisionWorld.distance: group {group_a if not rows_a else group_b!r} is empty"
@@ -529,7 +580,7 @@ class CollisionWorld:
     def _pair_distance(self, row_a: int, row_b: int) -> Proximity:
         ea, eb = self._elements[row_a], self._elements[row_b]
         result = fcl.DistanceResult()
-        d = fcl.distance(ea.obj, eb.obj, self._request, result)
+        d = fcl.distance(self._fcl(row_a), self._fcl(row_b), self._request, result)
         return Proximity(
             float(d),
             np.asarray(result.nearest_points[0], dtype=float),
@@ -541,6 +592,7 @@ class CollisionWorld:
     def link_distances(self, arm: Arm) -> LinkDistances:
         """Distance of every link of ``arm`` to the nearest active obstacle (for avoidance)."""
         rows = self._rows(arm_group(arm))
+        self._place()
         n = len(rows)
         distances = np.full(n, np.inf)
         link_points = np.full((n, 3), np.nan)
@@ -590,7 +642,9 @@ class CollisionWorld:
 
     def _point_distance(self, row: int, points: FloatArray) -> tuple[FloatArray, FloatArray]:
         element = self._elements[row]
-        transform = element.obj.getTransform()
+        self._place()
+        obj = self._fcl(row)
+        transform = obj.getTransform()
         rotation, origin = (
             np.asarray(transform.getRotation()),
             np.asarray(transform.getTranslation()),
@@ -625,7 +679,7 @@ class CollisionWorld:
         for k, point in enumerate(points):
             probe.setTransform(fcl.Transform(point))
             result = fcl.DistanceResult()
-            distances[k] = max(fcl.distance(probe, element.obj, self._request, result), 0.0)
+            distances[k] = max(fcl.distance(probe, obj, self._request, result), 0.0)
             closest[k] = result.nearest_points[1]
         return distances, closest
 
@@ -698,9 +752,10 @@ class CollisionWorld:
             body_q.append(oq)
         collides = np.zeros(n, dtype=bool)
         if self._active and n:
-            obstacles = [self._elements[r] for r in self._active]
-            o_centre = np.array([o.centre for o in obstacles])
-            o_radius = np.array([o.radius for o in obstacles])
+            self._place()
+            obstacles = [self._fcl(r) for r in self._active]
+            o_centre = np.array([self._elements[r].centre for r in self._active])
+            o_radius = np.array([self._elements[r].radius for r in self._active])
             p_all = np.stack(body_p, axis=1)  # (N, B, 3)
             r_all = quat.to_matrix(np.stack(body_q, axis=1))  # (N, B, 3, 3)
             local = np.array([self._elements[r].centre_local for r in rows])
@@ -716,7 +771,7 @@ class CollisionWorld:
             for w, b, o in candidates:
                 if collides[w]:
                     continue
-                collides[w] = _hit(probes[b], r_all[w, b], p_all[w, b], obstacles[o].obj, margin)
+                collides[w] = _hit(probes[b], r_all[w, b], p_all[w, b], obstacles[o], margin)
         hits = np.flatnonzero(collides)
         return TrajectoryCheck(collides, int(hits[0]) if len(hits) else -1)
 

@@ -141,6 +141,7 @@ class DualArmImpedanceController:
         self._max_torque = np.concatenate(
             [np.asarray(s.max_torque, dtype=float) for s in self._specs]
         )
+        self._min_torque = -self._max_torque
         self._rest = np.array([s.rest_posture for s in self._specs], dtype=float)  # (2, n)
         self._gains: list[ImpedanceGains] = [gains or ImpedanceGains()] * 2
         self._commands: list[PalmCommand | None] = [None, None]
@@ -363,9 +364,11 @@ class DualArmImpedanceController:
             raise RuntimeError("DualArmImpedanceController.apply: call enable() first")
         self._read_joints()
         q = self._q
+        # Per physics step, numpy's ufuncs are called bare (np.max, np.clip without their
+        # Python wrappers: the same reductions and the same min(max(x, lo), hi)).
         if self._steps_since_refresh >= self.refresh_every or (
             self.relinearise_tolerance > 0.0
-            and np.max(np.abs(q - self._q_lin)) > self.relinearise_tolerance
+            and np.abs(q - self._q_lin).max() > self.relinearise_tolerance
         ):
             self._relinearise()
         elif self._targets_changed:
@@ -373,8 +376,9 @@ class DualArmImpedanceController:
         tau = self._a + self._b @ q + self._c @ self._qd
         if self._steps_since_target:
             tau += (self._steps_since_target * self.physics_dt) * self._a_rate
-        tau += self._limit_k * (np.clip(q, self._soft_lower, self._soft_upper) - q)
-        np.clip(tau, -self._max_torque, self._max_torque, out=tau)
+        tau += self._limit_k * (np.minimum(np.maximum(q, self._soft_lower), self._soft_upper) - q)
+        np.maximum(tau, self._min_torque, out=tau)
+        np.minimum(tau, self._max_torque, out=tau)
         self._tau = tau
         for body, joints, rows in zip(
             self._bodies, self._body_joints, self._body_rows, strict=True

@@ -27,6 +27,7 @@ Quaternions are scalar-last (x, y, z, w); twists are (linear, angular) in the wo
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
@@ -47,7 +48,7 @@ def checked_vector(value: ArrayLike, shape: tuple[int, ...], name: str) -> Float
     array = np.asarray(value, dtype=float)
     if array.shape != shape:
         raise ValueError(f"{name}: expected shape {shape}, got {array.shape}")
-    if not np.all(np.isfinite(array)):
+    if not np.isfinite(array).all():
         raise ValueError(f"{name}: expected finite values, got {array}")
     return array
 
@@ -82,7 +83,8 @@ class PalmCommand:
             self, "position", checked_vector(self.position, (3,), "PalmCommand.position")
         )
         quaternion = checked_vector(self.quaternion, (4,), "PalmCommand.quaternion")
-        norm = float(np.linalg.norm(quaternion))
+        # np.linalg.norm of a vector is sqrt(q . q); called bare, without its wrapper's cost.
+        norm = math.sqrt(float(quaternion.dot(quaternion)))
         if norm < 1e-9:
             raise ValueError(
                 f"PalmCommand.quaternion: expected a unit quaternion, got {quaternion}"

@@ -174,6 +174,12 @@ class SimWorld:
             for o in self.scene.spec.obstacles
         }
         self._substeps = max(1, round(spec.scene.physics_hz / spec.scene.control_hz))
+        #: What the contact monitor watches against the obstacles, by label: the arms' bodies
+        #: and the objects (fixed once the scene is built).
+        self._watched_bodies: dict[str, int] = {
+            f"{a.value}_arm": self.scene.robot_ids[self.scene.robot.arms[a].body] for a in ARMS
+        }
+        self._watched_bodies.update(self.scene.object_ids)
         self._rest_z = {
             o.name: float(o.position[2]) for o in self.scene.spec.objects
         }  # resting centre height
@@ -217,18 +223,19 @@ class SimWorld:
 
     def _watch_contacts(self) -> None:
         c = self.scene.client
-        bodies = {
-            f"{a.value}_arm": self.scene.robot_ids[self.scene.robot.arms[a].body] for a in ARMS
-        }
-        bodies.update(self.scene.object_ids)
+        bodies = self._watched_bodies
+        contacts = self.safety.obstacle_contacts
         for name in self.scene.active_obstacles:
-            obstacle = self.scene.obstacle_ids[name]
+            # One query per obstacle: PyBullet gives every point of it with any body, each
+            # turned to have the obstacle as body A (the same points, distances and forces as
+            # one query per pair).
+            points = pb.getContactPoints(bodyA=self.scene.obstacle_ids[name], physicsClientId=c)
+            if not points:
+                continue
             for label, body in bodies.items():
-                if touching(pb.getContactPoints(bodyA=body, bodyB=obstacle, physicsClientId=c)):
+                if touching([p for p in points if body in (p[1], p[2])]):
                     key = f"{label} ~ {name}"
-                    self.safety.obstacle_contacts[key] = (
-                        self.safety.obstacle_contacts.get(key, 0) + 1
-                    )
+                    contacts[key] = contacts.get(key, 0) + 1
         left, right = (bodies["left_arm"], bodies["right_arm"])
         if left != right and touching(
             pb.getContactPoints(bodyA=left, bodyB=right, physicsClientId=c)
@@ -249,8 +256,13 @@ class SimWorld:
             pos, _ = self.scene.object_pose(name)
             vel, _ = self.scene.object_velocity(name)
             lifted = pos[2] > self._rest_z[name] + 0.01
-            touched = any(self.scene.palm_contact_force(a, name) > 0.5 for a in ARMS)
-            if lifted and not touched and vel[2] < -0.2 and not self.safety.dropped:
+            # The contact forces are read only for a lifted object falling (reads, no effect).
+            if (
+                lifted
+                and vel[2] < -0.2
+                and not self.safety.dropped
+                and not any(self.scene.palm_contact_force(a, name) > 0.5 for a in ARMS)
+            ):
                 self.safety.dropped = True
                 self.safety.drop_time = self.time()
                 self.safety.dropped_object = name

@@ -61,6 +61,58 @@ def test_scalar_versions_match_vector_versions() -> None:
         )
 
 
+def test_batched_matrices_are_the_scalar_formula_to_the_bit() -> None:
+    # Batches of every shape and layout, with non-unit, signed-zero and tiny components: each
+    # entry must be the scalar formula's own floating-point result, not merely close to it.
+    q = np.concatenate(
+        (
+            RNG.normal(size=(200, 4)),
+            [[0.0, -0.0, 0.0, 1.0], [-0.0, -0.0, -0.0, -1.0], [1e-300, -1e-300, 3.0, 0.5]],
+        )
+    )
+    for batch in (q, q.reshape(-1, 1, 4), q.reshape(29, 7, 4)[:, ::-1], q[5]):
+        scalar = [quat.matrix_floats(tuple(qi.tolist())) for qi in batch.reshape(-1, 4)]
+        got = quat.to_matrix(batch)
+        assert got.shape == (*batch.shape[:-1], 3, 3)
+        assert got.tobytes() == np.array(scalar).reshape(got.shape).tobytes()
+    assert quat.to_matrix([0.0, 0.0, 0.0, 1.0]).tolist() == np.eye(3).tolist()
+
+
+def test_batched_products_are_the_scalar_formula_to_the_bit() -> None:
+    p = np.concatenate((RNG.normal(size=(60, 4)), [[0.0, -0.0, 0.0, 1.0], [-0.0, 0.0, -0.0, -1.0]]))
+    q = p[::-1] * 0.5
+    scalar = [
+        quat.multiply_scalar(tuple(a.tolist()), tuple(b.tolist()))
+        for a, b in zip(p, q, strict=True)
+    ]
+    assert quat.multiply(p, q).tobytes() == np.array(scalar).tobytes()
+    assert quat.multiply(p[3], q[3]).tobytes() == np.array(scalar[3]).tobytes()
+    # Broadcasting: one quaternion against a batch, on either side.
+    assert quat.multiply(p[:, None], q[None, :5]).shape == (62, 5, 4)
+    one = [quat.multiply_scalar(tuple(p[0].tolist()), tuple(b.tolist())) for b in q]
+    assert quat.multiply(p[0], q).tobytes() == np.array(one).tobytes()
+
+
+def test_log_is_the_plain_numpy_formula_to_the_bit() -> None:
+    # log's clip and norm are called as bare ufuncs: the bits of np.clip and np.linalg.norm.
+    q = np.concatenate(
+        (
+            quat.canonical(random_quats(50)),
+            [[0.0, 0.0, 0.0, 1.0], [1e-13, 0.0, 0.0, 1.0], [0.0, 0.0, 0.0, 1.0000001]],
+        )
+    )
+    for batch in (q, 3.0 * q, q.reshape(53, 1, 4), q[7]):
+        v = batch[..., :3]
+        vnorm = np.linalg.norm(v, axis=-1)
+        angle = np.arctan2(vnorm, np.clip(batch[..., 3], -1.0, 1.0))
+        expected = v * np.where(vnorm > 1e-12, angle / np.maximum(vnorm, 1e-12), 1.0)[..., None]
+        assert quat.log(batch).tobytes() == expected.tobytes()
+    g = random_quats(53)
+    conj = quat.conjugate(q)
+    expected = 2.0 * quat.log(quat.canonical(quat.multiply(g, conj)))
+    assert quat.rotation_error(g, q).tobytes() == expected.tobytes()
+
+
 def test_make_continuous_removes_sign_flips_only() -> None:
     angles = np.linspace(0, 3 * np.pi, 200)
     q = quat.from_axis_angle(np.array([0.0, 0.0, 1.0]), angles)

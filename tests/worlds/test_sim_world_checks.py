@@ -3,8 +3,11 @@
 from __future__ import annotations
 
 import numpy as np
+import pybullet as pb
+import pytest
 from numpy.testing import assert_allclose
 
+from skills.vocabulary import Arm
 from worlds.sim_world import (
     FOREARM_DOUBT_PER_M,
     FOREARM_LEVER_M,
@@ -51,3 +54,38 @@ def test_touching_counts_penetration_or_force_never_a_near_miss() -> None:
     assert touching([_point(0.001, 0.0), _point(-0.0002, 0.0)])  # penetrating
     assert touching([_point(0.0, 0.0)])  # touching
     assert touching([_point(0.0005, 3.0)])  # pushing before it closes
+
+
+@pytest.mark.sim
+def test_one_contact_query_per_obstacle_counts_as_one_per_pair() -> None:
+    # The monitor asks PyBullet once per obstacle for all its points and sorts them by body:
+    # with obstacles pressed into the parcel and onto a palm, every step counts exactly what
+    # one query per (body, obstacle) pair counts.
+    from worlds.sim_world import SimWorld
+    from worlds.testing import DEFAULT_WORLD
+    from worlds.world_file import load_world
+
+    with SimWorld(load_world(DEFAULT_WORLD)) as sim:
+        scene, c = sim.scene, sim.scene.client
+        sim.set_active_obstacles(["ball_left", "ball_right"])
+        parcel = sim.object_pose("parcel").position
+        palm = sim.palm_pose(Arm.LEFT).position
+        places = {"ball_left": parcel + [0.1, 0.0, 0.09], "ball_right": palm + [0.0, 0.0, 0.05]}
+        for name, position in places.items():
+            pb.resetBasePositionAndOrientation(
+                scene.obstacle_ids[name], position.tolist(), [0, 0, 0, 1], physicsClientId=c
+            )
+        expected: dict[str, int] = {}
+        for _ in range(60):
+            scene.step(1)
+            sim._watch_contacts()
+            for name in sorted(scene.active_obstacles):
+                for label, body in sim._watched_bodies.items():
+                    pair = pb.getContactPoints(
+                        bodyA=body, bodyB=scene.obstacle_ids[name], physicsClientId=c
+                    )
+                    if touching(pair):
+                        expected[f"{label} ~ {name}"] = expected.get(f"{label} ~ {name}", 0) + 1
+        assert sim.safety.obstacle_contacts == expected
+        assert expected.get("parcel ~ ball_left", 0) > 0
+        assert expected.get("left_arm ~ ball_right", 0) > 0
