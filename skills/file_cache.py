@@ -134,7 +134,18 @@ def write_entry(path: Path, payload: bytes) -> None:
     OSError
         If the folder cannot be written.
     """
-    data = _MAGIC + hashlib.sha256(payload).hexdigest().encode() + b"\n" + payload
+    write_whole(path, _MAGIC + hashlib.sha256(payload).hexdigest().encode() + b"\n" + payload)
+
+
+def write_whole(path: Path, data: bytes) -> None:
+    """Write ``data`` to ``path`` through a temporary beside it, synced and renamed into place:
+    a reader sees the whole file or none.
+
+    Raises
+    ------
+    OSError
+        If the folder cannot be written.
+    """
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
     try:
         with os.fdopen(fd, "wb") as f:
@@ -156,4 +167,5 @@ __all__ = [
     "source_files",
     "versions",
     "write_entry",
+    "write_whole",
 ]

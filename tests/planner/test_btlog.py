@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import json
 import xml.etree.ElementTree as ET
-from collections.abc import Iterator
 from pathlib import Path
 
 import py_trees
@@ -34,13 +33,6 @@ TREE = """
   </BehaviorTree>
 </root>
 """
-
-
-@pytest.fixture(autouse=True)
-def _clean_blackboard() -> Iterator[None]:
-    py_trees.blackboard.Blackboard.clear()
-    yield
-    py_trees.blackboard.Blackboard.clear()
 
 
 def status_events(path: Path) -> list[dict]:

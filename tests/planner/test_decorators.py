@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import time
-from collections.abc import Iterator
 
 import py_trees
 import pytest
@@ -13,13 +12,6 @@ from planner.decorators import SimTimeout
 from tests.planner.stub_leaves import FakeClock, StubForever
 
 S, F, R, INV = Status.SUCCESS, Status.FAILURE, Status.RUNNING, Status.INVALID
-
-
-@pytest.fixture(autouse=True)
-def _clean_blackboard() -> Iterator[None]:
-    py_trees.blackboard.Blackboard.clear()
-    yield
-    py_trees.blackboard.Blackboard.clear()
 
 
 def _timeout_tree(duration: float, clock: FakeClock) -> tuple[SimTimeout, StubForever]:

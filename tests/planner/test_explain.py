@@ -2,22 +2,12 @@
 
 from __future__ import annotations
 
-from collections.abc import Iterator
-
 import py_trees
-import pytest
 from py_trees.common import Status
 
 from planner.loader import load_tree_string
 from planner.runner import explain, status_chain
 from tests.planner.stub_leaves import FakeClock, StubCheck, StubCounter  # noqa: F401 (registers)
-
-
-@pytest.fixture(autouse=True)
-def _clean_blackboard() -> Iterator[None]:
-    py_trees.blackboard.Blackboard.clear()
-    yield
-    py_trees.blackboard.Blackboard.clear()
 
 
 def run(body: str, dt: float = 0.1, ticks: int = 100) -> py_trees.behaviour.Behaviour:

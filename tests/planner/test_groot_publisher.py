@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import random
 import struct
-from collections.abc import Iterator
 from pathlib import Path
 
 import py_trees
@@ -33,13 +32,6 @@ TREE = """
   </BehaviorTree>
 </root>
 """
-
-
-@pytest.fixture(autouse=True)
-def _clean_blackboard() -> Iterator[None]:
-    py_trees.blackboard.Blackboard.clear()
-    yield
-    py_trees.blackboard.Blackboard.clear()
 
 
 def ask(port: int, kind: str, request_id: int = 7) -> list[bytes]:

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import functools
 import re
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -19,13 +18,6 @@ from tests.planner.stub_leaves import FakeClock, StubAt, StubCounter, StubFlaky
 
 TREES = Path(__file__).resolve().parents[1] / "data" / "trees"
 S, F, R, INV = Status.SUCCESS, Status.FAILURE, Status.RUNNING, Status.INVALID
-
-
-@pytest.fixture(autouse=True)
-def _clean_blackboard() -> Iterator[None]:
-    py_trees.blackboard.Blackboard.clear()
-    yield
-    py_trees.blackboard.Blackboard.clear()
 
 
 def by_short_name(root: py_trees.behaviour.Behaviour) -> dict[str, py_trees.behaviour.Behaviour]:

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import itertools
 import xml.etree.ElementTree as ET
-from collections.abc import Iterator
 from pathlib import Path
 
 import py_trees
@@ -15,13 +14,6 @@ from planner.render import node_kind, render_cli, render_tree, short_name
 
 TREES = Path(__file__).resolve().parents[1] / "data" / "trees"
 SVG = "{http://www.w3.org/2000/svg}"
-
-
-@pytest.fixture(autouse=True)
-def _clean_blackboard() -> Iterator[None]:
-    py_trees.blackboard.Blackboard.clear()
-    yield
-    py_trees.blackboard.Blackboard.clear()
 
 
 @pytest.fixture

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import enum
 import json
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -26,13 +25,6 @@ TREE = """
   </BehaviorTree>
 </root>
 """
-
-
-@pytest.fixture(autouse=True)
-def _clean_blackboard() -> Iterator[None]:
-    py_trees.blackboard.Blackboard.clear()
-    yield
-    py_trees.blackboard.Blackboard.clear()
 
 
 def read(path: Path) -> list[dict[str, Any]]:

@@ -12,7 +12,6 @@ from __future__ import annotations
 import hashlib
 import os
 import stat
-import tempfile
 from pathlib import Path
 
 from skills import file_cache
@@ -64,14 +63,5 @@ def cached_urdf(text: str, stem: str, cache_dir: Path | None = None) -> Path:
     folder = file_cache.cache_folder("robots", _WHAT, cache_dir)
     path = folder / f"{stem}_{digest}.urdf"
     if not _holds(path, data):
-        fd, tmp = tempfile.mkstemp(dir=folder, prefix=f".{stem}_", suffix=".urdf")
-        try:
-            with os.fdopen(fd, "wb") as f:
-                f.write(data)
-                f.flush()
-                os.fsync(f.fileno())
-            os.replace(tmp, path)
-        except BaseException:
-            Path(tmp).unlink(missing_ok=True)
-            raise
+        file_cache.write_whole(path, data)
     return path

@@ -2,23 +2,13 @@
 
 from __future__ import annotations
 
-from collections.abc import Iterator
-
 import py_trees
-import pytest
 from py_trees.common import Status
 
 from planner.loader import load_tree_string
 from tests.planner.stub_leaves import FakeClock
 
 S, F, R, INV = Status.SUCCESS, Status.FAILURE, Status.RUNNING, Status.INVALID
-
-
-@pytest.fixture(autouse=True)
-def _clean_blackboard() -> Iterator[None]:
-    py_trees.blackboard.Blackboard.clear()
-    yield
-    py_trees.blackboard.Blackboard.clear()
 
 
 class Ticker:
