@@ -9,6 +9,7 @@ relative-only compositions that close and open the grasp.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 
@@ -520,15 +521,18 @@ class MovePlan:
         return replace(self.composer, state=self.start)
 
 
-def squeeze_force(plan: SemanticAction | None, default: float) -> float:
-    """The plan's squeeze force for the hold skill, else ``default``, N."""
+def squeeze_force(plan: SemanticAction | None, default: float, rated: float = math.inf) -> float:
+    """The squeeze force per palm a grasp reaches and a move is composed with, N: the larger of
+    the plan's hold-skill force and ``default``, never above the robot's ``rated`` steady
+    squeeze (the reasoner refuses an object whose own need exceeds it)."""
+    force = default
     if plan is not None:
         sel = plan.skill(Action.HOLD_LATERAL)
         if sel is not None:
             value = sel.params.get("squeeze_force_n")
             if isinstance(value, int | float):
-                return max(float(value), default)
-    return default
+                force = max(float(value), default)
+    return min(force, rated)
 
 
 def compose_move(

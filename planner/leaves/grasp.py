@@ -89,7 +89,11 @@ class Grasp(MotionLeaf):
             return
         world = self.world
         name = self.get_input("object")
-        self.force = squeeze_force(self.optional_input("plan"), float(self.get_input("force_n")))
+        self.force = squeeze_force(
+            self.optional_input("plan"),
+            float(self.get_input("force_n")),
+            world.robot_capabilities().squeeze_force_n,
+        )
         depth = world.squeeze_depth(self.force)
         turn = move_turn(world, name, int(self.get_input("move")))
         geometry = lateral_geometry(world, name, grasp_quarter_turns(world, name, turn))

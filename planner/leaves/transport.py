@@ -93,7 +93,11 @@ class Transport(MotionLeaf):
             self.problem = bad
             return
         plan: SemanticAction = self.get_input("plan")
-        force = squeeze_force(plan, float(self.get_input("force_n")))
+        force = squeeze_force(
+            plan,
+            float(self.get_input("force_n")),
+            self.world.robot_capabilities().squeeze_force_n,
+        )
         state: DualArmState = self.get_input("from_state")
         avoid_gain = float(self.get_input("avoid_gain"))
         transport_weight = float(self.get_input("transport_weight"))

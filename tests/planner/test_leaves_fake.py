@@ -10,7 +10,7 @@ import pytest
 from py_trees.common import Status
 
 from affordances import SemanticAction, SkillSelection
-from planner.composition import MovePlan, lateral_geometry
+from planner.composition import MovePlan, lateral_geometry, squeeze_force
 from planner.leaves import (
     Approach,
     AtGoal,
@@ -22,6 +22,7 @@ from planner.leaves import (
     SelectSkills,
     Transport,
 )
+from planner.leaves.base import SQUEEZE_FORCE_N
 from planner.leaves.release import MAX_REOPENINGS
 from planner.move_result import MoveResult, move_results
 from planner.port import Pose
@@ -112,7 +113,7 @@ def test_grasp_squeezes_to_the_force_and_hands_over_a_state(
     select(fake_world, library)
     approach_and_grasp(fake_world, library)
     forces = [fake_world.contact_force(arm, "parcel") for arm in ARMS]
-    assert min(forces) >= 0.8 * 15.0
+    assert min(forces) >= 0.8 * SQUEEZE_FORCE_N
     state = blackboard_value("/state")
     assert np.allclose(state.object.position, fake_world.object_pose("parcel").position, atol=1e-3)
 
@@ -537,3 +538,24 @@ def test_transport_refuses_a_composition_checked_for_another_variant(
     assert "not the composition of this move: avoid_gain 2.0, checked with 1.0" in (
         carry.feedback_message
     )
+
+
+def test_squeeze_force_is_the_plans_or_the_default_never_above_the_robots_rating() -> None:
+    assert squeeze_force(None, 25.0) == 25.0
+    # a robot rated below the default squeezes at its rating (the iCub's 20 N)
+    assert squeeze_force(None, 25.0, rated=20.0) == 20.0
+
+    class _Plan:  # the one thing squeeze_force reads of a SemanticAction
+        def __init__(self, need: float) -> None:
+            self.need = need
+
+        def skill(self, action: Action) -> SkillSelection | None:
+            assert action is Action.HOLD_LATERAL
+            return SkillSelection(
+                Action.HOLD_LATERAL, Space.RELATIVE, 1.0, {"squeeze_force_n": self.need}
+            )
+
+    # the plan's own need wins over the default, still capped by the rating
+    assert squeeze_force(_Plan(32.0), 25.0, rated=40.0) == 32.0  # type: ignore[arg-type]
+    assert squeeze_force(_Plan(10.0), 25.0, rated=40.0) == 25.0  # type: ignore[arg-type]
+    assert squeeze_force(_Plan(32.0), 25.0, rated=30.0) == 30.0  # type: ignore[arg-type]
