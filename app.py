@@ -492,6 +492,16 @@ def _run_command(args: argparse.Namespace) -> int:
         f"  closest approach to an obstacle: "
         f"{'no obstacle' if dist is None else f'{dist * 1000:.1f} mm'}"
     )
+    if "disturbances" in s:
+        pushes = s["disturbances"]
+        print(f"  disturbances applied: {pushes['applied']} of {len(pushes['entries'])}")
+        for entry in pushes["entries"]:
+            steps = (
+                f"physics steps {entry['first_step']} to {entry['last_step']}"
+                if entry["steps"]
+                else "no physics step (none of the run started inside its window)"
+            )
+            print(f"    {printable(entry['object'])} at {entry['at_s']:g} s: {steps}")
     print(
         f"  simulated {report.sim_time_s:.1f} s in {report.wall_time_s:.1f} s wall "
         f"({report.sim_time_s / max(report.wall_time_s, 1e-9):.1f}x real time)"

@@ -73,10 +73,22 @@ class EpisodeReport:
     skills: list[str | None] = field(default_factory=list)
     #: Wall time inside the physics engine's steps alone, s (no control, tree or checks).
     physics_wall_s: float = 0.0
+    #: Per disturbance of the world, in file order, what it did
+    #: (:meth:`worlds.disturbances.AppliedDisturbance.summary`); empty for a world without.
+    disturbances: list[dict[str, Any]] = field(default_factory=list)
 
     def summary(self) -> dict[str, Any]:
-        """Plain JSON-safe dictionary (infinite distances as None)."""
+        """Plain JSON-safe dictionary (infinite distances as None).
+
+        A world with disturbances adds ``"disturbances": {"applied": n, "entries": [...]}``:
+        how many acted on at least one physics step, and per entry the steps it acted on. A
+        world without has no such key, so its records read as they did before.
+        """
         d = self.min_obstacle_distance_m
+        extra: dict[str, Any] = {}
+        if self.disturbances:
+            applied = sum(1 for e in self.disturbances if e["steps"] > 0)
+            extra["disturbances"] = {"applied": applied, "entries": self.disturbances}
         return {
             "success": self.success,
             "failure": self.failure,
@@ -94,6 +106,7 @@ class EpisodeReport:
             "physics_wall_s": round(self.physics_wall_s, 3),
             "compositions": self.compositions,
             "skills": self.skills,
+            **extra,
             "outputs": self.outputs,
         }
 
@@ -467,6 +480,7 @@ def run_episode(
         )
         report.replaced_outputs = replaced
         report.physics_wall_s = sim.scene.physics_wall_s
+        report.disturbances = [a.summary() for a in sim.scene.disturbances.applied()]
         if out is not None:
             if log is not None and log.error is not None:
                 report.output_errors.append(log.error)

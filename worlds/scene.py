@@ -32,6 +32,7 @@ from worlds.bodies import (
     load_robot,
 )
 from worlds.control import DualArmImpedanceController, ImpedanceGains, PalmCommand, PalmState
+from worlds.disturbances import Disturbances
 from worlds.spec import ObstacleSpec, Quat, SceneSpec, WorldSpec
 from worlds.world_file import World, as_world_spec
 
@@ -186,6 +187,9 @@ class Scene:
             o.name: create_obstacle(c, o, self._parking(o)) for o in self.spec.obstacles
         }
         self._active_obstacles: set[str] = set()
+        self.disturbances = Disturbances(
+            c, self.spec.disturbances, self.object_ids, self.spec.physics_hz
+        )
 
         self.controller = DualArmImpedanceController(
             self.robot,
@@ -333,14 +337,18 @@ class Scene:
         return self.step_count * self.physics_dt
 
     def step(self, steps: int = 1) -> None:
-        """Apply the palm control torques and advance physics, ``steps`` times."""
+        """Apply the palm control torques and the world's disturbances
+        (:class:`worlds.disturbances.Disturbances`), and advance physics, ``steps`` times."""
         apply = self.controller.apply
+        disturb = self.disturbances.apply if self.disturbances else None
         step = pb.stepSimulation
         clock = time.perf_counter
         c = self.client
         spent = 0.0
-        for _ in range(steps):
+        for i in range(steps):
             apply()
+            if disturb is not None:
+                disturb(self.step_count + i)
             started = clock()
             step(physicsClientId=c)
             spent += clock() - started

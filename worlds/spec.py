@@ -10,6 +10,7 @@ Positions are in the world frame, m; quaternions scalar-last ``(x, y, z, w)``.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from enum import StrEnum
 from pathlib import Path
@@ -261,6 +262,79 @@ def default_parcel() -> ObjectSpec:
     )
 
 
+#: Rounding allowed when a disturbance's window is turned into physics steps, in steps: a
+#: window written as 0.5 s at 240 Hz starts at step 120 whatever 0.5 * 240 rounds to.
+STEP_ROUNDING = 1e-6
+
+
+@dataclass(frozen=True)
+class DisturbanceSpec:
+    """A scripted push: a force and a torque on an object over a window of simulated time.
+
+    Both act at the object's centre of mass, in the world frame, on every physics step that
+    starts inside the window (:meth:`steps`).
+
+    Attributes
+    ----------
+    object : str
+        Name of the object pushed.
+    at_s : float
+        Start of the window, simulated time, s, >= 0.
+    duration_s : float
+        Length of the window, s, > 0.
+    force_n : tuple of float
+        (3,) force, world frame, N.
+    torque_nm : tuple of float
+        (3,) torque, world frame, N m.
+    """
+
+    object: str
+    at_s: float
+    duration_s: float
+    force_n: Vec3
+    torque_nm: Vec3 = (0.0, 0.0, 0.0)
+
+    def __post_init__(self) -> None:
+        numbers = (self.at_s, self.duration_s, *self.force_n, *self.torque_nm)
+        if (
+            len(self.force_n) != 3
+            or len(self.torque_nm) != 3
+            or not all(math.isfinite(v) for v in numbers)
+        ):
+            raise ValueError(
+                f"DisturbanceSpec {self.object!r}: expected finite numbers and 3-vectors, "
+                f"got at_s={self.at_s}, duration_s={self.duration_s}, "
+                f"force_n={self.force_n}, torque_nm={self.torque_nm}"
+            )
+        if self.at_s < 0.0 or self.duration_s <= 0.0:
+            raise ValueError(
+                f"DisturbanceSpec {self.object!r}: expected at_s >= 0 and duration_s > 0, "
+                f"got {self.at_s} and {self.duration_s}"
+            )
+
+    def steps(self, physics_hz: int) -> range:
+        """The physics steps the disturbance acts on.
+
+        Step ``k`` starts at ``t = k / physics_hz``; it is pushed if
+        ``at_s <= t < at_s + duration_s`` (times compared to :data:`STEP_ROUNDING` of a step),
+        so a window of ``duration_s`` holds ``duration_s * physics_hz`` steps when that is a
+        whole number, and a window shorter than a step may hold none.
+
+        Parameters
+        ----------
+        physics_hz : int
+            Physics rate, Hz.
+
+        Returns
+        -------
+        range
+            Indices of the physics steps, counted from 0 at the scene's start.
+        """
+        first = math.ceil(self.at_s * physics_hz - STEP_ROUNDING)
+        stop = math.ceil((self.at_s + self.duration_s) * physics_hz - STEP_ROUNDING)
+        return range(first, max(first, stop))
+
+
 @dataclass(frozen=True)
 class SceneSpec:
     """Everything needed to build a :class:`worlds.scene.Scene`.
@@ -283,6 +357,8 @@ class SceneSpec:
         Gravity along world z, m/s^2.
     seed : int
         Seed of the scene's random generator.
+    disturbances : tuple of DisturbanceSpec
+        Scripted pushes on the objects, in the world file's order (none by default).
     """
 
     robot: RobotSpec = field(default_factory=RobotSpec)
@@ -293,6 +369,7 @@ class SceneSpec:
     control_hz: int = 60
     gravity: float = -9.81
     seed: int = 0
+    disturbances: tuple[DisturbanceSpec, ...] = ()
 
     def __post_init__(self) -> None:
         if self.physics_hz <= 0 or self.control_hz <= 0 or self.physics_hz % self.control_hz:
@@ -304,6 +381,12 @@ class SceneSpec:
         duplicates = sorted({n for n in names if names.count(n) > 1})
         if duplicates:
             raise ValueError(f"SceneSpec: expected unique names, got duplicates {duplicates}")
+        objects = [o.name for o in self.objects]
+        unknown = [d.object for d in self.disturbances if d.object not in objects]
+        if unknown:
+            raise ValueError(
+                f"SceneSpec: expected disturbances on objects in {objects}, got {unknown}"
+            )
 
     def object_named(self, name: str) -> ObjectSpec:
         """The object called ``name``."""
@@ -389,6 +472,8 @@ class WorldSpec:
 
 
 __all__ = [
+    "STEP_ROUNDING",
+    "DisturbanceSpec",
     "Fragility",
     "MoveSpec",
     "ObjectSpec",

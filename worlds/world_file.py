@@ -32,6 +32,7 @@ from pydantic import ValidationError
 
 from affordances.safe_yaml import YamlFileError, parse_yaml, read_bounded
 from worlds.spec import (
+    DisturbanceSpec,
     Fragility,
     MoveSpec,
     ObjectSpec,
@@ -53,6 +54,7 @@ from worlds.world_schema import (
     WORLD_FILE_VERSION,
     BoxShape,
     CylinderShape,
+    DisturbanceEntry,
     MeshShape,
     MoveEntry,
     Obstacle,
@@ -76,6 +78,7 @@ __all__ = [
     "WORLD_FILE_VERSION",
     "BoxShape",
     "CylinderShape",
+    "DisturbanceEntry",
     "Fragility",
     "MeshShape",
     "MoveEntry",
@@ -339,6 +342,10 @@ def world_spec(world: World) -> WorldSpec:
         control_hz=int(sim.control_hz),
         gravity=float(sim.gravity),
         seed=int(sim.seed),
+        disturbances=tuple(
+            DisturbanceSpec(d.object, d.at_s, d.duration_s, d.force_n, d.torque_nm)
+            for d in world.disturbances
+        ),
     )
     return WorldSpec(
         name=world.name,
@@ -401,6 +408,7 @@ def world_summary(world: World) -> str:
         f"world {world.name!r}, {_count(len(world.objects), 'object')}, "
         f"{_count(len(world.obstacles), 'obstacle')}, {_count(len(world.task), 'task step')}, "
         f"{_count(moves, 'move')}"
+        + (f", {_count(len(world.disturbances), 'disturbance')}" if world.disturbances else "")
     )
 
 

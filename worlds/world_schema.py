@@ -24,9 +24,11 @@ from pydantic import (
     ConfigDict,
     Field,
     PrivateAttr,
+    SerializerFunctionWrapHandler,
     StrictBool,
     ValidationInfo,
     field_validator,
+    model_serializer,
     model_validator,
 )
 
@@ -93,6 +95,9 @@ _SKILL_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_-]*")
 
 Vector3 = Annotated[tuple[_Metres, _Metres, _Metres], BeforeValidator(_vector3)]
 """Three finite numbers ``[x, y, z]``, within 100 (a position, m)."""
+
+FiniteVector3 = Annotated[tuple[_Finite, _Finite, _Finite], BeforeValidator(_vector3)]
+"""Three finite numbers ``[x, y, z]``, within 1e6 (a force, N, or a torque, N m)."""
 
 _Degrees = Annotated[float, Field(strict=True, allow_inf_nan=False, ge=-720.0, le=720.0)]
 Angles3 = Annotated[tuple[_Degrees, _Degrees, _Degrees], BeforeValidator(_vector3)]
@@ -346,6 +351,22 @@ class TaskStep(_FileModel):
     moves: tuple[MoveEntry, ...] = Field(min_length=1, description="consecutive goals, at least 1")
 
 
+class DisturbanceEntry(_FileModel):
+    """A scripted push on an object: a force (and a torque) over a window of simulated time.
+
+    Both act at the object's centre of mass, in the world frame, on every physics step whose
+    start time ``t`` has ``at_s <= t < at_s + duration_s``.
+    """
+
+    at_s: _NonNegative = Field(description="start of the window, simulated time, s, >= 0")
+    object: _Name = Field(description="name of the object pushed")
+    force_n: FiniteVector3 = Field(description="force [x, y, z], world frame, N")
+    duration_s: _Positive = Field(description="length of the window, s, > 0")
+    torque_nm: FiniteVector3 = Field(
+        default=(0.0, 0.0, 0.0), description="torque [x, y, z], world frame, N m"
+    )
+
+
 class SimSettings(_FileModel):
     """Simulation rates, seed and limits."""
 
@@ -502,6 +523,9 @@ class World(_FileModel):
     sim: SimSettings = Field(default_factory=SimSettings)
     skills: SkillSettings = Field(default_factory=SkillSettings)
     trials: TrialSettings = Field(default_factory=TrialSettings)
+    disturbances: tuple[DisturbanceEntry, ...] = Field(
+        default=(), description="scripted pushes on objects during a run; may be empty"
+    )
 
     _source: Path | None = PrivateAttr(default=None)
 
@@ -591,6 +615,15 @@ class World(_FileModel):
                                 show_value(obstacle),
                             )
                         )
+        for d, disturbance in enumerate(self.disturbances):
+            if disturbance.object not in object_names:
+                issues.append(
+                    Issue(
+                        ("disturbances", d, "object"),
+                        f"the name of an object ({_one_of(object_names)})",
+                        show_value(disturbance.object),
+                    )
+                )
         if issues:
             raise FieldProblems(issues)
         context = info.context if isinstance(info.context, Mapping) else {}
@@ -598,6 +631,15 @@ class World(_FileModel):
         if source is not None:
             self._source = Path(source)
         return self
+
+    @model_serializer(mode="wrap")
+    def _without_empty_disturbances(self, handler: SerializerFunctionWrapHandler) -> Any:
+        # A world without disturbances dumps as it did before the section existed: its content
+        # hash names its trial campaigns (experiment.records), and those must stay its own.
+        data = handler(self)
+        if not self.disturbances and isinstance(data, dict):
+            data.pop("disturbances", None)
+        return data
 
 
 def _one_of(names: Sequence[str]) -> str:
