@@ -22,9 +22,12 @@ from py_trees.common import Status
 
 import planner.leaves  # noqa: F401  (registers the leaves for the XML loader)
 from experiment.figures import Animation, MoveTrace, demonstrated_path, trajectory_figure
+from experiment.grip_recorder import GripRecorder
+from experiment.metrics import GripMetrics
 from planner.atomic_file import atomic_open, stale_temporaries
 from planner.btlog import BtLog
 from planner.default_tree import TaskStep, default_tree
+from planner.leaves.conditions import IsHeld
 from planner.loader import load_tree
 from planner.move_result import move_results
 from planner.port import Move
@@ -39,6 +42,9 @@ from worlds.world_file import World, as_world_spec
 
 PLACE_TOLERANCE_M = 0.02
 PLACE_TOLERANCE_DEG = 10.0
+#: An object is held, for the grip metrics, while both palms press on it with at least this
+#: force, N: the default ``min_force_n`` of the IsHeld leaf (and of Transport and Turning).
+HELD_FORCE_N = float(IsHeld.INPUT_PORTS["min_force_n"].default_value)
 
 
 @dataclass
@@ -76,6 +82,9 @@ class EpisodeReport:
     #: Per disturbance of the world, in file order, what it did
     #: (:meth:`worlds.disturbances.AppliedDisturbance.summary`); empty for a world without.
     disturbances: list[dict[str, Any]] = field(default_factory=list)
+    #: How the objects were carried: slip, tilt, jerk, squeeze, grasps
+    #: (:class:`experiment.metrics.GripMetrics`, the worst over objects).
+    grip: GripMetrics = field(default_factory=GripMetrics)
 
     def summary(self) -> dict[str, Any]:
         """Plain JSON-safe dictionary (infinite distances as None).
@@ -101,6 +110,7 @@ class EpisodeReport:
             "obstacle_contacts": self.obstacle_contacts,
             "arm_contacts": self.arm_contacts,
             "dropped": self.dropped,
+            **self.grip.summary(),
             "sim_time_s": round(self.sim_time_s, 3),
             "wall_time_s": round(self.wall_time_s, 3),
             "physics_wall_s": round(self.physics_wall_s, 3),
@@ -217,18 +227,26 @@ class _Track:
 
 
 class _Recorder:
-    """Post-tick bookkeeping: each move's object path and placement error, for every object.
+    """Post-tick bookkeeping: each move's object path and placement error, for every object,
+    and the samples of the grip metrics.
 
     It reads the moves' published results (:func:`planner.move_result.move_results`,
     written by the Transport leaves), not the leaves: while a move's latest result is RUNNING
     the carried object's measured pose is sampled into that move's path; when it turns
-    SUCCESS the move's placement error, composition and skill are kept.
+    SUCCESS the move's placement error, composition and skill are kept. Every tick its
+    :class:`experiment.grip_recorder.GripRecorder` samples the objects and palms, and the
+    poses it read are the ones the paths keep.
     """
 
     def __init__(
-        self, sim: SimWorld, moves: list[tuple[str, int]], stepped: dict[str, tuple[Move, ...]]
+        self,
+        sim: SimWorld,
+        moves: list[tuple[str, int]],
+        stepped: dict[str, tuple[Move, ...]],
+        control_dt: float,
     ) -> None:
         self.sim = sim
+        self.grip = GripRecorder(sim, control_dt)
         self.order = {key: i for i, key in enumerate(moves)}
         self.tracks = {key: _Track() for key in moves}
         self.current: tuple[str, int] | None = None
@@ -246,11 +264,12 @@ class _Recorder:
         ]
 
     def __call__(self, tree: py_trees.trees.BehaviourTree) -> None:
+        poses = self.grip.sample()
         # In task order, as a move that ends and the next that starts share a tick.
         results = [(k, r) for k, r in move_results().items() if k in self.order]
         for key, result in sorted(results, key=lambda kr: self.order[kr[0]]):
             track = self.tracks[key]
-            pose = self.sim.object_pose(key[0])
+            pose = poses[key[0]]
             if result.status == Status.RUNNING:
                 if track.start is None:
                     track.start = (pose.position.copy(), pose.orientation.copy())
@@ -396,7 +415,7 @@ def run_episode(
         root = default_tree(task_steps(world))
     lib = library if library is not None else load_library(world)
     with SimWorld(world, gui=gui) as sim:
-        recorder = _Recorder(sim, moves, stepped)
+        recorder = _Recorder(sim, moves, stepped, 1.0 / world.sim.control_hz)
         hooks: list[Callable[[py_trees.trees.BehaviourTree], Any]] = [
             lambda tree: tree.add_post_tick_handler(recorder)
         ]
@@ -481,6 +500,7 @@ def run_episode(
         report.replaced_outputs = replaced
         report.physics_wall_s = sim.scene.physics_wall_s
         report.disturbances = [a.summary() for a in sim.scene.disturbances.applied()]
+        report.grip = recorder.grip.metrics(HELD_FORCE_N)
         if out is not None:
             if log is not None and log.error is not None:
                 report.output_errors.append(log.error)

@@ -1,4 +1,5 @@
-"""A campaign's summary from its records: outcomes, Wilson intervals, splits by condition.
+"""A campaign's summary from its records: outcomes, Wilson intervals, splits by condition,
+the grip metrics' median and worst.
 
 Pure Python over JSON records (no PyBullet), so that ``app.py report`` reads campaigns fast.
 """
@@ -6,9 +7,12 @@ Pure Python over JSON records (no PyBullet), so that ``app.py report`` reads cam
 from __future__ import annotations
 
 import math
+import statistics
 from collections import Counter
 from collections.abc import Iterable
 from typing import Any
+
+from experiment.metrics import METRIC_LABELS
 
 #: The normal quantile of a two-sided 95 % interval.
 Z_95 = 1.959963984540054
@@ -76,9 +80,35 @@ def _rate(successes: int, trials: int) -> dict[str, Any]:
     }
 
 
+def metric_values(records: Iterable[dict[str, Any]], name: str) -> list[float]:
+    """The values of grip metric ``name`` over records; a record without one (older campaigns,
+    crashed trials, nothing held) is left out."""
+    values = (r.get(name) for r in records)
+    return [
+        float(v)
+        for v in values
+        if isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
+    ]
+
+
+def metric_summary(records: Iterable[dict[str, Any]]) -> dict[str, dict[str, Any]]:
+    """Per grip metric (:data:`experiment.metrics.METRIC_LABELS`), its ``median`` and worst
+    (``max``) over the records that carry it, and how many do (``trials``); None when none."""
+    recs = list(records)
+    out = {}
+    for name in METRIC_LABELS:
+        values = metric_values(recs, name)
+        out[name] = {
+            "median": round(statistics.median(values), 6) if values else None,
+            "max": max(values) if values else None,
+            "trials": len(values),
+        }
+    return out
+
+
 def summarise(records: Iterable[dict[str, Any]]) -> dict[str, Any]:
     """Counts of successes and failure reasons with a Wilson 95 % interval, the same split by
-    condition (:func:`conditions`), mean times."""
+    condition (:func:`conditions`), the grip metrics (:func:`metric_summary`), mean times."""
     recs = list(records)
     reasons = Counter(reason_of(r.get("failure", "") or "") for r in recs)
     successes = reasons.pop("success", 0)
@@ -115,6 +145,7 @@ def summarise(records: Iterable[dict[str, Any]]) -> dict[str, Any]:
             if r.get("obstacle_contacts") or (r.get("min_obstacle_distance_m") or 0.0) < 0.0
         ),
         "min_obstacle_distance_m": min(dists) if dists else None,
+        "metrics": metric_summary(recs),
         "sim_time_s": round(sim, 2),
         "wall_time_s": round(wall, 2),
         "realtime_factor": round(sim / wall, 2) if wall > 0 else math.nan,
@@ -124,7 +155,8 @@ def summarise(records: Iterable[dict[str, Any]]) -> dict[str, Any]:
 
 
 def summary_lines(summary: dict[str, Any]) -> list[str]:
-    """The outcome table of :func:`summarise`'s summary, as printed lines."""
+    """The outcome table of :func:`summarise`'s summary, then its grip metrics (those some
+    trial measured), as printed lines."""
     lo, hi = summary["success_interval_95"]
     lines = [f"  {'outcome':<44} trials"]
     lines.append(
@@ -140,6 +172,15 @@ def summary_lines(summary: dict[str, Any]) -> list[str]:
             lines.append(
                 f"  {'  ' + _printable(value)[:42]:<44} {rate['successes']} of {rate['trials']} "
                 f"({100 * a:.1f}-{100 * b:.1f} %)"
+            )
+    measured = {k: m for k, m in summary.get("metrics", {}).items() if m["trials"]}
+    if measured:
+        lines.append(f"  {'grip, over the trials that measured it':<44} {'median':>9} {'worst':>9}")
+        for name, m in measured.items():
+            label = METRIC_LABELS.get(name, name)
+            lines.append(
+                f"  {'  ' + label:<44} {m['median']:>9.4g} {m['max']:>9.4g}"
+                + ("" if m["trials"] == summary["trials"] else f"  ({m['trials']} trials)")
             )
     return lines
 

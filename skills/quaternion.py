@@ -239,6 +239,14 @@ def rotate(q: ArrayLike, v: ArrayLike) -> Array:
     return vec + w * t + np.cross(u, t)
 
 
+def tilt(q: ArrayLike) -> Array:
+    """Angle (rad, in [0, pi]) between the z axis that unit quaternions ``(..., 4)`` turn world z
+    into and world z: how far a body is tipped from upright, whatever its yaw. Shape ``(...)``."""
+    z = rotate(q, np.array([0.0, 0.0, 1.0]))
+    # atan2 keeps full precision near upright, where arccos of z's height loses half the digits.
+    return np.arctan2(np.hypot(z[..., 0], z[..., 1]), z[..., 2])
+
+
 def from_axis_angle(axis: ArrayLike, angle: ArrayLike) -> Array:
     """Quaternions ``(..., 4)`` for rotations of ``angle`` rad about unit ``axis`` ``(..., 3)``."""
     ax = np.asarray(axis, dtype=float)

@@ -465,5 +465,4 @@ class SimWorld:
     def object_tilt_deg(self, name: str) -> float:
         """Angle between the object's z axis and the world's, degrees."""
         _, q = self.scene.object_pose(name)
-        z = quat.rotate(q, np.array([0.0, 0.0, 1.0]))
-        return float(np.degrees(np.arccos(np.clip(z[2], -1.0, 1.0))))
+        return float(np.degrees(quat.tilt(q)))

@@ -86,3 +86,27 @@ def test_progress_updates_in_place_only_on_a_terminal() -> None:
     assert "[" + "#" * 30 + "] 3/3" in tty.getvalue()
     with pytest.raises(ValueError, match="step_percent"):
         Progress(log, step_percent=0.0)
+
+
+def test_grip_metrics_summarise_as_median_and_worst_and_old_records_count_as_missing() -> None:
+    grip = {"slip_mm": 1.0, "peak_tilt_deg": 0.5, "contact_count": 1, "regrasp_count": 0}
+    records = [
+        {"trial": 0, "success": True, **grip},
+        {"trial": 1, "success": True, **grip, "slip_mm": 3.0, "peak_tilt_deg": None},
+        {"trial": 2, "success": False, **grip, "slip_mm": 8.0, "contact_count": 3},
+        {"trial": 3, "success": True},  # an older campaign's record: no metrics at all
+        {"trial": 4, "success": False, "failure": "error: crashed", "slip_mm": "n/a"},
+    ]
+    metrics = summarise(records)["metrics"]
+    assert metrics["slip_mm"] == {"median": 3.0, "max": 8.0, "trials": 3}
+    assert metrics["peak_tilt_deg"] == {"median": 0.5, "max": 0.5, "trials": 2}
+    assert metrics["contact_count"] == {"median": 1.0, "max": 3.0, "trials": 3}
+    assert metrics["peak_jerk_mps3"] == {"median": None, "max": None, "trials": 0}
+    text = "\n".join(summary_lines(summarise(records)))
+    assert "median" in text and "worst" in text
+    slip = next(line for line in text.splitlines() if "slip in the grip, mm" in line)
+    assert slip.split()[-4:] == ["3", "8", "(3", "trials)"]
+    assert "peak jerk" not in text  # no trial measured it
+    old = summarise([{"trial": 0, "success": True}])
+    assert all(m["trials"] == 0 for m in old["metrics"].values())
+    assert "median" not in "\n".join(summary_lines(old))

@@ -193,3 +193,12 @@ def test_a_rotation_vector_turns_by_its_length_about_itself() -> None:
     q = quat.from_rotation_vector([0.0, 0.0, 0.6])
     np.testing.assert_allclose(q, quat.from_axis_angle([0.0, 0.0, 1.0], 0.6), atol=1e-15)
     np.testing.assert_allclose(quat.from_rotation_vector(np.zeros(3)), quat.IDENTITY, atol=0)
+
+
+def test_tilt_is_the_angle_from_upright_whatever_the_yaw() -> None:
+    yaw = quat.from_axis_angle([0.0, 0.0, 1.0], np.linspace(-3.0, 3.0, 7))
+    tipped = quat.from_axis_angle([[1.0, 0.0, 0.0], [1.0, 1.0, 0.0]], [0.3, 2.5])
+    assert_allclose(quat.tilt(yaw), 0.0, atol=1e-12)
+    assert_allclose(quat.tilt(quat.multiply(tipped[:, None], yaw)), [[0.3] * 7, [2.5] * 7])
+    assert_allclose(quat.tilt(quat.from_axis_angle([0.0, 1.0, 0.0], 1e-7)), 1e-7, rtol=1e-6)
+    assert_allclose(quat.tilt(quat.from_axis_angle([0.0, 1.0, 0.0], np.pi)), np.pi)
