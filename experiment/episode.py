@@ -37,7 +37,7 @@ from planner.runner import RunResult, run_tree
 from planner.tree_dataflow import RUN_WRITES, TASK_OBJECT_KEY
 from skills.default_library import default_library
 from skills.library import SkillLibrary
-from worlds.sim_world import SimWorld, task_moves
+from worlds.sim_world import SafetyRecord, SimWorld, task_moves
 from worlds.world_file import World, as_world_spec
 
 PLACE_TOLERANCE_M = 0.02
@@ -149,15 +149,29 @@ def judge(
 
     ``objects``, ``errors_m`` and ``errors_deg`` hold one entry per move of the task, in task
     order: a move without a placement is a failure naming its object and move, whatever the
-    tree said.
+    tree said. A drop fails the run only if the task then went wrong in any way (it is the
+    reason given, being the cause); a dropped object that the tree picked up again and placed,
+    with nothing touched, is a recovery: the run succeeds and its record says ``dropped``.
     """
     s = sim.safety
     if s.spawned_inside:
         # First: what it causes (a drop, a contact) is not the reason.
         where = "; ".join(f"{o} inside {', '.join(b)}" for o, b in sorted(s.spawned_inside.items()))
         return False, f"obstacle spawned inside a body: {where}"
-    if s.dropped:
+    ok, failure = _task_outcome(result, s, objects, errors_m, errors_deg)
+    if not ok and s.dropped:
         return False, f"dropped {s.dropped_object}" if s.dropped_object else "dropped"
+    return ok, failure
+
+
+def _task_outcome(
+    result: RunResult,
+    s: SafetyRecord,
+    objects: list[str],
+    errors_m: list[float | None],
+    errors_deg: list[float | None],
+) -> tuple[bool, str]:
+    """:func:`judge` without the spawn and drop criteria."""
     if s.obstacle_contacts:
         return False, "obstacle contact: " + ", ".join(sorted(s.obstacle_contacts))
     if s.min_obstacle_distance_m < 0.0:

@@ -19,6 +19,7 @@ from numpy.lib.stride_tricks import sliding_window_view
 from numpy.typing import ArrayLike, NDArray
 
 from skills import quaternion as quat
+from skills.dual_arm import shift_along_face
 from skills.types import Array
 
 #: A boolean array, one flag per sample.
@@ -216,10 +217,7 @@ def slip_m(
     h = np.asarray(held, dtype=bool)
     local = palm2object_positions(palm_positions, object_positions, object_orientations)
     reference = local[np.flatnonzero(grasp_starts(h))][grasp_index(h)[h]]  # (held, 2, 3)
-    normal = reference / np.linalg.norm(reference, axis=-1, keepdims=True)
-    moved = local[h] - reference
-    along_face = moved - np.sum(moved * normal, axis=-1, keepdims=True) * normal
-    return _peak(np.linalg.norm(along_face, axis=-1).ravel())
+    return _peak(shift_along_face(local[h], reference).ravel())
 
 
 def peak_tilt_rad(object_orientations: ArrayLike, held: ArrayLike) -> float:

@@ -26,7 +26,14 @@ from skills import quaternion as quat
 from skills.types import Array
 from skills.vocabulary import Arm
 
-__all__ = ["GraspGeometry", "contact_twists", "grasp_matrix", "integrate_twist", "skew"]
+__all__ = [
+    "GraspGeometry",
+    "contact_twists",
+    "grasp_matrix",
+    "integrate_twist",
+    "shift_along_face",
+    "skew",
+]
 
 
 def skew(r: ArrayLike) -> Array:
@@ -227,3 +234,31 @@ def integrate_twist(
     disp = v + a * pv + b * np.cross(phi, pv)
     new_orientation = quat.multiply(quat.exp(0.5 * phi), orientation)
     return position + disp * dt, new_orientation
+
+
+def shift_along_face(palm2object: ArrayLike, reference: ArrayLike) -> Array:
+    """How far palms have moved along the faces they hold since ``reference``, m.
+
+    The displacement of each palm in {O} less its component along the reference's line from
+    the object's centre (for a face held at its middle, the face normal): a squeeze settling in
+    or a palm pressing deeper is not a slip; a palm sliding along the face, or the object
+    turning or dropping in the grip, is.
+
+    Parameters
+    ----------
+    palm2object : array_like
+        (..., 3) palm positions in {O} now, m.
+    reference : array_like
+        (..., 3) their positions in {O} when the grasp was made, m (not at the centre).
+
+    Returns
+    -------
+    ndarray
+        (...) distances, m.
+    """
+    now = np.asarray(palm2object, dtype=float)
+    ref = np.asarray(reference, dtype=float)
+    normal = ref / np.linalg.norm(ref, axis=-1, keepdims=True)
+    moved = now - ref
+    along = moved - np.sum(moved * normal, axis=-1, keepdims=True) * normal
+    return np.asarray(np.linalg.norm(along, axis=-1))

@@ -12,12 +12,14 @@ from affordances import SemanticAction
 from planner.composition import MovePlan, SkillChoiceError, goal_error
 from planner.leaves.base import WorldLeaf, composed_move, composition_ports
 from planner.port import ObjectSensing, ObstacleScene, PalmControl
-from skills.composer import DualArmState
+from skills.composer import DualArmState, relative_from_world
+from skills.dual_arm import shift_along_face
 from skills.vocabulary import ARMS
 
 
 class IsHeld(WorldLeaf):
-    """Both palms press on the object and it has not slipped from where the grasp holds it."""
+    """Both palms press on the object and, given the grasp's state, have not slipped along its
+    faces from where the grasp put them (the object knocked, dropped or turned in the grip)."""
 
     WORLD_ROLES: ClassVar[tuple[type, ...]] = (ObjectSensing, PalmControl)
 
@@ -31,10 +33,13 @@ class IsHeld(WorldLeaf):
             float,
             required=False,
             default_value=0.02,
-            description="largest offset from the grasp's reference, m",
+            description="largest move of a palm along its face from the grasp's reference, m",
         ),
         "from_state": PortInformation(
-            DualArmState, required=False, description="the reference state of the grasp"
+            DualArmState,
+            required=False,
+            description="the state the last skill handed over: its palms in the object frame "
+            "are the grasp's reference",
         ),
     }
     OUTPUT_PORTS: dict[str, PortInformation] = {}
@@ -53,11 +58,20 @@ class IsHeld(WorldLeaf):
             )
         reference: DualArmState | None = self.optional_input("from_state")
         if reference is not None:
-            slip = float(
-                np.linalg.norm(self.world.object_pose(name).position - reference.object.position)
-            )
-            if slip > float(self.get_input("max_slip_m")):
-                return self.fail(f"slipped {slip * 1000:.1f} mm from the grasp")
+            obj = self.world.object_pose(name)
+            slips = []
+            for arm in ARMS:
+                palm = self.world.palm_pose(arm)
+                local, _ = relative_from_world(
+                    obj.position, obj.orientation, palm.position, palm.orientation
+                )
+                slips.append(float(shift_along_face(local, reference.relative(arm).position)))
+            worst = int(np.argmax(slips))
+            if slips[worst] > float(self.get_input("max_slip_m")):
+                return self.fail(
+                    f"slipped in the grip: the {ARMS[worst].value} palm "
+                    f"{slips[worst] * 1000:.1f} mm along its face from the grasp"
+                )
         return self.succeed(f"held: {forces[0]:.1f} N, {forces[1]:.1f} N")
 
 

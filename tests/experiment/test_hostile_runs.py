@@ -37,6 +37,20 @@ def test_an_obstacle_spawned_inside_a_body_is_the_reason_not_what_it_caused() ->
     assert (ok, failure) == (False, "obstacle spawned inside a body: ball_right inside parcel")
 
 
+def test_a_drop_the_tree_recovered_from_is_recorded_not_failed() -> None:
+    sim: Any = SimpleNamespace(safety=SafetyRecord(dropped=True, dropped_object="parcel"))
+    done = RunResult(Status.SUCCESS, 3.0, 1.0, 180, "")
+    assert judge(done, sim, ["parcel"], [0.004], [0.5]) == (True, "")
+    # a drop is the reason whenever the task then went wrong, being its cause
+    assert judge(done, sim, ["parcel"], [0.04], [0.5]) == (False, "dropped parcel")
+    stuck = RunResult(Status.FAILURE, 3.0, 1.0, 180, "x")
+    assert judge(stuck, sim, ["parcel"], [None], [None]) == (False, "dropped parcel")
+    touched = SafetyRecord(dropped=True, dropped_object="parcel")
+    touched.obstacle_contacts["parcel ~ ball_right"] = 3
+    sim_touched: Any = SimpleNamespace(safety=touched)
+    assert judge(done, sim_touched, ["parcel"], [0.004], [0.5]) == (False, "dropped parcel")
+
+
 def test_a_negative_fcl_clearance_fails_the_run_when_nothing_spawned_inside() -> None:
     safety = SafetyRecord(min_obstacle_distance_m=-0.04, closest="left_arm/base ~ ball_right")
     sim: Any = SimpleNamespace(safety=safety)

@@ -349,6 +349,42 @@ def test_is_held_reads_forces_and_fails_after_a_drop(
     assert held.status == Status.FAILURE
 
 
+def test_is_held_with_the_grasps_state_fails_when_a_palm_slid_along_its_face(
+    fake_world: FakeWorld, library: SkillLibrary
+) -> None:
+    select(fake_world, library)
+    approach_and_grasp(fake_world, library)
+    fake_world.advance(DT)
+    held = ready(IsHeld("held"), fake_world, library, object="parcel", from_state="{state}")
+    held.tick_once()
+    assert held.status == Status.SUCCESS, held.feedback_message
+    palms = {arm: fake_world.palm_pose(arm) for arm in ARMS}
+    # pressing 5 mm deeper into the faces is a squeeze, not a slip
+    inward = {
+        arm: Pose(
+            p.position - (0.005 if arm is Arm.LEFT else -0.005) * np.array([0, 1.0, 0]),
+            p.orientation,
+        )
+        for arm, p in palms.items()
+    }
+    fake_world.place_palms(inward)
+    held.tick_once()
+    assert held.status == Status.SUCCESS, held.feedback_message
+    # the right palm 30 mm lower on its face: the parcel slipped in the grip
+    fake_world.place_palms(
+        {
+            Arm.RIGHT: Pose(
+                palms[Arm.RIGHT].position - [0.0, 0.0, 0.03], palms[Arm.RIGHT].orientation
+            )
+        }
+    )
+    held.tick_once()
+    assert held.status == Status.FAILURE
+    assert re.search(
+        r"slipped in the grip: the right palm 3\d\.\d mm along its face", held.feedback_message
+    )
+
+
 def test_at_goal_reports_the_errors(fake_world: FakeWorld, library: SkillLibrary) -> None:
     leaf = ready(AtGoal("at_goal"), fake_world, library, object="parcel", move=0)
     leaf.tick_once()

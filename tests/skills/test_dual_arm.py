@@ -11,6 +11,7 @@ from skills.dual_arm import (
     contact_twists,
     grasp_matrix,
     integrate_twist,
+    shift_along_face,
     skew,
 )
 from skills.vocabulary import Arm
@@ -116,3 +117,14 @@ def test_integrate_twist_matches_a_pure_rotation_about_a_point() -> None:
 def twist_at(point: np.ndarray, twist_origin: np.ndarray) -> np.ndarray:
     """The twist of a body, given at the origin, expressed at ``point``."""
     return np.concatenate((twist_origin[:3] + np.cross(twist_origin[3:], point), twist_origin[3:]))
+
+
+def test_shift_along_face_counts_sliding_not_pressing() -> None:
+    reference = np.array([[0.0, 0.16, 0.0], [0.0, -0.16, 0.0]])  # palms on the +-y faces
+    # sliding 30 mm down the face and 40 mm along x is 50 mm; pressing 5 mm deeper is none
+    moved = reference + np.array([[0.04, -0.005, -0.03], [0.0, 0.005, 0.0]])
+    assert_allclose(shift_along_face(moved, reference), [0.05, 0.0], atol=1e-12)
+    # the object turned 10 degrees about z in the grip: the palm moved along the face by
+    # 0.16 sin(10 deg) (and towards the centre by 0.16 (1 - cos), which is not counted)
+    turned = quat.rotate(quat.from_axis_angle([0.0, 0.0, 1.0], np.radians(10.0)), reference)
+    assert_allclose(shift_along_face(turned, reference), 0.16 * np.sin(np.radians(10.0)))
