@@ -38,6 +38,7 @@ from planner.tree_dataflow import RUN_WRITES, TASK_OBJECT_KEY
 from skills.default_library import default_library
 from skills.library import SkillLibrary
 from worlds.sim_world import SafetyRecord, SimWorld, task_moves
+from worlds.truth import PhysicalTruth
 from worlds.world_file import World, as_world_spec
 
 PLACE_TOLERANCE_M = 0.02
@@ -384,6 +385,7 @@ def run_episode(
     gui: bool = False,
     main_tree: str | None = None,
     groot_port: int | None = None,
+    truth: PhysicalTruth | None = None,
 ) -> EpisodeReport:
     """Run the world's task once and judge it.
 
@@ -412,6 +414,9 @@ def run_episode(
     groot_port : int, optional
         Serve the run's status live to Groot2 on this port
         (:class:`planner.groot_publisher.GrootPublisher`; needs ``out``).
+    truth : PhysicalTruth, optional
+        How the physics differs from ``world`` (:mod:`worlds.truth`): only the scene sees it;
+        the tree, the skills and the reasoner read ``world``. None: in nothing.
 
     Raises
     ------
@@ -428,7 +433,7 @@ def run_episode(
     else:
         root = default_tree(task_steps(world))
     lib = library if library is not None else load_library(world)
-    with SimWorld(world, gui=gui) as sim:
+    with SimWorld(world, gui=gui, truth=truth) as sim:
         recorder = _Recorder(sim, moves, stepped, 1.0 / world.sim.control_hz)
         hooks: list[Callable[[py_trees.trees.BehaviourTree], Any]] = [
             lambda tree: tree.add_post_tick_handler(recorder)

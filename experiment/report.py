@@ -76,6 +76,8 @@ def read_campaigns(out: Path) -> CampaignFile:
         world = first.get("world") or "(world not recorded)"
         tree = first.get("tree") or "default tree"
         label = f"{world}, {tree}, seed {first.get('seed')}"
+        if first.get("mode") == "hard":
+            label += ", Hard"
         campaigns.append(Campaign(label, [by_trial[t] for t in sorted(by_trial)]))
     return CampaignFile(path, campaigns, read.skipped)
 

@@ -14,6 +14,9 @@ on the robot):
   collision shapes), so only the carry can meet it: a sphere the robot would have to be in
   to pick the parcel up or put it down is not a test of avoidance.
 
+With ``hard``, each trial also runs against a physical truth drawn for it
+(:mod:`experiment.hard`); its record says what was drawn (``hard``) and ``"mode": "hard"``.
+
 Trials are judged as :func:`experiment.episode.judge` says (2 cm and 10 degrees per placement,
 never dropped, no robot link or parcel touching an obstacle, arms never touching). Results
 are appended to ``results.jsonl`` one line per trial as they finish, so an interrupted
@@ -37,6 +40,7 @@ from typing import Any
 import numpy as np
 import pybullet as pb
 
+from experiment.hard import HardTrial, draw_hard, with_pushes
 from experiment.records import campaign_key, owned_by
 from experiment.results import (
     ResultsFileError,
@@ -407,14 +411,23 @@ def run_trial(job: tuple[dict[str, Any], int, int]) -> dict[str, Any]:
     source = Path(base_data["source"]) if base_data["source"] else None
     base = world_from_data(base_data["world"], source)
     tree = Path(base_data["tree"]) if base_data["tree"] else None
+    hard: HardTrial | None = None
     try:
         # The user's leaves the tree may use, registered in this process too (a spawned
         # worker starts without them; a forked one finds them registered already).
         register_leaves(base_data.get("leaves", ()))
         world, kinds = draw_trial(base, seed, trial)
+        if base_data.get("hard"):
+            hard = draw_hard(world, seed, trial)
+            world = with_pushes(world, hard.pushes)
         where = _layout_of(world)
         report = run_episode(
-            world, tree, out=None, animation=False, main_tree=base_data.get("main_tree")
+            world,
+            tree,
+            out=None,
+            animation=False,
+            main_tree=base_data.get("main_tree"),
+            truth=None if hard is None else hard.truth,
         )
         record = report.summary()
         record.pop("outputs", None)
@@ -434,6 +447,8 @@ def run_trial(job: tuple[dict[str, Any], int, int]) -> dict[str, Any]:
             "host": socket.gethostname(),
         }
     )
+    if hard is not None:
+        record.update({"mode": "hard", "hard": hard.summary()})
     return record
 
 
@@ -450,13 +465,22 @@ def campaign_of(
     tree: Path | None,
     leaves: Sequence[str] = (),
     main_tree: str | None = None,
+    hard: bool = False,
 ) -> dict[str, Any]:
-    """The key of the campaign of ``base``, ``seed``, ``tree``, the tree's own ``leaves`` and
-    the ``main_tree`` run of it (:func:`experiment.records.campaign_key`)."""
+    """The key of the campaign of ``base``, ``seed``, ``tree``, the tree's own ``leaves``, the
+    ``main_tree`` run of it and whether it is ``hard`` (:func:`experiment.records.campaign_key`).
+
+    A Hard campaign's settings hold its ranges (``trials.hard``, every value); the world's
+    content hash leaves them out, so an Easy campaign's key does not depend on them.
+    """
     settings: dict[str, Any] = {"leaves": [_leaf_source(s) for s in leaves]} if leaves else {}
     if main_tree:
         settings["main_tree"] = main_tree
-    return campaign_key(base.name, base.model_dump(mode="json"), tree, seed, settings)
+    if hard:
+        settings["hard"] = base.trials.hard.model_dump(mode="json")
+    data = base.model_dump(mode="json")
+    data["trials"].pop("hard", None)
+    return campaign_key(base.name, data, tree, seed, settings)
 
 
 def _leaf_source(source: str) -> str:
@@ -637,6 +661,7 @@ def run_campaign(
     backend: str = "local",
     address: str | None = None,
     main_tree: str | None = None,
+    hard: bool = False,
 ) -> list[dict[str, Any]]:
     """Run trials ``0..n-1`` not yet in ``out/results.jsonl``; append each as it finishes.
 
@@ -671,6 +696,9 @@ def run_campaign(
     main_tree : str, optional
         The ``<BehaviorTree ID>`` of ``tree`` to run instead of its ``main_tree_to_execute``;
         it is part of the campaign's key, so a campaign resumes only trials of the same one.
+    hard : bool
+        Hard mode (:mod:`experiment.hard`): every trial runs against a physical truth drawn
+        for it. Part of the campaign's key, with the world's ``trials.hard`` ranges.
 
     Returns
     -------
@@ -704,6 +732,7 @@ def run_campaign(
             backend,
             address,
             main_tree,
+            hard,
         )
 
 
@@ -724,6 +753,7 @@ def _run_locked(
     backend: str,
     address: str | None,
     main_tree: str | None = None,
+    hard: bool = False,
 ) -> list[dict[str, Any]]:
     results = out / "results.jsonl"
     cut = repair_tail(results)
@@ -735,7 +765,7 @@ def _run_locked(
             f"{results}: skipped {earlier.skipped} line(s) that are not trial records; "
             "their trials run again"
         )
-    key = campaign_of(base, seed, tree, leaves, main_tree)
+    key = campaign_of(base, seed, tree, leaves, main_tree, hard)
     done = campaign_results(results, key)
     pending = [t for t in range(n) if t not in done]
     payload: dict[str, Any] = {
@@ -746,6 +776,7 @@ def _run_locked(
         "leaves": [_leaf_source(s) for s in leaves],
         "backend": backend,
         **({"main_tree": main_tree} if main_tree else {}),
+        **({"hard": True} if hard else {}),
     }
     die = os.environ.get("DUET_TEST_DIE_ONCE", "")
     # Test-only (see run_trial): where trials run in worker processes, never in this one.

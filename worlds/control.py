@@ -2,7 +2,8 @@
 
 :class:`DualArmImpedanceController` reads the joint state, re-linearises the law of
 :mod:`worlds.impedance` (Jacobian, gravity, inertia from PyBullet), adds the joint-limit
-repulsion, clips to the torque limits and sends the torques with TORQUE_CONTROL.
+repulsion, clips to the torque limits and sends the torques with TORQUE_CONTROL, through the
+actuators' faults (:mod:`worlds.actuators`) when it is given any.
 
 Quaternions are scalar-last (x, y, z, w); twists are (linear, angular) in the world frame.
 """
@@ -19,6 +20,13 @@ from numpy.typing import ArrayLike, NDArray
 from skills import quaternion as quat
 from skills.types import Array
 from skills.vocabulary import Arm
+from worlds.actuators import (
+    ActuatorFaults,
+    ActuatorState,
+    actuator_start,
+    actuator_step,
+    lag_gain,
+)
 from worlds.impedance import (
     GainArrays,
     ImpedanceGains,
@@ -64,6 +72,9 @@ class DualArmImpedanceController:
         Also re-linearise as soon as a joint has moved this far from the linearisation point,
         rad; 0 switches this off. The linearisation error grows with the joint displacement,
         not with time, so this keeps moving arms accurate and lets a still arm skip refreshes.
+    faults : ActuatorFaults, optional
+        How the actuators differ from ideal torque sources (one entry per joint, the left
+        arm's first); None: the computed torques are applied as they are.
     """
 
     ARMS = (Arm.LEFT, Arm.RIGHT)
@@ -77,6 +88,7 @@ class DualArmImpedanceController:
         gains: ImpedanceGains | None = None,
         refresh_every: int = 1,
         relinearise_tolerance: float = 0.0,
+        faults: ActuatorFaults | None = None,
     ) -> None:
         name = "DualArmImpedanceController"
         if len(body_ids) != len(robot.bodies):
@@ -99,6 +111,13 @@ class DualArmImpedanceController:
         if any(len(spec.joint_indices) != n for spec in self._specs):
             raise ValueError(f"{name}: expected arms with equal joint counts")
         self._n = n
+        if faults is not None and faults.joints != 2 * n:
+            raise ValueError(
+                f"{name}: expected actuator faults for {2 * n} joints, got {faults.joints}"
+            )
+        self.faults = faults
+        self._lag_gain = lag_gain(faults.lag_s, physics_dt) if faults is not None else 1.0
+        self._actuators: ActuatorState | None = None
         self._arm_body = [int(body_ids[spec.body]) for spec in self._specs]
         # One body per arm, or one body for both; every movable joint must belong to an arm,
         # because PyBullet's Jacobian and inverse dynamics take all of a body's movable joints.
@@ -156,6 +175,7 @@ class DualArmImpedanceController:
         self._q = np.zeros(2 * n)
         self._qd = np.zeros(2 * n)
         self._tau = np.zeros(2 * n)
+        self._applied = self._tau
         self._q_lin = np.zeros(2 * n)
         self._terms: ImpedanceTerms | None = None
         self._targets_changed = True
@@ -380,6 +400,9 @@ class DualArmImpedanceController:
         np.maximum(tau, self._min_torque, out=tau)
         np.minimum(tau, self._max_torque, out=tau)
         self._tau = tau
+        if self.faults is not None:
+            tau = self._actuate(tau)
+        self._applied = tau
         for body, joints, rows in zip(
             self._bodies, self._body_joints, self._body_rows, strict=True
         ):
@@ -393,7 +416,22 @@ class DualArmImpedanceController:
         self._steps_since_refresh += 1
         self._steps_since_target += 1
 
+    def _actuate(self, tau: FloatArray) -> FloatArray:
+        """The torques the faulty actuators apply this tick for the computed ``tau`` (2n,)."""
+        assert self.faults is not None
+        if self._actuators is None:
+            self._actuators = actuator_start(tau, self.faults)
+        self._actuators, applied = actuator_step(
+            self._actuators, tau, self.faults, self._lag_gain, self._max_torque
+        )
+        return applied
+
     # -- outputs -----------------------------------------------------------------------------
+
+    def applied_torques(self) -> FloatArray:
+        """Torques sent to PyBullet at the last tick, (2n,) N m, the left arm's first: the
+        computed ones (:attr:`PalmState.joint_torques`) through the actuators' faults."""
+        return self._applied.copy()
 
     def palm_state(self, arm: Arm) -> PalmState:
         """Measured palm pose and twist (world frame) and joint state of ``arm``."""

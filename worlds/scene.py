@@ -7,7 +7,10 @@ applies the control torques and advances physics by one step.
 
 Rules kept here: objects are held by friction and squeeze only (no constraints to the palms, no
 teleporting or mass changes once the scene runs); obstacles are static (mass 0) and are switched
-on or off per move by parking them far below the floor.
+on or off per move by parking them far below the floor. A :class:`worlds.truth.PhysicalTruth`
+changes the bodies as they are built (masses, frictions, the table's height) and the
+actuators; :attr:`Scene.spec` stays as the world file says, :attr:`Scene.physical` is what was
+built.
 """
 
 from __future__ import annotations
@@ -34,6 +37,7 @@ from worlds.bodies import (
 from worlds.control import DualArmImpedanceController, ImpedanceGains, PalmCommand, PalmState
 from worlds.disturbances import Disturbances
 from worlds.spec import ObstacleSpec, Quat, SceneSpec, WorldSpec
+from worlds.truth import PhysicalTruth, physical_scene
 from worlds.world_file import World, as_world_spec
 
 FloatArray = NDArray[np.float64]
@@ -121,6 +125,8 @@ class Scene:
         Re-linearise sooner once a joint has moved this far, rad (0: only by the clock).
     gui : bool
         Open PyBullet's window (needs a display); DIRECT otherwise.
+    truth : PhysicalTruth, optional
+        How the physics differs from ``spec`` (:mod:`worlds.truth`); None: in nothing.
     """
 
     def __init__(
@@ -130,8 +136,13 @@ class Scene:
         refresh_every: int | None = None,
         relinearise_tolerance: float = RELINEARISE_TOLERANCE,
         gui: bool = False,
+        truth: PhysicalTruth | None = None,
     ) -> None:
         self.spec = spec if spec is not None else SceneSpec()
+        #: How the physics differs from :attr:`spec`.
+        self.truth = truth if truth is not None else PhysicalTruth()
+        #: The scene as built: :attr:`spec` with the truth's masses, frictions and heights.
+        self.physical = physical_scene(self.spec, truth) if truth is not None else self.spec
         if refresh_every is None:
             refresh_every = max(1, round(self.spec.physics_hz / RELINEARISE_HZ))
         self.physics_dt = 1.0 / self.spec.physics_hz
@@ -153,6 +164,7 @@ class Scene:
         refresh_every: int | None = None,
         relinearise_tolerance: float = RELINEARISE_TOLERANCE,
         gui: bool = False,
+        truth: PhysicalTruth | None = None,
     ) -> Scene:
         """Build the scene of a world: a :class:`worlds.spec.WorldSpec`, or a validated
         :class:`worlds.world_file.World`, converted here."""
@@ -162,6 +174,7 @@ class Scene:
             refresh_every=refresh_every,
             relinearise_tolerance=relinearise_tolerance,
             gui=gui,
+            truth=truth,
         )
 
     def _build(
@@ -181,8 +194,10 @@ class Scene:
 
         self.robot = build_robot(self.spec.robot)
         self.robot_ids = load_robot(c, self.robot)
-        self.table_id = create_table(c, self.spec.table)
-        self.object_ids = {obj.name: create_object(c, obj) for obj in self.spec.objects}
+        if self.truth.palm_friction_scale != 1.0:
+            self._scale_palm_friction(self.truth.palm_friction_scale)
+        self.table_id = create_table(c, self.physical.table)
+        self.object_ids = {obj.name: create_object(c, obj) for obj in self.physical.objects}
         self.obstacle_ids = {
             o.name: create_obstacle(c, o, self._parking(o)) for o in self.spec.obstacles
         }
@@ -201,8 +216,19 @@ class Scene:
             else replace(ImpedanceGains(), **self.robot.gain_overrides),
             refresh_every=refresh_every,
             relinearise_tolerance=relinearise_tolerance,
+            faults=self.truth.actuators,
         )
         self.controller.enable()
+
+    def _scale_palm_friction(self, scale: float) -> None:
+        """Multiply each palm's friction coefficient, as its robot model gives it, by ``scale``."""
+        for arm in (Arm.LEFT, Arm.RIGHT):
+            spec = self.robot.arms[arm]
+            body = self.robot_ids[spec.body]
+            model = pb.getDynamicsInfo(body, spec.palm_link, physicsClientId=self.client)[1]
+            pb.changeDynamics(
+                body, spec.palm_link, lateralFriction=model * scale, physicsClientId=self.client
+            )
 
     # -- setup -------------------------------------------------------------------------------
 

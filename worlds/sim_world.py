@@ -4,13 +4,19 @@
 physics at the world file's rate and watches what a trial is judged on: contacts between any
 robot link or the parcel and an obstacle (PyBullet, every physics step), the arms touching each
 other, the smallest FCL distance to an obstacle, and the parcel falling.
+
+Given a :class:`worlds.truth.PhysicalTruth`, the physics follows it while the port still
+answers from the world file (masses, frictions, the table), and :meth:`SimWorld.object_pose`
+reports each object where the robot senses it: off by the truth's perception error until the
+object is first held in both palms (:data:`LOCATED_BY_GRASP_N`), where it is from then on.
+The safety monitor and the judge read the physics.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -27,6 +33,7 @@ from worlds.collision import CollisionWorld, arm_group
 from worlds.control import ImpedanceGains, PalmCommand
 from worlds.scene import LATERAL_PALM_QUATERNIONS, Scene
 from worlds.spec import Shape, ShapeSpec, WorldSpec
+from worlds.truth import PhysicalTruth, sensed_pose
 from worlds.world_file import World, as_world_spec
 
 #: Extra clearance asked of predicted forearm poses (carried rigidly with the palms), m: the
@@ -41,6 +48,9 @@ FOREARM_DOUBT_PER_M = 0.2
 FOREARM_LEVER_M = 0.3
 #: Highest an object's centre may be carried above the table top, m.
 MAX_LIFT_M = 0.30
+#: Contact force each palm must press an object with, N, for the grasp to locate it: from the
+#: first control tick it does, the object is sensed where it is.
+LOCATED_BY_GRASP_N = 0.5
 
 
 def touching(points: Sequence[Sequence[Any]]) -> bool:
@@ -146,6 +156,10 @@ class SimWorld:
         The one object the monitor watches for drops; default: every object of the task.
     gains : ImpedanceGains, optional
         Palm impedance gains.
+    gui : bool
+        Show PyBullet's window.
+    truth : PhysicalTruth, optional
+        How the physics differs from the world (:mod:`worlds.truth`); None: in nothing.
     """
 
     def __init__(
@@ -154,9 +168,14 @@ class SimWorld:
         object_name: str | None = None,
         gains: ImpedanceGains | None = None,
         gui: bool = False,
+        truth: PhysicalTruth | None = None,
     ) -> None:
         self.spec = spec = as_world_spec(world)
-        self.scene = Scene(spec.scene, gains=gains, gui=gui)
+        self.scene = Scene(spec.scene, gains=gains, gui=gui, truth=truth)
+        #: The objects still sensed off where they are (none are held yet).
+        self._unlocated: tuple[str, ...] = tuple(
+            o.name for o in spec.scene.objects if self.scene.truth.of(o.name).sensed_offset
+        )
         self.gains = self.scene.controller.gains(Arm.LEFT)
         self.collision = CollisionWorld(self.scene)
         task_objects = tuple(dict.fromkeys(step.object for step in spec.task))
@@ -167,7 +186,7 @@ class SimWorld:
         self._rest = self._rest_poses()
         self.scene.place_palms({a: (p.position, p.orientation) for a, p in self._rest.items()})
         self._commands: dict[Arm, Pose] = dict(self._rest)
-        self._contexts = {c.name: c for c in object_contexts(spec)}
+        self._contexts = {c.name: self._sensed_context(c) for c in object_contexts(spec)}
         self._extents = {o.name: shape_extents(o.shape) for o in self.scene.spec.objects}
         self._obstacle_info = {
             o.name: ObstacleInfo(o.name, np.asarray(o.position, float), o.shape.bounding_radius())
@@ -181,9 +200,19 @@ class SimWorld:
         }
         self._watched_bodies.update(self.scene.object_ids)
         self._rest_z = {
-            o.name: float(o.position[2]) for o in self.scene.spec.objects
-        }  # resting centre height
+            o.name: float(o.position[2]) for o in self.scene.physical.objects
+        }  # resting centre height, on the true table
         self.collision.sync()
+
+    def _sensed_context(self, context: ObjectContext) -> ObjectContext:
+        """The reasoner's context with the object's start pose as the robot senses it (its
+        mass, friction and the rest as the world file says)."""
+        if context.name not in self._unlocated:
+            return context
+        pose = self.object_pose(context.name)
+        truth = self.scene.truth.of(context.name)
+        x, y, z = (float(v) for v in pose.position)
+        return replace(context, position=(x, y, z), yaw=context.yaw + truth.sensed_yaw_offset_rad)
 
     def _rest_poses(self) -> dict[Arm, Pose]:
         """Palms waiting above the table's near edge, outside the objects, facing inwards."""
@@ -220,6 +249,16 @@ class SimWorld:
         self.collision.sync()
         self._watch_distances()
         self._watch_drop()
+        if self._unlocated:
+            self._locate_held()
+
+    def _locate_held(self) -> None:
+        """Sense where they are the objects both palms now press (:data:`LOCATED_BY_GRASP_N`)."""
+        self._unlocated = tuple(
+            name
+            for name in self._unlocated
+            if min(self.scene.palm_contact_force(a, name) for a in ARMS) < LOCATED_BY_GRASP_N
+        )
 
     def _watch_contacts(self) -> None:
         c = self.scene.client
@@ -269,8 +308,11 @@ class SimWorld:
 
     # -- objects and task --------------------------------------------------------------------
     def object_pose(self, name: str) -> Pose:
-        """Measured pose of an object's centre."""
+        """Sensed pose of an object's centre: measured, off by the truth's perception error
+        until the object is first held."""
         p, q = self.scene.object_pose(name)
+        if name in self._unlocated:
+            p, q = sensed_pose(p, q, self.scene.truth.of(name))
         return Pose(p, q)
 
     def object_twist(self, name: str) -> Array:

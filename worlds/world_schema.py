@@ -435,6 +435,87 @@ class Region(_FileModel):
     y: Range = Field(description="[low, high] of the centre's y, world frame, m")
 
 
+def _range_at_least(low: float, strict: bool, what: str) -> Any:
+    """A validator of a :data:`Range` whose low end is above ``low`` (``strict``) or at it."""
+
+    def check(bounds: tuple[float, float]) -> tuple[float, float]:
+        if bounds[0] < low or (strict and bounds[0] == low):
+            raise field_problem(what, bounds)
+        return bounds
+
+    return check
+
+
+class HardSettings(_FileModel):
+    """How ``app.py trials --hard`` draws each trial's physical truth: the physics differs from
+    what the robot is told by values drawn from these ranges (uniform unless said otherwise),
+    from the campaign seed and the trial's index alone."""
+
+    mass_scale: Range = Field(
+        default=(0.5, 1.5), description="the object's true mass over its file mass, > 0"
+    )
+    friction_scale: Range = Field(
+        default=(0.7, 1.3), description="the object's true friction over its file one, >= 0"
+    )
+    palm_friction_scale: Range = Field(
+        default=(0.8, 1.2), description="the palms' true friction over their model's, >= 0"
+    )
+    table_dz_m: Range = Field(
+        default=(-0.03, 0.03),
+        description="the table top's true height less the file's, m; the object starts on it",
+    )
+    pose_sigma_m: Annotated[float, Field(strict=True, allow_inf_nan=False, ge=0, le=1)] = Field(
+        default=0.005,
+        description="standard deviation of the sensed start position's error along x and y "
+        "(normal), m, 0 to 1",
+    )
+    yaw_sigma_deg: Annotated[float, Field(strict=True, allow_inf_nan=False, ge=0, le=180)] = Field(
+        default=2.0,
+        description="standard deviation of the sensed start yaw's error (normal), degrees, "
+        "0 to 180",
+    )
+    push_rate_hz: Annotated[float, Field(strict=True, allow_inf_nan=False, ge=0, le=10)] = Field(
+        default=0.2,
+        description="mean pushes per second of simulated time on each object (Poisson), 0 to 10",
+    )
+    push_force_n: Range = Field(
+        default=(5.0, 20.0),
+        description="a push's force, N, >= 0, in a direction uniform on the sphere",
+    )
+    push_duration_s: Range = Field(default=(0.05, 0.2), description="a push's length, s, > 0")
+    torque_scale: Range = Field(
+        default=(0.85, 1.15), description="each joint's applied torque over its computed, > 0"
+    )
+    torque_bias: Annotated[float, Field(strict=True, allow_inf_nan=False, ge=0, le=1)] = Field(
+        default=0.03,
+        description="each joint's torque bias is drawn within +- this fraction of its torque "
+        "limit, 0 to 1",
+    )
+    torque_lag_s: Range = Field(
+        default=(0.01, 0.03),
+        description="time constant of the first-order lag on the applied torques, s, >= 0",
+    )
+    latency_ticks: Annotated[int, Field(strict=True, ge=0, le=100)] = Field(
+        default=1,
+        description="physics steps between reading the joint state and applying the torque "
+        "computed from it, 0 to 100",
+    )
+
+    _positive = field_validator("mass_scale", "torque_scale", "push_duration_s")(
+        _range_at_least(0.0, True, "values > 0")
+    )
+    _non_negative = field_validator(
+        "friction_scale", "palm_friction_scale", "push_force_n", "torque_lag_s"
+    )(_range_at_least(0.0, False, "values >= 0"))
+
+    @field_validator("table_dz_m")
+    @classmethod
+    def _within_a_metre(cls, dz: tuple[float, float]) -> tuple[float, float]:
+        if dz[0] < -1.0 or dz[1] > 1.0:
+            raise field_problem("heights within [-1, 1] m", dz)
+        return dz
+
+
 class TrialSettings(_FileModel):
     """How ``app.py trials`` draws the paper's experiment in this world.
 
@@ -486,6 +567,10 @@ class TrialSettings(_FileModel):
         default=(0.0, 0.0),
         description="[low, high] of each goal's yaw about z, degrees, within [-180, 180]",
     )
+    hard: HardSettings = Field(
+        default_factory=HardSettings,
+        description="with --hard, how each trial's physics is drawn to differ from the file",
+    )
 
     @field_validator("sphere_radius")
     @classmethod
@@ -500,6 +585,15 @@ class TrialSettings(_FileModel):
         if yaw[0] < -180.0 or yaw[1] > 180.0:
             raise field_problem("angles within [-180, 180] degrees", yaw)
         return yaw
+
+    @model_serializer(mode="wrap")
+    def _without_default_hard(self, handler: SerializerFunctionWrapHandler) -> Any:
+        # Settings without a hard section dump as before it existed: a world's content hash
+        # names its trial campaigns (experiment.records), and those must stay its own.
+        data = handler(self)
+        if self.hard == HardSettings() and isinstance(data, dict):
+            data.pop("hard", None)
+        return data
 
 
 class World(_FileModel):
@@ -624,6 +718,15 @@ class World(_FileModel):
                         show_value(disturbance.object),
                     )
                 )
+        low = self.trials.hard.table_dz_m[0]
+        if self.table.size[2] + low <= 0.0:
+            issues.append(
+                Issue(
+                    ("trials", "hard", "table_dz_m"),
+                    f"a low end above -{self.table.size[2]:g} m (the table's height)",
+                    show_value(self.trials.hard.table_dz_m),
+                )
+            )
         if issues:
             raise FieldProblems(issues)
         context = info.context if isinstance(info.context, Mapping) else {}

@@ -1,0 +1,170 @@
+"""Actuators that are not ideal torque sources: scale and bias errors, a lag and a latency.
+
+The impedance controller (:class:`worlds.control.DualArmImpedanceController`) computes a
+torque per joint at every physics step (its *tick*: :meth:`~worlds.control.
+DualArmImpedanceController.apply` runs once before every ``stepSimulation``). With
+:class:`ActuatorFaults` handed to it, what PyBullet receives is that torque passed through
+:func:`actuator_step`, in this order:
+
+1. latency: the torque applied over tick ``k`` is the one computed at tick
+   ``k - latency_ticks``, from the joint state read at that tick (for ``k < latency_ticks``,
+   the one computed at tick 0);
+2. scale and bias: ``scale * torque + bias``, per joint;
+3. a first-order lag of time constant ``lag_s`` (``lag_s * dy/dt = u - y``), integrated
+   exactly for an input held over each tick: ``y += (1 - exp(-dt / lag_s)) * (u - y)``, the
+   torque applied over the tick being ``y`` at its end, so a step in the commanded torque
+   reaches ``1 - 1/e`` (63.2 %) of its size ``lag_s`` after it is first applied;
+4. saturation at the joint's torque limit.
+
+At tick 0 the actuators are taken to have held tick 0's torque for ever (the latency queue
+full of it, the lag settled on it), so that switching on causes no transient of its own.
+
+Joints are ordered as the controller stacks them: the left arm's, then the right arm's.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class ActuatorFaults:
+    """How every joint's actuator differs from an ideal torque source.
+
+    Attributes
+    ----------
+    torque_scale : tuple of float
+        (m,) factor on each joint's torque, > 0.
+    torque_bias_nm : tuple of float
+        (m,) torque added to each joint's, N m.
+    lag_s : float
+        Time constant of the first-order lag on every joint's torque, s, >= 0 (0: none).
+    latency_ticks : int
+        Controller ticks (physics steps) between reading the joint state and applying the
+        torque computed from it, >= 0.
+    """
+
+    torque_scale: tuple[float, ...]
+    torque_bias_nm: tuple[float, ...]
+    lag_s: float = 0.0
+    latency_ticks: int = 0
+
+    def __post_init__(self) -> None:
+        name = "ActuatorFaults"
+        scale = tuple(float(v) for v in self.torque_scale)
+        bias = tuple(float(v) for v in self.torque_bias_nm)
+        if len(scale) != len(bias) or not scale:
+            raise ValueError(
+                f"{name}: expected torque_scale and torque_bias_nm of one equal, non-zero "
+                f"length, got {len(scale)} and {len(bias)}"
+            )
+        if not all(math.isfinite(v) and v > 0.0 for v in scale):
+            raise ValueError(f"{name}: expected torque_scale finite and > 0, got {scale}")
+        if not all(math.isfinite(v) for v in bias):
+            raise ValueError(f"{name}: expected torque_bias_nm finite, got {bias}")
+        if not (math.isfinite(self.lag_s) and self.lag_s >= 0.0):
+            raise ValueError(f"{name}: expected lag_s finite and >= 0, got {self.lag_s}")
+        if isinstance(self.latency_ticks, bool) or not isinstance(self.latency_ticks, int):
+            raise ValueError(f"{name}: expected latency_ticks an int, got {self.latency_ticks!r}")
+        if self.latency_ticks < 0:
+            raise ValueError(f"{name}: expected latency_ticks >= 0, got {self.latency_ticks}")
+        object.__setattr__(self, "torque_scale", scale)
+        object.__setattr__(self, "torque_bias_nm", bias)
+        object.__setattr__(self, "lag_s", float(self.lag_s))
+
+    @property
+    def joints(self) -> int:
+        """Number of joints the faults describe."""
+        return len(self.torque_scale)
+
+    def summary(self) -> dict[str, Any]:
+        """JSON-ready: every value, as held."""
+        return {
+            "torque_scale": list(self.torque_scale),
+            "torque_bias_nm": list(self.torque_bias_nm),
+            "lag_s": self.lag_s,
+            "latency_ticks": self.latency_ticks,
+        }
+
+
+@dataclass(frozen=True)
+class ActuatorState:
+    """The actuators' memory between ticks.
+
+    Attributes
+    ----------
+    queue : ndarray
+        (latency_ticks, m) torques computed but not yet applied, oldest first, N m.
+    lagged : ndarray
+        (m,) the lag's output at the end of the last tick (before saturation), N m.
+    """
+
+    queue: FloatArray
+    lagged: FloatArray
+
+
+def lag_gain(lag_s: float, dt: float) -> float:
+    """Fraction of the gap to its input a first-order lag closes in one tick of ``dt`` s with
+    the input held over the tick: ``1 - exp(-dt / lag_s)``; 1 without a lag (``lag_s`` 0)."""
+    return 1.0 if lag_s == 0.0 else -math.expm1(-dt / lag_s)
+
+
+def actuator_start(commanded: ArrayLike, faults: ActuatorFaults) -> ActuatorState:
+    """The actuators at tick 0, having held the ``commanded`` torques (m,) N m for ever."""
+    tau = np.asarray(commanded, dtype=float).reshape(faults.joints)
+    return ActuatorState(
+        np.tile(tau, (faults.latency_ticks, 1)),
+        np.asarray(faults.torque_scale) * tau + np.asarray(faults.torque_bias_nm),
+    )
+
+
+def actuator_step(
+    state: ActuatorState,
+    commanded: ArrayLike,
+    faults: ActuatorFaults,
+    gain: float,
+    limit: ArrayLike,
+) -> tuple[ActuatorState, FloatArray]:
+    """One tick of the actuators: the torques (m,) applied over it and the state after it.
+
+    Parameters
+    ----------
+    state : ActuatorState
+        After the last tick (:func:`actuator_start` before the first).
+    commanded : array_like
+        (m,) torques the controller computed this tick, N m.
+    faults : ActuatorFaults
+        The actuators.
+    gain : float
+        :func:`lag_gain` of ``faults.lag_s`` and the tick's length.
+    limit : array_like
+        (m,) each joint's torque limit, N m, > 0.
+
+    Returns
+    -------
+    ActuatorState
+        The state after this tick.
+    ndarray
+        (m,) torques applied over this tick, N m, within ``+-limit``.
+    """
+    tau = np.asarray(commanded, dtype=float).reshape(faults.joints)
+    if faults.latency_ticks:
+        delayed = state.queue[0]
+        queue = np.concatenate((state.queue[1:], tau[None, :]))
+    else:
+        delayed, queue = tau, state.queue
+    target = np.asarray(faults.torque_scale) * delayed + np.asarray(faults.torque_bias_nm)
+    # Without a lag the target itself, not y + (u - y), which rounds.
+    lagged = target if gain == 1.0 else state.lagged + gain * (target - state.lagged)
+    bound = np.asarray(limit, dtype=float)
+    return ActuatorState(queue, lagged), np.minimum(np.maximum(lagged, -bound), bound)
+
+
+__all__ = ["ActuatorFaults", "ActuatorState", "actuator_start", "actuator_step", "lag_gain"]
