@@ -93,7 +93,8 @@ def draw_pushes(
 ) -> tuple[DisturbanceSpec, ...]:
     """Pushes on object ``name``: a Poisson process of ``rate_hz`` over ``[0, window_s)``
     (exponential gaps), each of a force uniform in ``force_n`` (N) in a direction uniform on
-    the sphere, for a duration uniform in ``duration_s`` (s)."""
+    the sphere, for a duration uniform in ``duration_s`` (s); each acts only if the palms hold
+    the object when it starts (``while_held``: pushes during carries)."""
     if rate_hz <= 0.0:
         return ()
     pushes = []
@@ -105,7 +106,7 @@ def draw_pushes(
         while (norm := float(np.linalg.norm(direction))) < 1e-12:  # never, but not a NaN
             direction = rng.normal(size=3)
         fx, fy, fz = (float(v) for v in magnitude * direction / norm)
-        pushes.append(DisturbanceSpec(name, t, duration, (fx, fy, fz)))
+        pushes.append(DisturbanceSpec(name, t, duration, (fx, fy, fz), while_held=True))
         t += float(rng.exponential(1.0 / rate_hz))
     return tuple(pushes)
 
@@ -163,6 +164,7 @@ def with_pushes(world: World, pushes: tuple[DisturbanceSpec, ...]) -> World:
             "force_n": list(p.force_n),
             "duration_s": p.duration_s,
             "torque_nm": list(p.torque_nm),
+            "while_held": p.while_held,
         }
         for p in pushes
     ]

@@ -9,7 +9,7 @@ each object whose window holds that step, at its centre of mass, in the world fr
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -32,12 +32,15 @@ class AppliedDisturbance:
         The first physics step it acted on (counted from 0 at the start), None if none.
     steps : int
         How many physics steps it acted on (consecutive from ``first_step``).
+    skipped : bool
+        A ``while_held`` push whose object was not held when its window opened.
     """
 
     index: int
     spec: DisturbanceSpec
     first_step: int | None
     steps: int
+    skipped: bool = False
 
     @property
     def last_step(self) -> int | None:
@@ -57,6 +60,7 @@ class AppliedDisturbance:
             "first_step": self.first_step,
             "last_step": self.last_step,
             "steps": self.steps,
+            **({"while_held": True, "skipped": self.skipped} if d.while_held else {}),
         }
 
 
@@ -69,6 +73,8 @@ class _Push:
     body: int
     force: list[float]
     torque: list[float] | None
+    name: str
+    while_held: bool
 
 
 class Disturbances:
@@ -84,6 +90,9 @@ class Disturbances:
         Body id of each object, by name.
     physics_hz : int
         Physics rate, Hz.
+    held : callable (name) -> bool, optional
+        Whether both palms hold the named object now; asked once, when a ``while_held``
+        push's window opens (without it, such a push is never applied).
 
     Raises
     ------
@@ -97,6 +106,7 @@ class Disturbances:
         specs: Sequence[DisturbanceSpec],
         object_ids: Mapping[str, int],
         physics_hz: int,
+        held: Callable[[str], bool] | None = None,
     ) -> None:
         unknown = [d.object for d in specs if d.object not in object_ids]
         if unknown:
@@ -115,12 +125,16 @@ class Disturbances:
                     object_ids[d.object],
                     list(d.force_n),
                     list(d.torque_nm) if any(d.torque_nm) else None,
+                    d.object,
+                    d.while_held,
                 )
             )
+        self._held = held
         #: After this step no window holds any step.
         self._end = max((p.stop for p in self._pushes), default=0)
         self._first: list[int | None] = [None] * len(self._pushes)
         self._count = [0] * len(self._pushes)
+        self._skipped = [False] * len(self._pushes)
 
     def __bool__(self) -> bool:
         """Whether there is any disturbance at all (the scene skips :meth:`apply` if not)."""
@@ -139,8 +153,12 @@ class Disturbances:
             return
         c = self.client
         for i, push in enumerate(self._pushes):
-            if not push.first <= step < push.stop:
+            if not push.first <= step < push.stop or self._skipped[i]:
                 continue
+            if push.while_held and step == push.first:
+                self._skipped[i] = self._held is None or not self._held(push.name)
+                if self._skipped[i]:
+                    continue
             com, _ = pb.getBasePositionAndOrientation(push.body, physicsClientId=c)
             pb.applyExternalForce(push.body, -1, push.force, com, pb.WORLD_FRAME, physicsClientId=c)
             if push.torque is not None:
@@ -154,7 +172,7 @@ class Disturbances:
     def applied(self) -> tuple[AppliedDisturbance, ...]:
         """What each disturbance did so far, in file order."""
         return tuple(
-            AppliedDisturbance(i, spec, self._first[i], self._count[i])
+            AppliedDisturbance(i, spec, self._first[i], self._count[i], self._skipped[i])
             for i, spec in enumerate(self.specs)
         )
 

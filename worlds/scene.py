@@ -54,6 +54,11 @@ RELINEARISE_TOLERANCE = 0.01
 PARKING_OFFSET = (0.0, 0.0, -100.0)
 
 
+#: Least contact force of each palm for an object to count as held, N (the planner's IsHeld
+#: default): a ``while_held`` disturbance pushes only an object held so.
+HELD_FORCE_N = 2.0
+
+
 def _lateral_palm_quaternions() -> dict[Arm, Quat]:
     # Palm z (the contact normal) points at the object along -+y; palm x points down.
     left = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, -1.0], [-1.0, 0.0, 0.0]])
@@ -203,7 +208,7 @@ class Scene:
         }
         self._active_obstacles: set[str] = set()
         self.disturbances = Disturbances(
-            c, self.spec.disturbances, self.object_ids, self.spec.physics_hz
+            c, self.spec.disturbances, self.object_ids, self.spec.physics_hz, self._held
         )
 
         self.controller = DualArmImpedanceController(
@@ -400,6 +405,10 @@ class Scene:
         """Linear (3,) m/s and angular (3,) rad/s velocity of object ``name``, world frame."""
         linear, angular = pb.getBaseVelocity(self._object(name), physicsClientId=self.client)
         return np.asarray(linear), np.asarray(angular)
+
+    def _held(self, name: str) -> bool:
+        """Both palms press on object ``name`` with at least :data:`HELD_FORCE_N` each."""
+        return all(self.palm_contact_force(arm, name) >= HELD_FORCE_N for arm in Arm)
 
     def palm_contact_force(self, arm: Arm, name: str) -> float:
         """Sum of contact normal forces between ``arm``'s palm and object ``name``, N.

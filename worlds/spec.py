@@ -286,6 +286,9 @@ class DisturbanceSpec:
         (3,) force, world frame, N.
     torque_nm : tuple of float
         (3,) torque, world frame, N m.
+    while_held : bool
+        Push only if both palms hold the object when the window opens (a push during a
+        carry); otherwise the whole window is skipped.
     """
 
     object: str
@@ -293,6 +296,7 @@ class DisturbanceSpec:
     duration_s: float
     force_n: Vec3
     torque_nm: Vec3 = (0.0, 0.0, 0.0)
+    while_held: bool = False
 
     def __post_init__(self) -> None:
         numbers = (self.at_s, self.duration_s, *self.force_n, *self.torque_nm)

@@ -345,7 +345,9 @@ def world_spec(world: World) -> WorldSpec:
         gravity=float(sim.gravity),
         seed=int(sim.seed),
         disturbances=tuple(
-            DisturbanceSpec(d.object, d.at_s, d.duration_s, d.force_n, d.torque_nm)
+            DisturbanceSpec(
+                d.object, d.at_s, d.duration_s, d.force_n, d.torque_nm, while_held=d.while_held
+            )
             for d in world.disturbances
         ),
     )

@@ -365,6 +365,11 @@ class DisturbanceEntry(_FileModel):
     torque_nm: FiniteVector3 = Field(
         default=(0.0, 0.0, 0.0), description="torque [x, y, z], world frame, N m"
     )
+    while_held: StrictBool = Field(
+        default=False,
+        description="push only if both palms hold the object when the window opens (a push "
+        "during a carry); otherwise the window is skipped",
+    )
 
 
 class SimSettings(_FileModel):

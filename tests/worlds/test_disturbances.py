@@ -123,3 +123,35 @@ def test_an_entry_outside_the_run_applies_nothing() -> None:
     np.testing.assert_array_equal(states[1], states[0])
     assert [(a.first_step, a.last_step, a.steps) for a in applied] == [(None, None, 0)]
     assert applied[0].summary()["steps"] == 0
+
+
+@pytest.mark.sim
+def test_a_push_while_held_is_skipped_when_nothing_holds_the_object() -> None:
+    # The floating parcel is far from the palms: a while_held push never acts, a plain one does.
+    push = {"at_s": 0.1, "object": "parcel", "force_n": [0.8, 0.0, 0.0], "duration_s": 0.1}
+    with _floating_parcel([{**push, "while_held": True}, push]) as sim:
+        sim.advance(0.3)
+        twist = sim.object_twist("parcel")
+        held_push, plain_push = sim.scene.disturbances.applied()
+    assert (held_push.steps, held_push.skipped) == (0, True)
+    assert held_push.summary()["skipped"] is True
+    assert (plain_push.steps, plain_push.skipped) == (24, False)
+    assert_allclose(MASS * twist[0], 0.8 * 0.1, rtol=1e-6)
+
+
+@pytest.mark.sim
+def test_a_push_while_held_acts_on_a_parcel_the_palms_hold() -> None:
+    from experiment.episode import run_episode
+
+    # Mid-carry of the default world's first move, both palms hold the parcel.
+    push = {
+        "at_s": 4.3,
+        "object": "parcel",
+        "force_n": [0.0, 10.0, 0.0],
+        "duration_s": 0.1,
+        "while_held": True,
+    }
+    report = run_episode(_world([push]), None, out=None, animation=False)
+    (entry,) = report.disturbances
+    assert (entry["steps"], entry["skipped"]) == (24, False)
+    assert report.success, report.failure
