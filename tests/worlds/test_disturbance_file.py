@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import copy
 import re
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 import pytest
-import yaml
 from numpy.testing import assert_allclose
 
 import app
@@ -16,24 +16,13 @@ from worlds.spec import DisturbanceSpec
 from worlds.testing import DEFAULT_WORLD
 from worlds.world_file import WorldFileError, load_world, world_json_schema, world_spec
 
+WriteWorld = Callable[[dict[str, Any], str], Path]
+
 PUSH = {"at_s": 1.5, "object": "parcel", "force_n": [0.0, 5.0, 0.0], "duration_s": 0.2}
 
 
-@pytest.fixture
-def default_data() -> dict[str, Any]:
-    data = yaml.safe_load(DEFAULT_WORLD.read_text(encoding="utf-8"))
-    assert isinstance(data, dict)
-    return data
-
-
-def _write(data: dict[str, Any], folder: Path) -> Path:
-    path = folder / "pushed.yaml"
-    path.write_text(yaml.safe_dump(data), encoding="utf-8")
-    return path
-
-
 def test_a_world_without_disturbances_has_none_and_dumps_as_before(
-    default_data: dict[str, Any], tmp_path: Path
+    default_data: dict[str, Any], write_world: WriteWorld
 ) -> None:
     world = load_world(DEFAULT_WORLD)
     assert world.disturbances == ()
@@ -41,16 +30,16 @@ def test_a_world_without_disturbances_has_none_and_dumps_as_before(
     # The dump, whose hash names the world's trial campaigns, is the same with the empty
     # section written or left out, and has no such key.
     del default_data["disturbances"]
-    without = load_world(_write(default_data, tmp_path))
+    without = load_world(write_world(default_data, "pushed.yaml"))
     assert world.model_dump(mode="json") == without.model_dump(mode="json")
     assert "disturbances" not in world.model_dump(mode="json")
 
 
 def test_a_valid_entry_loads_into_the_scene_spec(
-    default_data: dict[str, Any], tmp_path: Path
+    default_data: dict[str, Any], write_world: WriteWorld
 ) -> None:
     default_data["disturbances"] = [PUSH, {**PUSH, "at_s": 0, "torque_nm": [0.1, 0, -0.2]}]
-    world = load_world(_write(default_data, tmp_path))
+    world = load_world(write_world(default_data, "pushed.yaml"))
     first, second = world.disturbances
     assert first.object == "parcel"
     assert_allclose(first.force_n, (0.0, 5.0, 0.0))
@@ -104,7 +93,7 @@ def test_a_valid_entry_loads_into_the_scene_spec(
         (
             {**PUSH, "colour": "red"},
             r"disturbances\[0\]\.colour: expected only the keys at_s, object, force_n, "
-            r"duration_s, torque_nm, got unknown key 'colour'",
+            r"duration_s, torque_nm, while_held, got unknown key 'colour'",
         ),
         (
             {k: v for k, v in PUSH.items() if k != "duration_s"},
@@ -113,10 +102,10 @@ def test_a_valid_entry_loads_into_the_scene_spec(
     ],
 )
 def test_a_bad_entry_names_its_field_and_what_was_expected(
-    default_data: dict[str, Any], tmp_path: Path, entry: dict[str, Any], match: str
+    default_data: dict[str, Any], write_world: WriteWorld, entry: dict[str, Any], match: str
 ) -> None:
     default_data["disturbances"] = [copy.deepcopy(entry)]
-    path = _write(default_data, tmp_path)
+    path = write_world(default_data, "pushed.yaml")
     with pytest.raises(WorldFileError, match=rf"^{re.escape(str(path))}: {match}") as info:
         load_world(path)
     assert "\n" not in str(info.value), "one defect, one line"
@@ -128,9 +117,10 @@ def test_the_command_line_refuses_a_bad_entry_with_exit_2(
     tmp_path: Path,
     capsys: pytest.CaptureFixture[str],
     command: str,
+    write_world: WriteWorld,
 ) -> None:
     default_data["disturbances"] = [{**PUSH, "object": "parcal"}]
-    path = _write(default_data, tmp_path)
+    path = write_world(default_data, "pushed.yaml")
     argv = [command, str(path)] + (["--out", str(tmp_path / "out")] if command == "run" else [])
     try:
         code = app.main(argv)
@@ -144,10 +134,10 @@ def test_the_command_line_refuses_a_bad_entry_with_exit_2(
 
 
 def test_validate_counts_the_disturbances(
-    default_data: dict[str, Any], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+    default_data: dict[str, Any], write_world: WriteWorld, capsys: pytest.CaptureFixture[str]
 ) -> None:
     default_data["disturbances"] = [PUSH, PUSH]
-    assert app.main(["validate", str(_write(default_data, tmp_path))]) == app.EXIT_OK
+    assert app.main(["validate", str(write_world(default_data, "pushed.yaml"))]) == app.EXIT_OK
     assert "3 moves, 2 disturbances" in capsys.readouterr().out
 
 

@@ -3,28 +3,17 @@
 from __future__ import annotations
 
 import re
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 import pytest
-import yaml
 
 import app
 from worlds.testing import DEFAULT_WORLD
 from worlds.world_file import HardSettings, WorldFileError, load_world
 
-
-@pytest.fixture
-def default_data() -> dict[str, Any]:
-    data = yaml.safe_load(DEFAULT_WORLD.read_text(encoding="utf-8"))
-    assert isinstance(data, dict)
-    return data
-
-
-def _write(data: dict[str, Any], folder: Path) -> Path:
-    path = folder / "hard.yaml"
-    path.write_text(yaml.safe_dump(data), encoding="utf-8")
-    return path
+WriteWorld = Callable[[dict[str, Any], str], Path]
 
 
 def test_the_defaults_are_issue_16s() -> None:
@@ -45,12 +34,12 @@ def test_the_defaults_are_issue_16s() -> None:
 
 
 def test_default_settings_dump_as_before_and_others_are_kept(
-    default_data: dict[str, Any], tmp_path: Path
+    default_data: dict[str, Any], write_world: WriteWorld
 ) -> None:
     world = load_world(DEFAULT_WORLD)
     assert "hard" not in world.model_dump(mode="json")["trials"]
     default_data["trials"]["hard"] = {"mass_scale": [0.9, 1.1], "latency_ticks": 0}
-    changed = load_world(_write(default_data, tmp_path))
+    changed = load_world(write_world(default_data, "hard.yaml"))
     assert changed.trials.hard.mass_scale == (0.9, 1.1)
     assert changed.trials.hard.friction_scale == (0.7, 1.3)  # the others keep their defaults
     dumped = changed.model_dump(mode="json")["trials"]["hard"]
@@ -78,13 +67,13 @@ def test_default_settings_dump_as_before_and_others_are_kept(
 )
 def test_bad_values_are_refused_naming_file_field_and_expectation(
     default_data: dict[str, Any],
-    tmp_path: Path,
+    write_world: WriteWorld,
     hard: dict[str, Any],
     match: str,
     capsys: pytest.CaptureFixture[str],
 ) -> None:
     default_data["trials"]["hard"] = hard
-    path = _write(default_data, tmp_path)
+    path = write_world(default_data, "hard.yaml")
     with pytest.raises(WorldFileError, match=rf"^{re.escape(str(path))}: {match}"):
         load_world(path)
     with pytest.raises(SystemExit) as exited:
