@@ -341,7 +341,9 @@ def _trajectory_figure(traces: Sequence[MoveTrace], path: Path, title: str) -> P
             if view.mirrored:
                 ax.invert_xaxis()
         if tr.demonstrated is None:
-            ax_top.text(0.02, 0.02, "never carried", transform=ax_top.transAxes, fontsize=8)
+            # Carried but never placed (a failed carry) is not the same as never carried.
+            note = "not placed" if len(tr.path) else "never carried"
+            ax_top.text(0.02, 0.02, note, transform=ax_top.transAxes, fontsize=8)
     for k in range(len(traces), rows * cols):
         r, c = divmod(k, cols)
         axes[2 * r, c].set_visible(False)
