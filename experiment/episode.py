@@ -23,6 +23,7 @@ from py_trees.common import Status
 import planner.leaves  # noqa: F401  (registers the leaves for the XML loader)
 from experiment.figures import Animation, MoveTrace, demonstrated_path, trajectory_figure
 from experiment.grip_recorder import GripRecorder
+from experiment.judge import judge, move_labels
 from experiment.metrics import GripMetrics
 from planner.atomic_file import atomic_open, stale_temporaries
 from planner.btlog import BtLog
@@ -33,16 +34,14 @@ from planner.move_result import move_results
 from planner.port import Move
 from planner.render import render_tree
 from planner.runlog import RunLog
-from planner.runner import RunResult, run_tree
+from planner.runner import run_tree
 from planner.tree_dataflow import RUN_WRITES, TASK_OBJECT_KEY
 from skills.default_library import default_library
 from skills.library import SkillLibrary
-from worlds.sim_world import SafetyRecord, SimWorld, task_moves
+from worlds.sim_world import SimWorld, task_moves
 from worlds.truth import PhysicalTruth
 from worlds.world_file import World, as_world_spec
 
-PLACE_TOLERANCE_M = 0.02
-PLACE_TOLERANCE_DEG = 10.0
 #: An object is held, for the grip metrics, while both palms press on it with at least this
 #: force, N: the default ``min_force_n`` of the IsHeld leaf (and of Transport and Turning).
 HELD_FORCE_N = float(IsHeld.INPUT_PORTS["min_force_n"].default_value)
@@ -127,76 +126,6 @@ def load_library(world: World) -> SkillLibrary:
     if world.skills.library == "default":
         return default_library()
     return SkillLibrary.load(world.resolve_path(world.skills.library))
-
-
-def move_labels(objects: list[str]) -> list[str]:
-    """``"<object> move <n>"`` per move of the task, numbered from 1 within each object."""
-    count: dict[str, int] = {}
-    labels = []
-    for name in objects:
-        count[name] = count.get(name, 0) + 1
-        labels.append(f"{name} move {count[name]}")
-    return labels
-
-
-def judge(
-    result: RunResult,
-    sim: SimWorld,
-    objects: list[str],
-    errors_m: list[float | None],
-    errors_deg: list[float | None],
-) -> tuple[bool, str]:
-    """Success and the first failure reason, in the order the paper's criteria are listed.
-
-    ``objects``, ``errors_m`` and ``errors_deg`` hold one entry per move of the task, in task
-    order: a move without a placement is a failure naming its object and move, whatever the
-    tree said. A drop fails the run only if the task then went wrong in any way (it is the
-    reason given, being the cause); a dropped object that the tree picked up again and placed,
-    with nothing touched, is a recovery: the run succeeds and its record says ``dropped``.
-    """
-    s = sim.safety
-    if s.spawned_inside:
-        # First: what it causes (a drop, a contact) is not the reason.
-        where = "; ".join(f"{o} inside {', '.join(b)}" for o, b in sorted(s.spawned_inside.items()))
-        return False, f"obstacle spawned inside a body: {where}"
-    ok, failure = _task_outcome(result, s, objects, errors_m, errors_deg)
-    if not ok and s.dropped:
-        return False, f"dropped {s.dropped_object}" if s.dropped_object else "dropped"
-    return ok, failure
-
-
-def _task_outcome(
-    result: RunResult,
-    s: SafetyRecord,
-    objects: list[str],
-    errors_m: list[float | None],
-    errors_deg: list[float | None],
-) -> tuple[bool, str]:
-    """:func:`judge` without the spawn and drop criteria."""
-    if s.obstacle_contacts:
-        return False, "obstacle contact: " + ", ".join(sorted(s.obstacle_contacts))
-    if s.min_obstacle_distance_m < 0.0:
-        # PyBullet makes no contact between a fixed base and a static body; FCL still sees
-        # them overlap (a negative clearance, measured every control step).
-        depth = -s.min_obstacle_distance_m * 1000.0
-        return False, f"obstacle penetration: {s.closest} overlap by {depth:.1f} mm (FCL)"
-    if s.arm_contacts:
-        return False, "arms touched"
-    if not result.success:
-        return False, f"tree {result.status.value.lower()}: {result.reason}"
-    labels = move_labels(objects)
-    undone = [
-        label
-        for label, e, d in zip(labels, errors_m, errors_deg, strict=True)
-        if e is None or d is None
-    ]
-    if undone:
-        return False, "not placed: " + ", ".join(undone)
-    for label, e, d in zip(labels, errors_m, errors_deg, strict=True):
-        assert e is not None and d is not None
-        if e > PLACE_TOLERANCE_M or d > PLACE_TOLERANCE_DEG:
-            return False, f"{label} placed {e * 100:.1f} cm, {d:.1f} deg from its goal"
-    return True, ""
 
 
 def robot_moves(world: World) -> dict[str, tuple[Move, ...]]:

@@ -17,7 +17,7 @@ on the robot):
 With ``hard``, each trial also runs against a physical truth drawn for it
 (:mod:`experiment.hard`); its record says what was drawn (``hard``) and ``"mode": "hard"``.
 
-Trials are judged as :func:`experiment.episode.judge` says (2 cm and 10 degrees per placement,
+Trials are judged as :func:`experiment.judge.judge` says (2 cm and 10 degrees per placement,
 never dropped, no robot link or parcel touching an obstacle, arms never touching). Results
 are appended to ``results.jsonl`` one line per trial as they finish, so an interrupted
 campaign resumes where it stopped.

@@ -10,7 +10,7 @@ from typing import Any
 import pytest
 from py_trees.common import Status
 
-from experiment.episode import judge
+from experiment.judge import judge
 from experiment.trials import TrialLayoutError, check_trial_layout
 from planner.runner import RunResult
 from worlds.bodies import x_display_reachable

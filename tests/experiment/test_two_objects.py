@@ -10,7 +10,8 @@ from typing import Any
 import pytest
 from py_trees.common import Status
 
-from experiment.episode import judge, move_keys, move_labels, run_episode, task_steps
+from experiment.episode import move_keys, run_episode, task_steps
+from experiment.judge import judge, move_labels
 from planner.default_tree import TaskStep, pick_and_place_xml
 from planner.runner import RunResult
 from worlds.sim_world import SafetyRecord

@@ -1,0 +1,89 @@
+"""The verdict of one run: the paper's criteria, in their order, on what the physics measured.
+
+A run succeeds only if every move of the task is placed within :data:`PLACE_TOLERANCE_M` and
+:data:`PLACE_TOLERANCE_DEG` of its goal (the object's measured pose), nothing touched an
+obstacle (PyBullet contacts every physics step, FCL clearance every control step), the arms
+never touched, and the tree succeeded. A dropped object fails the run unless the tree picked
+it up again and placed it.
+"""
+
+from __future__ import annotations
+
+from planner.runner import RunResult
+from worlds.sim_world import SafetyRecord, SimWorld
+
+PLACE_TOLERANCE_M = 0.02
+PLACE_TOLERANCE_DEG = 10.0
+
+
+def move_labels(objects: list[str]) -> list[str]:
+    """``"<object> move <n>"`` per move of the task, numbered from 1 within each object."""
+    count: dict[str, int] = {}
+    labels = []
+    for name in objects:
+        count[name] = count.get(name, 0) + 1
+        labels.append(f"{name} move {count[name]}")
+    return labels
+
+
+def judge(
+    result: RunResult,
+    sim: SimWorld,
+    objects: list[str],
+    errors_m: list[float | None],
+    errors_deg: list[float | None],
+) -> tuple[bool, str]:
+    """Success and the first failure reason, in the order the paper's criteria are listed.
+
+    ``objects``, ``errors_m`` and ``errors_deg`` hold one entry per move of the task, in task
+    order: a move without a placement is a failure naming its object and move, whatever the
+    tree said. A drop fails the run only if the task then went wrong in any way (it is the
+    reason given, being the cause); a dropped object that the tree picked up again and placed,
+    with nothing touched, is a recovery: the run succeeds and its record says ``dropped``.
+    """
+    s = sim.safety
+    if s.spawned_inside:
+        # First: what it causes (a drop, a contact) is not the reason.
+        where = "; ".join(f"{o} inside {', '.join(b)}" for o, b in sorted(s.spawned_inside.items()))
+        return False, f"obstacle spawned inside a body: {where}"
+    ok, failure = _task_outcome(result, s, objects, errors_m, errors_deg)
+    if not ok and s.dropped:
+        return False, f"dropped {s.dropped_object}" if s.dropped_object else "dropped"
+    return ok, failure
+
+
+def _task_outcome(
+    result: RunResult,
+    s: SafetyRecord,
+    objects: list[str],
+    errors_m: list[float | None],
+    errors_deg: list[float | None],
+) -> tuple[bool, str]:
+    """:func:`judge` without the spawn and drop criteria."""
+    if s.obstacle_contacts:
+        return False, "obstacle contact: " + ", ".join(sorted(s.obstacle_contacts))
+    if s.min_obstacle_distance_m < 0.0:
+        # PyBullet makes no contact between a fixed base and a static body; FCL still sees
+        # them overlap (a negative clearance, measured every control step).
+        depth = -s.min_obstacle_distance_m * 1000.0
+        return False, f"obstacle penetration: {s.closest} overlap by {depth:.1f} mm (FCL)"
+    if s.arm_contacts:
+        return False, "arms touched"
+    if not result.success:
+        return False, f"tree {result.status.value.lower()}: {result.reason}"
+    labels = move_labels(objects)
+    undone = [
+        label
+        for label, e, d in zip(labels, errors_m, errors_deg, strict=True)
+        if e is None or d is None
+    ]
+    if undone:
+        return False, "not placed: " + ", ".join(undone)
+    for label, e, d in zip(labels, errors_m, errors_deg, strict=True):
+        assert e is not None and d is not None
+        if e > PLACE_TOLERANCE_M or d > PLACE_TOLERANCE_DEG:
+            return False, f"{label} placed {e * 100:.1f} cm, {d:.1f} deg from its goal"
+    return True, ""
+
+
+__all__ = ["PLACE_TOLERANCE_DEG", "PLACE_TOLERANCE_M", "judge", "move_labels"]
