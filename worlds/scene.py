@@ -208,7 +208,7 @@ class Scene:
         }
         self._active_obstacles: set[str] = set()
         self.disturbances = Disturbances(
-            c, self.spec.disturbances, self.object_ids, self.spec.physics_hz, self._held
+            c, self.spec.disturbances, self.object_ids, self.spec.physics_hz, self.is_held
         )
 
         self.controller = DualArmImpedanceController(
@@ -406,9 +406,9 @@ class Scene:
         linear, angular = pb.getBaseVelocity(self._object(name), physicsClientId=self.client)
         return np.asarray(linear), np.asarray(angular)
 
-    def _held(self, name: str) -> bool:
-        """Both palms press on object ``name`` with at least :data:`HELD_FORCE_N` each."""
-        return all(self.palm_contact_force(arm, name) >= HELD_FORCE_N for arm in Arm)
+    def is_held(self, name: str, min_force_n: float = HELD_FORCE_N) -> bool:
+        """Both palms press on object ``name`` with at least ``min_force_n`` N each."""
+        return all(self.palm_contact_force(arm, name) >= min_force_n for arm in Arm)
 
     def palm_contact_force(self, arm: Arm, name: str) -> float:
         """Sum of contact normal forces between ``arm``'s palm and object ``name``, N.

@@ -255,9 +255,7 @@ class SimWorld:
     def _locate_held(self) -> None:
         """Sense where they are the objects both palms now press (:data:`LOCATED_BY_GRASP_N`)."""
         self._unlocated = tuple(
-            name
-            for name in self._unlocated
-            if min(self.scene.palm_contact_force(a, name) for a in ARMS) < LOCATED_BY_GRASP_N
+            name for name in self._unlocated if not self.scene.is_held(name, LOCATED_BY_GRASP_N)
         )
 
     def _watch_contacts(self) -> None:

@@ -10,6 +10,7 @@ import py_trees
 from py_trees.common import Status
 from py_trees.ports import BehaviourWithPorts, NoDataAvailable, PortInformation
 
+from affordances import SemanticAction
 from planner.composition import MovePlan, compose_move, squeeze_force
 from planner.port import WorldPort
 from skills.library import SkillLibrary
@@ -114,6 +115,14 @@ class WorldLeaf(BehaviourWithPorts):
         except NoDataAvailable:
             return None
 
+    def palm_squeeze_force(self, plan: SemanticAction | None) -> float:
+        """The squeeze force per palm this leaf works with, N: the larger of ``plan``'s hold
+        force and the ``force_n`` port, capped at the robot's rating
+        (:func:`planner.composition.squeeze_force`)."""
+        return squeeze_force(
+            plan, float(self.get_input("force_n")), self.world.robot_capabilities().squeeze_force_n
+        )
+
     def fail(self, message: str) -> Status:
         """Return FAILURE with ``message`` as the explanation."""
         self.feedback_message = message
@@ -196,11 +205,7 @@ def composed_move(leaf: WorldLeaf, name: str, index: int) -> MovePlan:
         name,
         index,
         leaf.get_input("from_state"),
-        squeeze_force(
-            plan,
-            float(leaf.get_input("force_n")),
-            leaf.world.robot_capabilities().squeeze_force_n,
-        ),
+        leaf.palm_squeeze_force(plan),
         avoid_gain=float(leaf.get_input("avoid_gain")),
         transport_weight=float(leaf.get_input("transport_weight")),
         skill=leaf.optional_input("skill"),

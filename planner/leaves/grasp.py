@@ -15,7 +15,6 @@ from planner.composition import (
     lateral_geometry,
     measured_dual_state,
     move_turn,
-    squeeze_force,
     static_composition,
 )
 from planner.leaves.base import SQUEEZE_FORCE_N, MotionLeaf, grasp_move_port
@@ -89,11 +88,7 @@ class Grasp(MotionLeaf):
             return
         world = self.world
         name = self.get_input("object")
-        self.force = squeeze_force(
-            self.optional_input("plan"),
-            float(self.get_input("force_n")),
-            world.robot_capabilities().squeeze_force_n,
-        )
+        self.force = self.palm_squeeze_force(self.optional_input("plan"))
         depth = world.squeeze_depth(self.force)
         turn = move_turn(world, name, int(self.get_input("move")))
         geometry = lateral_geometry(world, name, grasp_quarter_turns(world, name, turn))

@@ -9,7 +9,7 @@ from py_trees.common import Status
 from py_trees.ports import PortInformation
 
 from affordances import SemanticAction
-from planner.composition import MovePlan, SkillChoiceError, goal_error, squeeze_force
+from planner.composition import MovePlan, SkillChoiceError, goal_error
 from planner.leaves.base import MotionLeaf, composed_move, composition_ports
 from planner.move_result import MoveResult, publish_move_result
 from planner.port import Clock, Move, ObjectSensing, ObstacleScene, PalmControl, Pose
@@ -93,11 +93,7 @@ class Transport(MotionLeaf):
             self.problem = bad
             return
         plan: SemanticAction = self.get_input("plan")
-        force = squeeze_force(
-            plan,
-            float(self.get_input("force_n")),
-            self.world.robot_capabilities().squeeze_force_n,
-        )
+        force = self.palm_squeeze_force(plan)
         state: DualArmState = self.get_input("from_state")
         avoid_gain = float(self.get_input("avoid_gain"))
         transport_weight = float(self.get_input("transport_weight"))
