@@ -40,9 +40,9 @@ class GripRecorder:
     def sample(self) -> dict[str, Pose]:
         """Append this control step's rows; the object poses read, by name."""
         sim = self.sim
-        palms = [sim.scene.palm_state(arm) for arm in ARMS]  # one kinematics read per palm
+        # One link read per palm: its position and linear velocity.
         self.palm_rows.append(
-            np.array([np.concatenate((p.position, p.linear_velocity)) for p in palms])
+            np.array([np.concatenate(sim.scene.palm_motion(arm)) for arm in ARMS])
         )
         poses = {}
         for name in self.objects:

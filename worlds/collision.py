@@ -15,6 +15,7 @@ Poses in this module are (position (3,), quaternion (4,) scalar-last) pairs in t
 from __future__ import annotations
 
 import io
+import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -33,6 +34,7 @@ from worlds.scene import Scene
 from worlds.spec import Shape, ShapeSpec
 
 FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.intp]
 
 TABLE = "table"
 OBSTACLES = "obstacles"
@@ -250,9 +252,6 @@ class _Element:
     geometry: fcl.CollisionGeometry
     centre_local: FloatArray  # (3,) bounding-sphere centre in the shape frame
     radius: float
-    centre: FloatArray  # (3,) bounding-sphere centre in the world frame
-    #: The pose (3, 3) and (3,) that ``obj`` is to have, world frame; None once it has it.
-    pending: tuple[Array, FloatArray] | None = None
 
 
 #: Per robot body: its id, its elements' link indices (-1 the base), its moving links, the
@@ -307,11 +306,14 @@ class CollisionWorld:
         table = scene.spec.table
         geometry, centre, radius = _shape_geometry(ShapeSpec.box(table.size))
         self._add(TABLE, TABLE, geometry, centre, radius)
-        self._set_pose(
-            self._elements[-1],
-            np.array([table.position[0], table.position[1], table.position[2] - table.size[2] / 2]),
-            np.eye(3),
-        )
+        fixed = [
+            (
+                len(self._elements) - 1,
+                np.array(
+                    [table.position[0], table.position[1], table.position[2] - table.size[2] / 2]
+                ),
+            )
+        ]
         self._objects: dict[str, int] = {}
         for obj in scene.spec.objects:
             geometry, centre, radius = _shape_geometry(obj.shape)
@@ -322,7 +324,19 @@ class CollisionWorld:
             geometry, centre, radius = _shape_geometry(obstacle.shape)
             self._obstacles[obstacle.name] = len(self._elements)
             self._add(obstacle.name, OBSTACLES, geometry, centre, radius)
-            self._set_pose(self._elements[-1], np.asarray(obstacle.position, float), np.eye(3))
+            fixed.append((len(self._elements) - 1, np.asarray(obstacle.position, float)))
+        # Every element's pose, world frame, as the last sync read it: the bounding spheres'
+        # centres (E, 3) at once, for the screens; each FCL transform is set from the rotation
+        # (E, 3, 3) and position (E, 3) when a query first needs it (``_stale``).
+        count = len(self._elements)
+        self._radii = np.array([e.radius for e in self._elements])
+        self._centres_local = np.array([e.centre_local for e in self._elements])
+        self._centres = self._centres_local.copy()
+        self._rotations = np.tile(np.eye(3), (count, 1, 1))
+        self._positions = np.zeros((count, 3))
+        self._stale = np.zeros(count, dtype=bool)
+        for row, position in fixed:
+            self._set_poses(np.array([row]), position[None], np.eye(3)[None])
         self._palm_rows = {
             arm: self._index(f"{arm_group(arm)}/palm") for arm in (Arm.LEFT, Arm.RIGHT)
         }
@@ -345,7 +359,7 @@ class CollisionWorld:
         radius: float,
     ) -> None:
         obj = fcl.CollisionObject(geometry, fcl.Transform())
-        self._elements.append(_Element(name, group, obj, geometry, centre, radius, centre.copy()))
+        self._elements.append(_Element(name, group, obj, geometry, centre, radius))
 
     def _index(self, name: str) -> int:
         for i, element in enumerate(self._elements):
@@ -353,20 +367,23 @@ class CollisionWorld:
                 return i
         raise ValueError(f"CollisionWorld: expected an element named {name!r}")
 
-    @staticmethod
-    def _set_pose(element: _Element, position: FloatArray, rotation: Array) -> None:
-        # The FCL transform waits for the first query of this element (see _fcl): most syncs
+    def _set_poses(self, rows: IntArray, positions: FloatArray, rotations: Array) -> None:
+        """Pose elements ``rows`` (K,): positions (K, 3) and rotations (K, 3, 3), world frame."""
+        # The FCL transforms wait for the first query of each element (see _fcl): most syncs
         # are followed by a few pair queries, or none, not by one of every element.
-        element.pending = (rotation, position)
-        element.centre = rotation @ element.centre_local + position
+        self._rotations[rows] = rotations
+        self._positions[rows] = positions
+        self._stale[rows] = True
+        self._centres[rows] = (rotations @ self._centres_local[rows][:, :, None])[
+            :, :, 0
+        ] + positions
 
     def _fcl(self, row: int) -> fcl.CollisionObject:
         """The FCL object of element ``row``, at its pose of the last sync."""
         element = self._elements[row]
-        if element.pending is not None:
-            rotation, position = element.pending
-            element.obj.setTransform(fcl.Transform(rotation, position))
-            element.pending = None
+        if self._stale[row]:
+            element.obj.setTransform(fcl.Transform(self._rotations[row], self._positions[row]))
+            self._stale[row] = False
         return element.obj
 
     def _place(self) -> None:
@@ -383,11 +400,13 @@ class CollisionWorld:
             frame_q = np.array([by_link[link][1] if link >= 0 else base[1] for link in links])
             frame_r = quat.to_matrix(frame_q)
             positions = np.einsum("nij,nj->ni", frame_r, local_p) + frame_p
-            rotations = frame_r @ local_r
-            for row, position, rotation in zip(rows, positions, rotations, strict=True):
-                self._set_pose(self._elements[row], position, rotation)
-        for row, position, quaternion in objects_read:
-            self._set_pose(self._elements[row], position, quat.to_matrix(quaternion))
+            self._set_poses(np.asarray(rows), positions, frame_r @ local_r)
+        if objects_read:
+            rows_o = np.array([row for row, _, _ in objects_read])
+            positions_o = np.array([p for _, p, _ in objects_read])
+            self._set_poses(
+                rows_o, positions_o, quat.to_matrix(np.array([q for _, _, q in objects_read]))
+            )
 
     @property
     def element_names(self) -> tuple[str, ...]:
@@ -441,8 +460,8 @@ class CollisionWorld:
         margins = np.broadcast_to(np.asarray(margin, dtype=float), (n,))
         self._place()
         obstacles = [self._fcl(r) for r in self._active]
-        o_centre = np.array([self._elements[r].centre for r in self._active])
-        o_radius = np.array([self._elements[r].radius for r in self._active])
+        o_centre = self._centres[self._active]
+        o_radius = self._radii[self._active]
         palm_r = quat.to_matrix(quaternions)  # (N, 2, 3, 3)
         for a, arm in enumerate((Arm.LEFT, Arm.RIGHT)):
             rows = self._rows(arm_group(arm))
@@ -531,8 +550,8 @@ class CollisionWorld:
             for i, e in enumerate(self._elements)
             if e.group in wanted and (e.group != OBSTACLES or i in active)
         ]
-        centres = np.array([self._elements[i].centre for i in rows])
-        radii = np.array([self._elements[i].radius for i in rows])
+        centres = self._centres[rows]
+        radii = self._radii[rows]
         gaps = np.linalg.norm(centres[:, None] - centres[None], axis=-1) - radii[:, None] - radii
         pairs = []
         for a, b in zip(*np.nonzero(np.triu(gaps <= 0.0, k=1)), strict=True):
@@ -555,26 +574,44 @@ class CollisionWorld:
         ValueError
             If a group is unknown or empty (no active obstacles).
         """
+        found = self.closer_than(group_a, group_b, math.inf)
+        assert found is not None
+        return found
+
+    def closer_than(self, group_a: str, group_b: str, ceiling: float) -> Proximity | None:
+        """:meth:`distance` if it is below ``ceiling`` m, else None.
+
+        A watcher keeping the smallest distance seen asks with that distance: pairs whose
+        bounding spheres are farther apart are never handed to FCL, so most control steps
+        cost the bounds alone.
+
+        Raises
+        ------
+        ValueError
+            If a group is unknown or empty (no active obstacles).
+        """
         rows_a, rows_b = self._rows(group_a), self._rows(group_b)
         self._place()
         if not rows_a or not rows_b:
             raise ValueError(
                 f"CollisionWorld.distance: group {group_a if not rows_a else group_b!r} is empty"
             )
-        ca = np.array([self._elements[i].centre for i in rows_a])
-        cb = np.array([self._elements[i].centre for i in rows_b])
-        ra = np.array([self._elements[i].radius for i in rows_a])
-        rb = np.array([self._elements[i].radius for i in rows_b])
-        bounds = np.linalg.norm(ca[:, None] - cb[None], axis=-1) - ra[:, None] - rb
+        ca, cb = self._centres[rows_a], self._centres[rows_b]
+        bounds = (
+            np.linalg.norm(ca[:, None] - cb[None], axis=-1)
+            - self._radii[rows_a][:, None]
+            - self._radii[rows_b]
+        )
         best: Proximity | None = None
         for flat in np.argsort(bounds, axis=None):
             a, b = np.unravel_index(flat, bounds.shape)
-            if best is not None and bounds[a, b] > best.distance:
+            if bounds[a, b] > (ceiling if best is None else min(best.distance, ceiling)):
                 break
             found = self._pair_distance(rows_a[a], rows_b[b])
             if best is None or found.distance < best.distance:
                 best = found
-        assert best is not None
+        if best is None or best.distance >= ceiling:
+            return None
         return best
 
     def _pair_distance(self, row_a: int, row_b: int) -> Proximity:
@@ -754,8 +791,8 @@ class CollisionWorld:
         if self._active and n:
             self._place()
             obstacles = [self._fcl(r) for r in self._active]
-            o_centre = np.array([self._elements[r].centre for r in self._active])
-            o_radius = np.array([self._elements[r].radius for r in self._active])
+            o_centre = self._centres[self._active]
+            o_radius = self._radii[self._active]
             p_all = np.stack(body_p, axis=1)  # (N, B, 3)
             r_all = quat.to_matrix(np.stack(body_q, axis=1))  # (N, B, 3, 3)
             local = np.array([self._elements[r].centre_local for r in rows])

@@ -433,6 +433,18 @@ class DualArmImpedanceController:
         computed ones (:attr:`PalmState.joint_torques`) through the actuators' faults."""
         return self._applied.copy()
 
+    def palm_motion(self, arm: Arm) -> tuple[FloatArray, FloatArray]:
+        """Measured palm position (3,) m and linear velocity (3,) m/s of ``arm``, world frame:
+        :meth:`palm_state`'s first and third, read alone (one link read, no joint read)."""
+        link = pb.getLinkState(
+            self._arm_body[self.ARMS.index(Arm(arm))],
+            self._specs[self.ARMS.index(Arm(arm))].palm_link,
+            computeLinkVelocity=1,
+            computeForwardKinematics=1,
+            physicsClientId=self.client,
+        )
+        return np.asarray(link[4]), np.asarray(link[6])
+
     def palm_state(self, arm: Arm) -> PalmState:
         """Measured palm pose and twist (world frame) and joint state of ``arm``."""
         i = self.ARMS.index(Arm(arm))

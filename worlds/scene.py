@@ -394,6 +394,10 @@ class Scene:
         """Measured palm pose, twist and joint state of ``arm``, world frame."""
         return self.controller.palm_state(arm)
 
+    def palm_motion(self, arm: Arm) -> tuple[FloatArray, FloatArray]:
+        """Measured palm position (3,) m and linear velocity (3,) m/s of ``arm``, world frame."""
+        return self.controller.palm_motion(arm)
+
     def object_pose(self, name: str) -> tuple[FloatArray, FloatArray]:
         """Pose of object ``name``: position (3,) m and quaternion (4,) scalar-last, world frame."""
         position, quaternion = pb.getBasePositionAndOrientation(

@@ -283,8 +283,10 @@ class SimWorld:
         if not self.scene.active_obstacles:
             return
         for group in (arm_group(Arm.LEFT), arm_group(Arm.RIGHT), *self.scene.object_ids):
-            prox = self.collision.distance(group, "obstacles")
-            if prox.distance < self.safety.min_obstacle_distance_m:
+            prox = self.collision.closer_than(
+                group, "obstacles", self.safety.min_obstacle_distance_m
+            )
+            if prox is not None:
                 self.safety.min_obstacle_distance_m = prox.distance
                 self.safety.closest = f"{prox.element_a} ~ {prox.element_b}"
 

@@ -134,6 +134,16 @@ class Transport(MotionLeaf):
                 return
         self.move: Move = checked.move
         self.skill = checked.skill
+        # The ports a running carry reads every tick, read once as it starts (a port's value
+        # does not change under a running move; the blackboard's checks cost more than a step).
+        self.object_name = name
+        self.move_index = index
+        self.min_force_n = float(self.get_input("min_force_n"))
+        self.settle_s = float(self.get_input("settle_s"))
+        self.tolerance = (
+            float(self.get_input("tolerance_m")),
+            float(self.get_input("tolerance_deg")),
+        )
         self.composer = checked.fresh()
         self.started = world.time()
         self.weak_ticks = 0
@@ -145,12 +155,12 @@ class Transport(MotionLeaf):
             return self.fail(self.problem)
         assert self.composer is not None
         world = self.world
-        name = self.get_input("object")
+        name = self.object_name
         cmd = self.composer.step(self.control_dt)
         for i, arm in enumerate(ARMS):
             world.command_palm(arm, Pose(cmd.positions[i], cmd.orientations[i]), cmd.twists[i])
         forces = [world.contact_force(arm, name) for arm in ARMS]
-        if min(forces) < float(self.get_input("min_force_n")):
+        if min(forces) < self.min_force_n:
             self.weak_ticks += 1
             if self.weak_ticks * self.control_dt > 0.1:
                 return self.fail(
@@ -167,17 +177,14 @@ class Transport(MotionLeaf):
             and np.linalg.norm(commanded.position - self.move.goal.position) < 2e-3
             and np.linalg.norm(commanded.velocity) < 5e-3
         )
-        settled = elapsed > tau + float(self.get_input("settle_s"))
+        settled = elapsed > tau + self.settle_s
         if arrived or settled:
             # ... but the move is judged on the object as measured: a held object hangs below
             # its commanded pose, and only the measured pose is where it was put.
             twist = world.object_twist(name)
             still = np.linalg.norm(twist[:3]) < 5e-3 and np.linalg.norm(twist[3:]) < 0.05
             err_m, err_rad = goal_error(world, name, self.move.goal)
-            tol_m, tol_deg = (
-                float(self.get_input("tolerance_m")),
-                float(self.get_input("tolerance_deg")),
-            )
+            tol_m, tol_deg = self.tolerance
             within = err_m <= tol_m and np.degrees(err_rad) <= tol_deg
             off = f"{err_m * 1000:.1f} mm, {np.degrees(err_rad):.1f} deg from the goal"
             if still and within:
@@ -187,7 +194,7 @@ class Transport(MotionLeaf):
                 return self.fail(
                     f"came to rest {off} (tolerance {tol_m * 1000:.0f} mm, {tol_deg:g} deg)"
                 )
-        return self.running(f"move {self.get_input('move')}: {elapsed:.1f} of {tau:.1f} s")
+        return self.running(f"move {self.move_index}: {elapsed:.1f} of {tau:.1f} s")
 
     def terminate(self, new_status: Status) -> None:
         """Publish how the started move ended (:mod:`planner.move_result`); halted, stop."""
