@@ -39,7 +39,7 @@ from planner.tree_dataflow import RUN_WRITES, TASK_OBJECT_KEY
 from skills.default_library import default_library
 from skills.library import SkillLibrary
 from worlds.sim_world import SimWorld, task_moves
-from worlds.truth import PhysicalTruth
+from worlds.truth import PhysicalTruth, true_goal_position
 from worlds.world_file import World, as_world_spec
 
 #: An object is held, for the grip metrics, while both palms press on it with at least this
@@ -224,7 +224,7 @@ class _Recorder:
             elif result.status == Status.SUCCESS and self.current == key:
                 assert result.placement_error_m is not None
                 assert result.placement_error_rad is not None
-                track.error_m = result.placement_error_m
+                track.error_m = self._true_error_m(key, pose.position, result.placement_error_m)
                 track.error_deg = float(np.degrees(result.placement_error_rad))
                 track.positions.append(pose.position.copy())
                 track.orientations.append(pose.orientation.copy())
@@ -234,6 +234,24 @@ class _Recorder:
                 }
                 track.skill = result.skill
                 self.current = None
+
+    def _true_error_m(self, key: tuple[str, int], position: np.ndarray, told: float) -> float:
+        """The placement error judged on the physics: ``told`` (the leaf's, from the goal as
+        the file states it) unless the truth moved the table, then from the goal on the true
+        table top (:func:`worlds.truth.true_goal_position`)."""
+        dz = self.sim.scene.truth.table_dz_m
+        if not dz:
+            return told
+        goal = self.stepped[key[0]][key[1]].goal
+        table = self.sim.spec.scene.table
+        true_goal = true_goal_position(
+            goal.position,
+            goal.orientation,
+            self.sim.object_extents(key[0]),
+            table.position[2],
+            dz,
+        )
+        return float(np.linalg.norm(position - true_goal))
 
     def column(self, what: str) -> list[Any]:
         """One attribute of every judged move's track (its last step's), in task order."""

@@ -45,6 +45,10 @@ class MoveResult:
     skill : str or None
         Name of the learnt transport skill the composition ran (its demonstration is the one
         the move generalised), None if it composed none.
+    rested_z : float or None
+        At SUCCESS after a set-down (the surface was felt above or below where the goal puts
+        it), the height of the object's centre resting on it, m; the goal holds it as its
+        height from then on. None otherwise.
     """
 
     object: str
@@ -55,6 +59,7 @@ class MoveResult:
     placement_error_m: float | None = None
     placement_error_rad: float | None = None
     skill: str | None = None
+    rested_z: float | None = None
 
 
 def publish_move_result(result: MoveResult, writer: str) -> None:

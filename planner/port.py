@@ -262,6 +262,12 @@ class PalmControl(Protocol):
         """Normal force between a palm and an object, N (0 without contact)."""
         ...
 
+    def palm_load(self, arm: Arm, name: str) -> float:
+        """Upward force a palm exerts on an object, N (world +z; 0 without contact): the
+        share of its weight the palm carries, as a wrist force sensor reads it. Near zero or
+        below once a surface carries the object."""
+        ...
+
 
 @runtime_checkable
 class ObstacleScene(Protocol):

@@ -429,6 +429,21 @@ class Scene:
         )
         return float(sum(c[9] for c in contacts))
 
+    def palm_load(self, arm: Arm, name: str) -> float:
+        """Upward (world +z) force of ``arm``'s palm on object ``name``, normal and friction,
+        N."""
+        spec = self.robot.arms[Arm(arm)]
+        contacts = pb.getContactPoints(
+            bodyA=self.robot_ids[spec.body],
+            bodyB=self._object(name),
+            linkIndexA=spec.palm_link,
+            physicsClientId=self.client,
+        )
+        # PyBullet's normal points from the object (B) to the palm (A): the solver pushes A
+        # along it and along the friction directions, and the object the opposite way
+        # (checked: a lifted box's two loads sum to its weight).
+        return -float(sum(c[9] * c[7][2] + c[10] * c[11][2] + c[12] * c[13][2] for c in contacts))
+
     def arm_contact_force(self, arm: Arm, body_id: int) -> float:
         """Sum of contact normal forces between any link of ``arm``'s body and a body, N."""
         spec = self.robot.arms[Arm(arm)]

@@ -402,6 +402,10 @@ class SimWorld:
         """Palm-object normal force, N."""
         return self.scene.palm_contact_force(arm, name)
 
+    def palm_load(self, arm: Arm, name: str) -> float:
+        """Upward force of a palm on an object, N (:meth:`worlds.scene.Scene.palm_load`)."""
+        return self.scene.palm_load(arm, name)
+
     # -- obstacles and collision -------------------------------------------------------------
     def set_active_obstacles(self, names: Iterable[str]) -> None:
         """Exactly these obstacles are present (placed between moves, while nothing touches).

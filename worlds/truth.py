@@ -132,6 +132,36 @@ class PhysicalTruth:
         }
 
 
+def true_goal_position(
+    position: ArrayLike,
+    orientation: ArrayLike,
+    extents: ArrayLike,
+    table_top_z: float,
+    table_dz_m: float,
+) -> FloatArray:
+    """Where a goal is in the physics: one that rests the object on the table's top as the
+    file states it (its lowest point within 1 mm of ``table_top_z``) is raised with the true
+    top by ``table_dz_m``; any other goal is where it is.
+
+    Parameters
+    ----------
+    position, orientation : array_like
+        The goal's centre (3,), m, and orientation (4,), scalar-last, world frame.
+    extents : array_like
+        (3,) the object's box extents, m.
+    table_top_z : float
+        The file's table top height, m.
+    table_dz_m : float
+        :attr:`PhysicalTruth.table_dz_m`.
+    """
+    p = np.array(position, dtype=float)
+    # The object's half height in world z, turned as the goal turns it.
+    half_z = 0.5 * float(np.abs(quat.to_matrix(np.asarray(orientation, float))[2]) @ extents)
+    if abs(p[2] - half_z - table_top_z) <= 1e-3:
+        p[2] += table_dz_m
+    return p
+
+
 def physical_scene(spec: SceneSpec, truth: PhysicalTruth) -> SceneSpec:
     """The scene as the physics builds it: true masses and frictions, the table's top
     ``table_dz_m`` higher (its height above the floor with it), each object that much higher.
@@ -198,4 +228,4 @@ def sensed_pose(
     return sensed, np.asarray(quat.multiply(turn, np.asarray(quaternion, dtype=float)))
 
 
-__all__ = ["ObjectTruth", "PhysicalTruth", "physical_scene", "sensed_pose"]
+__all__ = ["ObjectTruth", "PhysicalTruth", "physical_scene", "sensed_pose", "true_goal_position"]

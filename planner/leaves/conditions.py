@@ -11,7 +11,8 @@ from py_trees.ports import PortInformation
 from affordances import SemanticAction
 from planner.composition import MovePlan, SkillChoiceError, goal_error
 from planner.leaves.base import WorldLeaf, composed_move, composition_ports
-from planner.port import ObjectSensing, ObstacleScene, PalmControl
+from planner.move_result import move_results
+from planner.port import ObjectSensing, ObstacleScene, PalmControl, Pose
 from skills.composer import DualArmState, relative_from_world
 from skills.dual_arm import shift_along_face
 from skills.vocabulary import ARMS
@@ -82,7 +83,9 @@ class IsHeld(WorldLeaf):
 
 
 class AtGoal(WorldLeaf):
-    """The object is within tolerance of a move's goal pose."""
+    """The object is within tolerance of a move's goal pose (at the height its Transport
+    set it down at, when it felt the surface elsewhere:
+    :attr:`~planner.move_result.MoveResult.rested_z`)."""
 
     WORLD_ROLES: ClassVar[tuple[type, ...]] = (ObjectSensing,)
 
@@ -107,7 +110,13 @@ class AtGoal(WorldLeaf):
         index = int(self.get_input("move"))
         if (bad := self.bad_move_index(name, index)) is not None:
             return self.fail(bad)
-        err_m, err_rad = goal_error(self.world, name, self.world.task_moves(name)[index].goal)
+        goal = self.world.task_moves(name)[index].goal
+        placed = move_results().get((name, index))
+        if placed is not None and placed.rested_z is not None:
+            # Its Transport felt the surface elsewhere than the goal's height: the goal is the
+            # same place on the surface as found.
+            goal = Pose(np.array([*goal.position[:2], placed.rested_z]), goal.orientation)
+        err_m, err_rad = goal_error(self.world, name, goal)
         deg = float(np.degrees(err_rad))
         text = f"{err_m * 1000:.1f} mm and {deg:.1f} deg from goal {index}"
         tol_m, tol_deg = (

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import ClassVar
 
 import numpy as np
@@ -16,6 +17,18 @@ from planner.port import Clock, Move, ObjectSensing, ObstacleScene, PalmControl,
 from skills.composer import DualArmComposer, DualArmState
 from skills.vocabulary import ARMS
 
+#: Below this share of the object's stated weight, the palms' summed upward force
+#: (:meth:`~planner.port.PalmControl.palm_load`) says a surface carries (part of) the object:
+#: an object of half its stated mass, hanging, still loads the palms with 0.5 of it.
+SUPPORTED_LOAD_FRACTION = 0.4
+#: How fast the palms lower an object that arrived unsupported (the surface is lower than the
+#: goal says), m/s, and how far below the goal they search before the move fails, m.
+SET_DOWN_SPEED_M_S = 0.02
+SET_DOWN_DEPTH_M = 0.05
+#: A supported object resting this far above where the composition holds it has met its
+#: surface above the goal: the palms' targets rise to it instead of pressing it down, m.
+RAISED_SUPPORT_M = 0.01
+
 
 class Transport(MotionLeaf):
     """Carry the held object to move ``move``'s goal, composing the plan's weighted skills.
@@ -29,6 +42,16 @@ class Transport(MotionLeaf):
     after ``tau``) or ``settle_s`` later, and only if the object *as measured* is still and
     within ``tolerance_m`` and ``tolerance_deg`` of the goal (the judge's 2 cm and 10 degrees
     by default); an object that came to rest outside them fails the move, saying where.
+
+    Placing is felt, not only commanded: the goal's height is where the world file says the
+    surface is, and a real surface may be elsewhere. An object that arrives still carried by
+    the palms (their upward force, :meth:`~planner.port.PalmControl.palm_load`, above
+    :data:`SUPPORTED_LOAD_FRACTION` of its stated weight) is lowered at
+    :data:`SET_DOWN_SPEED_M_S` until a surface takes it, at most :data:`SET_DOWN_DEPTH_M`
+    below the goal; one stopped by a surface :data:`RAISED_SUPPORT_M` or more above where it is
+    held has the palms' targets raised to it. Either way the goal's height becomes the height
+    the object rests at (its x, y and orientation are judged as given), and the handed-over
+    state carries the shift.
     Publishes the move's composition and outcome as a :class:`~planner.move_result.MoveResult`
     when it starts and when it ends.
 
@@ -144,6 +167,13 @@ class Transport(MotionLeaf):
             float(self.get_input("tolerance_m")),
             float(self.get_input("tolerance_deg")),
         )
+        #: Weight below which the palms no longer carry the object, N.
+        self.supported_below_n = (
+            SUPPORTED_LOAD_FRACTION * world.object_context(name).mass_kg * world.gravity()
+        )
+        #: Shift of the palms' targets along world z from the composition's, m (set-down).
+        self.lift_offset = 0.0
+        self.set_down_from: float | None = None  # when the set-down began, s
         self.composer = checked.fresh()
         self.started = world.time()
         self.weak_ticks = 0
@@ -158,7 +188,10 @@ class Transport(MotionLeaf):
         name = self.object_name
         cmd = self.composer.step(self.control_dt)
         for i, arm in enumerate(ARMS):
-            world.command_palm(arm, Pose(cmd.positions[i], cmd.orientations[i]), cmd.twists[i])
+            position = cmd.positions[i]
+            if self.lift_offset:
+                position = position + np.array([0.0, 0.0, self.lift_offset])
+            world.command_palm(arm, Pose(position, cmd.orientations[i]), cmd.twists[i])
         forces = [world.contact_force(arm, name) for arm in ARMS]
         if min(forces) < self.min_force_n:
             self.weak_ticks += 1
@@ -179,22 +212,64 @@ class Transport(MotionLeaf):
         )
         settled = elapsed > tau + self.settle_s
         if arrived or settled:
+            if (lowering := self._set_down(name, commanded.position[2])) is not None:
+                return lowering
             # ... but the move is judged on the object as measured: a held object hangs below
             # its commanded pose, and only the measured pose is where it was put.
             twist = world.object_twist(name)
             still = np.linalg.norm(twist[:3]) < 5e-3 and np.linalg.norm(twist[3:]) < 0.05
-            err_m, err_rad = goal_error(world, name, self.move.goal)
+            err_m, err_rad = goal_error(world, name, self._placed_goal(name))
             tol_m, tol_deg = self.tolerance
             within = err_m <= tol_m and np.degrees(err_rad) <= tol_deg
             off = f"{err_m * 1000:.1f} mm, {np.degrees(err_rad):.1f} deg from the goal"
             if still and within:
-                self._set_output("to_state", self.composer.state)
+                self._set_output("to_state", self._handed_over())
                 return self.succeed(f"{'placed' if arrived else 'settled'} {off}")
             if settled and still:
                 return self.fail(
                     f"came to rest {off} (tolerance {tol_m * 1000:.0f} mm, {tol_deg:g} deg)"
                 )
         return self.running(f"move {self.move_index}: {elapsed:.1f} of {tau:.1f} s")
+
+    def _set_down(self, name: str, commanded_z: float) -> Status | None:
+        """RUNNING while the palms lower an object no surface carries yet (or FAILURE once
+        they searched :data:`SET_DOWN_DEPTH_M` below the goal); None once one does. Raises the
+        targets to an object resting above where it is held (see the class)."""
+        world = self.world
+        load = sum(world.palm_load(arm, name) for arm in ARMS)
+        if load > self.supported_below_n:
+            if self.set_down_from is None:
+                self.set_down_from = world.time()
+            depth = SET_DOWN_SPEED_M_S * (world.time() - self.set_down_from)
+            if depth > SET_DOWN_DEPTH_M:
+                return self.fail(
+                    f"no surface took the object within {SET_DOWN_DEPTH_M * 1000:.0f} mm below "
+                    f"the goal (the palms still carry {load:.1f} N)"
+                )
+            self.lift_offset = -depth
+            return self.running(f"setting down: {depth * 1000:.0f} mm below the goal")
+        resting_z = float(world.object_pose(name).position[2])
+        if resting_z - (commanded_z + self.lift_offset) >= RAISED_SUPPORT_M:
+            self.lift_offset = resting_z - commanded_z
+        return None
+
+    def _placed_goal(self, name: str) -> Pose:
+        """The move's goal; after a set-down, at the height the object rests at."""
+        goal = self.move.goal
+        if not self.lift_offset:
+            return goal
+        resting_z = float(self.world.object_pose(name).position[2])
+        return Pose(np.array([*goal.position[:2], resting_z]), goal.orientation)
+
+    def _handed_over(self) -> DualArmState:
+        """The composition's full state, shifted by the set-down."""
+        assert self.composer is not None
+        state = self.composer.state
+        if not self.lift_offset:
+            return state
+        obj = state.object
+        shifted = obj._replace(position=obj.position + np.array([0.0, 0.0, self.lift_offset]))
+        return replace(state, object=shifted)
 
     def terminate(self, new_status: Status) -> None:
         """Publish how the started move ended (:mod:`planner.move_result`); halted, stop."""
@@ -220,6 +295,9 @@ class Transport(MotionLeaf):
                 err_m,
                 err_rad,
                 self.skill,
+                float(self._placed_goal(name).position[2])
+                if status == Status.SUCCESS and self.lift_offset
+                else None,
             ),
             self.name,
         )

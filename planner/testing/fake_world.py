@@ -285,6 +285,14 @@ class FakeWorld:
             return 0.0
         return self.contact_stiffness * max(self._penetration(arm, name), 0.0)
 
+    def palm_load(self, arm: Arm, name: str) -> float:
+        """Half the object's weight while held above its rest on the table; else 0."""
+        obj = self._objects[name]
+        rest_z = self.table_height + obj.extents[2] / 2.0
+        if self._held[name] is None or obj.pose.position[2] <= rest_z + 1e-3:
+            return 0.0
+        return obj.mass * GRAVITY / 2.0
+
     # -- WorldPort: obstacles and collision -----------------------------------------------------
     def set_active_obstacles(self, names: Iterable[str]) -> None:
         """Exactly these obstacles are present."""

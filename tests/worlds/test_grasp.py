@@ -41,6 +41,8 @@ class Log:
     parcel_in_palms: list[NDArray[np.float64]] = field(default_factory=list)
     tilt_deg: list[float] = field(default_factory=list)
     force: dict[Arm, list[float]] = field(default_factory=lambda: {Arm.LEFT: [], Arm.RIGHT: []})
+    #: Both palms' upward force on the parcel (Scene.palm_load), summed, N.
+    load: list[float] = field(default_factory=list)
 
 
 def parcel_in_palms(scene: Scene) -> NDArray[np.float64]:
@@ -86,6 +88,7 @@ def segment(
                 log.tilt_deg.append(tilt_deg(scene))
                 for arm in (Arm.LEFT, Arm.RIGHT):
                     log.force[arm].append(scene.palm_contact_force(arm, PARCEL))
+                log.load.append(sum(scene.palm_load(arm, PARCEL) for arm in (Arm.LEFT, Arm.RIGHT)))
 
 
 def start_scene(refresh_every: int | None = None) -> Scene:
@@ -115,6 +118,7 @@ class PickAndPlace:
     placed: NDArray[np.float64]
     place_target: NDArray[np.float64]
     released_force: tuple[float, float]
+    released_load: float
     settled_speed: float
     final_tilt: float
 
@@ -152,6 +156,7 @@ def run() -> PickAndPlace:
             placed=placed,
             place_target=down,
             released_force=released,
+            released_load=sum(scene.palm_load(arm, PARCEL) for arm in (Arm.LEFT, Arm.RIGHT)),
             settled_speed=float(np.linalg.norm(scene.object_velocity(PARCEL)[0])),
             final_tilt=tilt_deg(scene),
         )
@@ -184,6 +189,14 @@ def test_steady_squeeze_during_hold(run: PickAndPlace) -> None:
         )
         # Steady: varies by less than 2 N over the 5 s hold.
         assert np.ptp(force) < 2.0
+
+
+def test_the_palms_loads_carry_the_parcels_weight(run: PickAndPlace) -> None:
+    # Held still, the palms' upward forces (normal and friction) are what holds the parcel up:
+    # its weight, 1 kg x 9.81 m/s^2 (the default scene's parcel).
+    np.testing.assert_allclose(run.hold.load, 9.81, rtol=0.03)
+    # Resting on the table, released, the palms carry nothing.
+    assert run.released_load == 0.0
 
 
 def test_parcel_is_placed_and_released(run: PickAndPlace) -> None:
