@@ -1,11 +1,13 @@
 """Two-palm reach map: how well a world's robot holds the lateral grasp over a grid of centres.
 
-For each object centre of a grid (x, y at a few heights above the table), the palms are
-placed on the object's +-y faces by the episode's own start-posture solve
+For each object centre of a grid (x, y at a few heights above the table) and each grip yaw,
+the object stands on the table there, turned by the grip yaw, and the palms are placed on its
+turned +-y faces by the episode's own start-posture solve
 (:meth:`worlds.scene.Scene.place_palms`), then held for 0.5 s by the impedance controller
 (the model's gains); the figure is the larger palm position error, mm. It shows where a
-world's trial regions (its ``trials`` section) can lie. With ``--json`` the last line is
-``{"grid": [[x, y, z, error_mm], ...]}``.
+world's trial regions (its ``trials`` section) can lie, and how far a turned grip holds there
+(``--grip-yaws 0 45 -45``). With ``--json`` the last line is
+``{"grid": [[x, y, z, grip_yaw_deg, error_mm], ...]}``.
 
     python bench/reach_map.py worlds/icub_parcel_pick_place.yaml
 """
@@ -14,22 +16,38 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 from pathlib import Path
 
 import numpy as np
 
 from skills.vocabulary import Arm
 from worlds.scene import Scene, lateral_grasp_palm_poses
-from worlds.world_file import World, load_world
+from worlds.world_file import World, load_world, world_from_data
 
 
-def palm_error(world: World, centre: np.ndarray, hold_s: float = 0.5) -> float:
-    """Larger palm position error (m) after holding the grasp at ``centre`` for ``hold_s``."""
+def palm_error(
+    world: World, centre: np.ndarray, hold_s: float = 0.5, grip_yaw_deg: float = 0.0
+) -> float:
+    """Larger palm position error (m) after holding the grasp at ``centre`` (the object's
+    centre, m) for ``hold_s``, the grip turned by ``grip_yaw_deg`` about z."""
     obj = world.objects[0]
     half_span = float(obj.shape.size[1]) / 2.0  # type: ignore[union-attr]
-    with Scene.from_world(world) as scene:
+    # The object where the palms hold it (its start pose would stand in their way elsewhere),
+    # on the table and turned with the grip.
+    data = world.model_dump(mode="json")
+    data["objects"][0]["pose"] = {
+        "position": [float(centre[0]), float(centre[1]), float(obj.pose.position[2])],
+        "rpy_deg": [0.0, 0.0, grip_yaw_deg],
+    }
+    with Scene.from_world(world_from_data(data, world.source)) as scene:
         scene.set_active_obstacles(())
-        poses = lateral_grasp_palm_poses(centre, half_span, float(world.robot.palm_size[2]))
+        poses = lateral_grasp_palm_poses(
+            centre,
+            half_span,
+            float(world.robot.palm_size[2]),
+            grip_yaw=math.radians(grip_yaw_deg),
+        )
         scene.place_palms(poses)
         scene.step(round(hold_s * scene.spec.physics_hz))
         return max(
@@ -48,6 +66,9 @@ def main() -> int:
     parser.add_argument(
         "--lifts", type=float, nargs="+", default=[0.0, 0.06, 0.12], help="heights above rest, m"
     )
+    parser.add_argument(
+        "--grip-yaws", type=float, nargs="+", default=[0.0], help="grip turns about z, degrees"
+    )
     parser.add_argument("--json", action="store_true", help="print a JSON summary last")
     args = parser.parse_args()
     world = load_world(args.world)
@@ -55,17 +76,22 @@ def main() -> int:
     xs = rest[0] + args.dx * np.arange(-args.nx, args.nx + 1)
     ys = args.dy * np.arange(-args.ny, args.ny + 1)
     grid: list[list[float]] = []
-    for lift in args.lifts:
-        z = rest[2] + lift
-        print(f"palm error, mm, with the object's centre at z = {z:.3f} m (lifted {lift:.2f})")
-        print("   x \\ y " + " ".join(f"{y:7.2f}" for y in ys))
-        for x in xs:
-            row = []
-            for y in ys:
-                error = palm_error(world, np.array([x, y, z]))
-                grid.append([round(float(x), 4), round(float(y), 4), round(z, 4), error * 1e3])
-                row.append(f"{error * 1e3:7.1f}")
-            print(f"{x:8.2f} " + " ".join(row), flush=True)
+    for grip in args.grip_yaws:
+        for lift in args.lifts:
+            z = rest[2] + lift
+            print(
+                f"palm error, mm, with the object's centre at z = {z:.3f} m (lifted {lift:.2f}), "
+                f"the grip turned {grip:g} deg"
+            )
+            print("   x \\ y " + " ".join(f"{y:7.2f}" for y in ys))
+            for x in xs:
+                row = []
+                for y in ys:
+                    error = palm_error(world, np.array([x, y, z]), grip_yaw_deg=grip)
+                    cell = [round(float(x), 4), round(float(y), 4), round(z, 4), grip, error * 1e3]
+                    grid.append(cell)
+                    row.append(f"{error * 1e3:7.1f}")
+                print(f"{x:8.2f} " + " ".join(row), flush=True)
     if args.json:
         print(json.dumps({"grid": grid}))
     return 0

@@ -1,14 +1,18 @@
-"""The paper's experiment: many trials of three pick-and-place moves with new obstacles.
+"""The paper's experiment: many trials of consecutive pick-and-place moves with new obstacles.
 
 Each trial draws, from ``numpy.random.default_rng([seed, trial])`` and within the world
 file's ``trials`` section (:class:`worlds.world_file.TrialSettings`, as the workspace depends
 on the robot):
 
 - the parcel's start on the table, near the robot's centre line;
-- three goals, in the centre, right (-y) and left (+y) regions of the workspace;
-- for at least two of the three moves a sphere, either *on the line*: above the straight path
-  between the move's start and goal, under the demonstrated lift, or *ahead*: in front (+x) of
-  the carry at the lifted parcel's height. Every sphere clears the parcel at its move's start
+- one goal per move in its region (:meth:`~worlds.world_file.TrialSettings.goal_regions`: the
+  paper's three, centre, right (-y) and left (+y), or the section's own ``moves``), each
+  with a yaw drawn within the move's range;
+- for every move but at most one (drawn at random, and kept free with probability 1/2) a new
+  sphere, either *on the line*: above the straight path between the move's start and goal,
+  under the demonstrated lift, or *ahead*: in front (+x) of the carry at the lifted parcel's
+  height, of the kinds the move's region allows (a region without kinds gets no sphere).
+  Every sphere clears the parcel at its move's start
   and goal (``clearance``), and the robot itself, posed grasping the parcel there, at rest
   and lifted by ``lift`` (``robot_clearance``, measured by PyBullet on the robot's own
   collision shapes), so only the carry can meet it: a sphere the robot would have to be in
@@ -57,7 +61,14 @@ from planner.user_leaves import register_leaves
 from skills.turns import grip_yaw, lateral_quarter_turns, turn_steps
 from worlds.adapters import robot_capabilities
 from worlds.scene import Scene, lateral_grasp_palm_poses
-from worlds.world_file import Region, TrialSettings, World, world_from_data
+from worlds.world_file import (
+    GoalRegion,
+    ObstacleKind,
+    Region,
+    TrialSettings,
+    World,
+    world_from_data,
+)
 
 #: Goal yaws drawn for a move before giving up on placing its sphere: the robot turning the
 #: object must be clear of it too, and some turns leave no room for a sphere on the way.
@@ -67,9 +78,6 @@ TRIAL_REDRAWS = 10
 #: Spheres tried for one goal yaw.
 SPHERE_ATTEMPTS = 200
 
-#: The goal regions in the order of the moves.
-GOAL_REGIONS = ("centre", "right", "left")
-
 
 @dataclass(frozen=True)
 class Sphere:
@@ -78,7 +86,7 @@ class Sphere:
     name: str
     centre: tuple[float, float, float]
     radius: float
-    kind: str  # "line" or "ahead"
+    kind: ObstacleKind
 
 
 def _box_gap(centre: np.ndarray, half: np.ndarray, point: np.ndarray, yaw: float = 0.0) -> float:
@@ -225,13 +233,13 @@ def draw_trial(
     """A variant of ``base`` for one trial and the kinds of obstacle per move.
 
     The base world gives the robot, table, object, simulation settings and the trial layout
-    (``base.trials``); this draws the object's start, the three goals and the obstacles.
+    (``base.trials``); this draws the object's start, a goal per move and the obstacles.
     ``robot`` measures spheres against the robot (one is made for ``base`` if not given).
     """
     if robot is None:
         with RobotClearance(base) as own:
             return draw_trial(base, seed, trial, own)
-    turning = base.trials.goal_yaw_deg[0] != base.trials.goal_yaw_deg[1]
+    turning = any(_turns(region) for region in base.trials.goal_regions())
     for redraw in range(TRIAL_REDRAWS if turning else 1):
         try:
             return _draw_trial(base, seed, trial, robot, redraw)
@@ -241,6 +249,17 @@ def draw_trial(
             if redraw == TRIAL_REDRAWS - 1 or not turning:
                 raise
     raise AssertionError("unreachable")
+
+
+def _turns(region: GoalRegion) -> bool:
+    """Whether a move's goal yaw is drawn from a range rather than fixed."""
+    assert region.yaw_deg is not None  # given by TrialSettings.goal_regions
+    return region.yaw_deg[0] != region.yaw_deg[1]
+
+
+def _yaw_range(region: GoalRegion) -> tuple[float, float]:
+    assert region.yaw_deg is not None  # given by TrialSettings.goal_regions
+    return region.yaw_deg
 
 
 def _draw_trial(
@@ -253,44 +272,56 @@ def _draw_trial(
     half = np.asarray(getattr(obj.shape, "size", (0.2, 0.3, 0.15)), dtype=float) / 2.0
     z = base.table.position[2] + half[2]
     start = _in_region(rng, layout.start, z)
-    goals = [_in_region(rng, getattr(layout, region), z) for region in GOAL_REGIONS]
+    regions = layout.goal_regions()
+    goals = [_in_region(rng, region, z) for region in regions]
     # The yaws come from a generator of their own, so a layout without turns draws the same
     # starts, goals and spheres as before they were drawn.
     turn_rng = np.random.default_rng([seed, trial, 1, redraw])
-    goal_yaws = [_uniform(turn_rng, layout.goal_yaw_deg) for _ in GOAL_REGIONS]
+    goal_yaws = [_uniform(turn_rng, _yaw_range(region)) for region in regions]
     start_yaw = math.radians(obj.pose.rpy_deg[2])
     max_turn = robot_capabilities(base).max_turn_rad
     robot_yaw = math.radians(base.robot.base.rpy_deg[2])
     size = 2.0 * half
-    with_obstacle = [True, True, True]
-    with_obstacle[int(rng.integers(3))] = bool(rng.random() < 0.5)  # at least two of three
+    # Every move but at most one has a sphere (the paper's at least two of three).
+    with_obstacle = [bool(region.obstacles) for region in regions]
+    # The coin is drawn before the move it decides: the order of the draws the recorded
+    # campaigns (bench/results) were drawn in.
+    keep = bool(rng.random() < 0.5)
+    free = int(rng.integers(len(regions)))
+    with_obstacle[free] = with_obstacle[free] and keep
     spheres: list[Sphere | None] = []
     kinds: list[str] = []
     prev, prev_yaw = start, start_yaw
-    for i, goal in enumerate(goals):
+    for i, (goal, region) in enumerate(zip(goals, regions, strict=True)):
         sphere: Sphere | None = None
+        low, high = _yaw_range(region)
         for attempt in range(YAW_ATTEMPTS):
-            if (
-                attempt == YAW_ATTEMPTS - 1
-                and layout.goal_yaw_deg[0] <= math.degrees(prev_yaw) <= layout.goal_yaw_deg[1]
-            ):
+            if attempt == YAW_ATTEMPTS - 1 and low <= math.degrees(prev_yaw) <= high:
                 goal_yaws[i] = math.degrees(prev_yaw)  # at last, no turn at all
             elif attempt:  # no sphere fits the robot turning this way: another turn
-                goal_yaws[i] = _uniform(turn_rng, layout.goal_yaw_deg)
+                goal_yaws[i] = _uniform(turn_rng, (low, high))
             yaw = math.radians(goal_yaws[i])
             postures = move_postures(prev, prev_yaw, goal, yaw, size, max_turn, robot_yaw)
             if not with_obstacle[i]:
                 break
             try:
                 sphere = _draw_sphere(
-                    rng, f"ball_{i + 1}", prev, goal, half, layout, robot, postures
+                    rng,
+                    f"ball_{i + 1}",
+                    prev,
+                    goal,
+                    half,
+                    layout,
+                    region.obstacles,
+                    robot,
+                    postures,
                 )
                 break
             except RuntimeError:
-                if attempt == YAW_ATTEMPTS - 1 or layout.goal_yaw_deg[0] == layout.goal_yaw_deg[1]:
+                if attempt == YAW_ATTEMPTS - 1 or low == high:
                     raise
         spheres.append(sphere)
-        kinds.append("none" if sphere is None else sphere.kind)
+        kinds.append("none" if sphere is None else sphere.kind.value)
         prev, prev_yaw = goal, yaw
     data = base.model_dump(mode="json")
     data["objects"][0]["pose"]["position"] = start.tolist()
@@ -326,12 +357,13 @@ def _draw_sphere(
     goal: np.ndarray,
     half: np.ndarray,
     layout: TrialSettings,
+    allowed: Sequence[ObstacleKind],
     robot: RobotClearance,
     postures: list[Posture],
 ) -> Sphere:
-    """A sphere on the line or ahead of the carry, clear of the box and of the robot holding
-    it as it picks it up at the start and puts it down at the goal (``postures``: turned, and
-    at every step of a turn made in steps), at rest and lifted."""
+    """A sphere of an ``allowed`` kind, on the line or ahead of the carry, clear of the box and
+    of the robot holding it as it picks it up at the start and puts it down at the goal
+    (``postures``: turned, and at every step of a turn made in steps), at rest and lifted."""
     top = start[2] + half[2]
     lifted = np.array([0.0, 0.0, layout.lift])
     grasps = [
@@ -344,13 +376,16 @@ def _draw_sphere(
     )
     for _ in range(SPHERE_ATTEMPTS):  # rejection sampling
         radius = _uniform(rng, layout.sphere_radius)
-        if rng.random() < 0.5:
-            kind = "line"
+        # Either kind with probability 1/2 (one draw, as before kinds could be restricted).
+        if len(allowed) == 1:
+            kind = allowed[0]
+        else:
+            kind = ObstacleKind.LINE if rng.random() < 0.5 else ObstacleKind.AHEAD
+        if kind is ObstacleKind.LINE:
             t = float(rng.uniform(0.35, 0.65))
             xy = start[:2] + t * (goal[:2] - start[:2])
             centre = np.array([*xy, top + _uniform(rng, layout.line_gap) + radius])
         else:
-            kind = "ahead"
             front = max(start[0], goal[0]) + reach_x
             centre = np.array(
                 [

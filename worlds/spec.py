@@ -32,6 +32,13 @@ class RobotModelName(StrEnum):
     ICUB = "icub"
 
 
+class ObstacleKind(StrEnum):
+    """Where a trial's obstacle sphere is drawn for a move (``app.py trials``)."""
+
+    LINE = "line"  # above the straight path between the move's start and goal
+    AHEAD = "ahead"  # in front (+x) of the carry, at the lifted object's height
+
+
 @dataclass(frozen=True)
 class ShapeSpec:
     """Geometry in the body frame, centred on the body origin.

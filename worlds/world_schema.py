@@ -32,7 +32,7 @@ from pydantic import (
     model_validator,
 )
 
-from worlds.spec import Fragility, ObjectState, RobotModelName, Shape
+from worlds.spec import Fragility, ObjectState, ObstacleKind, RobotModelName, Shape
 from worlds.world_errors import FieldProblems, Issue, Shown, field_problem, format_path, show_value
 
 WORLD_FILE_VERSION = 1
@@ -122,6 +122,15 @@ def _range(value: Any) -> Any:
 
 Range = Annotated[tuple[_Finite, _Finite], BeforeValidator(_range)]
 """Two finite numbers ``[low, high]``, low <= high: values are drawn uniformly between them."""
+
+
+def _optional_range(value: Any) -> Any:
+    """A :data:`Range`, or None (left to a default)."""
+    return None if value is None else _range(value)
+
+
+OptionalRange = Annotated[tuple[_Finite, _Finite] | None, BeforeValidator(_optional_range)]
+"""A :data:`Range`, or None for a default given elsewhere."""
 
 
 class _FileModel(BaseModel):
@@ -440,6 +449,41 @@ class Region(_FileModel):
     y: Range = Field(description="[low, high] of the centre's y, world frame, m")
 
 
+def _yaw_in_a_turn(yaw: tuple[float, float] | None) -> tuple[float, float] | None:
+    if yaw is not None and (yaw[0] < -180.0 or yaw[1] > 180.0):
+        raise field_problem("angles within [-180, 180] degrees", yaw)
+    return yaw
+
+
+#: Every kind of obstacle sphere, in the order a trial draws between them.
+OBSTACLE_KINDS = (ObstacleKind.LINE, ObstacleKind.AHEAD)
+
+
+class GoalRegion(Region):
+    """One move of a trial: where its goal's centre is drawn, the goal's yaw and the kinds of
+    obstacle sphere the move may get."""
+
+    yaw_deg: OptionalRange = Field(
+        default=None,
+        description="[low, high] of the goal's yaw about z, degrees, within [-180, 180]; "
+        "default: trials.goal_yaw_deg",
+    )
+    obstacles: tuple[ObstacleKind, ...] = Field(
+        default=OBSTACLE_KINDS,
+        description="kinds of sphere this move's obstacle is drawn as (line: over the "
+        "straight path, under the lift; ahead: in front (+x) of the carry); [] for none",
+    )
+
+    _yaw = field_validator("yaw_deg")(_yaw_in_a_turn)
+
+    @field_validator("obstacles")
+    @classmethod
+    def _each_kind_once(cls, kinds: tuple[ObstacleKind, ...]) -> tuple[ObstacleKind, ...]:
+        if len(set(kinds)) != len(kinds):
+            raise field_problem("each kind at most once", kinds)
+        return kinds
+
+
 def _range_at_least(low: float, strict: bool, what: str) -> Any:
     """A validator of a :data:`Range` whose low end is above ``low`` (``strict``) or at it."""
 
@@ -525,8 +569,9 @@ class TrialSettings(_FileModel):
     """How ``app.py trials`` draws the paper's experiment in this world.
 
     The workspace depends on the robot, so the world says where the object starts, where its
-    centre, right (-y) and left (+y) goals lie, and how the obstacle spheres are drawn. The
-    defaults suit the default two-iiwa world.
+    goals lie and how the obstacle spheres are drawn. The goals are either the paper's three,
+    ``centre``, ``right`` (-y) and ``left`` (+y), or any number of ``moves``, each a
+    :class:`GoalRegion` (not both). The defaults suit the default two-iiwa world.
     """
 
     start: Region = Field(
@@ -570,7 +615,14 @@ class TrialSettings(_FileModel):
     )
     goal_yaw_deg: Range = Field(
         default=(0.0, 0.0),
-        description="[low, high] of each goal's yaw about z, degrees, within [-180, 180]",
+        description="[low, high] of each goal's yaw about z, degrees, within [-180, 180] "
+        "(a move's own yaw_deg replaces it)",
+    )
+    moves: tuple[GoalRegion, ...] = Field(
+        default=(),
+        min_length=1,
+        description="each move's goal region, in order, at least 1; without it the three "
+        "moves centre, right and left",
     )
     hard: HardSettings = Field(
         default_factory=HardSettings,
@@ -584,21 +636,46 @@ class TrialSettings(_FileModel):
             raise field_problem("radii > 0", radius)
         return radius
 
-    @field_validator("goal_yaw_deg")
-    @classmethod
-    def _yaw_in_a_turn(cls, yaw: tuple[float, float]) -> tuple[float, float]:
-        if yaw[0] < -180.0 or yaw[1] > 180.0:
-            raise field_problem("angles within [-180, 180] degrees", yaw)
-        return yaw
+    _yaw = field_validator("goal_yaw_deg")(_yaw_in_a_turn)
+
+    @model_validator(mode="after")
+    def _one_form_of_goals(self) -> TrialSettings:
+        named = [k for k in _PAPER_REGIONS if k in self.model_fields_set]
+        if self.moves and named:
+            raise field_problem(
+                "either moves or the regions centre, right and left, not both",
+                Shown(f"{named[0]} beside moves ({len(self.moves)})"),
+                named[0],
+            )
+        return self
+
+    def goal_regions(self) -> tuple[GoalRegion, ...]:
+        """Each move's goal region, in order, its ``yaw_deg`` given (``goal_yaw_deg`` unless
+        the move has its own): ``moves``, or the paper's centre, right and left."""
+        regions = self.moves or tuple(
+            GoalRegion(x=r.x, y=r.y) for r in (self.centre, self.right, self.left)
+        )
+        return tuple(
+            r if r.yaw_deg is not None else r.model_copy(update={"yaw_deg": self.goal_yaw_deg})
+            for r in regions
+        )
 
     @model_serializer(mode="wrap")
-    def _without_default_hard(self, handler: SerializerFunctionWrapHandler) -> Any:
-        # Settings without a hard section dump as before it existed: a world's content hash
-        # names its trial campaigns (experiment.records), and those must stay its own.
+    def _as_before(self, handler: SerializerFunctionWrapHandler) -> Any:
+        # Settings without a hard section or moves dump as before those existed: a world's
+        # content hash names its trial campaigns (experiment.records), and those must stay
+        # its own. With moves, the unused paper regions are left out (they are defaults).
         data = handler(self)
-        if self.hard == HardSettings() and isinstance(data, dict):
-            data.pop("hard", None)
+        if isinstance(data, dict):
+            if self.hard == HardSettings():
+                data.pop("hard", None)
+            for key in ("moves",) if not self.moves else _PAPER_REGIONS:
+                data.pop(key, None)
         return data
+
+
+#: The paper's three goal regions, in the order of its moves.
+_PAPER_REGIONS = ("centre", "right", "left")
 
 
 class World(_FileModel):

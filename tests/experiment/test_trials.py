@@ -14,7 +14,6 @@ from numpy.testing import assert_allclose
 
 from experiment.results import read_results
 from experiment.trials import (
-    GOAL_REGIONS,
     Posture,
     RobotClearance,
     _box_gap,
@@ -76,8 +75,7 @@ def test_a_trial_meets_the_papers_conditions(
     layout = base.trials
     moves = world.task[0].moves
     assert len(moves) == 3
-    for move, name in zip(moves, GOAL_REGIONS, strict=True):
-        region = getattr(layout, name)
+    for move, region in zip(moves, layout.goal_regions(), strict=True):
         (x0, x1), (y0, y1) = region.x, region.y
         assert x0 <= move.goal.position[0] <= x1 and y0 <= move.goal.position[1] <= y1
     assert sum(k != "none" for k in kinds) >= 2  # obstacles on at least two of three moves

@@ -219,6 +219,25 @@ CASES = [
     ("rates_not_multiple.yaml", r"sim\.physics_hz", r"a multiple of control_hz \(60\)", "250"),
     ("unknown_shape_type.yaml", r"obstacles\[0\]\.shape\.type", "a shape type, one of", "'cone'"),
     ("wrong_version.yaml", "version", r"1 \(the only world file version", "2"),
+    (
+        "trials_moves_and_regions.yaml",
+        r"trials\.centre",
+        "either moves or the regions centre, right and left, not both",
+        r"centre beside moves \(2\)",
+    ),
+    ("trials_move_region.yaml", r"trials\.moves\[1\]\.y", "low <= high", r"\[-0\.12, -0\.18\]"),
+    (
+        "trials_obstacle_kind.yaml",
+        r"trials\.moves\[0\]\.obstacles\[1\]",
+        "one of 'line' or 'ahead'",
+        "'above'",
+    ),
+    (
+        "trials_move_yaw.yaml",
+        r"trials\.moves\[0\]\.yaw_deg",
+        r"angles within \[-180, 180\] degrees",
+        r"\[-200\.0, 0\.0\]",
+    ),
 ]
 
 
@@ -325,6 +344,16 @@ def test_every_problem_is_listed_one_per_line(default_data: dict[str, Any], tmp_
             r"trials\.start\.x\[0\]: expected a finite number, got 1000",
         ),
         (
+            lambda d: d["trials"].update(moves=[]),
+            r"trials\.moves: expected a list with at least 1 item, got 0 items",
+        ),
+        (
+            lambda d: d["trials"].update(
+                moves=[{"x": [0.6, 0.7], "y": [0, 0.1], "obstacles": ["line", "line"]}]
+            ),
+            r"trials\.moves\[0\]\.obstacles: expected each kind at most once",
+        ),
+        (
             lambda d: d["trials"].update(line_gap=0.05),
             r"trials\.line_gap: expected a list of exactly 2 numbers \[low, high\], got 0\.05",
         ),
@@ -410,7 +439,10 @@ def test_cli_validate_ok(capsys: pytest.CaptureFixture[str]) -> None:
     assert err == ""
 
 
-@pytest.mark.parametrize("name", ["negative_mass.yaml", "bad_syntax.yaml", "empty.yaml", "nope"])
+@pytest.mark.parametrize(
+    "name",
+    ["negative_mass.yaml", "bad_syntax.yaml", "empty.yaml", "nope", "trials_move_region.yaml"],
+)
 def test_cli_validate_bad_file(name: str, capsys: pytest.CaptureFixture[str]) -> None:
     assert world_cli_validate(str(BAD / name)) == 2
     out, err = capsys.readouterr()
