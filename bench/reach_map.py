@@ -1,11 +1,13 @@
-"""Two-palm reach map: how well a world's robot holds the lateral grasp over a grid of centres.
+"""Two-palm reach map: how well a world's robot reaches and holds the lateral grasp over a grid.
 
-For each object centre of a grid (x, y at a few heights above the table), the palms are
-placed on the object's +-y faces by the episode's own start-posture solve
-(:meth:`worlds.scene.Scene.place_palms`), then held for 0.5 s by the impedance controller
-(the model's gains); the figure is the larger palm position error, mm. It shows where a
-world's trial regions (its ``trials`` section) can lie. With ``--json`` the last line is
-``{"grid": [[x, y, z, error_mm], ...]}``.
+The palms start on the +-y faces of the world's object where it rests (the episode's own
+start-posture solve, :meth:`worlds.scene.Scene.place_palms`); for each object centre of a grid
+(x, y at a few heights above the table) the impedance controller (the model's gains, a
+humanoid's torso included) then carries them there along a minimum-jerk path in 1.5 s and
+holds them 0.5 s; the figure is the larger palm position error, mm. It shows where a world's
+trial regions (its ``trials`` section) can lie. With ``--json`` the last line is
+``{"grid": [[x, y, z, error_mm], ...], "within_3mm": [[x_min, x_max], [y_min, y_max]]}``
+(the extent of the grid points at table height within 3 mm).
 
     python bench/reach_map.py worlds/icub_parcel_pick_place.yaml
 """
@@ -19,18 +21,31 @@ from pathlib import Path
 import numpy as np
 
 from skills.vocabulary import Arm
+from worlds.control import PalmCommand
 from worlds.scene import Scene, lateral_grasp_palm_poses
 from worlds.world_file import World, load_world
 
 
-def palm_error(world: World, centre: np.ndarray, hold_s: float = 0.5) -> float:
-    """Larger palm position error (m) after holding the grasp at ``centre`` for ``hold_s``."""
+def palm_error(world: World, centre: np.ndarray, move_s: float = 1.5, hold_s: float = 0.5) -> float:
+    """Larger palm position error (m) after carrying the grasp from the object's rest pose to
+    ``centre`` (3,) in ``move_s`` and holding it there for ``hold_s``."""
     obj = world.objects[0]
     half_span = float(obj.shape.size[1]) / 2.0  # type: ignore[union-attr]
+    thickness = float(world.robot.palm_size[2])
+    start = np.asarray(obj.pose.position, dtype=float)
     with Scene.from_world(world) as scene:
         scene.set_active_obstacles(())
-        poses = lateral_grasp_palm_poses(centre, half_span, float(world.robot.palm_size[2]))
-        scene.place_palms(poses)
+        # No object between the palms: the map is the arms' and torso's, not the grip's.
+        scene.place_palms(lateral_grasp_palm_poses(start, half_span, thickness))
+        per_command = scene.spec.physics_hz // scene.spec.control_hz
+        steps = round(move_s * scene.spec.physics_hz)
+        for k in range(0, steps, per_command):
+            s = min(1.0, (k + per_command) / steps)
+            blend = s**3 * (10.0 - 15.0 * s + 6.0 * s * s)  # minimum jerk
+            poses = lateral_grasp_palm_poses(start + blend * (centre - start), half_span, thickness)
+            for arm, (p, q) in poses.items():
+                scene.set_palm_command(arm, PalmCommand(p, q))
+            scene.step(per_command)
         scene.step(round(hold_s * scene.spec.physics_hz))
         return max(
             float(np.linalg.norm(scene.palm_state(arm).position - poses[arm][0]))
@@ -66,8 +81,18 @@ def main() -> int:
                 grid.append([round(float(x), 4), round(float(y), 4), round(z, 4), error * 1e3])
                 row.append(f"{error * 1e3:7.1f}")
             print(f"{x:8.2f} " + " ".join(row), flush=True)
+    table = [g for g in grid if g[2] == round(float(rest[2]), 4) and g[3] <= 3.0]
+    within = (
+        [
+            [min(g[0] for g in table), max(g[0] for g in table)],
+            [min(g[1] for g in table), max(g[1] for g in table)],
+        ]
+        if table
+        else None
+    )
+    print(f"within 3 mm at table height: x, y extents {within}")
     if args.json:
-        print(json.dumps({"grid": grid}))
+        print(json.dumps({"grid": grid, "within_3mm": within}))
     return 0
 
 

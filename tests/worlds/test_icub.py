@@ -19,7 +19,7 @@ from skills.vocabulary import ARMS, Arm
 from tests.worlds.test_grasp import Log, minimum_jerk, tilt_deg
 from worlds.collision import CollisionWorld
 from worlds.control import PalmCommand
-from worlds.robots.icub import ARM_JOINTS
+from worlds.robots.icub import ARM_JOINTS, TORSO_JOINTS
 from worlds.scene import Scene, lateral_grasp_palm_poses
 from worlds.world_file import World, load_world
 
@@ -46,36 +46,32 @@ def start(world: World) -> tuple[NDArray[np.float64], float, float]:
     return np.asarray(parcel.pose.position, float), half_span, float(world.robot.palm_size[2])
 
 
-def test_icub_loads_with_two_seven_joint_arms_and_fixed_rest(world: World) -> None:
+def test_icub_loads_as_one_body_with_torso_and_two_arms(world: World) -> None:
     with icub_scene(world) as scene:
         assert scene.robot.name == "icub"
-        assert len(scene.robot_ids) == 2  # the trunk with the left arm; the right arm
+        assert len(scene.robot_ids) == 1  # torso and both arms under one controller
+        body = scene.robot_ids[0]
+        c = scene.client
+        infos = [pb.getJointInfo(body, j, physicsClientId=c) for j in range(pb.getNumJoints(body))]
+        movable = [i[1].decode() for i in infos if i[2] != pb.JOINT_FIXED]
+        arms = [f"{side}_{name}" for side in "lr" for name in ARM_JOINTS]
+        assert movable == [*TORSO_JOINTS, *arms]
         for arm, side in ((Arm.LEFT, "l"), (Arm.RIGHT, "r")):
             spec = scene.robot.arms[arm]
-            body = scene.robot_ids[spec.body]
-            infos = [
-                pb.getJointInfo(body, j, physicsClientId=scene.client)
-                for j in range(pb.getNumJoints(body, physicsClientId=scene.client))
-            ]
-            movable = [i[1].decode() for i in infos if i[2] != pb.JOINT_FIXED]
-            assert movable == [f"{side}_{name}" for name in ARM_JOINTS]
             names = [infos[j][1].decode() for j in spec.joint_indices]
             assert names == [f"{side}_{name}" for name in ARM_JOINTS]
-            assert infos[spec.palm_link][12] == b"palm"
-        # The legs, torso and head do not move: they are fixed joints.
-        trunk = scene.robot_ids[0]
-        before = [pb.getLinkState(trunk, j, physicsClientId=scene.client)[4] for j in range(20)]
+            assert infos[spec.palm_link][12] == f"{side}_palm".encode()
+        assert scene.controller.driven_joint_count == 17
+        # The legs do not move: fixed joints on the fixed waist (the head rides on the torso).
+        legs = [j for j, i in enumerate(infos) if i[1].decode().startswith(("l_", "r_"))][:16]
+        assert all(infos[j][2] == pb.JOINT_FIXED for j in legs)
+        before = [pb.getLinkState(body, j, physicsClientId=c)[4] for j in legs]
         scene.step(240)
-        after = [pb.getLinkState(trunk, j, physicsClientId=scene.client)[4] for j in range(20)]
-        np.testing.assert_allclose(after, before, atol=1e-9)
-        # No link of the robot touches the table or the other body at rest.
-        for body in scene.robot_ids:
-            assert not pb.getContactPoints(
-                bodyA=body, bodyB=scene.table_id, physicsClientId=scene.client
-            )
-        assert not pb.getContactPoints(
-            bodyA=scene.robot_ids[0], bodyB=scene.robot_ids[1], physicsClientId=scene.client
-        )
+        after = [pb.getLinkState(body, j, physicsClientId=c)[4] for j in legs]
+        np.testing.assert_allclose(after, before, atol=1e-12)
+        # No link of the robot touches the table, and the arms do not touch each other.
+        assert not pb.getContactPoints(bodyA=body, bodyB=scene.table_id, physicsClientId=c)
+        assert not pb.getContactPoints(bodyA=body, bodyB=body, physicsClientId=c)
 
 
 def test_forearm_collision_shapes_reach_fcl(world: World) -> None:
