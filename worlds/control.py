@@ -36,6 +36,7 @@ from worlds.impedance import (
     affine_law,
     checked_vector,
     impedance_terms,
+    limit_posture,
 )
 from worlds.robots import ArmSpec, RobotModel
 
@@ -317,6 +318,10 @@ class DualArmImpedanceController:
             for batch in self._batches
         ]
         margin = np.array([self._gains[i].limit_margin for i in self._joint_arm])
+        self._avoid_band = np.array([self._gains[i].posture_limit_band for i in self._joint_arm])
+        self._avoid_weight = np.array(
+            [self._gains[i].posture_limit_weight for i in self._joint_arm]
+        )
         self._limit_k = np.array([self._gains[i].limit_stiffness for i in self._joint_arm])
         # The joint-limit repulsion band starts this far inside the limits.
         self._soft_lower = self._lower + margin
@@ -402,8 +407,7 @@ class DualArmImpedanceController:
                 quaternion,
                 q,
                 gravity,
-                gains,
-                np.array([self._rest[self._body_rows[g]] for g in batch]),
+                *self._posture(gains, batch),
                 mass_matrix=mass,
                 dt=self.physics_dt,
             )
@@ -418,6 +422,24 @@ class DualArmImpedanceController:
             self._target_position += elapsed * self._target_twist[:, :3]
         self._update_targets()
         self._steps_since_refresh = 0
+
+    def _posture(self, gains: GainArrays, batch: list[int]) -> tuple[GainArrays, FloatArray]:
+        """A batch's posture gains and targets (k, n) at the joint state read
+        (:func:`worlds.impedance.limit_posture` where a band is set)."""
+        rows = [self._body_rows[g] for g in batch]
+        rest = np.array([self._rest[r] for r in rows])
+        if not self._avoid_band.any():
+            return gains, rest
+        weight, rest = limit_posture(
+            np.array([self._q[r] for r in rows]),
+            np.array([self._lower[r] for r in rows]),
+            np.array([self._upper[r] for r in rows]),
+            rest,
+            gains.posture_weight if gains.posture_weight is not None else np.ones_like(rest),
+            np.array([self._avoid_band[r] for r in rows]),
+            np.array([self._avoid_weight[r] for r in rows]),
+        )
+        return replace(gains, posture_weight=weight), rest
 
     def apply(self) -> None:
         """Compute and send the torques of the next physics step (one read, one write a body)."""

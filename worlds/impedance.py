@@ -144,6 +144,13 @@ class ImpedanceGains:
         band: the palm met the face on an edge and the held box rolled out of the grip.
     limit_stiffness : float
         Repulsive torque per radian inside the margin, N m/rad.
+    posture_limit_band : float
+        Width of a band inside each joint limit where the null-space posture also pulls the
+        joint back to the band's edge, rad (:func:`limit_posture`); 0: off. Unlike the
+        repulsion it moves the joint only along the palms' null space (a torso turning to
+        spare a shoulder at its limit), so it may start far inside the limit.
+    posture_limit_weight : float
+        That pull's posture weight at the limit, growing from 0 at the band's edge.
     """
 
     stiffness_linear: float = 1000.0
@@ -155,6 +162,8 @@ class ImpedanceGains:
     joint_damping: float = 0.5
     limit_margin: float = 0.05
     limit_stiffness: float = 200.0
+    posture_limit_band: float = 0.0
+    posture_limit_weight: float = 0.0
 
     def __post_init__(self) -> None:
         for name, value in vars(self).items():
@@ -409,6 +418,45 @@ def impedance_terms(
     )
 
 
+def limit_posture(
+    q: FloatArray,
+    lower: FloatArray,
+    upper: FloatArray,
+    rest: FloatArray,
+    weight: FloatArray,
+    band: FloatArray,
+    band_weight: FloatArray,
+) -> tuple[FloatArray, FloatArray]:
+    """Posture weights and targets that also pull joints out of a band inside their limits.
+
+    A joint ``d`` deep into a band of width ``b`` gets a second posture spring towards the
+    band's edge, of weight ``band_weight * d / b``; the two springs on one joint are one of
+    summed weight towards their weighted mean, so the law (:func:`impedance_terms`) takes them
+    as its posture ``W`` and ``q_rest``. Re-evaluated at each linearisation.
+
+    Parameters
+    ----------
+    q, lower, upper : ndarray
+        (..., n) joint positions and limits, rad.
+    rest, weight : ndarray
+        (..., n) posture targets (rad) and weights.
+    band, band_weight : ndarray
+        (..., n) band widths (rad; 0: none) and the band springs' weights at the limits.
+
+    Returns
+    -------
+    weight, rest : ndarray
+        (..., n) each.
+    """
+    edge = np.minimum(np.maximum(q, lower + band), upper - band)
+    depth = np.abs(edge - q)
+    extra = np.where(band > 0.0, band_weight * depth / np.where(band > 0.0, band, 1.0), 0.0)
+    total = weight + extra
+    return total, np.where(
+        total > 0.0, (weight * rest + extra * edge) / np.where(total > 0.0, total, 1.0), rest
+    )
+
+
 def affine_law(
     terms: ImpedanceTerms,
     target_position: FloatArray,
@@ -457,4 +505,5 @@ __all__ = [
     "affine_law",
     "checked_vector",
     "impedance_terms",
+    "limit_posture",
 ]

@@ -21,7 +21,7 @@ from worlds.collision import CollisionWorld
 from worlds.control import PalmCommand
 from worlds.robots.icub import ARM_JOINTS, TORSO_JOINTS
 from worlds.scene import Scene, lateral_grasp_palm_poses
-from worlds.world_file import World, load_world
+from worlds.world_file import World, load_world, world_from_data
 
 pytestmark = pytest.mark.sim
 
@@ -116,39 +116,43 @@ def parcel_in_palms(scene: Scene) -> NDArray[np.float64]:
     return position - 0.5 * (palms[0] + palms[1])
 
 
-@pytest.fixture(scope="module")
-def lift(world: World) -> Lift:
-    """Approach, squeeze, lift 6 cm, hold 3 s, carry 5 cm along +y."""
+def segment(
+    scene: Scene,
+    c0: NDArray[np.float64],
+    c1: NDArray[np.float64],
+    g0: float,
+    g1: float,
+    squeeze: float,
+    duration: float,
+    log: Log | None = None,
+) -> None:
+    """Palms along a minimum-jerk path of the grasp centre from ``c0`` to ``c1`` (3,), their
+    gap from ``g0`` to ``g1``, m; logged every 24 steps into ``log``."""
+    parcel = scene.spec.objects[0]
+    half_span = parcel.shape.size[1] / 2.0
+    thickness = scene.robot.arms[Arm.LEFT].palm_size[2]
+    per_command = scene.spec.physics_hz // scene.spec.control_hz
+    steps = round(duration * scene.spec.physics_hz)
+    for k in range(0, steps, per_command):
+        s = float(minimum_jerk((k + per_command) / steps))
+        poses = lateral_grasp_palm_poses(
+            c0 + (c1 - c0) * s, half_span, thickness, g0 + (g1 - g0) * s
+        )
+        for arm, (p, q) in poses.items():
+            scene.set_palm_command(arm, PalmCommand(p, q, squeeze_offset=squeeze))
+        for _ in range(per_command):
+            scene.step()
+            if log is not None and scene.step_count % 24 == 0:
+                log.time.append(scene.time)
+                log.parcel_in_palms.append(parcel_in_palms(scene))
+                log.tilt_deg.append(tilt_deg(scene))
+                for arm in ARMS:
+                    log.force[arm].append(scene.palm_contact_force(arm, PARCEL))
+
+
+def run_lift(world: World, carry: NDArray[np.float64]) -> Lift:
+    """Approach, squeeze, lift 6 cm, hold 3 s, carry along ``carry`` (3,), m, in 1.5 s."""
     centre, half_span, thickness = start(world)
-
-    def segment(
-        scene: Scene,
-        c0: NDArray[np.float64],
-        c1: NDArray[np.float64],
-        g0: float,
-        g1: float,
-        squeeze: float,
-        duration: float,
-        log: Log | None = None,
-    ) -> None:
-        per_command = scene.spec.physics_hz // scene.spec.control_hz
-        steps = round(duration * scene.spec.physics_hz)
-        for k in range(0, steps, per_command):
-            s = float(minimum_jerk((k + per_command) / steps))
-            poses = lateral_grasp_palm_poses(
-                c0 + (c1 - c0) * s, half_span, thickness, g0 + (g1 - g0) * s
-            )
-            for arm, (p, q) in poses.items():
-                scene.set_palm_command(arm, PalmCommand(p, q, squeeze_offset=squeeze))
-            for _ in range(per_command):
-                scene.step()
-                if log is not None and scene.step_count % 24 == 0:
-                    log.time.append(scene.time)
-                    log.parcel_in_palms.append(parcel_in_palms(scene))
-                    log.tilt_deg.append(tilt_deg(scene))
-                    for arm in ARMS:
-                        log.force[arm].append(scene.palm_contact_force(arm, PARCEL))
-
     with icub_scene(world) as scene:
         scene.place_palms(lateral_grasp_palm_poses(centre, half_span, thickness, gap=0.05))
         scene.step(48)
@@ -156,22 +160,55 @@ def lift(world: World) -> Lift:
         segment(scene, centre, centre, 0.0, 0.0, SQUEEZE, 0.5)
         before = parcel_in_palms(scene)
         up = centre + np.array([0.0, 0.0, 0.06])
-        side = up + np.array([0.0, 0.05, 0.0])
-        lifting, hold, carry = Log(), Log(), Log()
+        side = up + carry
+        lifting, hold, moving = Log(), Log(), Log()
         segment(scene, centre, up, 0.0, 0.0, SQUEEZE, 1.5, lifting)
         height = float(scene.object_pose(PARCEL)[0][2])
         segment(scene, up, up, 0.0, 0.0, SQUEEZE, 3.0, hold)
-        segment(scene, up, side, 0.0, 0.0, SQUEEZE, 1.5, carry)
-        return Lift(before, height, (lifting, hold, carry), hold)
+        segment(scene, up, side, 0.0, 0.0, SQUEEZE, 1.5, moving)
+        return Lift(before, height, (lifting, hold, moving), hold)
 
 
-def test_icub_lifts_the_parcel(lift: Lift, world: World) -> None:
+def parcel_moved(world: World, offset: tuple[float, float, float]) -> World:
+    """``world`` with its parcel starting ``offset`` (3,) m from where the file puts it."""
+    data = world.model_dump(mode="json")
+    pose = data["objects"][0]["pose"]
+    pose["position"] = [v + d for v, d in zip(pose["position"], offset, strict=True)]
+    return world_from_data(data, world.source)
+
+
+@pytest.fixture(scope="module")
+def lift(world: World) -> Lift:
+    """At the centre: approach, squeeze, lift 6 cm, hold 3 s, carry 5 cm along +y."""
+    return run_lift(world, np.array([0.0, 0.05, 0.0]))
+
+
+@pytest.fixture(scope="module")
+def side_lift(world: World) -> tuple[World, Lift]:
+    """The same 10 cm to the robot's left (+y), carried 5 cm further out: the palms there
+    need the torso (the trial goals lie this far to either side)."""
+    moved = parcel_moved(world, (0.0, 0.10, 0.0))
+    return moved, run_lift(moved, np.array([0.0, 0.05, 0.0]))
+
+
+@pytest.fixture(params=["centre", "side"])
+def lifted(request: pytest.FixtureRequest, world: World) -> tuple[World, Lift]:
+    """The lift at the centre, and 10 cm to the side."""
+    if request.param == "centre":
+        return world, request.getfixturevalue("lift")
+    side: tuple[World, Lift] = request.getfixturevalue("side_lift")
+    return side
+
+
+def test_icub_lifts_the_parcel(lifted: tuple[World, Lift]) -> None:
+    world, lift = lifted
     centre, _, _ = start(world)
     # 6 cm less the palms' sag under the parcel's weight.
     np.testing.assert_allclose(lift.height_after_lift, centre[2] + 0.06, atol=0.01)
 
 
-def test_parcel_does_not_slip_or_tilt_in_icub_palms(lift: Lift) -> None:
+def test_parcel_does_not_slip_or_tilt_in_icub_palms(lifted: tuple[World, Lift]) -> None:
+    _, lift = lifted
     offsets = np.concatenate([np.asarray(log.parcel_in_palms) for log in lift.logs])
     slip = np.linalg.norm(offsets - lift.before_lift, axis=1)
     assert slip.max() < 0.01, f"slip {slip.max() * 1000:.2f} mm"
@@ -179,7 +216,8 @@ def test_parcel_does_not_slip_or_tilt_in_icub_palms(lift: Lift) -> None:
     assert max(tilts) < 5.0, f"tilt {max(tilts):.2f} deg"
 
 
-def test_icub_squeeze_is_steady_during_hold(lift: Lift) -> None:
+def test_icub_squeeze_is_steady_during_hold(lifted: tuple[World, Lift]) -> None:
+    _, lift = lifted
     for arm in ARMS:
         force = np.asarray(lift.hold.force[arm])
         assert np.all((force > 5.0) & (force < 60.0)), (

@@ -367,6 +367,11 @@ def icub_model(
         # A 1.7 deg band at 50 N m/rad cut the palm error holding the parcel at table height
         # from 2.7-6.1 mm to 0.8-2.4 mm over x 0.24-0.32 m, y -0.04-0.04 m, and at x 0.24,
         # y 0.08 from 6.0 to 1.1 mm (bench/reach_map.py, torso fixed).
+        # With the torso driven, a palm far to one side brings the other arm's shoulder roll to
+        # its limit (the arm reaching across the chest): a posture pull out of a 0.15 rad band
+        # at each limit, in the palms' null space, turns the torso to spare it. It cut the
+        # palm error at (0.29, 0.12), (0.29, 0.16) and (0.25, 0.12) m at table height from 9.2,
+        # 16.1 and 9.8 mm to 1.4, 2.8 and 1.1 mm (bench/reach_map.py).
         gain_overrides={
             "damping_linear": 30.0,
             "damping_angular": 0.5,
@@ -374,6 +379,8 @@ def icub_model(
             "damping_null": 0.2,
             "limit_margin": 0.03,
             "limit_stiffness": 50.0,
+            "posture_limit_band": 0.15,
+            "posture_limit_weight": 20.0,
         },
         arm_link_names={
             arm: frozenset(_arm_link_names(side) | {palm_link_name(side)})
