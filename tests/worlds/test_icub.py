@@ -7,7 +7,7 @@ teleporting).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -21,7 +21,7 @@ from worlds.collision import CollisionWorld
 from worlds.control import PalmCommand
 from worlds.robots.icub import ARM_JOINTS, TORSO_JOINTS
 from worlds.scene import Scene, lateral_grasp_palm_poses
-from worlds.world_file import World, load_world, world_from_data
+from worlds.world_file import World, as_world_spec, load_world, world_from_data
 
 pytestmark = pytest.mark.sim
 
@@ -118,6 +118,7 @@ def parcel_in_palms(scene: Scene) -> NDArray[np.float64]:
 
 def segment(
     scene: Scene,
+    grasp: tuple[float, float],
     c0: NDArray[np.float64],
     c1: NDArray[np.float64],
     g0: float,
@@ -127,10 +128,9 @@ def segment(
     log: Log | None = None,
 ) -> None:
     """Palms along a minimum-jerk path of the grasp centre from ``c0`` to ``c1`` (3,), their
-    gap from ``g0`` to ``g1``, m; logged every 24 steps into ``log``."""
-    parcel = scene.spec.objects[0]
-    half_span = parcel.shape.size[1] / 2.0
-    thickness = scene.robot.arms[Arm.LEFT].palm_size[2]
+    gap from ``g0`` to ``g1``, m, ``grasp`` the parcel's half span and the palm thickness, m;
+    logged every 24 steps into ``log``."""
+    half_span, thickness = grasp
     per_command = scene.spec.physics_hz // scene.spec.control_hz
     steps = round(duration * scene.spec.physics_hz)
     for k in range(0, steps, per_command):
@@ -156,16 +156,16 @@ def run_lift(world: World, carry: NDArray[np.float64]) -> Lift:
     with icub_scene(world) as scene:
         scene.place_palms(lateral_grasp_palm_poses(centre, half_span, thickness, gap=0.05))
         scene.step(48)
-        segment(scene, centre, centre, 0.05, 0.0, 0.0, 1.0)
-        segment(scene, centre, centre, 0.0, 0.0, SQUEEZE, 0.5)
+        segment(scene, (half_span, thickness), centre, centre, 0.05, 0.0, 0.0, 1.0)
+        segment(scene, (half_span, thickness), centre, centre, 0.0, 0.0, SQUEEZE, 0.5)
         before = parcel_in_palms(scene)
         up = centre + np.array([0.0, 0.0, 0.06])
         side = up + carry
         lifting, hold, moving = Log(), Log(), Log()
-        segment(scene, centre, up, 0.0, 0.0, SQUEEZE, 1.5, lifting)
+        segment(scene, (half_span, thickness), centre, up, 0.0, 0.0, SQUEEZE, 1.5, lifting)
         height = float(scene.object_pose(PARCEL)[0][2])
-        segment(scene, up, up, 0.0, 0.0, SQUEEZE, 3.0, hold)
-        segment(scene, up, side, 0.0, 0.0, SQUEEZE, 1.5, moving)
+        segment(scene, (half_span, thickness), up, up, 0.0, 0.0, SQUEEZE, 3.0, hold)
+        segment(scene, (half_span, thickness), up, side, 0.0, 0.0, SQUEEZE, 1.5, moving)
         return Lift(before, height, (lifting, hold, moving), hold)
 
 
@@ -223,3 +223,62 @@ def test_icub_squeeze_is_steady_during_hold(lifted: tuple[World, Lift]) -> None:
         assert np.all((force > 5.0) & (force < 60.0)), (
             f"{arm}: {force.min():.1f}..{force.max():.1f} N"
         )
+
+
+# -- the torso in the loop --------------------------------------------------------------------
+
+
+def empty_scene(world: World) -> Scene:
+    """The iCub world's scene without its parcel (the palms move through where it was)."""
+    spec = as_world_spec(world).scene
+    return Scene(replace(spec, objects=()))
+
+
+def arm_chain(scene: Scene, arm: Arm) -> tuple[NDArray[np.float64], float]:
+    """An arm's shoulder (its first joint's frame, (3,) m) and the summed lengths of its links
+    to the palm, m: no posture of the arm alone puts the palm farther from that shoulder."""
+    body, c = scene.robot_ids[0], scene.client
+    spec = scene.robot.arms[arm]
+    links = [*range(spec.joint_indices[0], spec.palm_link + 1)]
+    frames = np.array([pb.getLinkState(body, j, physicsClientId=c)[4] for j in links])
+    return frames[0], float(np.linalg.norm(np.diff(frames, axis=0), axis=1).sum())
+
+
+def torso(scene: Scene) -> NDArray[np.float64]:
+    """The torso joints' positions (pitch, roll, yaw), rad."""
+    return scene.controller.joint_positions()[: len(TORSO_JOINTS)]
+
+
+def test_the_torso_takes_the_palms_beyond_the_arms_reach(world: World) -> None:
+    centre, half_span, thickness = start(world)
+    far = np.array([0.45, 0.0, 0.70])  # ahead of the table's middle, low
+    with empty_scene(world) as scene:
+        scene.place_palms(lateral_grasp_palm_poses(centre, half_span, thickness, gap=0.02))
+        target = lateral_grasp_palm_poses(far, half_span, thickness, gap=0.02)
+        for arm in ARMS:
+            shoulder, length = arm_chain(scene, arm)
+            # Out of the arm's reach from its shoulder with the torso upright, by over 2 cm.
+            assert np.linalg.norm(target[arm][0] - shoulder) > length + 0.02
+        segment(scene, (half_span, thickness), centre, far, 0.02, 0.02, 0.0, 2.0)
+        scene.step(240)
+        errors = [np.linalg.norm(scene.palm_state(a).position - target[a][0]) for a in ARMS]
+        assert max(errors) < 0.003, f"palm error {max(errors) * 1000:.2f} mm"
+        assert torso(scene)[0] > 0.3  # it leans forward to get there
+        ctl = scene.controller
+        q = ctl.joint_positions()
+        assert np.all((q >= ctl._lower - 1e-3) & (q <= ctl._upper + 1e-3))
+
+
+def test_the_torso_stays_upright_while_the_palms_hold_still(world: World) -> None:
+    centre, half_span, thickness = start(world)
+    with empty_scene(world) as scene:
+        scene.place_palms(lateral_grasp_palm_poses(centre, half_span, thickness, gap=0.02))
+        scene.step(24)
+        start_torso = torso(scene)
+        worst = 0.0
+        for _ in range(20):
+            scene.step(24)
+            worst = max(worst, float(np.abs(torso(scene) - start_torso).max()))
+        # Within 0.5 degrees of where it started, and 3 degrees of upright.
+        assert worst < np.radians(0.5), f"torso moved {np.degrees(worst):.3f} deg"
+        assert np.abs(torso(scene)).max() < np.radians(3.0), np.degrees(torso(scene))
