@@ -5,9 +5,10 @@ start-posture solve, :meth:`worlds.scene.Scene.place_palms`); for each object ce
 (x, y at a few heights above the table) the impedance controller (the model's gains, a
 humanoid's torso included) then carries them there along a minimum-jerk path in 1.5 s and
 holds them 0.5 s; the figure is the larger palm position error, mm. It shows where a world's
-trial regions (its ``trials`` section) can lie. With ``--json`` the last line is
-``{"grid": [[x, y, z, error_mm], ...], "within_3mm": [[x_min, x_max], [y_min, y_max]]}``
-(the extent of the grid points at table height within 3 mm).
+trial regions (its ``trials`` section) can lie; under the tables, per height, the largest
+rectangle of grid points (x rows by a y range symmetric about the centre line) all within
+3 mm. With ``--json`` the last line is ``{"grid": [[x, y, z, error_mm], ...], "within_3mm":
+{z: [[x_min, x_max], [y_min, y_max]] or null}}``.
 
     python bench/reach_map.py worlds/icub_parcel_pick_place.yaml
 """
@@ -53,6 +54,33 @@ def palm_error(world: World, centre: np.ndarray, move_s: float = 1.5, hold_s: fl
         )
 
 
+def within_rectangle(
+    grid: list[list[float]], z: float, tolerance_mm: float = 3.0
+) -> tuple[tuple[float, float], tuple[float, float]] | None:
+    """The largest rectangle of grid points at height ``z`` all within ``tolerance_mm``: a run
+    of consecutive x rows by ``|y| <= Y``; ((x_min, x_max), (-Y, Y)), m, or None if none."""
+    at = [g for g in grid if g[2] == z]
+    xs = sorted({g[0] for g in at})
+    ys = sorted({abs(g[1]) for g in at})
+    error = {(g[0], g[1]): g[3] for g in at}
+    best: tuple[float, tuple[tuple[float, float], tuple[float, float]]] | None = None
+    for half in ys:
+        ok = [
+            all(e <= tolerance_mm for (x0, y), e in error.items() if x0 == x and abs(y) <= half)
+            for x in xs
+        ]
+        start = None
+        for i, good in enumerate([*ok, False]):
+            if good and start is None:
+                start = i
+            elif not good and start is not None:
+                area = (xs[i - 1] - xs[start] + 1e-9) * (2.0 * half + 1e-9)
+                if best is None or area > best[0]:
+                    best = (area, ((xs[start], xs[i - 1]), (-half, half)))
+                start = None
+    return None if best is None else best[1]
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("world", type=Path, help="world file")
@@ -81,16 +109,11 @@ def main() -> int:
                 grid.append([round(float(x), 4), round(float(y), 4), round(z, 4), error * 1e3])
                 row.append(f"{error * 1e3:7.1f}")
             print(f"{x:8.2f} " + " ".join(row), flush=True)
-    table = [g for g in grid if g[2] == round(float(rest[2]), 4) and g[3] <= 3.0]
-    within = (
-        [
-            [min(g[0] for g in table), max(g[0] for g in table)],
-            [min(g[1] for g in table), max(g[1] for g in table)],
-        ]
-        if table
-        else None
-    )
-    print(f"within 3 mm at table height: x, y extents {within}")
+    within = {}
+    for lift in args.lifts:
+        z = round(float(rest[2] + lift), 4)
+        within[z] = within_rectangle(grid, z)
+        print(f"within 3 mm at z = {z:.3f} m: x, y ranges {within[z]}")
     if args.json:
         print(json.dumps({"grid": grid, "within_3mm": within}))
     return 0
