@@ -492,6 +492,12 @@ def _run_command(args: argparse.Namespace) -> int:
         f"  closest approach to an obstacle: "
         f"{'no obstacle' if dist is None else f'{dist * 1000:.1f} mm'}"
     )
+    forearm = s["min_forearm_distance_m"]
+    if forearm is not None or s["forearm_contacts"]:
+        print(
+            f"  forearms: {sum(s['forearm_contacts'].values())} physics steps touching an "
+            f"obstacle; closest approach {'n/a' if forearm is None else f'{forearm * 1000:.1f} mm'}"
+        )
     if "disturbances" in s:
         pushes = s["disturbances"]
         print(f"  disturbances applied: {pushes['applied']} of {len(pushes['entries'])}")
@@ -525,7 +531,7 @@ def _trials_command(args: argparse.Namespace) -> int:
     """The paper's experiment: N trials of three moves with new obstacles, judged, resumable."""
     from experiment.progress import Progress
     from experiment.results import ResultsFileError
-    from experiment.summary import summary_lines
+    from experiment.summary import contact_lines, summary_lines
     from experiment.trials import campaign_of, campaign_results, reason_of, run_campaign, summarise
 
     world = _load_world_or_exit(args.world)
@@ -633,11 +639,8 @@ def _trials_command(args: argparse.Namespace) -> int:
     print(f"  {'moves placed with':<44} moves")
     for label, count in summary["compositions"].items():
         print(f"  {label[:44]:<44} {count}")
-    dist = summary["min_obstacle_distance_m"]
-    print(
-        f"  trials with any obstacle contact: {summary['obstacle_contacts']}; closest approach "
-        f"{'n/a' if dist is None else f'{dist * 1000:.1f} mm'}"
-    )
+    for line in contact_lines(summary):
+        print(line)
     print(
         f"  simulated {summary['sim_time_s']:.0f} s in {summary['wall_time_s']:.0f} s of "
         f"worker time ({summary['realtime_factor']}x real time per worker)"
@@ -651,7 +654,7 @@ def _report_command(args: argparse.Namespace) -> int:
     """A campaign's outcome table with Wilson 95 % intervals, and its picture."""
     from experiment.report import read_campaigns, report_figure, report_summaries
     from experiment.results import ResultsFileError
-    from experiment.summary import summary_lines
+    from experiment.summary import contact_lines, summary_lines
 
     out = Path(args.out)
     try:
@@ -669,11 +672,8 @@ def _report_command(args: argparse.Namespace) -> int:
         print(f"{printable(summary['campaign'])}: {summary['trials']} trials")
         for line in summary_lines(summary):
             print(line)
-        dist = summary["min_obstacle_distance_m"]
-        print(
-            f"  trials with any obstacle contact: {summary['obstacle_contacts']}; closest "
-            f"approach {'n/a' if dist is None else f'{dist * 1000:.1f} mm'}"
-        )
+        for line in contact_lines(summary):
+            print(line)
     figure = out / "report.png" if out.is_dir() else out.with_name(f"{out.stem}_report.png")
     try:
         report_figure(found.campaigns, figure)

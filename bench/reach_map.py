@@ -1,13 +1,16 @@
-"""Two-palm reach map: how well a world's robot holds the lateral grasp over a grid of centres.
+"""Two-palm reach map: how well a world's robot reaches and holds the lateral grasp over a grid.
 
 For each object centre of a grid (x, y at a few heights above the table) and each grip yaw,
 the object stands on the table there, turned by the grip yaw, and the palms are placed on its
 turned +-y faces by the episode's own start-posture solve
-(:meth:`worlds.scene.Scene.place_palms`), then held for 0.5 s by the impedance controller
-(the model's gains); the figure is the larger palm position error, mm. It shows where a
-world's trial regions (its ``trials`` section) can lie, and how far a turned grip holds there
-(``--grip-yaws 0 45 -45``). With ``--json`` the last line is
-``{"grid": [[x, y, z, grip_yaw_deg, error_mm], ...]}``.
+(:meth:`worlds.scene.Scene.place_palms`: a humanoid's torso included, both palms solved
+together), then held for 0.5 s by the impedance controller (the model's gains); the figure is
+the larger palm position error, mm. It shows where a world's trial regions (its ``trials``
+section) can lie, and how far a turned grip holds there (``--grip-yaws 0 45 -45``); under the
+tables, per height and grip, the largest rectangle of grid points (x rows by a y range
+symmetric about the centre line) all within 3 mm. With ``--json`` the last line is
+``{"grid": [[x, y, z, grip_yaw_deg, error_mm], ...], "within_3mm": {"z grip": [[x_min,
+x_max], [y_min, y_max]] or null}}``.
 
     python bench/reach_map.py worlds/icub_parcel_pick_place.yaml
 """
@@ -56,6 +59,33 @@ def palm_error(
         )
 
 
+def within_rectangle(
+    cells: list[list[float]], tolerance_mm: float = 3.0
+) -> tuple[tuple[float, float], tuple[float, float]] | None:
+    """The largest rectangle of ``cells`` ([x, y, ..., error_mm], one height and grip) all
+    within ``tolerance_mm``: a run of consecutive x rows by ``|y| <= Y``; ((x_min, x_max),
+    (-Y, Y)), m, or None if none."""
+    xs = sorted({c[0] for c in cells})
+    ys = sorted({abs(c[1]) for c in cells})
+    error = {(c[0], c[1]): c[-1] for c in cells}
+    best: tuple[float, tuple[tuple[float, float], tuple[float, float]]] | None = None
+    for half in ys:
+        ok = [
+            all(e <= tolerance_mm for (x0, y), e in error.items() if x0 == x and abs(y) <= half)
+            for x in xs
+        ]
+        start = None
+        for i, good in enumerate([*ok, False]):
+            if good and start is None:
+                start = i
+            elif not good and start is not None:
+                area = (xs[i - 1] - xs[start] + 1e-9) * (2.0 * half + 1e-9)
+                if best is None or area > best[0]:
+                    best = (area, ((xs[start], xs[i - 1]), (-half, half)))
+                start = None
+    return None if best is None else best[1]
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("world", type=Path, help="world file")
@@ -92,8 +122,15 @@ def main() -> int:
                     grid.append(cell)
                     row.append(f"{error * 1e3:7.1f}")
                 print(f"{x:8.2f} " + " ".join(row), flush=True)
+    within = {}
+    for grip in args.grip_yaws:
+        for lift in args.lifts:
+            z = round(float(rest[2] + lift), 4)
+            found = within_rectangle([c for c in grid if c[2] == z and c[3] == grip])
+            within[f"{z} {grip:g}"] = found
+            print(f"within 3 mm at z = {z:.3f} m, grip {grip:g} deg: x, y ranges {found}")
     if args.json:
-        print(json.dumps({"grid": grid}))
+        print(json.dumps({"grid": grid, "within_3mm": within}))
     return 0
 
 

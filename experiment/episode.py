@@ -85,6 +85,11 @@ class EpisodeReport:
     #: How the objects were carried: slip, tilt, jerk, squeeze, grasps
     #: (:class:`experiment.metrics.GripMetrics`, the worst over objects).
     grip: GripMetrics = field(default_factory=GripMetrics)
+    #: Physics steps with a forearm touching an obstacle, by ``"<arm>_forearm ~ <obstacle>"``
+    #: (counted in ``obstacle_contacts`` too, under the arm).
+    forearm_contacts: dict[str, int] = field(default_factory=dict)
+    #: Smallest FCL distance from a forearm to an active obstacle, m (inf: none measured).
+    min_forearm_distance_m: float = math.inf
 
     def summary(self) -> dict[str, Any]:
         """Plain JSON-safe dictionary (infinite distances as None).
@@ -94,6 +99,7 @@ class EpisodeReport:
         world without has no such key, so its records read as they did before.
         """
         d = self.min_obstacle_distance_m
+        forearm = self.min_forearm_distance_m
         extra: dict[str, Any] = {}
         if self.disturbances:
             applied = sum(1 for e in self.disturbances if e["steps"] > 0)
@@ -109,6 +115,8 @@ class EpisodeReport:
             "min_obstacle_distance_m": None if math.isinf(d) else round(d, 5),
             "obstacle_contacts": self.obstacle_contacts,
             "arm_contacts": self.arm_contacts,
+            "forearm_contacts": self.forearm_contacts,
+            "min_forearm_distance_m": None if math.isinf(forearm) else round(forearm, 5),
             "dropped": self.dropped,
             **self.grip.summary(),
             "sim_time_s": round(self.sim_time_s, 3),
@@ -467,6 +475,8 @@ def run_episode(
         report.physics_wall_s = sim.scene.physics_wall_s
         report.disturbances = [a.summary() for a in sim.scene.disturbances.applied()]
         report.grip = recorder.grip.metrics(HELD_FORCE_N)
+        report.forearm_contacts = dict(sim.safety.forearm_contacts)
+        report.min_forearm_distance_m = sim.safety.min_forearm_distance_m
         if out is not None:
             if log is not None and log.error is not None:
                 report.output_errors.append(log.error)

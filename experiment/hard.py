@@ -31,7 +31,6 @@ from typing import Any
 
 import numpy as np
 
-from skills.vocabulary import ARMS
 from worlds.actuators import ActuatorFaults
 from worlds.robots import robot_model_of
 from worlds.spec import DisturbanceSpec
@@ -128,7 +127,9 @@ def draw_hard(world: World, seed: int, trial: int) -> HardTrial:
     palm = _uniform(rng, ranges.palm_friction_scale)
     table_dz = _uniform(rng, ranges.table_dz_m)
     model = robot_model_of(spec.scene.robot)
-    limits = np.array([t for arm in ARMS for t in model.arms[arm].max_torque], dtype=float)
+    # One fault per driven joint, in the controller's order (the iiwas: left arm, right arm;
+    # the iCub: torso, left arm, right arm).
+    limits = np.array([joint.max_torque for joint in model.driven_joints()], dtype=float)
     rng = _rng(seed, trial, ACTUATORS)
     scale = rng.uniform(*ranges.torque_scale, size=limits.size)
     bias = rng.uniform(-1.0, 1.0, size=limits.size) * ranges.torque_bias * limits

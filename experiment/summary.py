@@ -118,6 +118,9 @@ def summarise(records: Iterable[dict[str, Any]]) -> dict[str, Any]:
     dists = [
         r["min_obstacle_distance_m"] for r in recs if r.get("min_obstacle_distance_m") is not None
     ]
+    forearm = [
+        r["min_forearm_distance_m"] for r in recs if r.get("min_forearm_distance_m") is not None
+    ]
     carried = Counter(
         composition_label(c) for r in recs for c in r.get("compositions") or () if c is not None
     )
@@ -145,6 +148,9 @@ def summarise(records: Iterable[dict[str, Any]]) -> dict[str, Any]:
             if r.get("obstacle_contacts") or (r.get("min_obstacle_distance_m") or 0.0) < 0.0
         ),
         "min_obstacle_distance_m": min(dists) if dists else None,
+        # The forearms apart (their contacts count among the arms' above too).
+        "forearm_contacts": sum(1 for r in recs if r.get("forearm_contacts")),
+        "min_forearm_distance_m": min(forearm) if forearm else None,
         "metrics": metric_summary(recs),
         "sim_time_s": round(sim, 2),
         "wall_time_s": round(wall, 2),
@@ -182,6 +188,23 @@ def summary_lines(summary: dict[str, Any]) -> list[str]:
                 f"  {'  ' + label:<44} {m['median']:>9.4g} {m['max']:>9.4g}"
                 + ("" if m["trials"] == summary["trials"] else f"  ({m['trials']} trials)")
             )
+    return lines
+
+
+def contact_lines(summary: dict[str, Any]) -> list[str]:
+    """The obstacle contacts and closest approaches of :func:`summarise`'s summary, the
+    forearms' apart (campaigns recorded before the forearms were measured: no forearm line)."""
+    dist = summary["min_obstacle_distance_m"]
+    lines = [
+        f"  trials with any obstacle contact: {summary['obstacle_contacts']}; closest approach "
+        f"{'n/a' if dist is None else f'{dist * 1000:.1f} mm'}"
+    ]
+    if "forearm_contacts" in summary:
+        forearm = summary["min_forearm_distance_m"]
+        lines.append(
+            f"  of which by a forearm: {summary['forearm_contacts']}; forearms' closest approach "
+            f"{'n/a' if forearm is None else f'{forearm * 1000:.1f} mm'}"
+        )
     return lines
 
 

@@ -28,39 +28,81 @@ def build_robot(spec: RobotSpec) -> RobotModel:
     return robot_model_of(spec)
 
 
+#: Collision filter bits of a body that carries both arms (PyBullet's defaults: 1 for dynamic
+#: bodies, 2 for static ones, every other body colliding with every group).
+_DYNAMIC, _STATIC, _TRUNK, _LEFT, _RIGHT = 1, 2, 4, 8, 16
+
+
 def load_robot(client: int, robot: RobotModel) -> tuple[int, ...]:
-    """Load the robot's bodies with fixed bases, exclude its collision pairs and put both arms
-    in their rest postures; returns the body ids in :attr:`RobotModel.bodies` order."""
+    """Load the robot's bodies with fixed bases, exclude its collision pairs and put its arms
+    and shared joints in their rest postures; returns the body ids in
+    :attr:`RobotModel.bodies` order.
+
+    On a body that carries both arms, the two arms' links collide with each other (as two
+    bodies' would) and with nothing else of the body."""
+    shared_bodies = {spec.body for spec in robot.arms.values()}
+    both_arms = len(shared_bodies) == 1
     robot_ids = tuple(
         pb.loadURDF(
             str(body.urdf_path),
             body.base2world_position,
             body.base2world_quaternion,
             useFixedBase=True,
-            flags=pb.URDF_USE_INERTIA_FROM_FILE,
+            flags=pb.URDF_USE_INERTIA_FROM_FILE
+            | (pb.URDF_USE_SELF_COLLISION if both_arms and index in shared_bodies else 0),
             physicsClientId=client,
         )
-        for body in robot.bodies
+        for index, body in enumerate(robot.bodies)
     )
     exclude_collisions(client, robot, robot_ids)
+    if both_arms:
+        _arms_collide_only_with_each_other(client, robot, robot_ids)
+    for joint in robot.driven_joints():
+        pb.resetJointState(
+            robot_ids[joint.body], joint.joint, joint.rest, 0.0, physicsClientId=client
+        )
+    return robot_ids
+
+
+def arm_link_indices(
+    client: int, robot: RobotModel, robot_ids: Sequence[int]
+) -> dict[Arm, frozenset[int] | None]:
+    """Each arm's links on its body (-1 the base): None when the arm has its body to itself.
+
+    On a body that carries both arms, an arm's links are those of
+    :attr:`RobotModel.arm_link_names`; the rest of the body (a humanoid's trunk) goes with the
+    left arm, as it does in the FCL mirror's groups (:mod:`worlds.collision`).
+    """
+    out: dict[Arm, frozenset[int] | None] = {}
     for arm in (Arm.LEFT, Arm.RIGHT):
         spec = robot.arms[arm]
+        others = [a for a in (Arm.LEFT, Arm.RIGHT) if a != arm and robot.arms[a].body == spec.body]
+        if not others:
+            out[arm] = None
+            continue
         body = robot_ids[spec.body]
-        for joint, q in zip(spec.joint_indices, spec.rest_posture, strict=True):
-            pb.resetJointState(body, joint, q, 0.0, physicsClientId=client)
-    return robot_ids
+        names = _link_names(client, body)
+        own = robot.arm_link_names.get(arm, frozenset())
+        other_links = frozenset().union(*(robot.arm_link_names.get(a, frozenset()) for a in others))
+        if arm is Arm.LEFT:
+            out[arm] = frozenset(i for name, i in names.items() if name not in other_links)
+        else:
+            out[arm] = frozenset(i for name, i in names.items() if name in own)
+    return out
+
+
+def _link_names(client: int, body: int) -> dict[str, int]:
+    names = {"base": -1}
+    for j in range(pb.getNumJoints(body, physicsClientId=client)):
+        names[pb.getJointInfo(body, j, physicsClientId=client)[12].decode()] = j
+    return names
 
 
 def exclude_collisions(client: int, robot: RobotModel, robot_ids: Sequence[int]) -> None:
     """Switch off the robot's :attr:`RobotModel.collision_exclusions` link pairs."""
     if not robot.collision_exclusions:
         return
-    indices: list[dict[str, int]] = []
-    for body in robot_ids:
-        names = {"base": -1}
-        for j in range(pb.getNumJoints(body, physicsClientId=client)):
-            names[pb.getJointInfo(body, j, physicsClientId=client)[12].decode()] = j
-        indices.append(names)
+    indices = [_link_names(client, body) for body in robot_ids]
     for body_a, link_a, body_b, link_b in robot.collision_exclusions:
         pb.setCollisionFilterPair(
             robot_ids[body_a],
@@ -70,6 +112,25 @@ def exclude_collisions(client: int, robot: RobotModel, robot_ids: Sequence[int])
             enableCollision=0,
             physicsClientId=client,
         )
+
+
+def _arms_collide_only_with_each_other(
+    client: int, robot: RobotModel, robot_ids: Sequence[int]
+) -> None:
+    """Filter groups on the body that carries both arms: each arm's links collide with the
+    other arm's and with other bodies; the trunk's with other bodies only."""
+    body = robot_ids[robot.arms[Arm.LEFT].body]
+    left = robot.arm_link_names.get(Arm.LEFT, frozenset())
+    right = robot.arm_link_names.get(Arm.RIGHT, frozenset())
+    everything = _DYNAMIC | _STATIC
+    for name, link in _link_names(client, body).items():
+        if name in left:
+            group, mask = _LEFT, everything | _RIGHT
+        elif name in right:
+            group, mask = _RIGHT, everything | _LEFT
+        else:
+            group, mask = _TRUNK, everything
+        pb.setCollisionFilterGroupMask(body, link, group, mask, physicsClientId=client)
 
 
 def create_table(client: int, table: TableSpec) -> int:
@@ -217,6 +278,7 @@ def connect(gui: bool) -> int:
 
 __all__ = [
     "NoDisplayError",
+    "arm_link_indices",
     "build_robot",
     "connect",
     "create_object",

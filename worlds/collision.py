@@ -6,8 +6,10 @@ each with a bounding sphere for a numpy prefilter. :meth:`CollisionWorld.sync` r
 poses (one ``getLinkStates`` call per robot body) and object poses.
 
 Groups name sets of elements: ``"left_arm"``, ``"right_arm"`` (all links of the arm's body,
-palm included), ``"table"``, ``"obstacles"`` (the active ones) and each object by its name.
-Element names are ``"left_arm/<link>"``, ``"table"``, the object or obstacle name.
+palm included; of a body that carries both arms, each arm's own links, the rest of the body
+with the left arm: :func:`worlds.bodies.arm_link_indices`), ``"table"``, ``"obstacles"`` (the
+active ones) and each object by its name. Element names are ``"left_arm/<link>"`` (the palm
+link ``"left_arm/palm"``), ``"table"``, the object or obstacle name.
 
 Poses in this module are (position (3,), quaternion (4,) scalar-last) pairs in the world frame.
 """
@@ -285,9 +287,14 @@ class CollisionWorld:
             rows: list[int] = []
             local_p: list[FloatArray] = []
             local_q: list[FloatArray] = []
+            own = scene.arm_links[arm]  # None: the whole body is the arm's
             for link in range(-1, pb.getNumJoints(body, physicsClientId=c)):
+                if own is not None and link not in own:
+                    continue
                 if link < 0:
                     link_name = "base"
+                elif link == spec.palm_link:
+                    link_name = "palm"  # whatever the URDF calls it
                 else:
                     link_name = pb.getJointInfo(body, link, physicsClientId=c)[12].decode()
                 shapes = pb.getCollisionShapeData(body, link, physicsClientId=c)
@@ -591,11 +598,48 @@ class CollisionWorld:
             If a group is unknown or empty (no active obstacles).
         """
         rows_a, rows_b = self._rows(group_a), self._rows(group_b)
-        self._place()
         if not rows_a or not rows_b:
             raise ValueError(
                 f"CollisionWorld.distance: group {group_a if not rows_a else group_b!r} is empty"
             )
+        return self._rows_closer_than(rows_a, rows_b, ceiling)
+
+    def elements_distance(self, names: Sequence[str], group: str) -> Proximity:
+        """:meth:`distance` from some elements, by name (a forearm's links), to a group.
+
+        Raises
+        ------
+        ValueError
+            If a name is unknown, or ``names`` or the group is empty.
+        """
+        found = self.elements_closer_than(names, group, math.inf)
+        assert found is not None
+        return found
+
+    def elements_closer_than(
+        self, names: Sequence[str], group: str, ceiling: float
+    ) -> Proximity | None:
+        """:meth:`elements_distance` if it is below ``ceiling`` m, else None
+        (:meth:`closer_than`).
+
+        Raises
+        ------
+        ValueError
+            If a name is unknown, or ``names`` or the group is empty.
+        """
+        rows_a, rows_b = [self._index(name) for name in names], self._rows(group)
+        if not rows_a or not rows_b:
+            raise ValueError(
+                "CollisionWorld.elements_distance: "
+                + ("no elements given" if not rows_a else f"group {group!r} is empty")
+            )
+        return self._rows_closer_than(rows_a, rows_b, ceiling)
+
+    def _rows_closer_than(
+        self, rows_a: list[int], rows_b: list[int], ceiling: float
+    ) -> Proximity | None:
+        """The closest pair of elements ``rows_a`` x ``rows_b`` if nearer than ``ceiling``."""
+        self._place()
         ca, cb = self._centres[rows_a], self._centres[rows_b]
         bounds = (
             np.linalg.norm(ca[:, None] - cb[None], axis=-1)

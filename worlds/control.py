@@ -36,6 +36,7 @@ from worlds.impedance import (
     affine_law,
     checked_vector,
     impedance_terms,
+    limit_posture,
 )
 from worlds.robots import ArmSpec, RobotModel
 
@@ -47,11 +48,16 @@ FloatArray = NDArray[np.float64]
 
 
 class DualArmImpedanceController:
-    """Torque-controls both palms of a robot loaded in a PyBullet client.
+    """Torque-controls both palms of a robot loaded in PyBullet.
 
     Call :meth:`apply` once before every ``stepSimulation``. Until an arm has a command it holds
-    its palm where it was when the controller was enabled. Both arms must have the same number
-    of joints; every movable joint of the robot's bodies must belong to an arm.
+    its palm where it was when the controller was enabled. Every movable joint of the robot's
+    bodies must belong to an arm or to the robot's shared joints
+    (:attr:`worlds.robots.RobotModel.shared_joints`).
+
+    The law (:mod:`worlds.impedance`) is linearised body by body: a body's palms are its tasks,
+    over all its joints. Two iiwas are two bodies of one palm each, two independent laws; the
+    iCub is one body whose torso moves both palms, one coupled law over torso and both arms.
 
     Parameters
     ----------
@@ -73,8 +79,9 @@ class DualArmImpedanceController:
         rad; 0 switches this off. The linearisation error grows with the joint displacement,
         not with time, so this keeps moving arms accurate and lets a still arm skip refreshes.
     faults : ActuatorFaults, optional
-        How the actuators differ from ideal torque sources (one entry per joint, the left
-        arm's first); None: the computed torques are applied as they are.
+        How the actuators differ from ideal torque sources (one entry per driven joint, in
+        :meth:`worlds.robots.RobotModel.driven_joints` order); None: the computed torques are
+        applied as they are.
     """
 
     ARMS = (Arm.LEFT, Arm.RIGHT)
@@ -111,73 +118,90 @@ class DualArmImpedanceController:
         if any(len(spec.joint_indices) != n for spec in self._specs):
             raise ValueError(f"{name}: expected arms with equal joint counts")
         self._n = n
-        if faults is not None and faults.joints != 2 * n:
+        driven = robot.driven_joints()
+        self._driven = driven
+        total = len(driven)
+        if faults is not None and faults.joints != total:
             raise ValueError(
-                f"{name}: expected actuator faults for {2 * n} joints, got {faults.joints}"
+                f"{name}: expected actuator faults for {total} joints, got {faults.joints}"
             )
         self.faults = faults
         self._lag_gain = lag_gain(faults.lag_s, physics_dt) if faults is not None else 1.0
         self._actuators: ActuatorState | None = None
         self._arm_body = [int(body_ids[spec.body]) for spec in self._specs]
-        # One body per arm, or one body for both; every movable joint must belong to an arm,
-        # because PyBullet's Jacobian and inverse dynamics take all of a body's movable joints.
-        self._bodies: list[int] = sorted(set(self._arm_body), key=self._arm_body.index)
+        # One law per body: its joints (all movable ones, which PyBullet's Jacobian and inverse
+        # dynamics take), their rows in the driven vector, and the arms whose palms it carries.
+        self._bodies: list[int] = []
         self._body_joints: list[list[int]] = []
-        # Rows of the (2n,) stacked vector per body: a slice when contiguous (cheaper to index).
-        self._body_rows: list[NDArray[np.intp] | slice] = []
-        self._arm_columns: list[NDArray[np.intp]] = []  # arm joints within its body's DOFs
-        for body in self._bodies:
+        self._body_rows: list[slice] = []  # rows of the driven vector, per body
+        self._body_arms: list[list[int]] = []
+        start = 0
+        for index in dict.fromkeys(d.body for d in driven):
+            body = int(body_ids[index])
+            joints = [d.joint for d in driven if d.body == index]
             movable = [
                 j
                 for j in range(pb.getNumJoints(body, physicsClientId=client))
                 if pb.getJointInfo(body, j, physicsClientId=client)[2] != pb.JOINT_FIXED
             ]
-            arms_here = [i for i, b in enumerate(self._arm_body) if b == body]
-            owned = [j for i in arms_here for j in self._specs[i].joint_indices]
-            if sorted(owned) != movable:
+            if joints != movable:
                 raise ValueError(
-                    f"{name}: expected the arms to own all movable joints {movable} of body "
-                    f"{body}, got {sorted(owned)}"
+                    f"{name}: expected the arms and shared joints to own all movable joints "
+                    f"{movable} of body {body}, got {joints}"
                 )
-            self._body_joints.append(movable)
-            rows = np.empty(len(movable), dtype=np.intp)
-            for i in arms_here:
-                for k, j in enumerate(self._specs[i].joint_indices):
-                    rows[movable.index(j)] = i * n + k
-            contiguous = bool(np.all(np.diff(rows) == 1))
-            self._body_rows.append(slice(int(rows[0]), int(rows[-1]) + 1) if contiguous else rows)
-        for i, spec in enumerate(self._specs):
-            movable = self._body_joints[self._bodies.index(self._arm_body[i])]
-            self._arm_columns.append(
-                np.array([movable.index(j) for j in spec.joint_indices], dtype=np.intp)
-            )
-        # Arms alone on their body (the KUKA pair) skip the column selection.
-        self._arm_owns_body = [
-            len(self._body_joints[self._bodies.index(b)]) == n for b in self._arm_body
+            self._bodies.append(body)
+            self._body_joints.append(joints)
+            self._body_rows.append(slice(start, start + len(joints)))
+            self._body_arms.append([i for i, spec in enumerate(self._specs) if spec.body == index])
+            start += len(joints)
+        # Each arm's joints' rows in the driven vector.
+        self._arm_rows = [
+            np.array([k for k, d in enumerate(driven) if d.arm is arm], dtype=np.intp)
+            for arm in self.ARMS
         ]
-        self._lower = np.concatenate([np.asarray(s.lower, dtype=float) for s in self._specs])
-        self._upper = np.concatenate([np.asarray(s.upper, dtype=float) for s in self._specs])
-        self._max_torque = np.concatenate(
-            [np.asarray(s.max_torque, dtype=float) for s in self._specs]
-        )
+        # Bodies of the same shape (joints, palms) are linearised in one vectorised call.
+        batches: dict[tuple[int, int], list[int]] = {}
+        for g, joints in enumerate(self._body_joints):
+            batches.setdefault((len(joints), len(self._body_arms[g])), []).append(g)
+        self._batches = list(batches.values())
+        self._batch_tasks = [
+            np.array([self._body_arms[g] for g in batch], dtype=np.intp) for batch in self._batches
+        ]
+        self._lower = np.array([d.lower for d in driven], dtype=float)
+        self._upper = np.array([d.upper for d in driven], dtype=float)
+        self._max_torque = np.array([d.max_torque for d in driven], dtype=float)
         self._min_torque = -self._max_torque
-        self._rest = np.array([s.rest_posture for s in self._specs], dtype=float)  # (2, n)
+        self._rest = np.array([d.rest for d in driven], dtype=float)  # (N,)
+        # The posture factor per joint (shared joints held more firmly); None where every
+        # joint has 1, as the law then takes its unweighted form.
+        shared = robot.shared_joints
+        self._posture_weight: FloatArray | None = None
+        if shared is not None:
+            self._posture_weight = np.array(
+                [1.0 if d.arm is not None else shared.posture_weight for d in driven]
+            )
+        # Whose gains act on each joint: its arm's; a shared joint, its body's first arm's.
+        first_arm = {self._specs[arms[0]].body: arms[0] for arms in self._body_arms}
+        self._joint_arm = np.array(
+            [self.ARMS.index(d.arm) if d.arm is not None else first_arm[d.body] for d in driven],
+            dtype=np.intp,
+        )
         self._gains: list[ImpedanceGains] = [gains or ImpedanceGains()] * 2
         self._commands: list[PalmCommand | None] = [None, None]
         self._target_position = np.zeros((2, 3))
         self._target_quaternion = np.tile([0.0, 0.0, 0.0, 1.0], (2, 1))
         self._target_twist = np.zeros((2, 6))
         self._update_gains()
-        self._a = np.zeros(2 * n)
-        self._a_rate = np.zeros(2 * n)
-        self._b = np.zeros((2 * n, 2 * n))
-        self._c = np.zeros((2 * n, 2 * n))
-        self._q = np.zeros(2 * n)
-        self._qd = np.zeros(2 * n)
-        self._tau = np.zeros(2 * n)
+        self._a = np.zeros(total)
+        self._a_rate = np.zeros(total)
+        self._b = np.zeros((total, total))
+        self._c = np.zeros((total, total))
+        self._q = np.zeros(total)
+        self._qd = np.zeros(total)
+        self._tau = np.zeros(total)
         self._applied = self._tau
-        self._q_lin = np.zeros(2 * n)
-        self._terms: ImpedanceTerms | None = None
+        self._q_lin = np.zeros(total)
+        self._terms: list[ImpedanceTerms] = []
         self._targets_changed = True
         self._gravity_world = np.array([0.0, 0.0, -9.81])
         self._base_rotation: dict[int, Array | None] = {}
@@ -192,6 +216,11 @@ class DualArmImpedanceController:
     def joint_count(self) -> int:
         """Number of joints per arm."""
         return self._n
+
+    @property
+    def driven_joint_count(self) -> int:
+        """Number of joints driven: both arms' and the shared ones."""
+        return len(self._driven)
 
     def enable(self) -> None:
         """Switch off PyBullet's default velocity motors and hold the palms where they are."""
@@ -233,12 +262,17 @@ class DualArmImpedanceController:
         self._targets_changed = True
 
     def _update_targets(self) -> None:
-        assert self._terms is not None
-        law = affine_law(
-            self._terms, self._target_position, self._target_quaternion, self._target_twist
-        )
-        self._a = law.a.reshape(-1)
-        self._a_rate = law.a_rate.reshape(-1)
+        for terms, batch, tasks in zip(self._terms, self._batches, self._batch_tasks, strict=True):
+            law = affine_law(
+                terms,
+                self._target_position[tasks],
+                self._target_quaternion[tasks],
+                self._target_twist[tasks],
+            )
+            for j, g in enumerate(batch):
+                rows = self._body_rows[g]
+                self._a[rows] = law.a[j]
+                self._a_rate[rows] = law.a_rate[j]
         self._steps_since_target = 0
         self._targets_changed = False
 
@@ -265,13 +299,30 @@ class DualArmImpedanceController:
 
     def set_rest_posture(self, arm: Arm, q: ArrayLike) -> None:
         """Set the null-space posture target of ``arm``, rad, shape (n,)."""
-        self._rest[self.ARMS.index(Arm(arm))] = checked_vector(q, (self._n,), "set_rest_posture")
+        rows = self._arm_rows[self.ARMS.index(Arm(arm))]
+        self._rest[rows] = checked_vector(q, (self._n,), "set_rest_posture")
         self._steps_since_refresh = self.refresh_every
 
+    def rest_posture(self) -> FloatArray:
+        """Null-space posture targets of every driven joint, rad, (N,) in driven order."""
+        return self._rest.copy()
+
     def _update_gains(self) -> None:
-        self._gain_arrays = GainArrays.of(self._gains)
-        margin = np.repeat([g.limit_margin for g in self._gains], self._n)
-        self._limit_k = np.repeat([g.limit_stiffness for g in self._gains], self._n)
+        self._gain_arrays = [
+            GainArrays.of_tasks(
+                [[self._gains[i] for i in self._body_arms[g]] for g in batch],
+                None
+                if self._posture_weight is None
+                else np.array([self._posture_weight[self._body_rows[g]] for g in batch]),
+            )
+            for batch in self._batches
+        ]
+        margin = np.array([self._gains[i].limit_margin for i in self._joint_arm])
+        self._avoid_band = np.array([self._gains[i].posture_limit_band for i in self._joint_arm])
+        self._avoid_weight = np.array(
+            [self._gains[i].posture_limit_weight for i in self._joint_arm]
+        )
+        self._limit_k = np.array([self._gains[i].limit_stiffness for i in self._joint_arm])
         # The joint-limit repulsion band starts this far inside the limits.
         self._soft_lower = self._lower + margin
         self._soft_upper = self._upper - margin
@@ -303,80 +354,92 @@ class DualArmImpedanceController:
     def _relinearise(self) -> None:
         """:meth:`refresh` on the joint state already read."""
         self._q_lin = self._q.copy()
-        n = self._n
-        q_arm = self._q.reshape(2, n)
         c = self.client
-        body_terms: dict[int, tuple[list[float], FloatArray, FloatArray]] = {}
-        for body, rows in zip(self._bodies, self._body_rows, strict=True):
-            q_body = self._q[rows].tolist()
-            zeros = [0.0] * len(q_body)
-            # PyBullet's inverse dynamics works in the base frame with the world's gravity
-            # vector: hand it gravity in the base frame for a turned base, then restore it.
-            gravity_in_base = self._gravity_in_base[body]
-            if gravity_in_base is not None:
-                pb.setGravity(*gravity_in_base, physicsClientId=c)
-            gravity = np.asarray(
-                pb.calculateInverseDynamics(body, q_body, zeros, zeros, physicsClientId=c)
+        self._terms = []
+        for batch, tasks, gains in zip(
+            self._batches, self._batch_tasks, self._gain_arrays, strict=True
+        ):
+            k, t = tasks.shape
+            nb = len(self._body_joints[batch[0]])
+            jacobian = np.empty((k, 6 * t, nb))
+            gravity = np.empty((k, nb))
+            mass = np.empty((k, nb, nb))
+            q = np.empty((k, nb))
+            position = np.empty((k, t, 3))
+            quaternion = np.empty((k, t, 4))
+            for j, g in enumerate(batch):
+                body = self._bodies[g]
+                q[j] = self._q[self._body_rows[g]]
+                q_body = q[j].tolist()
+                zeros = [0.0] * nb
+                # PyBullet's inverse dynamics works in the base frame with the world's gravity
+                # vector: hand it gravity in the base frame for a turned base, then restore it.
+                gravity_in_base = self._gravity_in_base[body]
+                if gravity_in_base is not None:
+                    pb.setGravity(*gravity_in_base, physicsClientId=c)
+                gravity[j] = pb.calculateInverseDynamics(
+                    body, q_body, zeros, zeros, physicsClientId=c
+                )
+                if gravity_in_base is not None:
+                    pb.setGravity(*self._gravity_world, physicsClientId=c)
+                mass[j] = pb.calculateMassMatrix(body, q_body, physicsClientId=c)
+                base2world = self._base_rotation[body]
+                for s, i in enumerate(tasks[j]):
+                    palm = self._specs[i].palm_link
+                    linear, angular = pb.calculateJacobian(
+                        body, palm, [0.0, 0.0, 0.0], q_body, zeros, zeros, physicsClientId=c
+                    )
+                    rows = slice(6 * s, 6 * s + 6)
+                    jacobian[j, rows][:3] = linear
+                    jacobian[j, rows][3:] = angular
+                    # PyBullet's Jacobian is in the base frame; the law works in the world's.
+                    if base2world is not None:
+                        jacobian[j, rows][:3] = base2world @ jacobian[j, rows][:3]
+                        jacobian[j, rows][3:] = base2world @ jacobian[j, rows][3:]
+                    link = pb.getLinkState(
+                        body, palm, computeForwardKinematics=1, physicsClientId=c
+                    )
+                    position[j, s] = link[4]
+                    quaternion[j, s] = link[5]
+            terms = impedance_terms(
+                jacobian,
+                position,
+                quaternion,
+                q,
+                gravity,
+                *self._posture(gains, batch),
+                mass_matrix=mass,
+                dt=self.physics_dt,
             )
-            if gravity_in_base is not None:
-                pb.setGravity(*self._gravity_world, physicsClientId=c)
-            mass = np.asarray(pb.calculateMassMatrix(body, q_body, physicsClientId=c))
-            body_terms[body] = (q_body, gravity, mass)
-        jacobian = np.empty((2, 6, n))
-        gravity_arm = np.empty((2, n))
-        mass_arm = np.empty((2, n, n))
-        position = np.empty((2, 3))
-        quaternion = np.empty((2, 4))
-        for i, spec in enumerate(self._specs):
-            body = self._arm_body[i]
-            q_body, gravity, mass = body_terms[body]
-            zeros = [0.0] * len(q_body)
-            linear, angular = pb.calculateJacobian(
-                body, spec.palm_link, [0.0, 0.0, 0.0], q_body, zeros, zeros, physicsClientId=c
-            )
-            if self._arm_owns_body[i]:
-                jacobian[i, :3] = linear
-                jacobian[i, 3:] = angular
-                gravity_arm[i] = gravity
-                mass_arm[i] = mass
-            else:
-                cols = self._arm_columns[i]
-                jacobian[i, :3] = np.asarray(linear)[:, cols]
-                jacobian[i, 3:] = np.asarray(angular)[:, cols]
-                gravity_arm[i] = gravity[cols]
-                mass_arm[i] = mass[np.ix_(cols, cols)]
-            # PyBullet's Jacobian is in the base frame; the law works in the world frame.
-            base2world = self._base_rotation[body]
-            if base2world is not None:
-                jacobian[i, :3] = base2world @ jacobian[i, :3]
-                jacobian[i, 3:] = base2world @ jacobian[i, 3:]
-            link = pb.getLinkState(
-                body, spec.palm_link, computeForwardKinematics=1, physicsClientId=c
-            )
-            position[i] = link[4]
-            quaternion[i] = link[5]
-        terms = impedance_terms(
-            jacobian,
-            position,
-            quaternion,
-            q_arm,
-            gravity_arm,
-            self._gain_arrays,
-            self._rest,
-            mass_matrix=mass_arm,
-            dt=self.physics_dt,
-        )
-        self._b[:n, :n] = terms.b[0]
-        self._b[n:, n:] = terms.b[1]
-        self._c[:n, :n] = terms.c[0]
-        self._c[n:, n:] = terms.c[1]
+            for j, g in enumerate(batch):
+                rows = self._body_rows[g]
+                self._b[rows, rows] = terms.b[j]
+                self._c[rows, rows] = terms.c[j]
+            self._terms.append(terms)
         # The anchor has moved along the feed-forward twist since the last target update.
         if self._steps_since_target:
             elapsed = self._steps_since_target * self.physics_dt
             self._target_position += elapsed * self._target_twist[:, :3]
-        self._terms = terms
         self._update_targets()
         self._steps_since_refresh = 0
+
+    def _posture(self, gains: GainArrays, batch: list[int]) -> tuple[GainArrays, FloatArray]:
+        """A batch's posture gains and targets (k, n) at the joint state read
+        (:func:`worlds.impedance.limit_posture` where a band is set)."""
+        rows = [self._body_rows[g] for g in batch]
+        rest = np.array([self._rest[r] for r in rows])
+        if not self._avoid_band.any():
+            return gains, rest
+        weight, rest = limit_posture(
+            np.array([self._q[r] for r in rows]),
+            np.array([self._lower[r] for r in rows]),
+            np.array([self._upper[r] for r in rows]),
+            rest,
+            gains.posture_weight if gains.posture_weight is not None else np.ones_like(rest),
+            np.array([self._avoid_band[r] for r in rows]),
+            np.array([self._avoid_weight[r] for r in rows]),
+        )
+        return replace(gains, posture_weight=weight), rest
 
     def apply(self) -> None:
         """Compute and send the torques of the next physics step (one read, one write a body)."""
@@ -417,7 +480,7 @@ class DualArmImpedanceController:
         self._steps_since_target += 1
 
     def _actuate(self, tau: FloatArray) -> FloatArray:
-        """The torques the faulty actuators apply this tick for the computed ``tau`` (2n,)."""
+        """The torques the faulty actuators apply this tick for the computed ``tau`` (N,)."""
         assert self.faults is not None
         if self._actuators is None:
             self._actuators = actuator_start(tau, self.faults)
@@ -429,8 +492,10 @@ class DualArmImpedanceController:
     # -- outputs -----------------------------------------------------------------------------
 
     def applied_torques(self) -> FloatArray:
-        """Torques sent to PyBullet at the last tick, (2n,) N m, the left arm's first: the
-        computed ones (:attr:`PalmState.joint_torques`) through the actuators' faults."""
+        """Torques sent to PyBullet at the last tick, (N,) N m in
+        :meth:`worlds.robots.RobotModel.driven_joints` order: the computed ones
+        (:attr:`PalmState.joint_torques`, :meth:`computed_torques`) through the actuators'
+        faults."""
         return self._applied.copy()
 
     def palm_motion(self, arm: Arm) -> tuple[FloatArray, FloatArray]:
@@ -444,6 +509,14 @@ class DualArmImpedanceController:
             physicsClientId=self.client,
         )
         return np.asarray(link[4]), np.asarray(link[6])
+
+    def computed_torques(self) -> FloatArray:
+        """Torques the law computed at the last tick, (N,) N m, in driven order."""
+        return self._tau.copy()
+
+    def joint_positions(self) -> FloatArray:
+        """Positions of every driven joint at the last tick, (N,) rad, in driven order."""
+        return self._q.copy()
 
     def palm_state(self, arm: Arm) -> PalmState:
         """Measured palm pose and twist (world frame) and joint state of ``arm``."""
@@ -466,7 +539,7 @@ class DualArmImpedanceController:
             angular_velocity=np.asarray(link[7]),
             joint_positions=np.array([s[0] for s in states]),
             joint_velocities=np.array([s[1] for s in states]),
-            joint_torques=self._tau[i * self._n : (i + 1) * self._n].copy(),
+            joint_torques=self._tau[self._arm_rows[i]],
         )
 
     def palm_states(self) -> Mapping[Arm, PalmState]:

@@ -6,14 +6,22 @@ torque keeps the joints off their limits; torques are clipped to the joint limit
 velocity motors are switched off and the torques go out with TORQUE_CONTROL
 (:class:`worlds.control.DualArmImpedanceController`, which reads PyBullet; this module does not).
 
-The law is an affine map of the joint state, re-linearised every ``refresh_every`` physics steps
-around the configuration ``q0`` (palm pose ``x0``, Jacobian ``J``, gravity torque ``g``, inertia
-``M``)::
+The law is an affine map of the joint state of one body, re-linearised every ``refresh_every``
+physics steps around the configuration ``q0`` (palm poses ``x0``, Jacobian ``J``, gravity torque
+``g``, inertia ``M``)::
 
     tau(q, qd) = g + G (a + a_rate * t + B q + C qd) + tau_limits(q)
-    B = -(J^T K J + k_n P),   C = -(J^T D J + d_n P + d_j I),   P = I - J^T (J J^T + l^2 I)^-1 J
-    a = J^T K (e0 + J q0) + J^T D xd* + k_n P q_rest,   a_rate = J^T K xd*,
+    B = -(J^T K J + k_n P W),   C = -(J^T D J + d_n P W + d_j I),
+    P = I - J^T (J J^T + l^2 I)^-1 J
+    a = J^T K (e0 + J q0) + J^T D xd* + k_n P W q_rest,   a_rate = J^T K xd*,
     G = M (M - dt C)^-1
+
+A body may carry several palms (its *tasks*): ``J`` stacks their 6-row Jacobians over all the
+body's joints, ``K`` and ``D`` are block-diagonal, and ``e0``, ``xd*`` stack their pose errors and
+twists. Joints that move several palms (a humanoid's torso) so get the sum of every palm's
+spring and damper torques, the posture acts in the null space of all palms at once and the
+implicit damping step ``G`` uses the body's whole inertia: the law is coupled over all joints.
+``W`` weighs the posture spring per joint (1 on an arm; a torso is held upright more firmly).
 
 with ``e0`` the pose error of the target against ``x0`` (position; rotation vector of
 ``target * palm^-1``), ``xd*`` the feed-forward twist, ``t`` the time since the target was set,
@@ -136,6 +144,13 @@ class ImpedanceGains:
         band: the palm met the face on an edge and the held box rolled out of the grip.
     limit_stiffness : float
         Repulsive torque per radian inside the margin, N m/rad.
+    posture_limit_band : float
+        Width of a band inside each joint limit where the null-space posture also pulls the
+        joint back to the band's edge, rad (:func:`limit_posture`); 0: off. Unlike the
+        repulsion it moves the joint only along the palms' null space (a torso turning to
+        spare a shoulder at its limit), so it may start far inside the limit.
+    posture_limit_weight : float
+        That pull's posture weight at the limit, growing from 0 at the band's edge.
     """
 
     stiffness_linear: float = 1000.0
@@ -147,6 +162,8 @@ class ImpedanceGains:
     joint_damping: float = 0.5
     limit_margin: float = 0.05
     limit_stiffness: float = 200.0
+    posture_limit_band: float = 0.0
+    posture_limit_weight: float = 0.0
 
     def __post_init__(self) -> None:
         for name, value in vars(self).items():
@@ -195,16 +212,18 @@ class PalmState:
 
 @dataclass(frozen=True)
 class GainArrays:
-    """Gains of ``k`` arms as arrays, for :func:`impedance_terms`.
+    """Gains of ``k`` bodies with ``t`` palms each, as arrays, for :func:`impedance_terms`.
 
     Attributes
     ----------
     stiffness : ndarray
-        (k, 6) task-space spring diagonal: N/m (first 3), N m/rad (last 3).
+        (k, 6t) task-space spring diagonal, palm by palm: N/m (3), N m/rad (3).
     damping : ndarray
-        (k, 6) task-space damper diagonal: N s/m, N m s/rad.
+        (k, 6t) task-space damper diagonal: N s/m, N m s/rad.
     null_stiffness, null_damping, joint_damping : ndarray
         (k,) posture spring (N m/rad), posture damper and joint damper (N m s/rad).
+    posture_weight : ndarray, optional
+        (k, n) factor of the posture spring and damper per joint; None: 1 on every joint.
     """
 
     stiffness: FloatArray
@@ -212,29 +231,58 @@ class GainArrays:
     null_stiffness: FloatArray
     null_damping: FloatArray
     joint_damping: FloatArray
+    posture_weight: FloatArray | None = None
 
     @staticmethod
     def of(gains: Sequence[ImpedanceGains]) -> GainArrays:
-        """Stack the gains of several arms."""
+        """Stack the gains of several bodies with one palm each."""
+        return GainArrays.of_tasks([[g] for g in gains])
+
+    @staticmethod
+    def of_tasks(
+        gains: Sequence[Sequence[ImpedanceGains]], posture_weight: FloatArray | None = None
+    ) -> GainArrays:
+        """Stack the gains of several bodies, each with the same number of palms.
+
+        Each palm's spring and damper are its own; the posture and joint damping of a body
+        are its first palm's (they act on the body's joints, which its palms may share).
+
+        Parameters
+        ----------
+        gains : sequence of sequence of ImpedanceGains
+            (k, t) per body, its palms' gains.
+        posture_weight : ndarray, optional
+            (k, n) posture factor per joint; None: 1.
+        """
         return GainArrays(
             stiffness=np.array(
-                [[g.stiffness_linear] * 3 + [g.stiffness_angular] * 3 for g in gains]
+                [
+                    [v for g in body for v in [g.stiffness_linear] * 3 + [g.stiffness_angular] * 3]
+                    for body in gains
+                ]
             ),
-            damping=np.array([[g.damping_linear] * 3 + [g.damping_angular] * 3 for g in gains]),
-            null_stiffness=np.array([g.stiffness_null for g in gains]),
-            null_damping=np.array([g.damping_null for g in gains]),
-            joint_damping=np.array([g.joint_damping for g in gains]),
+            damping=np.array(
+                [
+                    [v for g in body for v in [g.damping_linear] * 3 + [g.damping_angular] * 3]
+                    for body in gains
+                ]
+            ),
+            null_stiffness=np.array([body[0].stiffness_null for body in gains]),
+            null_damping=np.array([body[0].damping_null for body in gains]),
+            joint_damping=np.array([body[0].joint_damping for body in gains]),
+            posture_weight=posture_weight,
         )
 
 
 @dataclass(frozen=True)
 class AffineTorqueLaw:
-    """``tau = a + a_rate * elapsed + B q + C qd`` for ``k`` arms, valid near its linearisation.
+    """``tau = a + a_rate * elapsed + B q + C qd`` for ``k`` bodies, valid near its
+    linearisation.
 
     Attributes
     ----------
     a, a_rate : ndarray
-        (k, n) constant torque (N m) and its rate from the moving target (N m/s).
+        (k, n) constant torque (N m) and its rate from the moving targets (N m/s).
     b, c : ndarray
         (k, n, n) joint stiffness (N m/rad) and damping (N m s/rad).
     """
@@ -247,24 +295,25 @@ class AffineTorqueLaw:
 
 @dataclass(frozen=True)
 class ImpedanceTerms:
-    """The target-independent part of the linearised law of ``k`` arms.
+    """The target-independent part of the linearised law of ``k`` bodies with ``t`` palms.
 
-    With the pose error ``e`` (6,) of the target against ``palm_position``/``palm_quaternion``
-    and the target twist ``xd*`` (6,): ``a = a_base + error_gain e + twist_gain xd*`` and
-    ``a_rate = error_gain xd*`` (see :func:`affine_law`).
+    With the pose errors ``e`` (6t,) of the targets against ``palm_position``/
+    ``palm_quaternion`` and the target twists ``xd*`` (6t,), palm by palm:
+    ``a = a_base + error_gain e + twist_gain xd*`` and ``a_rate = error_gain xd*`` (see
+    :func:`affine_law`).
 
     Attributes
     ----------
     a_base : ndarray
         (k, n) gravity, posture and linearisation-offset torque, N m.
     error_gain, twist_gain : ndarray
-        (k, n, 6) torque per unit pose error (N m per m or rad) and per unit twist.
+        (k, n, 6t) torque per unit pose error (N m per m or rad) and per unit twist.
     b, c : ndarray
         (k, n, n) joint stiffness (N m/rad) and damping (N m s/rad).
     palm_position : ndarray
-        (k, 3) palm positions at the linearisation point, world frame, m.
+        (k, t, 3) palm positions at the linearisation point, world frame, m.
     palm_quaternion : ndarray
-        (k, 4) palm orientations at the linearisation point, scalar-last.
+        (k, t, 4) palm orientations at the linearisation point, scalar-last.
     """
 
     a_base: FloatArray
@@ -288,28 +337,32 @@ def impedance_terms(
     dt: float = 0.0,
     pinv_damping: float = 1e-3,
 ) -> ImpedanceTerms:
-    """Linearise the palm impedance law of ``k`` arms around their configurations ``q``.
+    """Linearise the palm impedance law of ``k`` bodies around their configurations ``q``.
+
+    Each body has ``n`` joints and ``t`` palms; a joint may move several palms (its columns of
+    the stacked Jacobian are then non-zero in several palms' rows), and its torque is the sum
+    of what each palm asks of it.
 
     With ``mass_matrix`` and ``dt`` the damping is made implicit: the control torque (all but
-    gravity) is multiplied by ``G = M (M + dt D_q)^-1``, ``D_q = -C`` the joint damping matrix.
-    This gives the joint velocity one implicit Euler step of the damper would give, which keeps
-    the light wrist joints stable at 240 Hz (explicit damping diverges once ``dt D_q / M > 2``;
-    the iiwa's last joint with a palm has about 0.002 kg m^2).
+    gravity) is multiplied by ``G = M (M + dt D_q)^-1``, ``D_q = -C`` the joint damping matrix
+    over all the body's joints. This gives the joint velocity one implicit Euler step of the
+    damper would give, which keeps the light wrist joints stable at 240 Hz (explicit damping
+    diverges once ``dt D_q / M > 2``; the iiwa's last joint with a palm has about 0.002 kg m^2).
 
     Parameters
     ----------
     jacobian : ndarray
-        (k, 6, n) palm Jacobians (linear rows first), world frame.
+        (k, 6t, n) palm Jacobians stacked palm by palm (linear rows first), world frame.
     palm_position : ndarray
-        (k, 3) palm positions at ``q``, world frame, m.
+        (k, t, 3) palm positions at ``q``, world frame, m.
     palm_quaternion : ndarray
-        (k, 4) palm orientations at ``q``, scalar-last.
+        (k, t, 4) palm orientations at ``q``, scalar-last.
     q : ndarray
         (k, n) joint positions, rad.
     gravity_torque : ndarray
-        (k, n) torques holding the arms still against gravity at ``q``, N m.
+        (k, n) torques holding the bodies still against gravity at ``q``, N m.
     gains : GainArrays
-        Spring, damper and posture gains of the ``k`` arms.
+        Spring, damper and posture gains of the ``k`` bodies.
     rest_posture : ndarray
         (k, n) null-space posture targets, rad.
     mass_matrix : ndarray, optional
@@ -324,30 +377,36 @@ def impedance_terms(
     ImpedanceTerms
     """
     n = q.shape[-1]
+    m = jacobian.shape[-2]
     eye = np.eye(n)
-    jt = np.swapaxes(jacobian, -1, -2)  # (k, n, 6)
+    jt = np.swapaxes(jacobian, -1, -2)  # (k, n, 6t)
     jt_k = jt * gains.stiffness[:, None, :]
     jt_d = jt * gains.damping[:, None, :]
-    gram = jacobian @ jt + (pinv_damping**2) * np.eye(6)
-    # P = I - J^T (J J^T + l^2 I)^-1 J: symmetric, removes the palm's directions.
+    gram = jacobian @ jt + (pinv_damping**2) * np.eye(m)
+    # P = I - J^T (J J^T + l^2 I)^-1 J: symmetric, removes every palm's directions.
     projector = eye - jt @ np.linalg.solve(gram, jacobian)
+    # The posture torque P W (q_rest - q): a joint-space spring, weighed per joint, projected.
+    # Unweighted (W = I, every arm alone on its body) it is left as P: the same numbers.
+    posture = projector
+    rest = rest_posture
+    if gains.posture_weight is not None:
+        posture = projector * gains.posture_weight[:, None, :]
+        rest = gains.posture_weight * rest_posture
     k_null = gains.null_stiffness[:, None, None]
-    b = -(jt_k @ jacobian + k_null * projector)
+    b = -(jt_k @ jacobian + k_null * posture)
     c = -(
         jt_d @ jacobian
-        + gains.null_damping[:, None, None] * projector
+        + gains.null_damping[:, None, None] * posture
         + gains.joint_damping[:, None, None] * eye
     )
-    a_base = (jt_k @ (jacobian @ q[..., None]) + k_null * (projector @ rest_posture[..., None]))[
-        ..., 0
-    ]
+    a_base = (jt_k @ (jacobian @ q[..., None]) + k_null * (projector @ rest[..., None]))[..., 0]
     if mass_matrix is not None and dt > 0.0:
         # G X = M (M - dt C)^-1 X, every term in one solve.
         stacked = np.concatenate([b, c, jt_k, jt_d, a_base[..., None]], axis=-1)
         stacked = mass_matrix @ np.linalg.solve(mass_matrix - dt * c, stacked)
         b, c = stacked[..., :n], stacked[..., n : 2 * n]
-        jt_k, jt_d = stacked[..., 2 * n : 2 * n + 6], stacked[..., 2 * n + 6 : 2 * n + 12]
-        a_base = stacked[..., 2 * n + 12]
+        jt_k, jt_d = stacked[..., 2 * n : 2 * n + m], stacked[..., 2 * n + m : 2 * n + 2 * m]
+        a_base = stacked[..., 2 * n + 2 * m]
     return ImpedanceTerms(
         a_base=a_base + gravity_torque,
         error_gain=jt_k,
@@ -359,36 +418,77 @@ def impedance_terms(
     )
 
 
+def limit_posture(
+    q: FloatArray,
+    lower: FloatArray,
+    upper: FloatArray,
+    rest: FloatArray,
+    weight: FloatArray,
+    band: FloatArray,
+    band_weight: FloatArray,
+) -> tuple[FloatArray, FloatArray]:
+    """Posture weights and targets that also pull joints out of a band inside their limits.
+
+    A joint ``d`` deep into a band of width ``b`` gets a second posture spring towards the
+    band's edge, of weight ``band_weight * d / b``; the two springs on one joint are one of
+    summed weight towards their weighted mean, so the law (:func:`impedance_terms`) takes them
+    as its posture ``W`` and ``q_rest``. Re-evaluated at each linearisation.
+
+    Parameters
+    ----------
+    q, lower, upper : ndarray
+        (..., n) joint positions and limits, rad.
+    rest, weight : ndarray
+        (..., n) posture targets (rad) and weights.
+    band, band_weight : ndarray
+        (..., n) band widths (rad; 0: none) and the band springs' weights at the limits.
+
+    Returns
+    -------
+    weight, rest : ndarray
+        (..., n) each.
+    """
+    edge = np.minimum(np.maximum(q, lower + band), upper - band)
+    depth = np.abs(edge - q)
+    extra = np.where(band > 0.0, band_weight * depth / np.where(band > 0.0, band, 1.0), 0.0)
+    total = weight + extra
+    return total, np.where(
+        total > 0.0, (weight * rest + extra * edge) / np.where(total > 0.0, total, 1.0), rest
+    )
+
+
 def affine_law(
     terms: ImpedanceTerms,
     target_position: FloatArray,
     target_quaternion: FloatArray,
     target_twist: FloatArray,
 ) -> AffineTorqueLaw:
-    """Complete linearised terms with the targets of ``k`` arms.
+    """Complete linearised terms with the targets of ``k`` bodies' ``t`` palms.
 
     Parameters
     ----------
     terms : ImpedanceTerms
         From :func:`impedance_terms`.
     target_position : ndarray
-        (k, 3) spring anchors (squeeze offset included), world frame, m.
+        (k, t, 3) spring anchors (squeeze offset included), world frame, m.
     target_quaternion : ndarray
-        (k, 4) target orientations, scalar-last.
+        (k, t, 4) target orientations, scalar-last.
     target_twist : ndarray
-        (k, 6) feed-forward twists (m/s, rad/s), world frame.
+        (k, t, 6) feed-forward twists (m/s, rad/s), world frame.
 
     Returns
     -------
     AffineTorqueLaw
     """
+    k = target_position.shape[0]
     error = np.concatenate(
         [
             target_position - terms.palm_position,
             quat.rotation_error(target_quaternion, terms.palm_quaternion),
         ],
         axis=-1,
-    )
+    ).reshape(k, -1)
+    target_twist = target_twist.reshape(k, -1)
     a_rate = (terms.error_gain @ target_twist[..., None])[..., 0]
     a = terms.a_base + (terms.error_gain @ error[..., None])[..., 0]
     a = a + (terms.twist_gain @ target_twist[..., None])[..., 0]
@@ -405,4 +505,5 @@ __all__ = [
     "affine_law",
     "checked_vector",
     "impedance_terms",
+    "limit_posture",
 ]

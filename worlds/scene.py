@@ -27,6 +27,7 @@ from skills import quaternion as quat
 from skills.vocabulary import Arm
 from worlds.bodies import (
     NoDisplayError,
+    arm_link_indices,
     build_robot,
     connect,
     create_object,
@@ -36,6 +37,7 @@ from worlds.bodies import (
 )
 from worlds.control import DualArmImpedanceController, ImpedanceGains, PalmCommand, PalmState
 from worlds.disturbances import Disturbances
+from worlds.palm_ik import solve_palms
 from worlds.spec import ObstacleSpec, Quat, SceneSpec, WorldSpec
 from worlds.truth import PhysicalTruth, physical_scene
 from worlds.world_file import World, as_world_spec
@@ -199,6 +201,9 @@ class Scene:
 
         self.robot = build_robot(self.spec.robot)
         self.robot_ids = load_robot(c, self.robot)
+        #: Each arm's links on its body, None where the arm has its body to itself
+        #: (:func:`worlds.bodies.arm_link_indices`).
+        self.arm_links = arm_link_indices(c, self.robot, self.robot_ids)
         if self.truth.palm_friction_scale != 1.0:
             self._scale_palm_friction(self.truth.palm_friction_scale)
         self.table_id = create_table(c, self.physical.table)
@@ -286,27 +291,39 @@ class Scene:
             For each active obstacle, the names of the objects, ``"table"``, ``"left_arm"`` or
             ``"right_arm"`` it overlaps or comes within ``clearance`` of.
         """
-        others = {name: body for name, body in self.object_ids.items()}
-        others["table"] = self.table_id
+        others: dict[str, tuple[int, frozenset[int] | None]] = {
+            name: (body, None) for name, body in self.object_ids.items()
+        }
+        others["table"] = (self.table_id, None)
         for arm in (Arm.LEFT, Arm.RIGHT):
-            others[f"{arm.value}_arm"] = self.robot_ids[self.robot.arms[arm].body]
+            others[f"{arm.value}_arm"] = (
+                self.robot_ids[self.robot.arms[arm].body],
+                self.arm_links[arm],
+            )
         overlaps: dict[str, list[str]] = {}
         for name in sorted(self._active_obstacles):
             body = self.obstacle_ids[name]
             overlaps[name] = [
                 other
-                for other, other_body in others.items()
-                if pb.getClosestPoints(body, other_body, clearance, physicsClientId=self.client)
+                for other, (other_body, links) in others.items()
+                if any(
+                    links is None or p[4] in links
+                    for p in pb.getClosestPoints(
+                        body, other_body, clearance, physicsClientId=self.client
+                    )
+                )
             ]
         return overlaps
 
     def place_palms(
         self, palm2world: Mapping[Arm, tuple[ArrayLike, ArrayLike]]
     ) -> dict[Arm, FloatArray]:
-        """Set the start posture: one inverse-kinematics solve per arm, before the run starts.
+        """Set the start posture: one inverse-kinematics solve per arm, before the run starts
+        (one for both where they share a body: :func:`worlds.palm_ik.solve_palms`).
 
-        The arms are reset to the solutions, which also become the null-space rest postures,
-        and the palm commands are set to the requested poses.
+        The arms are reset to the solutions, which also become the arms' null-space rest
+        postures (shared joints keep theirs: a torso stays pulled upright), and the palm
+        commands are set to the requested poses.
 
         Parameters
         ----------
@@ -326,8 +343,13 @@ class Scene:
         if self.step_count:
             raise RuntimeError("place_palms: the start posture can only be set before stepping")
         solutions: dict[Arm, FloatArray] = {}
-        for arm, (position, quaternion) in palm2world.items():
-            arm = Arm(arm)
+        wanted = {Arm(arm): pose for arm, pose in palm2world.items()}
+        for arm in [a for a in wanted if self._shares_body(a)]:
+            if arm not in solutions:
+                solutions.update(self._place_palms_on_shared_body(arm, wanted))
+        for arm, (position, quaternion) in wanted.items():
+            if arm in solutions:
+                continue
             spec = self.robot.arms[arm]
             body = self.robot_ids[spec.body]
             ranges = [hi - lo for lo, hi in zip(spec.lower, spec.upper, strict=True)]
@@ -352,13 +374,57 @@ class Scene:
             q = np.array([q_all[movable.index(j)] for j in spec.joint_indices])
             for joint, value in zip(spec.joint_indices, q, strict=True):
                 pb.resetJointState(body, joint, float(value), 0.0, physicsClientId=self.client)
-            self.controller.set_rest_posture(arm, q)
+            solutions[arm] = q
+        for arm, (position, quaternion) in wanted.items():
+            self.controller.set_rest_posture(arm, solutions[arm])
             self.controller.set_command(
                 arm, PalmCommand(np.asarray(position, float), np.asarray(quaternion, float))
             )
-            solutions[arm] = q
         self.controller.refresh()
         return solutions
+
+    def _shares_body(self, arm: Arm) -> bool:
+        body = self.robot.arms[arm].body
+        return sum(spec.body == body for spec in self.robot.arms.values()) > 1
+
+    def _place_palms_on_shared_body(
+        self, arm: Arm, wanted: Mapping[Arm, tuple[ArrayLike, ArrayLike]]
+    ) -> dict[Arm, FloatArray]:
+        """Solve every palm on ``arm``'s body at once (:func:`worlds.palm_ik.solve_palms`): the
+        palms asked for go to their poses, the others stay where they are; returns the arm
+        joints (n,) of each arm on the body."""
+        index = self.robot.arms[arm].body
+        body = self.robot_ids[index]
+        driven = [d for d in self.robot.driven_joints() if d.body == index]
+        arms = [a for a in Arm if self.robot.arms[a].body == index]
+        shared = self.robot.shared_joints
+        weight = shared.posture_weight if shared is not None else 1.0
+        c = self.client
+        joints = [d.joint for d in driven]
+        q0 = np.array([s[0] for s in pb.getJointStates(body, joints, physicsClientId=c)])
+        targets = []
+        for a in arms:
+            if a in wanted:
+                position, quaternion = wanted[a]
+                targets.append((np.asarray(position, float), np.asarray(quaternion, float)))
+            else:
+                state = self.controller.palm_state(a)
+                targets.append((state.position, state.quaternion))
+        q = solve_palms(
+            c,
+            body,
+            joints,
+            [self.robot.arms[a].palm_link for a in arms],
+            targets,
+            q0,
+            np.array([d.lower for d in driven]),
+            np.array([d.upper for d in driven]),
+            np.array([d.rest for d in driven]),
+            np.array([1.0 if d.arm is not None else max(weight, 1e-3) for d in driven]),
+        )
+        return {
+            a: np.array([v for v, d in zip(q, driven, strict=True) if d.arm is a]) for a in arms
+        }
 
     # -- running -----------------------------------------------------------------------------
 

@@ -64,6 +64,14 @@ def touching(points: Sequence[Sequence[Any]]) -> bool:
     return any(p[8] <= 0.0 or p[9] > 0.0 for p in points)
 
 
+def _points_on(
+    points: Sequence[Sequence[Any]], body: int, links: frozenset[int] | None
+) -> list[Sequence[Any]]:
+    """The contact points of ``points`` (obstacle as body A) on ``body``'s ``links`` (None:
+    any of its links)."""
+    return [p for p in points if p[2] == body and (links is None or p[4] in links)]
+
+
 def forearm_doubt(palm_positions: Array, palm_orientations: Array) -> Array:
     """Extra clearance asked of the forearms at each waypoint (N,), m: grows with the palms'
     travel from the first waypoint (:data:`FOREARM_DOUBT_PER_M`), up to
@@ -117,6 +125,14 @@ class SafetyRecord:
     spawned_inside : dict
         ``obstacle -> [bodies]``: an obstacle switched on where an object or an arm already
         was (PyBullet would push it out at once, or, for a fixed base, never).
+    forearm_contacts : dict
+        ``"<arm>_forearm ~ <obstacle>"`` -> physics steps with a forearm link
+        (:attr:`worlds.robots.RobotModel.forearm_link_names`) touching it; these steps count
+        in ``obstacle_contacts`` too, under the arm.
+    min_forearm_distance_m : float
+        Smallest FCL distance from a forearm link to an active obstacle, m.
+    forearm_closest : str
+        Which forearm link came closest to which obstacle.
     """
 
     obstacle_contacts: dict[str, int] = field(default_factory=dict)
@@ -127,6 +143,9 @@ class SafetyRecord:
     drop_time: float | None = None
     dropped_object: str = ""
     spawned_inside: dict[str, list[str]] = field(default_factory=dict)
+    forearm_contacts: dict[str, int] = field(default_factory=dict)
+    min_forearm_distance_m: float = math.inf
+    forearm_closest: str = ""
 
 
 def task_moves(spec: WorldSpec, name: str) -> tuple[Move, ...]:
@@ -193,12 +212,33 @@ class SimWorld:
             for o in self.scene.spec.obstacles
         }
         self._substeps = max(1, round(spec.scene.physics_hz / spec.scene.control_hz))
-        #: What the contact monitor watches against the obstacles, by label: the arms' bodies
-        #: and the objects (fixed once the scene is built).
-        self._watched_bodies: dict[str, int] = {
-            f"{a.value}_arm": self.scene.robot_ids[self.scene.robot.arms[a].body] for a in ARMS
+        #: What the contact monitor watches against the obstacles, by label: the arms (a body
+        #: and its links, None: all of them), the objects, and the forearms' links apart
+        #: (fixed once the scene is built).
+        robot = self.scene.robot
+        self._watched_bodies: dict[str, tuple[int, frozenset[int] | None]] = {
+            f"{a.value}_arm": (self.scene.robot_ids[robot.arms[a].body], self.scene.arm_links[a])
+            for a in ARMS
         }
-        self._watched_bodies.update(self.scene.object_ids)
+        self._watched_bodies.update({n: (b, None) for n, b in self.scene.object_ids.items()})
+        self._forearm_links: dict[str, tuple[int, frozenset[int]]] = {}
+        self._forearm_elements: list[str] = []
+        for a in ARMS:
+            names = robot.forearm_link_names.get(a, frozenset())
+            if not names:
+                continue
+            body = self.scene.robot_ids[robot.arms[a].body]
+            links = frozenset(
+                j
+                for j in range(pb.getNumJoints(body, physicsClientId=self.scene.client))
+                if pb.getJointInfo(body, j, physicsClientId=self.scene.client)[12].decode() in names
+            )
+            self._forearm_links[f"{a.value}_forearm"] = (body, links)
+            self._forearm_elements.extend(
+                e
+                for e in self.collision.arm_links(a)
+                if e.split("/", 1)[1].split("#", 1)[0] in names
+            )
         self._rest_z = {
             o.name: float(o.position[2]) for o in self.scene.physical.objects
         }  # resting centre height, on the true table
@@ -269,15 +309,31 @@ class SimWorld:
             points = pb.getContactPoints(bodyA=self.scene.obstacle_ids[name], physicsClientId=c)
             if not points:
                 continue
-            for label, body in bodies.items():
-                if touching([p for p in points if body in (p[1], p[2])]):
+            for label, (body, links) in bodies.items():
+                if touching(_points_on(points, body, links)):
                     key = f"{label} ~ {name}"
                     contacts[key] = contacts.get(key, 0) + 1
-        left, right = (bodies["left_arm"], bodies["right_arm"])
-        if left != right and touching(
-            pb.getContactPoints(bodyA=left, bodyB=right, physicsClientId=c)
-        ):
-            self.safety.arm_contacts += 1
+            for label, (body, links) in self._forearm_links.items():
+                if touching(_points_on(points, body, links)):
+                    key = f"{label} ~ {name}"
+                    forearm = self.safety.forearm_contacts
+                    forearm[key] = forearm.get(key, 0) + 1
+        (left, left_links), (right, right_links) = bodies["left_arm"], bodies["right_arm"]
+        if left != right:
+            if touching(pb.getContactPoints(bodyA=left, bodyB=right, physicsClientId=c)):
+                self.safety.arm_contacts += 1
+        elif left_links is not None and right_links is not None:
+            # One body carrying both arms: its own contacts between the two arms' links.
+            points = pb.getContactPoints(bodyA=left, bodyB=left, physicsClientId=c)
+            if touching(
+                [
+                    p
+                    for p in points
+                    if (p[3] in left_links and p[4] in right_links)
+                    or (p[3] in right_links and p[4] in left_links)
+                ]
+            ):
+                self.safety.arm_contacts += 1
 
     def _watch_distances(self) -> None:
         if not self.scene.active_obstacles:
@@ -289,6 +345,13 @@ class SimWorld:
             if prox is not None:
                 self.safety.min_obstacle_distance_m = prox.distance
                 self.safety.closest = f"{prox.element_a} ~ {prox.element_b}"
+        if self._forearm_elements:
+            forearm = self.collision.elements_closer_than(
+                self._forearm_elements, "obstacles", self.safety.min_forearm_distance_m
+            )
+            if forearm is not None:
+                self.safety.min_forearm_distance_m = forearm.distance
+                self.safety.forearm_closest = f"{forearm.element_a} ~ {forearm.element_b}"
 
     def _watch_drop(self) -> None:
         for name in self.watched:
@@ -474,9 +537,13 @@ class SimWorld:
             ok = np.isfinite(ld.distances)
             moving = self.scene.robot.arm_link_names.get(arm)
             if moving is not None:
-                # A body that carries more than the arm (iCub's trunk with the left arm): its
-                # fixed links cannot get out of the way, so they are left out of avoidance.
-                ok &= np.array([name.split("/", 1)[-1] in moving for name in ld.links], dtype=bool)
+                # A body that carries more than the arm (iCub's trunk with the left arm): the
+                # trunk's links are not the arm's to move away, so they are left out of
+                # avoidance (the palm's element is "palm", whatever its link's name).
+                ok &= np.array(
+                    [name.split("/", 1)[-1] in moving | {"palm"} for name in ld.links],
+                    dtype=bool,
+                )
             pts.append(ld.link_points[ok])
         return np.concatenate(pts) if pts else np.zeros((0, 3))
 

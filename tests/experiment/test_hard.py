@@ -16,7 +16,6 @@ from numpy.testing import assert_allclose
 from experiment.hard import draw_hard, draw_pushes, with_pushes
 from experiment.records import outcome, owned_by
 from experiment.trials import campaign_of, draw_trial, run_trial
-from skills.vocabulary import ARMS
 from worlds.robots import robot_model_of
 from worlds.testing import DEFAULT_WORLD
 from worlds.world_file import World, load_world, world_spec
@@ -56,7 +55,7 @@ def test_2000_draws_keep_to_their_ranges_with_the_expected_means(world: World) -
     assert_allclose(yaws.mean(), 0.0, atol=0.2)
     assert_allclose(yaws.std(), 2.0, rtol=0.1)
     model = robot_model_of(world_spec(world).scene.robot)
-    limits = np.array([t for arm in ARMS for t in model.arms[arm].max_torque])
+    limits = np.array([joint.max_torque for joint in model.driven_joints()])
     faults = [d.truth.actuators for d in draws]
     assert all(f is not None for f in faults)
     scale = np.array([f.torque_scale for f in faults if f is not None])  # (2000, 14)

@@ -158,6 +158,102 @@ def test_implicit_damping_tends_to_explicit_for_small_steps() -> None:
     assert np.trace(-coarse.c[0]) < np.trace(-explicit.c[0])
 
 
+def test_shared_joints_take_the_sum_of_both_palms_springs() -> None:
+    # One body, two palms, three joints shared (a torso) and four of each arm's.
+    rng = np.random.default_rng(RNG_SEED)
+    shared, arm = 3, 4
+    n = shared + 2 * arm
+    jacobian = np.zeros((1, 12, n))
+    jacobian[0, :6, :shared] = rng.normal(size=(6, shared))
+    jacobian[0, :6, shared : shared + arm] = rng.normal(size=(6, arm))
+    jacobian[0, 6:, :shared] = rng.normal(size=(6, shared))
+    jacobian[0, 6:, shared + arm :] = rng.normal(size=(6, arm))
+    identity = np.tile([0.0, 0.0, 0.0, 1.0], (1, 2, 1))
+    palms = np.zeros((1, 2, 3))
+    targets = np.array([[[0.01, -0.02, 0.005], [-0.01, 0.0, 0.02]]])
+    gains = ImpedanceGains(stiffness_null=0.0)
+    q = rng.normal(size=(1, n))
+    law = linearised_law(
+        jacobian,
+        palms,
+        identity,
+        q,
+        np.zeros((1, n)),
+        targets,
+        identity,
+        np.zeros((1, 2, 6)),
+        GainArrays.of_tasks([[gains, gains]]),
+        q,
+    )
+    tau = law.a + (law.b @ q[..., None])[..., 0]
+    wrench = np.concatenate(
+        [1000.0 * targets[0, 0], np.zeros(3), 1000.0 * targets[0, 1], np.zeros(3)]
+    )
+    left = jacobian[0, :6].T @ wrench[:6]
+    right = jacobian[0, 6:].T @ wrench[6:]
+    np.testing.assert_allclose(tau[0], left + right, atol=1e-9)
+    # The torso's columns carry both palms' torques; each arm's only its own palm's.
+    np.testing.assert_allclose(tau[0, shared : shared + arm], left[shared : shared + arm])
+    assert np.abs(right[:shared]).max() > 0.1 and np.abs(left[:shared]).max() > 0.1
+    # Stiffness and damping couple the torso with both arms, never one arm with the other.
+    assert np.abs(law.b[0, :shared, shared + arm :]).max() > 0.0
+    np.testing.assert_allclose(law.b[0, shared : shared + arm, shared + arm :], 0.0, atol=1e-12)
+
+
+def test_two_palms_on_one_body_without_shared_joints_is_two_bodies() -> None:
+    # The coupled law over a block-diagonal body gives each block the one-palm law: the iiwa
+    # pair's numbers are the general law's, not a second copy of it.
+    x, y = _random_law_inputs(4), _random_law_inputs(5)
+    n = 7
+    quaternion = np.tile([0.0, 0.0, 0.0, 1.0], (2, 1, 1))
+    target_q = Rotation.from_rotvec([[0.0, 0.1, 0.0], [0.05, 0.0, 0.0]]).as_quat()[:, None]
+    palms = np.array([[[0.5, 0.2, 0.7]], [[0.5, -0.2, 0.7]]])
+    targets = palms + [[[0.01, 0.0, -0.02]], [[0.0, 0.02, 0.01]]]
+    twist = np.array([[[0.01, 0.0, 0.0, 0.0, 0.0, 0.1]], [[0.0, 0.0, 0.02, 0.0, 0.0, 0.0]]])
+    gains = ImpedanceGains()
+    two = linearised_law(
+        np.concatenate([x["jacobian"], y["jacobian"]]),
+        palms,
+        quaternion,
+        np.concatenate([x["q"], y["q"]]),
+        np.concatenate([x["gravity"], y["gravity"]]),
+        targets,
+        target_q,
+        twist,
+        GainArrays.of([gains, gains]),
+        np.zeros((2, n)),
+        mass_matrix=np.concatenate([x["mass"], y["mass"]]),
+        dt=1 / 240,
+    )
+    jacobian = np.zeros((1, 12, 2 * n))
+    jacobian[0, :6, :n] = x["jacobian"][0]
+    jacobian[0, 6:, n:] = y["jacobian"][0]
+    mass = np.zeros((1, 2 * n, 2 * n))
+    mass[0, :n, :n] = x["mass"][0]
+    mass[0, n:, n:] = y["mass"][0]
+    one = linearised_law(
+        jacobian,
+        palms.reshape(1, 2, 3),
+        quaternion.reshape(1, 2, 4),
+        np.concatenate([x["q"], y["q"]], axis=-1),
+        np.concatenate([x["gravity"], y["gravity"]], axis=-1),
+        targets.reshape(1, 2, 3),
+        target_q.reshape(1, 2, 4),
+        twist.reshape(1, 2, 6),
+        GainArrays.of_tasks([[gains, gains]]),
+        np.zeros((1, 2 * n)),
+        mass_matrix=mass,
+        dt=1 / 240,
+    )
+    np.testing.assert_allclose(one.a[0], two.a.reshape(-1), atol=1e-9)
+    np.testing.assert_allclose(one.a_rate[0], two.a_rate.reshape(-1), atol=1e-9)
+    for name in ("b", "c"):
+        block = getattr(one, name)[0]
+        np.testing.assert_allclose(block[:n, :n], getattr(two, name)[0], atol=1e-9)
+        np.testing.assert_allclose(block[n:, n:], getattr(two, name)[1], atol=1e-9)
+        np.testing.assert_allclose(block[:n, n:], 0.0, atol=1e-12)
+
+
 # -- in PyBullet ----------------------------------------------------------------------------
 
 

@@ -93,13 +93,16 @@ def test_iiwa_reach_is_its_chain_from_the_second_joint_to_the_palm() -> None:
         assert_allclose(reach[arm].radius_m, links + palm, rtol=1e-12)
 
 
-def test_icub_reach_is_about_its_arm_length() -> None:
+def test_icub_reach_is_about_its_torso_and_arm_length() -> None:
     spec = world_spec(load_world(ROOT / "worlds" / "icub_parcel_pick_place.yaml"))
     reach = arm_reach(robot_model_of(spec.scene.robot))
-    # shoulders about 0.24 m apart, an arm of about 0.3 m plus the hand and its palm
-    assert_allclose(reach[Arm.LEFT].shoulder[1] - reach[Arm.RIGHT].shoulder[1], 0.24, atol=0.01)
+    # The torso moves both shoulders: both spheres centre on its pitch axis at the waist, and
+    # reach the torso's height to the shoulders (about 0.25 m) plus an arm of about 0.3 m, the
+    # hand and its palm.
+    assert_allclose(reach[Arm.LEFT].shoulder, reach[Arm.RIGHT].shoulder, atol=1e-12)
+    assert_allclose(reach[Arm.LEFT].shoulder[2], spec.scene.robot.mount_height, atol=0.01)
     for arm in (Arm.LEFT, Arm.RIGHT):
-        assert 0.35 < reach[arm].radius_m < 0.5
+        assert 0.6 < reach[arm].radius_m < 0.8
 
 
 def test_resting_height_of_a_box_on_its_side() -> None:

@@ -7,7 +7,7 @@ teleporting).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -19,9 +19,9 @@ from skills.vocabulary import ARMS, Arm
 from tests.worlds.test_grasp import Log, minimum_jerk, tilt_deg
 from worlds.collision import CollisionWorld
 from worlds.control import PalmCommand
-from worlds.robots.icub import ARM_JOINTS
+from worlds.robots.icub import ARM_JOINTS, TORSO_JOINTS
 from worlds.scene import Scene, lateral_grasp_palm_poses
-from worlds.world_file import World, load_world
+from worlds.world_file import World, as_world_spec, load_world, world_from_data
 
 pytestmark = pytest.mark.sim
 
@@ -46,36 +46,32 @@ def start(world: World) -> tuple[NDArray[np.float64], float, float]:
     return np.asarray(parcel.pose.position, float), half_span, float(world.robot.palm_size[2])
 
 
-def test_icub_loads_with_two_seven_joint_arms_and_fixed_rest(world: World) -> None:
+def test_icub_loads_as_one_body_with_torso_and_two_arms(world: World) -> None:
     with icub_scene(world) as scene:
         assert scene.robot.name == "icub"
-        assert len(scene.robot_ids) == 2  # the trunk with the left arm; the right arm
+        assert len(scene.robot_ids) == 1  # torso and both arms under one controller
+        body = scene.robot_ids[0]
+        c = scene.client
+        infos = [pb.getJointInfo(body, j, physicsClientId=c) for j in range(pb.getNumJoints(body))]
+        movable = [i[1].decode() for i in infos if i[2] != pb.JOINT_FIXED]
+        arms = [f"{side}_{name}" for side in "lr" for name in ARM_JOINTS]
+        assert movable == [*TORSO_JOINTS, *arms]
         for arm, side in ((Arm.LEFT, "l"), (Arm.RIGHT, "r")):
             spec = scene.robot.arms[arm]
-            body = scene.robot_ids[spec.body]
-            infos = [
-                pb.getJointInfo(body, j, physicsClientId=scene.client)
-                for j in range(pb.getNumJoints(body, physicsClientId=scene.client))
-            ]
-            movable = [i[1].decode() for i in infos if i[2] != pb.JOINT_FIXED]
-            assert movable == [f"{side}_{name}" for name in ARM_JOINTS]
             names = [infos[j][1].decode() for j in spec.joint_indices]
             assert names == [f"{side}_{name}" for name in ARM_JOINTS]
-            assert infos[spec.palm_link][12] == b"palm"
-        # The legs, torso and head do not move: they are fixed joints.
-        trunk = scene.robot_ids[0]
-        before = [pb.getLinkState(trunk, j, physicsClientId=scene.client)[4] for j in range(20)]
+            assert infos[spec.palm_link][12] == f"{side}_palm".encode()
+        assert scene.controller.driven_joint_count == 17
+        # The legs do not move: fixed joints on the fixed waist (the head rides on the torso).
+        legs = [j for j, i in enumerate(infos) if i[1].decode().startswith(("l_", "r_"))][:16]
+        assert all(infos[j][2] == pb.JOINT_FIXED for j in legs)
+        before = [pb.getLinkState(body, j, physicsClientId=c)[4] for j in legs]
         scene.step(240)
-        after = [pb.getLinkState(trunk, j, physicsClientId=scene.client)[4] for j in range(20)]
-        np.testing.assert_allclose(after, before, atol=1e-9)
-        # No link of the robot touches the table or the other body at rest.
-        for body in scene.robot_ids:
-            assert not pb.getContactPoints(
-                bodyA=body, bodyB=scene.table_id, physicsClientId=scene.client
-            )
-        assert not pb.getContactPoints(
-            bodyA=scene.robot_ids[0], bodyB=scene.robot_ids[1], physicsClientId=scene.client
-        )
+        after = [pb.getLinkState(body, j, physicsClientId=c)[4] for j in legs]
+        np.testing.assert_allclose(after, before, atol=1e-12)
+        # No link of the robot touches the table, and the arms do not touch each other.
+        assert not pb.getContactPoints(bodyA=body, bodyB=scene.table_id, physicsClientId=c)
+        assert not pb.getContactPoints(bodyA=body, bodyB=body, physicsClientId=c)
 
 
 def test_forearm_collision_shapes_reach_fcl(world: World) -> None:
@@ -120,62 +116,99 @@ def parcel_in_palms(scene: Scene) -> NDArray[np.float64]:
     return position - 0.5 * (palms[0] + palms[1])
 
 
-@pytest.fixture(scope="module")
-def lift(world: World) -> Lift:
-    """Approach, squeeze, lift 6 cm, hold 3 s, carry 5 cm along +y."""
+def segment(
+    scene: Scene,
+    grasp: tuple[float, float],
+    c0: NDArray[np.float64],
+    c1: NDArray[np.float64],
+    g0: float,
+    g1: float,
+    squeeze: float,
+    duration: float,
+    log: Log | None = None,
+) -> None:
+    """Palms along a minimum-jerk path of the grasp centre from ``c0`` to ``c1`` (3,), their
+    gap from ``g0`` to ``g1``, m, ``grasp`` the parcel's half span and the palm thickness, m;
+    logged every 24 steps into ``log``."""
+    half_span, thickness = grasp
+    per_command = scene.spec.physics_hz // scene.spec.control_hz
+    steps = round(duration * scene.spec.physics_hz)
+    for k in range(0, steps, per_command):
+        s = float(minimum_jerk((k + per_command) / steps))
+        poses = lateral_grasp_palm_poses(
+            c0 + (c1 - c0) * s, half_span, thickness, g0 + (g1 - g0) * s
+        )
+        for arm, (p, q) in poses.items():
+            scene.set_palm_command(arm, PalmCommand(p, q, squeeze_offset=squeeze))
+        for _ in range(per_command):
+            scene.step()
+            if log is not None and scene.step_count % 24 == 0:
+                log.time.append(scene.time)
+                log.parcel_in_palms.append(parcel_in_palms(scene))
+                log.tilt_deg.append(tilt_deg(scene))
+                for arm in ARMS:
+                    log.force[arm].append(scene.palm_contact_force(arm, PARCEL))
+
+
+def run_lift(world: World, carry: NDArray[np.float64]) -> Lift:
+    """Approach, squeeze, lift 6 cm, hold 3 s, carry along ``carry`` (3,), m, in 1.5 s."""
     centre, half_span, thickness = start(world)
-
-    def segment(
-        scene: Scene,
-        c0: NDArray[np.float64],
-        c1: NDArray[np.float64],
-        g0: float,
-        g1: float,
-        squeeze: float,
-        duration: float,
-        log: Log | None = None,
-    ) -> None:
-        per_command = scene.spec.physics_hz // scene.spec.control_hz
-        steps = round(duration * scene.spec.physics_hz)
-        for k in range(0, steps, per_command):
-            s = float(minimum_jerk((k + per_command) / steps))
-            poses = lateral_grasp_palm_poses(
-                c0 + (c1 - c0) * s, half_span, thickness, g0 + (g1 - g0) * s
-            )
-            for arm, (p, q) in poses.items():
-                scene.set_palm_command(arm, PalmCommand(p, q, squeeze_offset=squeeze))
-            for _ in range(per_command):
-                scene.step()
-                if log is not None and scene.step_count % 24 == 0:
-                    log.time.append(scene.time)
-                    log.parcel_in_palms.append(parcel_in_palms(scene))
-                    log.tilt_deg.append(tilt_deg(scene))
-                    for arm in ARMS:
-                        log.force[arm].append(scene.palm_contact_force(arm, PARCEL))
-
     with icub_scene(world) as scene:
         scene.place_palms(lateral_grasp_palm_poses(centre, half_span, thickness, gap=0.05))
         scene.step(48)
-        segment(scene, centre, centre, 0.05, 0.0, 0.0, 1.0)
-        segment(scene, centre, centre, 0.0, 0.0, SQUEEZE, 0.5)
+        segment(scene, (half_span, thickness), centre, centre, 0.05, 0.0, 0.0, 1.0)
+        segment(scene, (half_span, thickness), centre, centre, 0.0, 0.0, SQUEEZE, 0.5)
         before = parcel_in_palms(scene)
         up = centre + np.array([0.0, 0.0, 0.06])
-        side = up + np.array([0.0, 0.05, 0.0])
-        lifting, hold, carry = Log(), Log(), Log()
-        segment(scene, centre, up, 0.0, 0.0, SQUEEZE, 1.5, lifting)
+        side = up + carry
+        lifting, hold, moving = Log(), Log(), Log()
+        segment(scene, (half_span, thickness), centre, up, 0.0, 0.0, SQUEEZE, 1.5, lifting)
         height = float(scene.object_pose(PARCEL)[0][2])
-        segment(scene, up, up, 0.0, 0.0, SQUEEZE, 3.0, hold)
-        segment(scene, up, side, 0.0, 0.0, SQUEEZE, 1.5, carry)
-        return Lift(before, height, (lifting, hold, carry), hold)
+        segment(scene, (half_span, thickness), up, up, 0.0, 0.0, SQUEEZE, 3.0, hold)
+        segment(scene, (half_span, thickness), up, side, 0.0, 0.0, SQUEEZE, 1.5, moving)
+        return Lift(before, height, (lifting, hold, moving), hold)
 
 
-def test_icub_lifts_the_parcel(lift: Lift, world: World) -> None:
+def parcel_moved(world: World, offset: tuple[float, float, float]) -> World:
+    """``world`` with its parcel starting ``offset`` (3,) m from where the file puts it."""
+    data = world.model_dump(mode="json")
+    pose = data["objects"][0]["pose"]
+    pose["position"] = [v + d for v, d in zip(pose["position"], offset, strict=True)]
+    return world_from_data(data, world.source)
+
+
+@pytest.fixture(scope="module")
+def lift(world: World) -> Lift:
+    """At the centre: approach, squeeze, lift 6 cm, hold 3 s, carry 5 cm along +y."""
+    return run_lift(world, np.array([0.0, 0.05, 0.0]))
+
+
+@pytest.fixture(scope="module")
+def side_lift(world: World) -> tuple[World, Lift]:
+    """The same 10 cm to the robot's left (+y), carried 5 cm further out: the palms there
+    need the torso (the trial goals lie this far to either side)."""
+    moved = parcel_moved(world, (0.0, 0.10, 0.0))
+    return moved, run_lift(moved, np.array([0.0, 0.05, 0.0]))
+
+
+@pytest.fixture(params=["centre", "side"])
+def lifted(request: pytest.FixtureRequest, world: World) -> tuple[World, Lift]:
+    """The lift at the centre, and 10 cm to the side."""
+    if request.param == "centre":
+        return world, request.getfixturevalue("lift")
+    side: tuple[World, Lift] = request.getfixturevalue("side_lift")
+    return side
+
+
+def test_icub_lifts_the_parcel(lifted: tuple[World, Lift]) -> None:
+    world, lift = lifted
     centre, _, _ = start(world)
     # 6 cm less the palms' sag under the parcel's weight.
     np.testing.assert_allclose(lift.height_after_lift, centre[2] + 0.06, atol=0.01)
 
 
-def test_parcel_does_not_slip_or_tilt_in_icub_palms(lift: Lift) -> None:
+def test_parcel_does_not_slip_or_tilt_in_icub_palms(lifted: tuple[World, Lift]) -> None:
+    _, lift = lifted
     offsets = np.concatenate([np.asarray(log.parcel_in_palms) for log in lift.logs])
     slip = np.linalg.norm(offsets - lift.before_lift, axis=1)
     assert slip.max() < 0.01, f"slip {slip.max() * 1000:.2f} mm"
@@ -183,9 +216,69 @@ def test_parcel_does_not_slip_or_tilt_in_icub_palms(lift: Lift) -> None:
     assert max(tilts) < 5.0, f"tilt {max(tilts):.2f} deg"
 
 
-def test_icub_squeeze_is_steady_during_hold(lift: Lift) -> None:
+def test_icub_squeeze_is_steady_during_hold(lifted: tuple[World, Lift]) -> None:
+    _, lift = lifted
     for arm in ARMS:
         force = np.asarray(lift.hold.force[arm])
         assert np.all((force > 5.0) & (force < 60.0)), (
             f"{arm}: {force.min():.1f}..{force.max():.1f} N"
         )
+
+
+# -- the torso in the loop --------------------------------------------------------------------
+
+
+def empty_scene(world: World) -> Scene:
+    """The iCub world's scene without its parcel (the palms move through where it was)."""
+    spec = as_world_spec(world).scene
+    return Scene(replace(spec, objects=()))
+
+
+def arm_chain(scene: Scene, arm: Arm) -> tuple[NDArray[np.float64], float]:
+    """An arm's shoulder (its first joint's frame, (3,) m) and the summed lengths of its links
+    to the palm, m: no posture of the arm alone puts the palm farther from that shoulder."""
+    body, c = scene.robot_ids[0], scene.client
+    spec = scene.robot.arms[arm]
+    links = [*range(spec.joint_indices[0], spec.palm_link + 1)]
+    frames = np.array([pb.getLinkState(body, j, physicsClientId=c)[4] for j in links])
+    return frames[0], float(np.linalg.norm(np.diff(frames, axis=0), axis=1).sum())
+
+
+def torso(scene: Scene) -> NDArray[np.float64]:
+    """The torso joints' positions (pitch, roll, yaw), rad."""
+    return scene.controller.joint_positions()[: len(TORSO_JOINTS)]
+
+
+def test_the_torso_takes_the_palms_beyond_the_arms_reach(world: World) -> None:
+    centre, half_span, thickness = start(world)
+    far = np.array([0.45, 0.0, 0.70])  # ahead of the table's middle, low
+    with empty_scene(world) as scene:
+        scene.place_palms(lateral_grasp_palm_poses(centre, half_span, thickness, gap=0.02))
+        target = lateral_grasp_palm_poses(far, half_span, thickness, gap=0.02)
+        for arm in ARMS:
+            shoulder, length = arm_chain(scene, arm)
+            # Out of the arm's reach from its shoulder with the torso upright, by over 2 cm.
+            assert np.linalg.norm(target[arm][0] - shoulder) > length + 0.02
+        segment(scene, (half_span, thickness), centre, far, 0.02, 0.02, 0.0, 2.0)
+        scene.step(240)
+        errors = [np.linalg.norm(scene.palm_state(a).position - target[a][0]) for a in ARMS]
+        assert max(errors) < 0.003, f"palm error {max(errors) * 1000:.2f} mm"
+        assert torso(scene)[0] > 0.3  # it leans forward to get there
+        ctl = scene.controller
+        q = ctl.joint_positions()
+        assert np.all((q >= ctl._lower - 1e-3) & (q <= ctl._upper + 1e-3))
+
+
+def test_the_torso_stays_upright_while_the_palms_hold_still(world: World) -> None:
+    centre, half_span, thickness = start(world)
+    with empty_scene(world) as scene:
+        scene.place_palms(lateral_grasp_palm_poses(centre, half_span, thickness, gap=0.02))
+        scene.step(24)
+        start_torso = torso(scene)
+        worst = 0.0
+        for _ in range(20):
+            scene.step(24)
+            worst = max(worst, float(np.abs(torso(scene) - start_torso).max()))
+        # Within 0.5 degrees of where it started, and 3 degrees of upright.
+        assert worst < np.radians(0.5), f"torso moved {np.degrees(worst):.3f} deg"
+        assert np.abs(torso(scene)).max() < np.radians(3.0), np.degrees(torso(scene))

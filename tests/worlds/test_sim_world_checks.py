@@ -80,7 +80,8 @@ def test_one_contact_query_per_obstacle_counts_as_one_per_pair() -> None:
             scene.step(1)
             sim._watch_contacts()
             for name in sorted(scene.active_obstacles):
-                for label, body in sim._watched_bodies.items():
+                for label, (body, links) in sim._watched_bodies.items():
+                    assert links is None  # the iiwas: one body per arm
                     pair = pb.getContactPoints(
                         bodyA=body, bodyB=scene.obstacle_ids[name], physicsClientId=c
                     )

@@ -1,23 +1,20 @@
-"""The iCub humanoid with flat palms, fixed at its waist behind a table.
+"""The iCub humanoid with flat palms, fixed at its waist behind a table, its torso driven.
 
-The URDFs are generated at run time from the ``icub-models`` package (``iCubGazeboV2_5``):
+The URDF is generated at run time from the ``icub-models`` package (``iCubGazeboV2_5``):
 
 * Only links with mass are kept; the sensor, skin and DH frames (massless links on fixed joints,
   about 170 of them) are dropped, so PyBullet loads the robot without
-  ``URDF_MERGE_FIXED_LINKS`` (which would also merge the palm box into the hand and lose the
-  palm frame the controller needs).
-* Every joint outside the two 7-DoF arms (legs, torso, neck) becomes a fixed joint: those
-  joints are not used by the task, and a fixed joint cannot sag. The torso can be given a
-  constant forward lean (``torso_pitch_deg``), baked into its fixed joint.
-* A thin palm box is added on a fixed joint on the inner face of each hand: the hand mesh's
-  convex hull (fingers curled, thumb out) is no flat contact face.
-* The robot is split into two bodies, one per arm, because the controller and the FCL mirror
-  (:mod:`worlds.collision`) drive and track each arm as the links of one body ending in a link
-  named ``palm``: body 0 is the iCub without its right arm (legs, torso, head, left arm); body 1
-  is the right arm alone on a massless mount at the chest frame, placed where the chest puts
-  it. Collisions between the right arm and the trunk are switched off
-  (:attr:`RobotModel.collision_exclusions`), as PyBullet leaves a single body's links alone;
-  the two arms still collide with each other.
+  ``URDF_MERGE_FIXED_LINKS`` (which would also merge the palm boxes into the hands and lose the
+  palm frames the controller needs).
+* The torso's three joints (pitch, roll, yaw) and the two 7-DoF arms move; every other joint
+  (legs, neck) becomes a fixed joint: the task does not use them, and a fixed joint cannot sag.
+* A thin palm box (``l_palm``, ``r_palm``) is added on a fixed joint on the inner face of each
+  hand: the hand mesh's convex hull (fingers curled, thumb out) is no flat contact face.
+* The robot is one body: the torso moves both shoulders, so one controller drives the torso
+  and both arms together (:class:`worlds.robots.model.SharedJointsSpec`). Its links are ordered
+  trunk first, then the left arm shoulder to palm, then the right arm: the FCL mirror
+  (:mod:`worlds.collision`) takes the links just before each palm as its forearm. The two arms'
+  links collide with each other and with nothing else of the body (:mod:`worlds.bodies`).
 
 Frames: the iCub's root link has x backwards, y to the robot's right and z up; the robot frame
 of the world file (x forward, left arm at +y) is the root link turned by 180 degrees about z.
@@ -34,7 +31,7 @@ import numpy as np
 from skills import quaternion as quat
 from skills.vocabulary import Arm, EndEffector
 from worlds.robots.cache import cached_urdf
-from worlds.robots.model import ArmSpec, BodySpec, RobotModel
+from worlds.robots.model import ArmSpec, BodySpec, RobotModel, SharedJointsSpec
 
 #: The icub-models robot the model is built from.
 ICUB_VARIANT = "iCubGazeboV2_5"
@@ -58,9 +55,22 @@ ARM_LINKS = (
     "wrist_1",
     "hand",
 )
+#: The links of an arm counted as its forearm in the trials' figures (the palm apart).
+FOREARM_LINKS = ("forearm", "wrist_1", "hand")
+#: The torso's joints, root first: they move both shoulders.
+TORSO_JOINTS = ("torso_pitch", "torso_roll", "torso_yaw")
 #: Torque limits per arm joint, N m. The URDF says 50000; these are of the order of the real
 #: iCub's motors (shoulder and elbow tens of N m, the wrist a few).
 MAX_TORQUE = (30.0, 30.0, 15.0, 15.0, 6.0, 6.0, 6.0)
+#: Torque limits of the torso joints, N m: the pitch holds the chest, head and both arms
+#: (about 13 kg, their centre some 0.1 m ahead of the axis once leaning); of the order of the
+#: real iCub's torso motors.
+TORSO_MAX_TORQUE = (60.0, 40.0, 30.0)
+#: Rest posture of the torso, rad: upright. The null-space term pulls it back there.
+TORSO_REST = (0.0, 0.0, 0.0)
+#: The torso's null-space posture spring and damper relative to the arms': firmer, so that
+#: it stays upright unless the palms need it.
+TORSO_POSTURE_WEIGHT = 8.0
 #: Inner face of the hand's collision hull along the hand frame's -y axis, m (both hands).
 HAND_INNER_FACE_Y = -0.018
 #: Palm centre along the fingers (hand x, left; -x right) and towards the thumb (hand z), m.
@@ -100,16 +110,6 @@ def _origin(parent: ET.Element, xyz: tuple[float, ...], rpy: tuple[float, ...] =
     )
 
 
-def _read_origin(element: ET.Element) -> tuple[np.ndarray, np.ndarray]:
-    """An element's origin: position (3,) and orientation (4,) in its parent's frame."""
-    origin = element.find("origin")
-    if origin is None:
-        return np.zeros(3), quat.IDENTITY.copy()
-    xyz = np.array([float(v) for v in origin.get("xyz", "0 0 0").split()])
-    rpy = [float(v) for v in origin.get("rpy", "0 0 0").split()]
-    return xyz, quat.from_rpy(rpy)
-
-
 def _set_origin(element: ET.Element, xyz: np.ndarray, rotation: np.ndarray) -> None:
     for old in element.findall("origin"):
         element.remove(old)
@@ -122,9 +122,14 @@ def _set_origin(element: ET.Element, xyz: np.ndarray, rotation: np.ndarray) -> N
     element.insert(0, origin)
 
 
+def palm_link_name(side: str) -> str:
+    """The palm link of the ``side`` ("l" or "r") hand."""
+    return f"{side}_palm"
+
+
 def _palm_link(robot: ET.Element, side: str, palm_size: tuple[float, float, float]) -> None:
-    """Append a palm box link (named ``palm``) on a fixed joint on the inner face of a hand."""
-    palm = ET.SubElement(robot, "link", name="palm")
+    """Append a palm box link (:func:`palm_link_name`) on a fixed joint on a hand's inner face."""
+    palm = ET.SubElement(robot, "link", name=palm_link_name(side))
     inertial = ET.SubElement(palm, "inertial")
     _origin(inertial, (0.0, 0.0, 0.0))
     ET.SubElement(inertial, "mass", value="0.05")
@@ -138,7 +143,7 @@ def _palm_link(robot: ET.Element, side: str, palm_size: tuple[float, float, floa
         ET.SubElement(geometry, "box", size=" ".join(f"{v:.6g}" for v in palm_size))
     joint = ET.SubElement(robot, "joint", name=f"{side}_palm_joint", type="fixed")
     ET.SubElement(joint, "parent", link=f"{side}_hand")
-    ET.SubElement(joint, "child", link="palm")
+    ET.SubElement(joint, "child", link=palm_link_name(side))
     position, rotation = palm2hand(side, palm_size)
     _set_origin(joint, position, rotation)
 
@@ -164,12 +169,8 @@ def _arm_link_names(side: str) -> set[str]:
     return {f"{side}_{name}" for name in ARM_LINKS}
 
 
-def icub_urdf_texts(
-    palm_size: tuple[float, float, float],
-    palm_friction: float,
-    torso_pitch_deg: float = 0.0,
-) -> tuple[str, str, np.ndarray, np.ndarray]:
-    """URDF texts of the two iCub bodies and where the right-arm body sits.
+def icub_urdf_text(palm_size: tuple[float, float, float], palm_friction: float) -> str:
+    """URDF text of the iCub as one body: torso and arms movable, legs and neck fixed.
 
     Parameters
     ----------
@@ -177,17 +178,10 @@ def icub_urdf_texts(
         (3,) palm box extent along the palm frame's x, y, z, m.
     palm_friction : float
         Lateral friction coefficient of the palms.
-    torso_pitch_deg : float
-        Constant forward lean of the torso, degrees.
 
     Returns
     -------
-    trunk_text, right_arm_text : str
-        Body 0 (everything but the right arm) and body 1 (the right arm on its mount).
-    mount2root_position : ndarray
-        (3,) chest frame (the right arm's mount) in the root link frame, m.
-    mount2root_rotation : ndarray
-        (4,) its orientation.
+    str
     """
     source = icub_source()
     package_root = source.parents[3]  # share/iCub/robots/<variant>/model.urdf -> share
@@ -204,55 +198,20 @@ def icub_urdf_texts(
     for link in robot.findall("link"):
         if _name(link) not in kept:
             robot.remove(link)
-    arm_joints = {f"{side}_{name}" for side in "lr" for name in ARM_JOINTS}
+    moving = {f"{side}_{name}" for side in "lr" for name in ARM_JOINTS} | set(TORSO_JOINTS)
     for joint in robot.findall("joint"):
         if _child(joint) not in kept:
             robot.remove(joint)
             continue
         for dynamics in joint.findall("dynamics"):
             joint.remove(dynamics)
-        if _name(joint) in arm_joints or joint.get("type") == "fixed":
+        if _name(joint) in moving or joint.get("type") == "fixed":
             continue
-        if _name(joint) == "torso_pitch" and torso_pitch_deg:
-            axis_element = joint.find("axis")
-            axis_text = axis_element.get("xyz", "0 0 1") if axis_element is not None else "0 0 1"
-            axis = np.array([float(v) for v in axis_text.split()])
-            xyz, rotation = _read_origin(joint)
-            lean = quat.from_rotation_vector(axis * math.radians(torso_pitch_deg))
-            _set_origin(joint, xyz, quat.multiply(rotation, lean))
         joint.set("type", "fixed")
         for tag in ("axis", "limit"):
             for sub in joint.findall(tag):
                 joint.remove(sub)
-
-    # Chest frame in the root frame (the joints up to it are now fixed).
-    joint_to = {_child(j): j for j in robot.findall("joint")}
-    position, rotation = np.zeros(3), quat.IDENTITY.copy()
-    link_name = "chest"
-    while link_name in joint_to:
-        joint = joint_to[link_name]
-        xyz, rot = _read_origin(joint)
-        position, rotation = xyz + quat.rotate(rot, position), quat.multiply(rot, rotation)
-        link_name = _parent(joint)
-
-    right_links = _arm_link_names("r")
-    trunk = _body_text(robot, right_links, "l", None, palm_size, palm_friction)
-    mount = ET.Element("link", name="r_arm_mount")
-    inertial = ET.SubElement(mount, "inertial")
-    _origin(inertial, (0.0, 0.0, 0.0))
-    ET.SubElement(inertial, "mass", value="0.01")
-    ET.SubElement(
-        inertial, "inertia", ixx="1e-6", ixy="0", ixz="0", iyy="1e-6", iyz="0", izz="1e-6"
-    )
-    # The right shoulder hangs off the chest; in its own body it hangs off the mount.
-    for joint in robot.findall("joint"):
-        if _child(joint) == "r_shoulder_1":
-            parent = joint.find("parent")
-            assert parent is not None
-            parent.set("link", "r_arm_mount")
-    trunk_links = {_name(ln) for ln in robot.findall("link")} - right_links
-    right = _body_text(robot, trunk_links, "r", mount, palm_size, palm_friction)
-    return trunk, right, position, rotation
+    return _body_text(robot, palm_size, palm_friction)
 
 
 def _name(element: ET.Element) -> str:
@@ -270,37 +229,39 @@ def _parent(joint: ET.Element) -> str:
 
 
 def _body_text(
-    robot: ET.Element,
-    exclude: set[str],
-    side: str,
-    root: ET.Element | None,
-    palm_size: tuple[float, float, float],
-    palm_friction: float,
+    robot: ET.Element, palm_size: tuple[float, float, float], palm_friction: float
 ) -> str:
-    """URDF text of the links of ``robot`` not in ``exclude`` (under ``root`` if given), with
-    a palm on the ``side`` hand."""
-    out = ET.Element("robot", name="duet_icub_trunk" if root is None else "duet_icub_right_arm")
-    if root is not None:
-        out.append(root)
-    links = [ln for ln in robot.findall("link") if _name(ln) not in exclude]
-    joints = [j for j in robot.findall("joint") if _child(j) not in exclude]
+    """URDF text of ``robot`` with a palm on each hand, its joints ordered for PyBullet."""
+    out = ET.Element("robot", name="duet_icub")
+    links = list(robot.findall("link"))
+    joints = list(robot.findall("joint"))
+    for side in "lr":
+        _palm_link(out, side, palm_size)
+    palms = [ln for ln in out.findall("link")]
+    palm_joints = [j for j in out.findall("joint")]
+    for element in palms + palm_joints:
+        out.remove(element)
+    links.extend(palms)
+    joints.extend(palm_joints)
     # PyBullet numbers links depth first, children in file order: the joints on the way from
-    # the root to the hand go last, so the arm's links are the body's last, shoulder to hand,
-    # then the palm (the FCL mirror takes the links just before the palm as the forearm).
+    # the root to the palms go last, the left arm's before the right's, so the trunk's links
+    # come first, then each arm's shoulder to palm (the FCL mirror takes the links just before
+    # a palm as its forearm).
     parent_of = {_child(j): _parent(j) for j in joints}
-    on_path: set[str] = set()
-    link_name: str | None = f"{side}_hand"
-    while link_name is not None:
-        on_path.add(link_name)
-        link_name = parent_of.get(link_name)
-    joints.sort(key=lambda j: _child(j) in on_path)
+    rank: dict[str, int] = {}
+    for order, side in ((1, "l"), (2, "r")):
+        link_name: str | None = palm_link_name(side)
+        while link_name is not None:
+            rank.setdefault(link_name, order)
+            link_name = parent_of.get(link_name)
+    joints.sort(key=lambda j: rank.get(_child(j), 0))
     out.extend(links)
     out.extend(joints)
-    _palm_link(out, side, palm_size)
-    palm = out.find("link[@name='palm']")
-    assert palm is not None
-    contact = ET.SubElement(palm, "contact")
-    ET.SubElement(contact, "lateral_friction", value=f"{palm_friction:.6g}")
+    for side in "lr":
+        palm = out.find(f"link[@name='{palm_link_name(side)}']")
+        assert palm is not None
+        contact = ET.SubElement(palm, "contact")
+        ET.SubElement(contact, "lateral_friction", value=f"{palm_friction:.6g}")
     return ET.tostring(out, encoding="unicode")
 
 
@@ -312,7 +273,6 @@ def icub_model(
     palm_size: tuple[float, float, float] = (0.05, 0.06, 0.01),
     palm_friction: float = 1.0,
     cache_dir: Path | None = None,
-    torso_pitch_deg: float = 0.0,
 ) -> RobotModel:
     """The iCub fixed at its root link (the waist), facing the robot frame's +x.
 
@@ -332,9 +292,7 @@ def icub_model(
     palm_friction : float
         Palm lateral friction coefficient.
     cache_dir : Path, optional
-        Where the generated URDFs go.
-    torso_pitch_deg : float
-        Constant forward lean of the torso, degrees.
+        Where the generated URDF goes.
 
     Returns
     -------
@@ -346,18 +304,13 @@ def icub_model(
     if min(palm_size) <= 0.0:
         raise ValueError(f"icub_model: expected positive palm_size, got {palm_size}")
     palm_size = (float(palm_size[0]), float(palm_size[1]), float(palm_size[2]))
-    trunk_text, right_text, mount2root_p, mount2root_r = icub_urdf_texts(
-        palm_size, palm_friction, torso_pitch_deg
-    )
-    trunk_urdf = cached_urdf(trunk_text, "icub_trunk", cache_dir)
-    right_urdf = cached_urdf(right_text, "icub_right_arm", cache_dir)
+    text = icub_urdf_text(palm_size, palm_friction)
+    urdf = cached_urdf(text, "icub", cache_dir)
     robot2world = quat.from_rpy(np.radians(base_rpy_deg))
     root2world = quat.multiply(robot2world, _ROOT2ROBOT)
     root_position = np.asarray(base_position, float) + quat.rotate(
         robot2world, [0, 0, mount_height]
     )
-    mount_position = root_position + quat.rotate(root2world, mount2root_p)
-    mount2world = quat.multiply(root2world, mount2root_r)
 
     def quat4(rotation: np.ndarray) -> tuple[float, float, float, float]:
         x, y, z, w = (float(v) for v in rotation)
@@ -366,18 +319,10 @@ def icub_model(
     def vec(v: np.ndarray) -> tuple[float, float, float]:
         return (float(v[0]), float(v[1]), float(v[2]))
 
-    bodies = (
-        BodySpec(trunk_urdf, vec(root_position), quat4(root2world)),
-        BodySpec(right_urdf, vec(mount_position), quat4(mount2world)),
-    )
-    trunk_links, trunk_joints = _link_and_joint_order(trunk_text)
-    right_links, right_joints = _link_and_joint_order(right_text)
-    limits = _joint_limits(trunk_text) | _joint_limits(right_text)
+    links, joints = _link_and_joint_order(text)
+    limits = _joint_limits(text)
     arms = {}
-    for arm, index, side, joints, links in (
-        (Arm.LEFT, 0, "l", trunk_joints, trunk_links),
-        (Arm.RIGHT, 1, "r", right_joints, right_links),
-    ):
+    for arm, side in ((Arm.LEFT, "l"), (Arm.RIGHT, "r")):
         names = [f"{side}_{n}" for n in ARM_JOINTS]
         lower = tuple(limits[n][0] for n in names)
         upper = tuple(limits[n][1] for n in names)
@@ -385,27 +330,32 @@ def icub_model(
             float(np.clip(q, lo, hi)) for q, lo, hi in zip(LEFT_REST, lower, upper, strict=True)
         )
         arms[arm] = ArmSpec(
-            body=index,
+            body=0,
             joint_indices=tuple(joints.index(n) for n in names),
-            palm_link=links.index("palm"),
+            palm_link=links.index(palm_link_name(side)),
             rest_posture=rest,
             lower=lower,
             upper=upper,
             max_torque=MAX_TORQUE,
             palm_size=palm_size,
             end_effector=END_EFFECTOR,
+            palm_link_name=palm_link_name(side),
         )
-    trunk_only = sorted(
-        {*trunk_links, "base"} - _arm_link_names("l") - {"palm"}  # everything but the left arm
+    torso = SharedJointsSpec(
+        body=0,
+        joint_indices=tuple(joints.index(n) for n in TORSO_JOINTS),
+        rest_posture=TORSO_REST,
+        lower=tuple(limits[n][0] for n in TORSO_JOINTS),
+        upper=tuple(limits[n][1] for n in TORSO_JOINTS),
+        max_torque=TORSO_MAX_TORQUE,
+        posture_weight=TORSO_POSTURE_WEIGHT,
     )
-    exclusions = tuple((1, r, 0, t) for r in ("base", *right_links) for t in trunk_only)
     position, _ = palm2hand("l", palm_size)
     return RobotModel(
         name="icub",
-        bodies=bodies,
+        bodies=(BodySpec(urdf, vec(root_position), quat4(root2world)),),
         arms=arms,
         palm2flange_position=vec(position),
-        collision_exclusions=exclusions,
         # Its arms reach about 0.3 m from shoulders 0.24 m apart: the palms wait closer in.
         rest_palms=(0.08, 0.14, 0.10),
         # The controller's implicit damping scales the static spring by less than one where
@@ -416,7 +366,12 @@ def icub_model(
         # (8.6 deg at 200 N m/rad, beyond the wrist motors) pushes back over a third of one.
         # A 1.7 deg band at 50 N m/rad cut the palm error holding the parcel at table height
         # from 2.7-6.1 mm to 0.8-2.4 mm over x 0.24-0.32 m, y -0.04-0.04 m, and at x 0.24,
-        # y 0.08 from 6.0 to 1.1 mm (bench/reach_map.py).
+        # y 0.08 from 6.0 to 1.1 mm (bench/reach_map.py, torso fixed).
+        # With the torso driven, a palm far to one side brings the other arm's shoulder roll to
+        # its limit (the arm reaching across the chest): a posture pull out of a 0.15 rad band
+        # at each limit, in the palms' null space, turns the torso to spare it. It cut the
+        # palm error at (0.29, 0.12), (0.29, 0.16) and (0.25, 0.12) m at table height from 9.2,
+        # 16.1 and 9.8 mm to 1.4, 2.8 and 1.1 mm (bench/reach_map.py).
         gain_overrides={
             "damping_linear": 30.0,
             "damping_angular": 0.5,
@@ -424,12 +379,19 @@ def icub_model(
             "damping_null": 0.2,
             "limit_margin": 0.03,
             "limit_stiffness": 50.0,
+            "posture_limit_band": 0.15,
+            "posture_limit_weight": 20.0,
         },
         arm_link_names={
-            arm: frozenset(_arm_link_names(side) | {"palm"})
+            arm: frozenset(_arm_link_names(side) | {palm_link_name(side)})
             for arm, side in ((Arm.LEFT, "l"), (Arm.RIGHT, "r"))
         },
         shoulder_at_first_joint=True,
+        shared_joints=torso,
+        forearm_link_names={
+            arm: frozenset(f"{side}_{name}" for name in FOREARM_LINKS)
+            for arm, side in ((Arm.LEFT, "l"), (Arm.RIGHT, "r"))
+        },
     )
 
 
@@ -467,4 +429,4 @@ def _joint_limits(text: str) -> dict[str, tuple[float, float]]:
     return limits
 
 
-__all__ = ["icub_model", "icub_source", "icub_urdf_texts", "palm2hand"]
+__all__ = ["icub_model", "icub_source", "icub_urdf_text", "palm2hand", "palm_link_name"]

@@ -33,6 +33,8 @@ MAX_TORQUE = (320.0, 320.0, 176.0, 176.0, 110.0, 40.0, 40.0)
 MOUNT_PITCH_DEG = 9.0
 #: Rest posture of the left arm, rad: palm facing -y with its x axis down, near the parcel.
 LEFT_REST = (0.03, 0.93, -0.07, -1.61, 1.59, -1.51, -0.45)
+#: The links counted as an arm's forearm in the trials' figures: the last three (the palm apart).
+FOREARM_LINKS = frozenset({"lbr_iiwa_link_5", "lbr_iiwa_link_6", "lbr_iiwa_link_7"})
 #: Each arm ends in a flat palm box: it presses, it cannot close around anything.
 END_EFFECTOR = EndEffector.FLAT_PALM
 
@@ -264,6 +266,7 @@ def kuka_iiwa_model(
         bodies=tuple(bodies),
         arms=arms,
         palm2flange_position=palm2flange_position(palm_size),
+        forearm_link_names={arm: FOREARM_LINKS for arm in (Arm.LEFT, Arm.RIGHT)},
     )
 
 

@@ -3,7 +3,8 @@
 A :class:`RobotModel` is a frozen description (URDF files, base poses, joint indices, palm links,
 rest posture, limits). Builders such as :func:`worlds.robots.kuka.kuka_iiwa_model` write it; the
 scene loads its bodies and the controller drives its arms. A robot may use one body per arm (the
-KUKA pair) or one body for both arms (a humanoid such as iCub).
+KUKA pair) or one body for both arms and the joints they share (a humanoid such as iCub, whose
+torso moves both shoulders: :class:`SharedJointsSpec`).
 
 The types live below the builders (``kuka.py``, ``icub.py``) and the package's dispatch
 (``worlds/robots/__init__.py``), so no builder imports the package that imports it.
@@ -67,6 +68,8 @@ class ArmSpec:
     end_effector : EndEffector
         What the arm ends in: it fixes the grasps the reasoner may offer
         (:data:`affordances.physics.GRASP_END_EFFECTOR`).
+    palm_link_name : str
+        The palm link's name in the URDF (two palms on one body need two names).
     """
 
     body: int
@@ -78,6 +81,7 @@ class ArmSpec:
     max_torque: tuple[float, ...]
     palm_size: tuple[float, float, float]
     end_effector: EndEffector
+    palm_link_name: str = "palm"
 
     def __post_init__(self) -> None:
         n = len(self.joint_indices)
@@ -87,6 +91,76 @@ class ArmSpec:
                 raise ValueError(f"ArmSpec: expected {name} of length {n}, got {got}")
         if any(lo >= hi for lo, hi in zip(self.lower, self.upper, strict=True)):
             raise ValueError(f"ArmSpec: expected lower < upper, got {self.lower} and {self.upper}")
+
+
+@dataclass(frozen=True)
+class SharedJointsSpec:
+    """Joints that move both arms' palms (a humanoid's torso), on the body that carries both.
+
+    Attributes
+    ----------
+    body : int
+        Index into :attr:`RobotModel.bodies`; both arms must be on this body.
+    joint_indices : tuple of int
+        (s,) PyBullet joint indices, root first.
+    rest_posture : tuple of float
+        (s,) joint positions the null-space term pulls towards, rad (upright).
+    lower, upper : tuple of float
+        (s,) joint position limits, rad.
+    max_torque : tuple of float
+        (s,) joint torque limits, N m.
+    posture_weight : float
+        Null-space posture stiffness and damping of these joints relative to the arms' (the
+        torso is held upright more firmly than the arms' natural posture).
+    """
+
+    body: int
+    joint_indices: tuple[int, ...]
+    rest_posture: tuple[float, ...]
+    lower: tuple[float, ...]
+    upper: tuple[float, ...]
+    max_torque: tuple[float, ...]
+    posture_weight: float = 1.0
+
+    def __post_init__(self) -> None:
+        n = len(self.joint_indices)
+        for name in ("rest_posture", "lower", "upper", "max_torque"):
+            got = len(getattr(self, name))
+            if got != n:
+                raise ValueError(f"SharedJointsSpec: expected {name} of length {n}, got {got}")
+        if any(lo >= hi for lo, hi in zip(self.lower, self.upper, strict=True)):
+            raise ValueError(
+                f"SharedJointsSpec: expected lower < upper, got {self.lower} and {self.upper}"
+            )
+        if not (np.isfinite(self.posture_weight) and self.posture_weight >= 0.0):
+            raise ValueError(
+                f"SharedJointsSpec: expected posture_weight >= 0, got {self.posture_weight}"
+            )
+
+
+@dataclass(frozen=True)
+class DrivenJoint:
+    """One joint the controller drives, in its joint order (:meth:`RobotModel.driven_joints`).
+
+    Attributes
+    ----------
+    body : int
+        Index into :attr:`RobotModel.bodies`.
+    joint : int
+        PyBullet joint index on that body.
+    arm : Arm or None
+        The arm it belongs to; None for a shared joint.
+    lower, upper, max_torque, rest : float
+        Limits (rad, N m) and rest posture (rad).
+    """
+
+    body: int
+    joint: int
+    arm: Arm | None
+    lower: float
+    upper: float
+    max_torque: float
+    rest: float
 
 
 @dataclass(frozen=True)
@@ -119,6 +193,11 @@ class RobotModel:
     shoulder_at_first_joint : bool
         The reasoner's arm model starts at the first arm joint's link; otherwise 0.36 m above
         the arm's base (the iiwa's second joint).
+    shared_joints : SharedJointsSpec, optional
+        Joints both arms' palms use (iCub's torso); None when the arms share none.
+    forearm_link_names : Mapping[Arm, frozenset of str]
+        The links of each arm counted as its forearm (forearm, wrist, hand; the palm apart) in
+        the trials' forearm-to-obstacle figures; empty: none counted.
     """
 
     name: str
@@ -130,6 +209,8 @@ class RobotModel:
     gain_overrides: Mapping[str, float] = field(default_factory=dict)
     arm_link_names: Mapping[Arm, frozenset[str]] = field(default_factory=dict)
     shoulder_at_first_joint: bool = False
+    shared_joints: SharedJointsSpec | None = None
+    forearm_link_names: Mapping[Arm, frozenset[str]] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         if set(self.arms) != {Arm.LEFT, Arm.RIGHT}:
@@ -140,7 +221,54 @@ class RobotModel:
                     f"RobotModel: arm {arm} refers to body {spec.body}, "
                     f"but there are {len(self.bodies)} bodies"
                 )
+        shared = self.shared_joints
+        if shared is not None:
+            bodies = {spec.body for spec in self.arms.values()}
+            if bodies != {shared.body}:
+                raise ValueError(
+                    f"RobotModel: expected both arms on the shared joints' body {shared.body}, "
+                    f"got bodies {sorted(bodies)}"
+                )
         object.__setattr__(self, "arms", MappingProxyType(dict(self.arms)))
+
+    def driven_joints(self) -> tuple[DrivenJoint, ...]:
+        """Every joint the controller drives, in its order: body by body (in the order the
+        arms name them, left first), each body's joints by PyBullet index. For the iiwa pair
+        that is the left arm's joints, then the right's; for iCub the torso, then both arms."""
+        joints: list[DrivenJoint] = []
+        bodies = list(dict.fromkeys(self.arms[arm].body for arm in (Arm.LEFT, Arm.RIGHT)))
+        for body in bodies:
+            here: list[DrivenJoint] = []
+            for arm in (Arm.LEFT, Arm.RIGHT):
+                spec = self.arms[arm]
+                if spec.body != body:
+                    continue
+                here.extend(
+                    DrivenJoint(body, j, arm, lo, hi, t, r)
+                    for j, lo, hi, t, r in zip(
+                        spec.joint_indices,
+                        spec.lower,
+                        spec.upper,
+                        spec.max_torque,
+                        spec.rest_posture,
+                        strict=True,
+                    )
+                )
+            shared = self.shared_joints
+            if shared is not None and shared.body == body:
+                here.extend(
+                    DrivenJoint(body, j, None, lo, hi, t, r)
+                    for j, lo, hi, t, r in zip(
+                        shared.joint_indices,
+                        shared.lower,
+                        shared.upper,
+                        shared.max_torque,
+                        shared.rest_posture,
+                        strict=True,
+                    )
+                )
+            joints.extend(sorted(here, key=lambda d: d.joint))
+        return tuple(joints)
 
     @property
     def end_effectors(self) -> frozenset[EndEffector]:
@@ -148,4 +276,11 @@ class RobotModel:
         return frozenset(spec.end_effector for spec in self.arms.values())
 
 
-__all__ = ["ArmSpec", "BodySpec", "FloatArray", "RobotModel"]
+__all__ = [
+    "ArmSpec",
+    "BodySpec",
+    "DrivenJoint",
+    "FloatArray",
+    "RobotModel",
+    "SharedJointsSpec",
+]

@@ -97,13 +97,13 @@ def _joints_by_child(urdf: Path) -> dict[str, _Joint]:
     return joints
 
 
-def _chain(urdf: Path) -> list[_Joint]:
+def _chain(urdf: Path, palm: str = PALM_LINK) -> list[_Joint]:
     """The joints from the root link to the palm, root first."""
     joints = _joints_by_child(urdf)
-    if PALM_LINK not in joints:
-        raise ValueError(f"{urdf}: expected a link named {PALM_LINK!r} on a joint")
+    if palm not in joints:
+        raise ValueError(f"{urdf}: expected a link named {palm!r} on a joint")
     chain = []
-    link = PALM_LINK
+    link = palm
     while link in joints:
         chain.append(joints[link])
         link = joints[link].parent
@@ -119,6 +119,7 @@ def chain_reach(
     urdf: Path,
     base2world_position: tuple[float, float, float],
     base2world_quaternion: tuple[float, float, float, float],
+    palm: str = PALM_LINK,
 ) -> ArmReach:
     """The reach sphere of the chain from a URDF's root link to its ``palm`` link.
 
@@ -139,7 +140,7 @@ def chain_reach(
     # start-up a fifth of a second for these few products.
     rotation = quat.as_quaternions(base2world_quaternion, "base2world_quaternion")
     position = np.asarray(base2world_position, dtype=float)
-    chain = _chain(urdf)
+    chain = _chain(urdf, palm)
     origins: list[np.ndarray] = []
     axes: list[np.ndarray] = []
     # World frames with every joint at zero: the fixed points and segment lengths found below
@@ -179,9 +180,13 @@ def arm_reach(model: RobotModel) -> dict[Arm, ArmReach]:
     """Each arm's reach sphere, from its body's URDF and base pose (see the module docstring)."""
     reach = {}
     for arm in ARMS:
-        body = model.bodies[model.arms[arm].body]
+        spec = model.arms[arm]
+        body = model.bodies[spec.body]
         reach[arm] = chain_reach(
-            body.urdf_path, body.base2world_position, body.base2world_quaternion
+            body.urdf_path,
+            body.base2world_position,
+            body.base2world_quaternion,
+            spec.palm_link_name,
         )
     return reach
 
