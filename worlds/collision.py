@@ -338,6 +338,15 @@ class CollisionWorld:
         count = len(self._elements)
         self._radii = np.array([e.radius for e in self._elements])
         self._centres_local = np.array([e.centre_local for e in self._elements])
+        # How far each element reaches from its frame's origin (a link's, an object's centre;
+        # the bounding-sphere centre of a static element): a screen that needs only the
+        # positions a sync read, not the rotations (see _reach_bounds).
+        self._reach = self._radii.copy()
+        for _, _, _, rows, shape_p, shape_r in self._link_tracks:
+            centres_in_link = shape_p + (shape_r @ self._centres_local[rows][:, :, None])[:, :, 0]
+            self._reach[rows] += np.linalg.norm(centres_in_link, axis=-1)
+        for row in self._objects.values():
+            self._reach[row] += float(np.linalg.norm(self._centres_local[row]))
         self._centres = self._centres_local.copy()
         self._rotations = np.tile(np.eye(3), (count, 1, 1))
         self._positions = np.zeros((count, 3))
@@ -414,6 +423,22 @@ class CollisionWorld:
             self._set_poses(
                 rows_o, positions_o, quat.to_matrix(np.array([q for _, _, q in objects_read]))
             )
+
+    def _origins(self) -> FloatArray:
+        """Per element, (E, 3): its frame's origin as the last sync read it (links, objects)
+        or its bounding-sphere centre (static elements); each element lies within
+        ``_reach`` of it. Reads positions alone, before :meth:`_place`."""
+        assert self._read is not None
+        links_read, objects_read = self._read
+        origins = self._centres.copy()  # static elements' are right already
+        for (_, links, moving, rows, _, _), (states, base) in zip(
+            self._link_tracks, links_read, strict=True
+        ):
+            by_link = {link: s[0] for link, s in zip(moving, states, strict=True)}
+            origins[rows] = [by_link[link] if link >= 0 else base[0] for link in links]
+        for row, position, _ in objects_read:
+            origins[row] = position
+        return origins
 
     @property
     def element_names(self) -> tuple[str, ...]:
@@ -639,6 +664,16 @@ class CollisionWorld:
         self, rows_a: list[int], rows_b: list[int], ceiling: float
     ) -> Proximity | None:
         """The closest pair of elements ``rows_a`` x ``rows_b`` if nearer than ``ceiling``."""
+        if self._read is not None and math.isfinite(ceiling):
+            # Not placed since the last sync: screen on the positions read first.
+            origins = self._origins()
+            reach = (
+                np.linalg.norm(origins[rows_a][:, None] - origins[rows_b][None], axis=-1)
+                - self._reach[rows_a][:, None]
+                - self._reach[rows_b]
+            )
+            if reach.min() >= ceiling:
+                return None
         self._place()
         ca, cb = self._centres[rows_a], self._centres[rows_b]
         bounds = (
