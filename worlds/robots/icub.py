@@ -205,7 +205,14 @@ def icub_urdf_text(palm_size: tuple[float, float, float], palm_friction: float) 
             continue
         for dynamics in joint.findall("dynamics"):
             joint.remove(dynamics)
-        if _name(joint) in moving or joint.get("type") == "fixed":
+        if _name(joint) in moving:
+            # The file's axes are unit to 6 digits; PyBullet's inverse dynamics (the
+            # controller's gravity and inertia) warns on every body it builds unless exact.
+            for axis in joint.findall("axis"):
+                xyz = np.array([float(v) for v in axis.get("xyz", "1 0 0").split()])
+                axis.set("xyz", " ".join(repr(float(v)) for v in xyz / np.linalg.norm(xyz)))
+            continue
+        if joint.get("type") == "fixed":
             continue
         joint.set("type", "fixed")
         for tag in ("axis", "limit"):
