@@ -133,8 +133,6 @@ class ViaPointLeaf(MotionLeaf):
     def __init__(self, name: str, **kwargs: Any) -> None:
         super().__init__(name=name, **kwargs)
         self.motion: ViaPointMotion | None = None
-        #: Set by ``initialise()`` when no way the leaf knows is free of contact: it fails.
-        self.refused: str | None = None
         #: Which way the palms take, when not the usual one (added to the feedback).
         self.route_note = ""
 
@@ -142,8 +140,6 @@ class ViaPointLeaf(MotionLeaf):
         """Command one step of the motion; SUCCESS at the last via-point."""
         if (why := self.connected()) is not None:
             return self.fail(why)
-        if self.refused is not None:
-            return self.fail(self.refused)
         assert self.motion is not None
         for arm, st in self.motion.step(self.control_dt).items():
             self.world.command_palm(arm, Pose(st.position, st.orientation), st.twist())

@@ -183,8 +183,8 @@ def choose_route(
 
     The routes are tried in order, with (if ``detour_of`` names one) that route taken around
     the obstacle its path comes nearest (:func:`detour`) tried at ``detour_at``. When none is
-    clear, the one with the most clearance: clear of contact first, then the largest
-    predicted distance.
+    clear, the one clear of contact with the largest predicted distance; when none is even
+    that, the usual one.
 
     Parameters
     ----------
@@ -221,9 +221,15 @@ def choose_route(
             candidates.insert(at, detour(route, path, obstacles))
         k += 1
     contact = [scene.check_palm_path(p.positions, p.orientations, 0.0).clear for _, p, _ in tried]
+    if not any(contact):
+        # The prediction carries the forearms rigidly and asks them for extra clearance the
+        # further the palms go: over a long way it doubts every route alike, and then it is
+        # no ground for leaving the usual one.
+        route, _, check = tried[0]
+        return RouteChoice(route, check, False, False, _refusals(tried))
     best = max(range(len(tried)), key=lambda i: (contact[i], tried[i][2].min_distance_m))
     route, _, check = tried[best]
-    return RouteChoice(route, check, False, contact[best], _refusals(tried))
+    return RouteChoice(route, check, False, True, _refusals(tried))
 
 
 def _refusals(tried: Sequence[tuple[PalmRoute, PalmPath, PathCheck]]) -> str:
@@ -240,23 +246,20 @@ def take_clear_route(
     detour_of: int | None = 0,
     detour_at: int | None = None,
 ) -> None:
-    """Plan ``leaf``'s motion along the route :func:`choose_route` picks, or refuse to move
-    (``leaf.refused``) when even the best is predicted to touch an obstacle, so that the
-    tree's fallbacks can act."""
+    """Plan ``leaf``'s motion along the route :func:`choose_route` picks; the leaf's feedback
+    says which and why when it is not the usual one, or when no route is clear."""
     choice = choose_route(
         scene, starts, routes, segment_tau, leaf.control_dt, margin_m, detour_of, detour_at
     )
-    leaf.refused = None
     leaf.route_note = ""
-    if not choice.contact_free:
-        leaf.motion = None
-        leaf.refused = f"every way predicted to touch an obstacle: {choice.note}"
-        return
     leaf.motion = ViaPointMotion(starts, choice.route.waypoints, segment_tau)
-    if choice.note and choice.clear:
-        leaf.route_note = f"by {choice.route.name}; refused {choice.note}"
-    elif not choice.clear:
+    if choice.clear:
+        if choice.note:
+            leaf.route_note = f"by {choice.route.name}; refused {choice.note}"
+    elif choice.contact_free:
         leaf.route_note = (
             f"no way clear by {margin_m:g} m: by {choice.route.name}, the most clearance "
             f"({choice.check.min_distance_m * 1000:.0f} mm); {choice.note}"
         )
+    else:
+        leaf.route_note = f"no way predicted clear, by {choice.route.name}: {choice.note}"
