@@ -297,6 +297,19 @@ class ObstacleScene(Protocol):
         """
         ...
 
+    def check_palm_path(
+        self,
+        palm_positions: Array,
+        palm_orientations: Array,
+        margin_m: float = 0.0,
+    ) -> PathCheck:
+        """Check a predicted path of both palms holding nothing (an approach, a retreat), and
+        the arm links carried with them, against the present obstacles.
+
+        Shapes: palms (N, 2, 3), (N, 2, 4), left then right.
+        """
+        ...
+
     def link_points(self) -> Array:
         """Points on the arms' links to keep away from obstacles, (M, 3), world frame."""
         ...

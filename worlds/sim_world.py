@@ -502,6 +502,31 @@ class SimWorld:
         """FCL check of predicted palm and held-object poses, and of the forearms carried with
         the palms (:meth:`worlds.collision.CollisionWorld.check_attached_links`), against the
         active obstacles."""
+        return self._check_path(
+            palm_positions,
+            palm_orientations,
+            margin_m,
+            (name, np.asarray(object_positions), np.asarray(object_orientations)),
+        )
+
+    def check_palm_path(
+        self,
+        palm_positions: Array,
+        palm_orientations: Array,
+        margin_m: float = 0.0,
+    ) -> PathCheck:
+        """FCL check of predicted poses of empty palms and of the forearms carried with them,
+        against the active obstacles (as :meth:`check_trajectory`, without a held object)."""
+        return self._check_path(palm_positions, palm_orientations, margin_m, None)
+
+    def _check_path(
+        self,
+        palm_positions: Array,
+        palm_orientations: Array,
+        margin_m: float,
+        held: tuple[str, Array, Array] | None,
+    ) -> PathCheck:
+        name, object_positions, object_orientations = held if held else (None, None, None)
         check = self.collision.check_trajectory(
             palm_positions,
             palm_orientations,
@@ -516,7 +541,9 @@ class SimWorld:
         arms = self.collision.check_attached_links(
             palm_positions, palm_orientations, 4, margin_m + doubt
         )
-        pts = np.concatenate((object_positions, palm_positions.reshape(-1, 3)))
+        pts = np.asarray(palm_positions).reshape(-1, 3)
+        if object_positions is not None:
+            pts = np.concatenate((object_positions, pts))
         d, _ = self.collision.query(pts)
         hits = np.flatnonzero(check.collides | arms)
         first = int(hits[0]) if hits.size else None
@@ -525,7 +552,7 @@ class SimWorld:
             if arms[first] and not check.collides[first]:
                 what = f"a forearm within {margin_m + doubt[first]:.3f} m"
             else:
-                what = f"palm or object within {margin_m:g} m"
+                what = f"{'palm or object' if held else 'a palm'} within {margin_m:g} m"
             what += f" at step {first}"
         return PathCheck(first is None, float(d.min()) if d.size else math.inf, first, what)
 

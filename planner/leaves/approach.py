@@ -9,8 +9,9 @@ from py_trees.ports import PortInformation
 
 from planner.composition import grasp_quarter_turns, lateral_geometry, move_turn, robot_yaw
 from planner.leaves.base import grasp_move_port
-from planner.leaves.palm_motion import ViaPointLeaf, ViaPointMotion, measured_state
-from planner.port import ObjectSensing, PalmControl, Pose, WorldPort
+from planner.leaves.palm_motion import ViaPointLeaf, measured_state
+from planner.leaves.palm_routes import PalmRoute, margin_port, take_clear_route
+from planner.port import ObjectSensing, ObstacleScene, PalmControl, Pose, WorldPort
 from skills import quaternion as quat
 from skills.turns import grip_yaw, wrap_angle, yaw_of
 from skills.vocabulary import ARMS, Arm
@@ -49,6 +50,11 @@ def clear_rise(world: WorldPort, name: str, pose: Pose, quarter_turns: int, rise
     grip = wrap_angle(grip_yaw(yaw_of(pose.orientation), quarter_turns, robot_yaw(world)))
     if abs(grip) <= TURNED_RAD:
         return rise
+    return above_rise(world, name, rise)
+
+
+def above_rise(world: WorldPort, name: str, rise: float) -> float:
+    """Height of middle set-points that take the palms in above the object's top."""
     top = float(world.object_extents(name)[2]) / 2.0  # the grasp is at the centre's height
     # A palm's farthest point from its centre, across its face.
     palm_reach = float(max(world.robot_capabilities().palm_size_m[:2])) / 2.0
@@ -60,9 +66,14 @@ class Approach(ViaPointLeaf):
 
     The faces are the pair that suits move ``move``'s turn (:mod:`skills.turns`), from the
     object's measured yaw: after a turn, the palms meet the faces that now face them.
+
+    Before moving, the path is predicted and checked against the obstacles
+    (:mod:`planner.leaves.palm_routes`); if it is not clear by ``margin_m``, the first clear of:
+    the other way in (from above the object's top instead of from the side, or the reverse), or
+    the usual way around the obstacle nearest its path.
     """
 
-    WORLD_ROLES: ClassVar[tuple[type, ...]] = (ObjectSensing, PalmControl)
+    WORLD_ROLES: ClassVar[tuple[type, ...]] = (ObjectSensing, PalmControl, ObstacleScene)
 
     INPUT_PORTS = {
         "object": PortInformation(str, description="object to approach"),
@@ -85,13 +96,15 @@ class Approach(ViaPointLeaf):
             default_value=1.5,
             description="duration scale of each segment, s",
         ),
+        "margin_m": margin_port(),
     }
     OUTPUT_PORTS: dict[str, PortInformation] = {}
     MOVING = "approaching"
     ARRIVED = "palms at the pre-grasp poses"
 
     def initialise(self) -> None:
-        """Plan the via-point motion from where the palms are now."""
+        """Plan the via-point motion from where the palms are now, by a way clear of the
+        obstacles."""
         self.motion = None
         if self.connected() is not None:
             return
@@ -101,13 +114,35 @@ class Approach(ViaPointLeaf):
         quarter_turns = grasp_quarter_turns(world, name, turn)
         g = lateral_geometry(world, name, quarter_turns)
         pose = world.object_pose(name)
-        waypoints = pregrasp_poses(
-            pose,
-            {a: g.position(a) for a in ARMS},
-            {a: g.orientation(a) for a in ARMS},
-            {a: g.normal(a) for a in ARMS},
-            float(self.get_input("standoff_m")),
-            clear_rise(world, name, pose, quarter_turns, float(self.get_input("rise_m"))),
+        rise_m = float(self.get_input("rise_m"))
+        rise = clear_rise(world, name, pose, quarter_turns, rise_m)
+
+        def way_in(height: float) -> dict[Arm, list[Pose]]:
+            return pregrasp_poses(
+                pose,
+                {a: g.position(a) for a in ARMS},
+                {a: g.orientation(a) for a in ARMS},
+                {a: g.normal(a) for a in ARMS},
+                float(self.get_input("standoff_m")),
+                height,
+            )
+
+        usual = "from above" if rise > rise_m else "from the side"
+        other, other_rise = (
+            ("from the side", rise_m)
+            if rise > rise_m
+            else ("from above", above_rise(world, name, rise_m))
         )
+        routes = [PalmRoute(f"coming in {usual}", way_in(rise))]
+        if other_rise != rise:
+            routes.append(PalmRoute(f"coming in {other}", way_in(other_rise)))
         starts = {a: measured_state(world.palm_pose(a), world.palm_twist(a)) for a in ARMS}
-        self.motion = ViaPointMotion(starts, waypoints, float(self.get_input("segment_s")))
+        take_clear_route(
+            self,
+            world,
+            starts,
+            routes,
+            float(self.get_input("segment_s")),
+            float(self.get_input("margin_m")),
+            detour_of=0,
+        )

@@ -133,6 +133,8 @@ class ViaPointLeaf(MotionLeaf):
     def __init__(self, name: str, **kwargs: Any) -> None:
         super().__init__(name=name, **kwargs)
         self.motion: ViaPointMotion | None = None
+        #: Which way the palms take, when not the usual one (added to the feedback).
+        self.route_note = ""
 
     def update(self) -> Status:
         """Command one step of the motion; SUCCESS at the last via-point."""
@@ -141,6 +143,7 @@ class ViaPointLeaf(MotionLeaf):
         assert self.motion is not None
         for arm, st in self.motion.step(self.control_dt).items():
             self.world.command_palm(arm, Pose(st.position, st.orientation), st.twist())
+        note = f" ({self.route_note})" if self.route_note else ""
         if self.motion.done():
-            return self.succeed(self.ARRIVED)
-        return self.running(f"{self.MOVING}: {self.motion.remaining():.3f} m to go")
+            return self.succeed(self.ARRIVED + note)
+        return self.running(f"{self.MOVING}: {self.motion.remaining():.3f} m to go{note}")

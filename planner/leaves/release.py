@@ -14,12 +14,13 @@ from planner.composition import (
     static_composition,
 )
 from planner.leaves.base import MotionLeaf
-from planner.leaves.palm_motion import ViaPointLeaf, ViaPointMotion, measured_state
-from planner.port import Clock, ObjectSensing, PalmControl, Pose
+from planner.leaves.palm_motion import ViaPointLeaf, measured_state
+from planner.leaves.palm_routes import PalmRoute, margin_port, take_clear_route
+from planner.port import Clock, ObjectSensing, ObstacleScene, PalmControl, Pose
 from skills import quaternion as quat
 from skills.composer import DualArmComposer, DualArmState
 from skills.dual_arm import GraspGeometry
-from skills.vocabulary import ARMS
+from skills.vocabulary import ARMS, Arm
 
 
 def palms_facing(state: DualArmState) -> GraspGeometry:
@@ -107,10 +108,20 @@ class Release(MotionLeaf):
         return self.running(f"opening: {forces[0]:.1f} N, {forces[1]:.1f} N")
 
 
-class Retreat(ViaPointLeaf):
-    """Take both palms back to their rest poses, rising first."""
+#: How far a retreat that must keep low backs away at least, m.
+LOW_BACK_M = 0.06
 
-    WORLD_ROLES: ClassVar[tuple[type, ...]] = (PalmControl,)
+
+class Retreat(ViaPointLeaf):
+    """Take both palms back to their rest poses, backing away and rising first.
+
+    Before moving, the path is predicted and checked against the obstacles
+    (:mod:`planner.leaves.palm_routes`); if it is not clear by ``margin_m``, the first clear of:
+    backing further away and rising half as high, the usual way around the obstacle nearest its
+    path, rising straight without backing away, or backing away and staying there.
+    """
+
+    WORLD_ROLES: ClassVar[tuple[type, ...]] = (PalmControl, ObstacleScene)
 
     INPUT_PORTS = {
         "back_m": PortInformation(
@@ -132,29 +143,59 @@ class Retreat(ViaPointLeaf):
             default_value=1.5,
             description="duration scale of each segment, s",
         ),
+        "margin_m": margin_port(),
     }
     OUTPUT_PORTS: dict[str, PortInformation] = {}
     MOVING = "retreating"
     ARRIVED = "palms at rest"
 
     def initialise(self) -> None:
-        """Plan rise-then-rest from where the palms are."""
+        """Plan rise-then-rest from where the palms are, by a way clear of the obstacles."""
         self.motion = None
         if self.connected() is not None:
             return
         world = self.world
-        rise = np.array([0.0, 0.0, float(self.get_input("rise_m"))])
+        rise = float(self.get_input("rise_m"))
         back = float(self.get_input("back_m"))
-        waypoints = {}
-        for arm in ARMS:
-            here = world.palm_pose(arm)
-            # The palm frame's z is its contact normal, pointing out of its face.
-            away = here.position - back * quat.rotate(here.orientation, np.array([0.0, 0.0, 1.0]))
-            first = [Pose(away, here.orientation)] if back > 0.0 else []
-            waypoints[arm] = [
-                *first,
-                Pose(away + rise, here.orientation),
-                world.rest_palm_pose(arm),
-            ]
-        starts = {a: measured_state(world.palm_pose(a), world.palm_twist(a)) for a in ARMS}
-        self.motion = ViaPointMotion(starts, waypoints, float(self.get_input("segment_s")))
+        here = {arm: world.palm_pose(arm) for arm in ARMS}
+        rest = {arm: world.rest_palm_pose(arm) for arm in ARMS}
+
+        def backing(distance: float, height: float | None) -> dict[Arm, list[Pose]]:
+            """Back ``distance`` along the normals, rise ``height`` and go to rest; or, for
+            a height of None, stay backed away."""
+            out = {}
+            for arm in ARMS:
+                pose = here[arm]
+                # The palm frame's z is its contact normal, pointing out of its face.
+                normal = quat.rotate(pose.orientation, np.array([0.0, 0.0, 1.0]))
+                away = pose.position - distance * normal
+                first = [Pose(away, pose.orientation)] if distance > 0.0 else []
+                if height is None:
+                    out[arm] = [Pose(away, pose.orientation)]
+                    continue
+                up = Pose(away + np.array([0.0, 0.0, height]), pose.orientation)
+                out[arm] = [*first, up, rest[arm]]
+            return out
+
+        routes = [
+            PalmRoute("backing away and rising", backing(back, rise)),
+            PalmRoute(
+                "backing further and rising less", backing(max(2 * back, LOW_BACK_M), rise / 2)
+            ),
+            # Backing along the normal can carry a forearm into an obstacle behind the palm.
+            PalmRoute("rising straight", backing(0.0, rise)),
+            PalmRoute("backing away and staying", backing(max(back, LOW_BACK_M / 2), None)),
+        ]
+        if back <= 0.0:
+            del routes[2]  # the usual way already
+        starts = {a: measured_state(here[a], world.palm_twist(a)) for a in ARMS}
+        take_clear_route(
+            self,
+            world,
+            starts,
+            routes,
+            float(self.get_input("segment_s")),
+            float(self.get_input("margin_m")),
+            detour_of=0,
+            detour_at=2,
+        )

@@ -337,7 +337,22 @@ class FakeWorld:
     ) -> PathCheck:
         """Bounding spheres of the object and palms, and segments of the arms, vs spheres."""
         r_obj = float(np.linalg.norm(self._objects[name].extents) / 2.0)
-        d_obj, _ = self._sphere_distance(object_positions, r_obj)
+        d_obj, _ = self._sphere_distance(np.asarray(object_positions, dtype=float), r_obj)
+        return self._check_path(d_obj, np.asarray(palm_positions, dtype=float), margin_m)
+
+    def check_palm_path(
+        self,
+        palm_positions: Array,
+        palm_orientations: Array,
+        margin_m: float = 0.0,
+    ) -> PathCheck:
+        """Segments of the arms, out to the palms, vs spheres."""
+        n = np.asarray(palm_positions).shape[0]
+        return self._check_path(
+            np.full(n, np.inf), np.asarray(palm_positions, dtype=float), margin_m
+        )
+
+    def _check_path(self, d_obj: Array, palm_positions: Array, margin_m: float) -> PathCheck:
         n = palm_positions.shape[0]
         arm_pts = self._arm_points(palm_positions.reshape(n * 2, 3), np.tile([0, 1], n))
         d_arm, _ = self._sphere_distance(arm_pts.reshape(-1, 3), 0.04)
@@ -345,12 +360,12 @@ class FakeWorld:
         d = np.minimum(d_obj, d_arm)
         hits = np.flatnonzero(d < margin_m)
         worst = int(np.argmin(d)) if n else 0
-        what = "object" if d_obj[worst] <= d_arm[worst] else "arm"
+        what = "object" if n and d_obj[worst] <= d_arm[worst] else "arm"
         return PathCheck(
             hits.size == 0,
             float(d.min()) if n else float("inf"),
             int(hits[0]) if hits.size else None,
-            f"{what} closest at waypoint {worst}: {d[worst]:.3f} m",
+            f"{what} closest at waypoint {worst}: {d[worst] if n else np.inf:.3f} m",
         )
 
     def _arm_points(self, palms: Array, arm_index: Array, per_arm: int = 4) -> Array:

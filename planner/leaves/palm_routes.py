@@ -1,0 +1,265 @@
+"""Choosing a clear way for the empty palms: predict each candidate route, check it, take the first
+that keeps clear of the obstacles.
+
+Approach and Retreat move the palms through via-points (:class:`ViaPointMotion`) near an
+object that stands among obstacles. Each offers a small ordered set of routes, its usual one
+first; the route's motion is rolled out open loop (the DMPs are deterministic) and the palms'
+path, with the arm links carried along, is checked through
+:meth:`planner.port.ObstacleScene.check_palm_path`. The first route clear by the margin is
+taken, so a palm with nothing near its path moves exactly as it always did.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from py_trees.ports import PortInformation
+
+from planner.leaves.palm_motion import ViaPointLeaf, ViaPointMotion
+from planner.port import ObstacleInfo, ObstacleScene, PathCheck, Pose
+from skills.pose_dmp import PoseState
+from skills.types import Array
+from skills.vocabulary import ARMS, Arm
+
+#: How far beyond an obstacle's bounding sphere a detour's via-point puts the palm, m: about a
+#: wrist-to-palm length, since the links behind the palm are what sweep past it.
+DETOUR_CLEARANCE_M = 0.15
+
+
+def margin_port() -> PortInformation:
+    """The clearance an empty palms' route must keep from the obstacles, m."""
+    return PortInformation(
+        float,
+        required=False,
+        default_value=0.01,
+        description="clearance from the obstacles the palms' predicted path must keep, m "
+        "(else another way is taken)",
+    )
+
+
+@dataclass(frozen=True)
+class PalmRoute:
+    """One candidate way for both palms.
+
+    Attributes
+    ----------
+    name : str
+        What the route does, in words (for the leaf's feedback).
+    waypoints : mapping Arm -> sequence of Pose
+        Via-points then the final pose per palm, world frame.
+    """
+
+    name: str
+    waypoints: Mapping[Arm, Sequence[Pose]]
+
+
+@dataclass(frozen=True)
+class PalmPath:
+    """A route's predicted palm path, one row per control step from the start.
+
+    Attributes
+    ----------
+    positions : ndarray, shape (N, 2, 3)
+        Left and right palm positions, world frame, m.
+    orientations : ndarray, shape (N, 2, 4)
+        Their orientations, scalar-last.
+    segments : ndarray, shape (N, 2)
+        Index of the via-point each palm heads for at each step.
+    """
+
+    positions: Array
+    orientations: Array
+    segments: Array
+
+
+@dataclass(frozen=True)
+class RouteChoice:
+    """The route a leaf takes and why.
+
+    Attributes
+    ----------
+    route : PalmRoute
+    check : PathCheck
+        Its check at the margin.
+    clear : bool
+        Clear by the margin.
+    contact_free : bool
+        Clear at least of contact (always, when ``clear``).
+    note : str
+        Empty for the first route taken clear; else which routes were refused and why.
+    """
+
+    route: PalmRoute
+    check: PathCheck
+    clear: bool
+    contact_free: bool
+    note: str
+
+
+def predict_palm_path(
+    starts: Mapping[Arm, PoseState],
+    waypoints: Mapping[Arm, Sequence[Pose]],
+    segment_tau: float,
+    dt: float,
+) -> PalmPath:
+    """Roll out the via-point motion the leaf would run, open loop, until it ends.
+
+    Parameters
+    ----------
+    starts : mapping Arm -> PoseState
+        Where each palm starts.
+    waypoints : mapping Arm -> sequence of Pose
+        Via-points then the final pose, world frame.
+    segment_tau : float
+        Duration scale of each segment, s.
+    dt : float
+        Control step, s.
+    """
+    motion = ViaPointMotion(starts, waypoints, segment_tau)
+    most = max(len(w) for w in waypoints.values())
+    # Every segment but the last hands over at ``switch_at``; the last converges in a few tau.
+    n_max = int(np.ceil((most * motion.switch_at + 4.0) * segment_tau / dt))
+    positions = [np.stack([starts[a].position for a in ARMS])]
+    orientations = [np.stack([starts[a].orientation for a in ARMS])]
+    segments = [np.zeros(2, dtype=int)]
+    for _ in range(n_max):
+        states = motion.step(dt)
+        positions.append(np.stack([states[a].position for a in ARMS]))
+        orientations.append(np.stack([states[a].orientation for a in ARMS]))
+        segments.append(np.array([motion.index[a] for a in ARMS]))
+        if motion.done():
+            break
+    return PalmPath(np.array(positions), np.array(orientations), np.array(segments))
+
+
+def detour(route: PalmRoute, path: PalmPath, obstacles: Sequence[ObstacleInfo]) -> PalmRoute:
+    """``route`` with a via-point that takes each palm around the obstacle its path comes
+    nearest: where the predicted path passes closest to that obstacle's bounding sphere, the
+    palm is sent out horizontally, away from the obstacle's centre, to
+    :data:`DETOUR_CLEARANCE_M` beyond the sphere, before heading on to the via-point it was
+    heading for there. A palm already that far from every obstacle keeps its route.
+    """
+    if not obstacles:
+        return route
+    centres = np.array([o.position for o in obstacles])  # (K, 3)
+    radii = np.array([o.radius for o in obstacles])
+    out: dict[Arm, list[Pose]] = {}
+    for a, arm in enumerate(ARMS):
+        p = path.positions[:, a]  # (N, 3)
+        gaps = np.linalg.norm(p[:, None] - centres[None], axis=-1) - radii[None]  # (N, K)
+        step, k = np.unravel_index(int(np.argmin(gaps)), gaps.shape)
+        waypoints = list(route.waypoints[arm])
+        reach = radii[k] + DETOUR_CLEARANCE_M
+        away = p[step] - centres[k]
+        away[2] = 0.0
+        across = float(np.linalg.norm(away))
+        if gaps[step, k] >= DETOUR_CLEARANCE_M or across >= reach:
+            out[arm] = waypoints
+            continue
+        if across < 1e-6:
+            # Straight above or below the centre: out sideways, to the arm's own side.
+            away = np.array([0.0, 1.0 if arm is Arm.LEFT else -1.0, 0.0])
+            across = 1.0
+        via = p[step] + (reach - across) * away / across
+        heading = int(min(path.segments[step, a], len(waypoints) - 1))
+        waypoints.insert(heading, Pose(via, waypoints[heading].orientation))
+        out[arm] = waypoints
+    return PalmRoute(f"{route.name}, around the nearest obstacle", out)
+
+
+def choose_route(
+    scene: ObstacleScene,
+    starts: Mapping[Arm, PoseState],
+    routes: Sequence[PalmRoute],
+    segment_tau: float,
+    dt: float,
+    margin_m: float,
+    detour_of: int | None = 0,
+    detour_at: int | None = None,
+) -> RouteChoice:
+    """The first of ``routes`` whose predicted path is clear by ``margin_m``.
+
+    The routes are tried in order, with (if ``detour_of`` names one) that route taken around
+    the obstacle its path comes nearest (:func:`detour`) tried at ``detour_at``. When none is
+    clear, the one clear of contact with the largest predicted distance; when none is even
+    that, the usual one.
+
+    Parameters
+    ----------
+    scene : ObstacleScene
+        The world's obstacles and collision queries.
+    starts : mapping Arm -> PoseState
+        Where each palm starts.
+    routes : sequence of PalmRoute
+        Candidates, the usual one first.
+    segment_tau, dt : float
+        The motion's segment duration scale and control step, s.
+    margin_m : float
+        Clearance asked, m.
+    detour_of : int or None
+        Index of the route to also try around the nearest obstacle.
+    detour_at : int, optional
+        Where in the order to try that detour (after ``detour_of``); default last.
+    """
+    if not routes:
+        raise ValueError("choose_route: expected at least one route, got none")
+    tried: list[tuple[PalmRoute, PalmPath, PathCheck]] = []
+    candidates = list(routes)
+    obstacles = scene.obstacles()
+    k = 0
+    while k < len(candidates):
+        route = candidates[k]
+        path = predict_palm_path(starts, route.waypoints, segment_tau, dt)
+        check = scene.check_palm_path(path.positions, path.orientations, margin_m)
+        if check.clear:
+            return RouteChoice(route, check, True, True, _refusals(tried))
+        tried.append((route, path, check))
+        if detour_of is not None and k == detour_of and obstacles:
+            at = len(routes) if detour_at is None else max(detour_at, k + 1)
+            candidates.insert(at, detour(route, path, obstacles))
+        k += 1
+    contact = [scene.check_palm_path(p.positions, p.orientations, 0.0).clear for _, p, _ in tried]
+    if not any(contact):
+        # The prediction carries the forearms rigidly and asks them for extra clearance the
+        # further the palms go: over a long way it doubts every route alike, and then it is
+        # no ground for leaving the usual one.
+        route, _, check = tried[0]
+        return RouteChoice(route, check, False, False, _refusals(tried))
+    best = max(range(len(tried)), key=lambda i: (contact[i], tried[i][2].min_distance_m))
+    route, _, check = tried[best]
+    return RouteChoice(route, check, False, True, _refusals(tried))
+
+
+def _refusals(tried: Sequence[tuple[PalmRoute, PalmPath, PathCheck]]) -> str:
+    return "; ".join(f"{route.name}: {check.detail}" for route, _, check in tried)
+
+
+def take_clear_route(
+    leaf: ViaPointLeaf,
+    scene: ObstacleScene,
+    starts: Mapping[Arm, PoseState],
+    routes: Sequence[PalmRoute],
+    segment_tau: float,
+    margin_m: float,
+    detour_of: int | None = 0,
+    detour_at: int | None = None,
+) -> None:
+    """Plan ``leaf``'s motion along the route :func:`choose_route` picks; the leaf's feedback
+    says which and why when it is not the usual one, or when no route is clear."""
+    choice = choose_route(
+        scene, starts, routes, segment_tau, leaf.control_dt, margin_m, detour_of, detour_at
+    )
+    leaf.route_note = ""
+    leaf.motion = ViaPointMotion(starts, choice.route.waypoints, segment_tau)
+    if choice.clear:
+        if choice.note:
+            leaf.route_note = f"by {choice.route.name}; refused {choice.note}"
+    elif choice.contact_free:
+        leaf.route_note = (
+            f"no way clear by {margin_m:g} m: by {choice.route.name}, the most clearance "
+            f"({choice.check.min_distance_m * 1000:.0f} mm); {choice.note}"
+        )
+    else:
+        leaf.route_note = f"no way predicted clear, by {choice.route.name}: {choice.note}"
