@@ -342,6 +342,8 @@ class CollisionWorld:
         # the bounding-sphere centre of a static element): a screen that needs only the
         # positions a sync read, not the rotations (see _reach_bounds).
         self._reach = self._radii.copy()
+        self._origins_read: object = None  # the sync read _origins_cache was made from
+        self._origins_cache = np.zeros((len(self._elements), 3))
         for _, _, _, rows, shape_p, shape_r in self._link_tracks:
             centres_in_link = shape_p + (shape_r @ self._centres_local[rows][:, :, None])[:, :, 0]
             self._reach[rows] += np.linalg.norm(centres_in_link, axis=-1)
@@ -429,6 +431,8 @@ class CollisionWorld:
         or its bounding-sphere centre (static elements); each element lies within
         ``_reach`` of it. Reads positions alone, before :meth:`_place`."""
         assert self._read is not None
+        if self._origins_read is self._read:
+            return self._origins_cache  # the watcher asks for several groups per sync
         links_read, objects_read = self._read
         origins = self._centres.copy()  # static elements' are right already
         for (_, links, moving, rows, _, _), (states, base) in zip(
@@ -438,6 +442,7 @@ class CollisionWorld:
             origins[rows] = [by_link[link] if link >= 0 else base[0] for link in links]
         for row, position, _ in objects_read:
             origins[row] = position
+        self._origins_read, self._origins_cache = self._read, origins
         return origins
 
     @property
