@@ -274,6 +274,7 @@ class CollisionWorld:
         self.scene = scene
         c = scene.client
         self._elements: list[_Element] = []
+        self._rows_by_name: dict[str, int] = {}
         # Robot links, per body (_LinkTrack).
         self._link_tracks: list[_LinkTrack] = []
         # What the last sync read from PyBullet, made into element poses at the first query.
@@ -377,13 +378,15 @@ class CollisionWorld:
         radius: float,
     ) -> None:
         obj = fcl.CollisionObject(geometry, fcl.Transform())
+        self._rows_by_name.setdefault(name, len(self._elements))
         self._elements.append(_Element(name, group, obj, geometry, centre, radius))
 
     def _index(self, name: str) -> int:
-        for i, element in enumerate(self._elements):
-            if element.name == name:
-                return i
-        raise ValueError(f"CollisionWorld: expected an element named {name!r}")
+        # The watcher looks the forearms' elements up every control step: by a mapping.
+        try:
+            return self._rows_by_name[name]
+        except KeyError:
+            raise ValueError(f"CollisionWorld: expected an element named {name!r}") from None
 
     def _set_poses(self, rows: IntArray, positions: FloatArray, rotations: Array) -> None:
         """Pose elements ``rows`` (K,): positions (K, 3) and rotations (K, 3, 3), world frame."""

@@ -501,9 +501,10 @@ class DualArmImpedanceController:
     def palm_motion(self, arm: Arm) -> tuple[FloatArray, FloatArray]:
         """Measured palm position (3,) m and linear velocity (3,) m/s of ``arm``, world frame:
         :meth:`palm_state`'s first and third, read alone (one link read, no joint read)."""
+        i = self.ARMS.index(Arm(arm))
         link = pb.getLinkState(
-            self._arm_body[self.ARMS.index(Arm(arm))],
-            self._specs[self.ARMS.index(Arm(arm))].palm_link,
+            self._arm_body[i],
+            self._specs[i].palm_link,
             computeLinkVelocity=1,
             computeForwardKinematics=1,
             physicsClientId=self.client,

@@ -18,6 +18,7 @@ from __future__ import annotations
 import time
 from collections.abc import Iterable, Mapping
 from dataclasses import replace
+from typing import Any
 
 import numpy as np
 import pybullet as pb
@@ -486,29 +487,28 @@ class Scene:
         The scene runs without physics substeps, so these are the full forces (with substeps
         PyBullet reports about 1/N of them).
         """
-        spec = self.robot.arms[Arm(arm)]
-        contacts = pb.getContactPoints(
-            bodyA=self.robot_ids[spec.body],
-            bodyB=self._object(name),
-            linkIndexA=spec.palm_link,
-            physicsClientId=self.client,
-        )
-        return float(sum(c[9] for c in contacts))
+        return float(sum(c[9] for c in self._palm_contacts(arm, name)))
 
     def palm_load(self, arm: Arm, name: str) -> float:
         """Upward (world +z) force of ``arm``'s palm on object ``name``, normal and friction,
         N."""
-        spec = self.robot.arms[Arm(arm)]
-        contacts = pb.getContactPoints(
-            bodyA=self.robot_ids[spec.body],
-            bodyB=self._object(name),
-            linkIndexA=spec.palm_link,
-            physicsClientId=self.client,
-        )
+        contacts = self._palm_contacts(arm, name)
         # PyBullet's normal points from the object (B) to the palm (A): the solver pushes A
         # along it and along the friction directions, and the object the opposite way
         # (checked: a lifted box's two loads sum to its weight).
         return -float(sum(c[9] * c[7][2] + c[10] * c[11][2] + c[12] * c[13][2] for c in contacts))
+
+    def _palm_contacts(self, arm: Arm, name: str) -> tuple[Any, ...]:
+        """PyBullet's contact points of ``arm``'s palm (body A) with object ``name`` (body B)."""
+        spec = self.robot.arms[Arm(arm)]
+        return tuple(
+            pb.getContactPoints(
+                bodyA=self.robot_ids[spec.body],
+                bodyB=self._object(name),
+                linkIndexA=spec.palm_link,
+                physicsClientId=self.client,
+            )
+        )
 
     def arm_contact_force(self, arm: Arm, body_id: int) -> float:
         """Sum of contact normal forces between any link of ``arm``'s body and a body, N."""

@@ -44,6 +44,17 @@ class BodySpec:
     base2world_quaternion: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 1.0)
 
 
+def _check_joint_vectors(owner: str, spec: ArmSpec | SharedJointsSpec) -> None:
+    """One value per joint in each per-joint field of ``spec``, and lower < upper."""
+    n = len(spec.joint_indices)
+    for name in ("rest_posture", "lower", "upper", "max_torque"):
+        got = len(getattr(spec, name))
+        if got != n:
+            raise ValueError(f"{owner}: expected {name} of length {n}, got {got}")
+    if any(lo >= hi for lo, hi in zip(spec.lower, spec.upper, strict=True)):
+        raise ValueError(f"{owner}: expected lower < upper, got {spec.lower} and {spec.upper}")
+
+
 @dataclass(frozen=True)
 class ArmSpec:
     """One arm of a robot: a chain of revolute joints ending in an end-effector link.
@@ -84,13 +95,7 @@ class ArmSpec:
     palm_link_name: str = "palm"
 
     def __post_init__(self) -> None:
-        n = len(self.joint_indices)
-        for name in ("rest_posture", "lower", "upper", "max_torque"):
-            got = len(getattr(self, name))
-            if got != n:
-                raise ValueError(f"ArmSpec: expected {name} of length {n}, got {got}")
-        if any(lo >= hi for lo, hi in zip(self.lower, self.upper, strict=True)):
-            raise ValueError(f"ArmSpec: expected lower < upper, got {self.lower} and {self.upper}")
+        _check_joint_vectors("ArmSpec", self)
 
 
 @dataclass(frozen=True)
@@ -123,15 +128,7 @@ class SharedJointsSpec:
     posture_weight: float = 1.0
 
     def __post_init__(self) -> None:
-        n = len(self.joint_indices)
-        for name in ("rest_posture", "lower", "upper", "max_torque"):
-            got = len(getattr(self, name))
-            if got != n:
-                raise ValueError(f"SharedJointsSpec: expected {name} of length {n}, got {got}")
-        if any(lo >= hi for lo, hi in zip(self.lower, self.upper, strict=True)):
-            raise ValueError(
-                f"SharedJointsSpec: expected lower < upper, got {self.lower} and {self.upper}"
-            )
+        _check_joint_vectors("SharedJointsSpec", self)
         if not (np.isfinite(self.posture_weight) and self.posture_weight >= 0.0):
             raise ValueError(
                 f"SharedJointsSpec: expected posture_weight >= 0, got {self.posture_weight}"
