@@ -386,7 +386,7 @@ def run_episode(
     if tree_path is not None:
         root = load_tree(tree_path, main_tree_id=main_tree, run_keys=RUN_WRITES)
     else:
-        root = default_tree(task_steps(world))
+        root = default_tree(task_steps(world), world.tree_path())
     lib = library if library is not None else load_library(world)
     with SimWorld(world, gui=gui, truth=truth) as sim:
         recorder = _Recorder(sim, moves, stepped, 1.0 / world.sim.control_hz)

@@ -12,7 +12,7 @@ import os
 import sys
 from pathlib import Path
 
-from planner.default_tree import PICK_AND_PLACE_XML
+from planner.default_tree import PICK_AND_PLACE_XML, TaskStep, task_xml
 from planner.tree_dataflow import RUN_WRITES
 from planner.tree_objects import check_tree_objects
 from planner.tree_problems import TreeFileError
@@ -55,15 +55,22 @@ def preflight_problems(
     """
     import planner.leaves  # noqa: F401  (registers the leaves a tree may use)
 
-    if tree is not None:
-        tree_problems = validate_tree(tree, main_tree_id=main_tree, run_keys=RUN_WRITES)
+    # Without --tree, the world's own tree template (its ``tree``) or the shipped one.
+    template = world.tree_path() if tree is None else None
+    checked = tree if tree is not None else template
+    if checked is not None:
+        tree_problems = validate_tree(
+            checked, main_tree_id=main_tree if tree else None, run_keys=RUN_WRITES
+        )
         if tree_problems:
             return [str(p) for p in tree_problems]
     try:
+        if template is not None:
+            task_xml([TaskStep(s.object, len(s.moves)) for s in world.task], template)
         if tree is not None:
             doc = read_tree_document(tree, main_tree_id=main_tree)
         else:
-            doc = read_tree_document(PICK_AND_PLACE_XML)
+            doc = read_tree_document(template or PICK_AND_PLACE_XML)
     except TreeFileError as err:
         return [str(p) for p in err.problems]
     lines = [p.format(world_file) for p in feasibility_problems(world, tree_grasps(doc))]

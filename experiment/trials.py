@@ -45,7 +45,7 @@ import numpy as np
 import pybullet as pb
 
 from experiment.hard import HardTrial, draw_hard, with_pushes
-from experiment.records import campaign_key, owned_by
+from experiment.records import campaign_key, owned_by, tree_hash
 from experiment.results import (
     ResultsFileError,
     campaign_lock,
@@ -513,6 +513,9 @@ def campaign_of(
         settings["main_tree"] = main_tree
     if hard:
         settings["hard"] = base.trials.hard.model_dump(mode="json")
+    template = base.tree_path() if tree is None else None
+    if template is not None:  # the world's own tree: its content, not only its path
+        settings["world_tree_sha256"] = tree_hash(template)
     data = base.model_dump(mode="json")
     data["trials"].pop("hard", None)
     return campaign_key(base.name, data, tree, seed, settings)

@@ -39,6 +39,7 @@ from py_trees.behaviour import Behaviour
 import planner.leaves  # noqa: F401  (registers the leaves the file uses)
 from planner.loader import load_tree, load_tree_string
 from planner.tree_dataflow import RUN_WRITES
+from planner.tree_problems import TreeFileError, TreeProblem
 
 __all__ = ["PICK_AND_PLACE_XML", "TaskStep", "default_tree", "pick_and_place_xml", "task_xml"]
 
@@ -80,15 +81,46 @@ class TaskStep:
             )
 
 
-def _shipped() -> tuple[ET.Element, ET.Element, ET.Element, ET.Element]:
-    """The document, its main Sequence, its PickAndPlace instance and definition."""
-    root = ET.parse(PICK_AND_PLACE_XML).getroot()
+def _template_problem(template: Path, message: str) -> TreeFileError:
+    return TreeFileError(
+        [TreeProblem(str(template), None, "", f"as a task's tree template: {message}")]
+    )
+
+
+def _shipped(
+    template: Path = PICK_AND_PLACE_XML,
+) -> tuple[ET.Element, ET.Element, ET.Element, ET.Element]:
+    """The document, its main Sequence, its PickAndPlace instance and definition.
+
+    Raises
+    ------
+    TreeFileError
+        If ``template`` is not XML or lacks that structure (names what is missing).
+    """
+    try:
+        root = ET.parse(template).getroot()
+    except (ET.ParseError, OSError) as err:
+        raise _template_problem(template, f"expected a readable XML file ({err})") from None
     main = root.find(f"BehaviorTree[@ID='{root.get('main_tree_to_execute')}']")
     sequence = main[0] if main is not None and len(main) else None
-    assert sequence is not None, f"{PICK_AND_PLACE_XML}: expected a main tree with a Sequence"
-    instance = next(e for e in sequence if e.tag == "SubTree" and e.get("ID") == _STEP_TREE)
+    if sequence is None or sequence.tag != "Sequence":
+        raise _template_problem(
+            template, "expected main_tree_to_execute naming a tree whose root is a Sequence"
+        )
+    instance = next((e for e in sequence if e.tag == "SubTree" and e.get("ID") == _STEP_TREE), None)
     definition = root.find(f"BehaviorTree[@ID='{_STEP_TREE}']")
-    assert definition is not None, f"{PICK_AND_PLACE_XML}: expected a {_STEP_TREE} tree"
+    if instance is None or definition is None or not len(definition):
+        raise _template_problem(
+            template,
+            f'expected a <BehaviorTree ID="{_STEP_TREE}"> and a <SubTree ID="{_STEP_TREE}"> '
+            "in the main tree's Sequence",
+        )
+    if not any(e.tag == "SubTree" and e.get("ID") == _MOVE_TREE for e in definition[0]):
+        raise _template_problem(
+            template,
+            f'expected the {_STEP_TREE} tree\'s root to hold <SubTree ID="{_MOVE_TREE}"> '
+            "(one is made per move of the task)",
+        )
     return root, sequence, instance, definition
 
 
@@ -122,17 +154,20 @@ def _instance_name(name: str, used: set[str]) -> str:
     return candidate
 
 
-def task_xml(steps: Sequence[TaskStep]) -> str:
-    """The shipped document running ``steps`` in order, as XML text (see the module's doc).
+def task_xml(steps: Sequence[TaskStep], template: Path = PICK_AND_PLACE_XML) -> str:
+    """The ``template`` document (default: the shipped one) running ``steps`` in order, as XML
+    text (see the module's doc).
 
     Raises
     ------
     ValueError
         If ``steps`` is empty.
+    TreeFileError
+        If ``template`` lacks the shipped tree's structure.
     """
     if not steps:
         raise ValueError("task_xml: expected at least 1 task step, got none")
-    root, sequence, instance, definition = _shipped()
+    root, sequence, instance, definition = _shipped(template)
     at = list(sequence).index(instance)
     sequence.remove(instance)
     root.remove(definition)
@@ -167,7 +202,7 @@ def pick_and_place_xml(moves: int) -> str:
     return task_xml([TaskStep(_FROM_BLACKBOARD, moves)])
 
 
-def default_tree(task: int | Sequence[TaskStep] = 3) -> Behaviour:
+def default_tree(task: int | Sequence[TaskStep] = 3, template: Path | None = None) -> Behaviour:
     """The tree ``app.py run`` and ``trials`` run without ``--tree``.
 
     Parameters
@@ -175,18 +210,23 @@ def default_tree(task: int | Sequence[TaskStep] = 3) -> Behaviour:
     task : int or sequence of TaskStep
         A number of moves of the blackboard's ``/object`` (3: the shipped file as it is), or
         a world's task, step by step (:func:`task_xml`).
+    template : Path, optional
+        A tree of the shipped one's structure to make the task of (a world's ``tree``);
+        default the shipped ``planner/trees/pick_and_place.xml``.
 
     Returns
     -------
     Behaviour
         The root as loaded by :func:`planner.loader.load_tree`; not set up.
     """
+    template = template or PICK_AND_PLACE_XML
     if isinstance(task, int):
-        if task == 3:
+        if task == 3 and template == PICK_AND_PLACE_XML:
             return load_tree(PICK_AND_PLACE_XML, run_keys=RUN_WRITES)
         return load_tree_string(
-            pick_and_place_xml(task), source=f"{PICK_AND_PLACE_XML} ({task} moves)"
+            task_xml([TaskStep(_FROM_BLACKBOARD, task)], template),
+            source=f"{template} ({task} moves)",
         )
     steps = list(task)
     what = ", ".join(f"{s.object} {s.moves} move{'s' * (s.moves != 1)}" for s in steps)
-    return load_tree_string(task_xml(steps), source=f"{PICK_AND_PLACE_XML} (task: {what})")
+    return load_tree_string(task_xml(steps, template), source=f"{template} (task: {what})")

@@ -702,6 +702,30 @@ class World(_FileModel):
     disturbances: tuple[DisturbanceEntry, ...] = Field(
         default=(), description="scripted pushes on objects during a run; may be empty"
     )
+    tree: _Name | None = Field(
+        default=None,
+        description="the behaviour tree this world's task runs without --tree: an XML file "
+        "relative to the world file's folder, with the shipped tree's Task, PickAndPlace and "
+        "Move subtrees (one PickAndPlace per task step, one Move per move is made of it); "
+        "default planner/trees/pick_and_place.xml",
+    )
+
+    @field_validator("tree")
+    @classmethod
+    def _tree_exists(cls, tree: str | None, info: ValidationInfo) -> str | None:
+        if tree is None:
+            return tree
+        path = _resolve(tree, info)
+        if not path.is_file() or path.suffix.lower() != ".xml":
+            reason = "not an .xml file" if path.is_file() else "no such file"
+            raise field_problem(
+                "an existing behaviour tree .xml file", Shown(f"{tree!r} ({reason}: {path})")
+            )
+        return tree
+
+    def tree_path(self) -> Path | None:
+        """The file of :attr:`tree`, resolved, or None for the shipped tree."""
+        return None if self.tree is None else self.resolve_path(self.tree)
 
     _source: Path | None = PrivateAttr(default=None)
 
@@ -824,6 +848,8 @@ class World(_FileModel):
         data = handler(self)
         if not self.disturbances and isinstance(data, dict):
             data.pop("disturbances", None)
+        if self.tree is None and isinstance(data, dict):
+            data.pop("tree", None)
         return data
 
 
