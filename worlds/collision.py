@@ -499,9 +499,6 @@ class CollisionWorld:
             return collides
         margins = np.broadcast_to(np.asarray(margin, dtype=float), (n,))
         self._place()
-        obstacles = [self._fcl(r) for r in self._active]
-        o_centre = self._centres[self._active]
-        o_radius = self._radii[self._active]
         palm_r = quat.to_matrix(quaternions)  # (N, 2, 3, 3)
         for a, arm in enumerate((Arm.LEFT, Arm.RIGHT)):
             rows = self._rows(arm_group(arm))
@@ -512,24 +509,97 @@ class CollisionWorld:
             start2waypoint = palm_r[:, a] @ palm_r[0, a].T
             links = [r for r in rows if r != self._palm_rows[arm]][-distal_links:]
             for row in links:
-                element = self._elements[row]
                 link = self._fcl(row)
                 offset = np.asarray(link.getTranslation(), dtype=float) - positions[0, a]
                 rot = start2waypoint @ np.asarray(link.getRotation(), dtype=float)
                 pos = start2waypoint @ offset + positions[:, a]
-                centres = np.einsum("nij,j->ni", rot, element.centre_local) + pos
-                gaps = (
-                    np.linalg.norm(centres[:, None] - o_centre, axis=-1) - element.radius - o_radius
-                )
-                probe = fcl.CollisionObject(element.geometry, fcl.Transform())
-                allowed: dict[int, float] = {}
-                for w, o in np.argwhere(gaps <= margins[:, None]):
-                    if collides[w]:
-                        continue
-                    if o not in allowed:
-                        allowed[o] = _start_allowance(probe, rot[0], pos[0], obstacles[o])
-                    asked = min(float(margins[w]), allowed[o])
-                    collides[w] = _hit(probe, rot[w], pos[w], obstacles[o], asked)
+                self._check_posed(row, rot, pos, margins, collides)
+        return collides
+
+    def _check_posed(
+        self,
+        row: int,
+        rotations: FloatArray,
+        positions: FloatArray,
+        margins: FloatArray,
+        collides: NDArray[np.bool_],
+    ) -> None:
+        """Mark in ``collides`` (N,) the waypoints where element ``row``, posed at ``rotations``
+        (N, 3, 3) and ``positions`` (N, 3), comes within ``margins`` (N,) of an active
+        obstacle, or nearer than it starts (:func:`_start_allowance`); bounding spheres screen
+        before FCL. Needs :meth:`_place` done."""
+        element = self._elements[row]
+        o_centre = self._centres[self._active]
+        o_radius = self._radii[self._active]
+        centres = np.einsum("nij,j->ni", rotations, element.centre_local) + positions
+        gaps = np.linalg.norm(centres[:, None] - o_centre, axis=-1) - element.radius - o_radius
+        probe = fcl.CollisionObject(element.geometry, fcl.Transform())
+        allowed: dict[int, float] = {}
+        for w, o in np.argwhere(gaps <= margins[:, None]):
+            if collides[w]:
+                continue
+            obstacle = self._fcl(self._active[o])
+            if o not in allowed:
+                allowed[o] = _start_allowance(probe, rotations[0], positions[0], obstacle)
+            asked = min(float(margins[w]), allowed[o])
+            collides[w] = _hit(probe, rotations[w], positions[w], obstacle, asked)
+
+    def arm_moving_links(self, arm: Arm) -> tuple[int, ...]:
+        """Link indices, on ``arm``'s body, of the arm's elements that move, palm excluded
+        (on a body that carries both arms, the left arm's include the trunk's)."""
+        _, links, _, rows, _, _ = self._link_tracks[(Arm.LEFT, Arm.RIGHT).index(Arm(arm))]
+        palm = self._palm_rows[Arm(arm)]
+        return tuple(
+            dict.fromkeys(k for k, r in zip(links, rows, strict=True) if k >= 0 and r != palm)
+        )
+
+    def check_link_frames(
+        self,
+        arm: Arm,
+        links: Sequence[int],
+        frame_positions: ArrayLike,
+        frame_quaternions: ArrayLike,
+        margin: float | ArrayLike = 0.0,
+    ) -> NDArray[np.bool_]:
+        """Check ``arm``'s elements on ``links`` posed by predicted link frames.
+
+        Parameters
+        ----------
+        arm : Arm
+        links : sequence of int
+            (L,) link indices on the arm's body (:meth:`arm_moving_links`).
+        frame_positions : array_like
+            (N, L, 3) the links' frames (PyBullet's ``getLinkState`` first two), world, m.
+        frame_quaternions : array_like
+            (N, L, 4) scalar-last.
+        margin : float or array_like
+            Clearance below which a waypoint counts as colliding, m: one, or (N,).
+
+        Returns
+        -------
+        ndarray
+            (N,) True where an element is within ``margin`` of an active obstacle, or, for
+            one that starts nearer, nearer than it starts (:func:`_start_allowance`).
+        """
+        p = np.asarray(frame_positions, dtype=float)
+        r = quat.to_matrix(np.asarray(frame_quaternions, dtype=float))  # (N, L, 3, 3)
+        n = p.shape[0]
+        collides = np.zeros(n, dtype=bool)
+        if not self._active or n == 0:
+            return collides
+        margins = np.broadcast_to(np.asarray(margin, dtype=float), (n,))
+        self._place()
+        column = {link: k for k, link in enumerate(links)}
+        _, track_links, _, rows, local_p, local_r = self._link_tracks[
+            (Arm.LEFT, Arm.RIGHT).index(Arm(arm))
+        ]
+        for i, (link, row) in enumerate(zip(track_links, rows, strict=True)):
+            k = column.get(link)
+            if k is None:
+                continue
+            rot = r[:, k] @ local_r[i]
+            pos = np.einsum("nij,j->ni", r[:, k], local_p[i]) + p[:, k]
+            self._check_posed(row, rot, pos, margins, collides)
         return collides
 
     def arm_links(self, arm: Arm) -> tuple[str, ...]:

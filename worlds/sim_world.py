@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 import pybullet as pb
+from numpy.typing import NDArray
 
 from affordances import ObjectContext, RobotCapabilities, SceneQuery
 from affordances.scene import GeometricSceneQuery
@@ -29,6 +30,7 @@ from skills import quaternion as quat
 from skills.types import Array
 from skills.vocabulary import ARMS, Arm
 from worlds.adapters import object_contexts, robot_capabilities
+from worlds.arm_prediction import ArmPredictor
 from worlds.collision import CollisionWorld, arm_group
 from worlds.control import ImpedanceGains, PalmCommand
 from worlds.scene import LATERAL_PALM_QUATERNIONS, Scene
@@ -46,6 +48,9 @@ FOREARM_MARGIN_M = 0.03
 FOREARM_DOUBT_PER_M = 0.2
 #: Lever that converts a palm's turn into travel for that doubt, m per rad (a forearm's length).
 FOREARM_LEVER_M = 0.3
+#: Waypoints between two solved for the arms' prediction on robots whose arms share joints
+#: (4 control steps at 60 Hz: the palms move at most a centimetre or two in between).
+PREDICTION_STRIDE = 4
 #: Highest an object's centre may be carried above the table top, m.
 MAX_LIFT_M = 0.30
 #: Contact force each palm must press an object with, N, for the grasp to locate it: from the
@@ -197,6 +202,9 @@ class SimWorld:
         )
         self.gains = self.scene.controller.gains(Arm.LEFT)
         self.collision = CollisionWorld(self.scene)
+        # Arms that share joints (a torso) are predicted by inverse kinematics on a copy of
+        # the robot, built at the first path check (worlds.arm_prediction).
+        self._arm_predictor: ArmPredictor | None = None
         task_objects = tuple(dict.fromkeys(step.object for step in spec.task))
         self.watched: tuple[str, ...] = (
             (object_name,) if object_name else task_objects or (spec.scene.objects[0].name,)
@@ -266,7 +274,9 @@ class SimWorld:
         }
 
     def close(self) -> None:
-        """Disconnect PyBullet."""
+        """Disconnect PyBullet (and the arms' kinematic copy, if one was built)."""
+        if self._arm_predictor is not None:
+            self._arm_predictor.close()
         self.scene.close()
 
     def __enter__(self) -> SimWorld:
@@ -537,10 +547,17 @@ class SimWorld:
         )
         # The forearms are predicted by carrying them rigidly with the palms, which misses the
         # elbow's swing: they get extra clearance so that a doubtful path is not trusted.
+        # Where the arms share joints, the rigid carry misses the torso's swing too, which
+        # moves a forearm centimetres: those arms are solved for (_predicted_links_collide).
         doubt = forearm_doubt(palm_positions, palm_orientations)
-        arms = self.collision.check_attached_links(
-            palm_positions, palm_orientations, 4, margin_m + doubt
-        )
+        if self.scene.robot.shared_joints is not None:
+            arms = self._predicted_links_collide(
+                palm_positions, palm_orientations, margin_m + doubt
+            )
+        else:
+            arms = self.collision.check_attached_links(
+                palm_positions, palm_orientations, 4, margin_m + doubt
+            )
         pts = np.asarray(palm_positions).reshape(-1, 3)
         if object_positions is not None:
             pts = np.concatenate((object_positions, pts))
@@ -555,6 +572,34 @@ class SimWorld:
                 what = f"{'palm or object' if held else 'a palm'} within {margin_m:g} m"
             what += f" at step {first}"
         return PathCheck(first is None, float(d.min()) if d.size else math.inf, first, what)
+
+    def _predicted_links_collide(
+        self, palm_positions: Array, palm_orientations: Array, margins: Array
+    ) -> NDArray[np.bool_]:
+        """(N,) True where an arm link, posed by inverse kinematics of the palm path on a copy
+        of the robot (:class:`worlds.arm_prediction.ArmPredictor`), comes within ``margins``
+        (N,) of an active obstacle. Waypoints are solved every :data:`PREDICTION_STRIDE`
+        (and the last); one between two solved ones is judged by the nearer of them."""
+        p = np.asarray(palm_positions, dtype=float)
+        q = np.asarray(palm_orientations, dtype=float)
+        n = p.shape[0]
+        if n == 0 or not self.scene.active_obstacles:
+            return np.zeros(n, dtype=bool)
+        if self._arm_predictor is None:
+            self._arm_predictor = ArmPredictor(self.scene)
+        solved = np.unique(np.append(np.arange(0, n, PREDICTION_STRIDE), n - 1))
+        links = {arm: self.collision.arm_moving_links(arm) for arm in ARMS}
+        frames = self._arm_predictor.link_frames(p[solved], q[solved], links)
+        hits = np.zeros(solved.size, dtype=bool)
+        for arm in ARMS:
+            f = frames[arm]
+            hits |= self.collision.check_link_frames(
+                arm, f.links, f.positions, f.quaternions, np.asarray(margins)[solved]
+            )
+        nearest = np.clip(
+            np.searchsorted(solved, np.arange(n) - PREDICTION_STRIDE // 2), 0, solved.size - 1
+        )
+        return hits[nearest]
 
     def link_points(self) -> Array:
         """For each arm link, its point closest to an active obstacle, (M, 3) (none if none)."""

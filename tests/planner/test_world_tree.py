@@ -19,7 +19,7 @@ DEFAULT_WORLD = Path(__file__).resolve().parents[2] / "worlds" / "parcel_pick_pl
 
 def _world_with_tree(tmp_path: Path, tree_text: str):
     (tmp_path / "task.xml").write_text(tree_text)
-    text = DEFAULT_WORLD.read_text() + "\ntree: task.xml\n"
+    text = DEFAULT_WORLD.read_text().replace("tree: null", "tree: task.xml")
     (tmp_path / "world.yaml").write_text(text)
     return load_world(tmp_path / "world.yaml")
 

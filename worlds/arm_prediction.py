@@ -1,0 +1,156 @@
+"""Where the arms' links go along predicted palm paths: inverse kinematics on a kinematic copy.
+
+Path checks (:meth:`worlds.sim_world.SimWorld.check_trajectory`) predict the palms and the held
+object by rolling the composition out; the links behind the palms follow from the joints. For
+an arm on its own base, the last links move nearly rigidly with the palm over one carry
+(:meth:`worlds.collision.CollisionWorld.check_attached_links`). On a robot whose arms share
+joints (the iCub's torso) that is not so: the torso swings both arms while one palm carries
+the object sideways, and a forearm ends centimetres from where the rigid carry puts it. Here
+each waypoint's palm poses are solved for every arm of a body at once
+(:func:`worlds.palm_ik.solve_palms`, warm-started from the waypoint before, the first from the
+measured joints, with the controller's null-space posture as the rest posture) on a copy of
+the robot in its own PyBullet client, so the scene's physics is never touched, and the links'
+frames are read from it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pybullet as pb
+from numpy.typing import NDArray
+
+from skills.vocabulary import Arm
+from worlds.bodies import load_robot
+from worlds.palm_ik import solve_palms
+from worlds.scene import Scene
+
+FloatArray = NDArray[np.float64]
+
+#: Most damped-least-squares steps per waypoint: each starts from the one before, a few
+#: millimetres away, so it converges in a handful.
+WAYPOINT_ITERATIONS = 10
+#: Palm pose error at which a waypoint's solve stops, m and rad.
+WAYPOINT_TOLERANCE = 1e-4
+
+
+@dataclass(frozen=True)
+class LinkFrames:
+    """Link frames (PyBullet's centre-of-mass frames, as ``getLinkState``'s first two) of one
+    arm along a path.
+
+    Attributes
+    ----------
+    links : tuple of int
+        (L,) link indices on the arm's body.
+    positions : ndarray
+        (N, L, 3) world frame, m.
+    quaternions : ndarray
+        (N, L, 4) scalar-last.
+    """
+
+    links: tuple[int, ...]
+    positions: FloatArray
+    quaternions: FloatArray
+
+
+class ArmPredictor:
+    """A kinematic copy of ``scene``'s robot that answers where its links go.
+
+    Parameters
+    ----------
+    scene : Scene
+        The running scene: its robot is copied once, its joints are read at each prediction.
+    """
+
+    def __init__(self, scene: Scene) -> None:
+        self._scene = scene
+        self._client = pb.connect(pb.DIRECT)
+        self._ids = load_robot(self._client, scene.robot)
+
+    def close(self) -> None:
+        """Disconnect the copy's client (idempotent)."""
+        if self._client >= 0:
+            pb.disconnect(physicsClientId=self._client)
+            self._client = -1
+
+    def link_frames(
+        self,
+        palm_positions: FloatArray,
+        palm_quaternions: FloatArray,
+        links: dict[Arm, tuple[int, ...]],
+    ) -> dict[Arm, LinkFrames]:
+        """Each arm's ``links`` along the palm path.
+
+        Parameters
+        ----------
+        palm_positions : ndarray
+            (N, 2, 3) left and right palm positions, world frame, m.
+        palm_quaternions : ndarray
+            (N, 2, 4) their orientations, scalar-last.
+        links : dict of Arm to tuple of int
+            Per arm, the link indices on its body to report.
+
+        Returns
+        -------
+        dict of Arm to LinkFrames
+        """
+        scene, robot = self._scene, self._scene.robot
+        positions = np.asarray(palm_positions, dtype=float)
+        quaternions = np.asarray(palm_quaternions, dtype=float)
+        n = positions.shape[0]
+        driven = robot.driven_joints()
+        rest_all = scene.controller.rest_posture()
+        shared = robot.shared_joints
+        weight = shared.posture_weight if shared is not None else 1.0
+        out: dict[Arm, LinkFrames] = {}
+        for index in dict.fromkeys(robot.arms[a].body for a in (Arm.LEFT, Arm.RIGHT)):
+            arms = [a for a in (Arm.LEFT, Arm.RIGHT) if robot.arms[a].body == index]
+            rows = [k for k, d in enumerate(driven) if d.body == index]
+            joints = [driven[k].joint for k in rows]
+            lower = np.array([driven[k].lower for k in rows])
+            upper = np.array([driven[k].upper for k in rows])
+            rest = rest_all[rows]
+            cost = np.array([1.0 if driven[k].arm is not None else max(weight, 1e-3) for k in rows])
+            states = pb.getJointStates(scene.robot_ids[index], joints, physicsClientId=scene.client)
+            q = np.array([s[0] for s in states])
+            copy = self._ids[index]
+            palm_links = [robot.arms[a].palm_link for a in arms]
+            arm_index = [0 if a is Arm.LEFT else 1 for a in arms]
+            frames = {
+                a: (np.zeros((n, len(links[a]), 3)), np.zeros((n, len(links[a]), 4))) for a in arms
+            }
+            for w in range(n):
+                targets = [(positions[w, i], quaternions[w, i]) for i in arm_index]
+                q = solve_palms(
+                    self._client,
+                    copy,
+                    joints,
+                    palm_links,
+                    targets,
+                    q,
+                    lower,
+                    upper,
+                    rest,
+                    cost,
+                    iterations=WAYPOINT_ITERATIONS,
+                    tolerance=WAYPOINT_TOLERANCE,
+                )
+                for a in arms:
+                    if not links[a]:
+                        continue
+                    read = pb.getLinkStates(
+                        copy,
+                        list(links[a]),
+                        computeForwardKinematics=1,
+                        physicsClientId=self._client,
+                    )
+                    frames[a][0][w] = [s[0] for s in read]
+                    frames[a][1][w] = [s[1] for s in read]
+            for a in arms:
+                out[a] = LinkFrames(tuple(links[a]), frames[a][0], frames[a][1])
+        return out
+
+
+__all__ = ["ArmPredictor", "LinkFrames"]
