@@ -91,5 +91,7 @@ def turn_lift_m(extents: ArrayLike, start: ArrayLike, goal: ArrayLike) -> float:
     """
     if abs(grasp_axis_turn(start, goal)) < 1e-2:
         return 0.0
-    rest = min(float(vertical_half_extent(extents, start)), float(vertical_half_extent(extents, goal)))
+    rest = min(
+        float(vertical_half_extent(extents, start)), float(vertical_half_extent(extents, goal))
+    )
     return max(sweep_radius_m(extents) - rest, 0.0)

@@ -1,4 +1,4 @@
-"""TurnClearsTable: a move that turns the box about its grasp axis keeps its corners off the table."""
+"""TurnClearsTable: a box turned about its grasp axis keeps its corners off the table."""
 
 from __future__ import annotations
 
