@@ -19,6 +19,7 @@ DEFAULT_SPACE: Mapping[Action, Space] = MappingProxyType(
         Action.GRASP_LATERAL: Space.RELATIVE,
         Action.TRANSPORT: Space.ABSOLUTE,
         Action.ROTATE_Z: Space.ABSOLUTE,
+        Action.ROTATE_GRASP_AXIS: Space.ABSOLUTE,
         Action.AVOID_OBSTACLE: Space.ABSOLUTE,
         Action.AVOID_LINKS: Space.ABSOLUTE,
         Action.HOLD_LATERAL: Space.RELATIVE,

@@ -229,6 +229,10 @@ class ObjectContext:
     goal_yaws : tuple of float
         Yaw at each goal of ``goals``, radians, in visiting order; may be empty (then only
         ``goal_yaw`` is known). Each move is planned with its own turn.
+    goal_grasp_turns : tuple of float
+        Turn about the grasp axis (the object's y axis, through a lateral grasp's palms) each
+        move of ``goals`` makes, radians, in visiting order (:func:`skills.flip.grasp_axis_turn`
+        from the previous goal's orientation); may be empty (no such turn).
     """
 
     name: str
@@ -246,6 +250,7 @@ class ObjectContext:
     goals: tuple[Vector3, ...] = ()
     goal_yaw: float | None = None
     goal_yaws: tuple[float, ...] = ()
+    goal_grasp_turns: tuple[float, ...] = ()
 
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name:
@@ -278,6 +283,16 @@ class ObjectContext:
             self,
             "goal_yaws",
             tuple(check_finite(y, owner, f"goal_yaws[{i}]") for i, y in enumerate(self.goal_yaws)),
+        )
+        turns = self.goal_grasp_turns
+        if isinstance(turns, str | bytes) or not isinstance(turns, Iterable):
+            raise ValueError(
+                f"{owner}.goal_grasp_turns: expected a list of angles in rad, got {turns!r}"
+            )
+        put(
+            self,
+            "goal_grasp_turns",
+            tuple(check_finite(a, owner, f"goal_grasp_turns[{i}]") for i, a in enumerate(turns)),
         )
 
 

@@ -522,6 +522,23 @@ def _common_skills(
             because.append(
                 f"hard: goal yaw differs by {_fmt(math.degrees(delta))} deg: rotate about z"
             )
+    # A goal that turns the object about the grasp axis (on its side) needs the turn learnt
+    # for it: the largest turn of any move decides, as for yaw.
+    flips = [a for a in context.goal_grasp_turns if abs(a) > config.yaw_tolerance_rad]
+    if flips:
+        flip = max(flips, key=abs)
+        skills.append(
+            SkillSelection(
+                Action.ROTATE_GRASP_AXIS,
+                DEFAULT_SPACE[Action.ROTATE_GRASP_AXIS],
+                1.0,
+                {"delta_grasp_axis_rad": flip},
+            )
+        )
+        because.append(
+            f"hard: goal turns the object {_fmt(math.degrees(flip))} deg about the grasp axis: "
+            "rotate about it"
+        )
     return skills, because
 
 

@@ -44,6 +44,7 @@ from typing import Any
 import numpy as np
 import pybullet as pb
 
+from experiment.flip_draws import draw_object, goal_half_height, pitched_goal_postures
 from experiment.hard import HardTrial, draw_hard, with_pushes
 from experiment.records import campaign_key, owned_by, tree_hash
 from experiment.results import (
@@ -112,12 +113,16 @@ class Posture:
         The palms' turn from their natural pose (:mod:`skills.turns`), rad.
     half_span : float
         Half the distance between the held faces, m.
+    half_extents : ndarray, shape (3,), optional
+        The box's half extents along its yawed frame's axes as held there (a box set down on
+        its side, :mod:`experiment.flip_draws`), m; None: its own.
     """
 
     position: np.ndarray
     object_yaw: float
     grip_yaw: float
     half_span: float
+    half_extents: np.ndarray | None = None
 
 
 def move_postures(
@@ -269,11 +274,16 @@ def _draw_trial(
     layout = base.trials
     rng = np.random.default_rng([seed, trial] if redraw == 0 else [seed, trial, 2, redraw])
     obj = base.objects[0]
-    half = np.asarray(getattr(obj.shape, "size", (0.2, 0.3, 0.15)), dtype=float) / 2.0
+    regions = layout.goal_regions()
+    drawn = draw_object(
+        layout, regions, getattr(obj.shape, "size", (0.2, 0.3, 0.15)), seed, trial, redraw
+    )
+    half = drawn.size / 2.0
     z = base.table.position[2] + half[2]
     start = _in_region(rng, layout.start, z)
-    regions = layout.goal_regions()
     goals = [_in_region(rng, region, z) for region in regions]
+    for goal, pitch in zip(goals, drawn.pitches, strict=True):
+        goal[2] = base.table.position[2] + goal_half_height(drawn.size, pitch)
     # The yaws come from a generator of their own, so a layout without turns draws the same
     # starts, goals and spheres as before they were drawn.
     turn_rng = np.random.default_rng([seed, trial, 1, redraw])
@@ -302,6 +312,7 @@ def _draw_trial(
                 goal_yaws[i] = _uniform(turn_rng, (low, high))
             yaw = math.radians(goal_yaws[i])
             postures = move_postures(prev, prev_yaw, goal, yaw, size, max_turn, robot_yaw)
+            postures = pitched_goal_postures(postures, goal, half, drawn.pitches[i])
             if not with_obstacle[i]:
                 break
             try:
@@ -325,6 +336,10 @@ def _draw_trial(
         prev, prev_yaw = goal, yaw
     data = base.model_dump(mode="json")
     data["objects"][0]["pose"]["position"] = start.tolist()
+    if layout.size_scale is not None:
+        data["objects"][0]["shape"]["size"] = drawn.size.tolist()
+    if drawn.mass is not None:
+        data["objects"][0]["mass"] = drawn.mass
     data["obstacles"] = [
         {
             "name": s.name,
@@ -339,15 +354,20 @@ def _draw_trial(
             "object": obj.name,
             "moves": [
                 {
-                    "goal": {"position": g.tolist(), "rpy_deg": [0.0, 0.0, yaw]},
+                    "goal": {"position": g.tolist(), "rpy_deg": [0.0, pitch, yaw]},
                     "obstacles": [] if s is None else [s.name],
                 }
-                for g, yaw, s in zip(goals, goal_yaws, spheres, strict=True)
+                for g, yaw, pitch, s in zip(goals, goal_yaws, drawn.pitches, spheres, strict=True)
             ],
         }
     ]
     data["name"] = f"{base.name}_trial_{trial}"
     return world_from_data(data, base.source), kinds
+
+
+def _half(posture: Posture, half: np.ndarray) -> np.ndarray:
+    """The box's half extents as held in ``posture``."""
+    return half if posture.half_extents is None else posture.half_extents
 
 
 def _draw_sphere(
@@ -371,7 +391,8 @@ def _draw_sphere(
     ]
     # The box's reach along x, turned as it is at the start and the goal.
     reach_x = max(
-        abs(math.cos(p.object_yaw)) * half[0] + abs(math.sin(p.object_yaw)) * half[1]
+        abs(math.cos(p.object_yaw)) * _half(p, half)[0]
+        + abs(math.sin(p.object_yaw)) * _half(p, half)[1]
         for p in postures
     )
     for _ in range(SPHERE_ATTEMPTS):  # rejection sampling
@@ -394,7 +415,7 @@ def _draw_sphere(
                     top + _uniform(rng, layout.ahead_height),
                 ]
             )
-        box = min(_box_gap(p.position, half, centre, p.object_yaw) for p in postures)
+        box = min(_box_gap(p.position, _half(p, half), centre, p.object_yaw) for p in postures)
         if box - radius < layout.clearance:
             continue
         if any(robot.distance(p, centre, radius) < layout.robot_clearance for p in grasps):

@@ -26,6 +26,7 @@ from skills.couplings.potential import PotentialFieldAvoidance
 from skills.couplings.steering import ObstacleSteering
 from skills.couplings.term import CouplingTerm
 from skills.dual_arm import GraspGeometry
+from skills.flip import vertical_half_extent
 from skills.library import SkillLibrary
 from skills.pose_dmp import PoseState
 from skills.skill import Skill, SkillKind
@@ -234,6 +235,7 @@ def absolute_terms(
     name: str,
     points_object: np.ndarray,
     transport: Skill | None = None,
+    rest_half_height: float | None = None,
 ) -> list[tuple[CouplingTerm, float]]:
     """Coupling terms and weights of the plan's absolute skills.
 
@@ -251,6 +253,9 @@ def absolute_terms(
     transport : Skill, optional
         The learnt motion to carry the object with instead of the library's first transport
         skill (weight 1 if the plan selects no transport).
+    rest_half_height : float, optional
+        The least half height (m) the object rests at over the move (lower than half its z
+        extent when the move sets it down on its side): the workspace floor follows it.
     """
     terms: list[tuple[CouplingTerm, float]] = []
     if transport is not None and plan.skill(Action.TRANSPORT) is None:
@@ -289,6 +294,11 @@ def absolute_terms(
             terms.append((field_term, sel.weight))
         elif skill.kind is SkillKind.WORKSPACE_REPULSION:
             lower, upper = world.workspace_bounds(name)
+            if rest_half_height is not None:
+                # The bounds keep the centre half its z extent over the table; a box set down
+                # on its side rests lower.
+                half_z = float(world.object_extents(name)[2]) / 2.0
+                lower = lower - np.array([0.0, 0.0, max(half_z - rest_half_height, 0.0)])
             margin = float(skill.params["margin"])
             # The bound sits a margin below the resting height: the push starts where the
             # object rests on the table (so placing on it is free) and grows without bound
@@ -457,8 +467,13 @@ def transport_composition(
     points = box_points(world.object_extents(name))
     key = skill or move.skill
     carry = transport_skill(library, key) if key else None
+    extents = world.object_extents(name)
+    rest = min(
+        float(vertical_half_extent(extents, state.object.orientation)),
+        float(vertical_half_extent(extents, move.goal.orientation)),
+    )
     terms = absolute_terms(
-        reweight(plan, avoid_gain, transport_weight), library, world, name, points, carry
+        reweight(plan, avoid_gain, transport_weight), library, world, name, points, carry, rest
     )
     absolute = saturate_avoidance(terms, grip_acceleration_limit(world, name, squeeze_force_n))
     # The handed-over palm poses are the squeezed grip already: hold them as they are.

@@ -8,6 +8,7 @@ skill              space       learnt how                                       
 =================  ==========  =====================================================  ========
 pick_and_place     absolute    RBF forcing by ridge regression, horizontal rotation   CSV
 rotate_z           absolute    RBF forcing by ridge regression                        CSV
+rotate_grasp_axis  absolute    RBF forcing by ridge regression, horizontal rotation   CSV
 avoid_obstacle     absolute    steering gains by least squares (Rai et al. 2014)      CSV
 avoid_links        absolute    Park et al. 2008 dynamic potential, set by hand        --
 workspace_limits   absolute    Gams et al. 2009 repulsion from the table top, by hand --
@@ -165,6 +166,29 @@ def build_default_library(demos_dir: Path = DEMOS_DIR) -> SkillLibrary:
                 BUILT_AT,
                 "pose DMP, 50 RBF per dimension, ridge regression; rotation forcing "
                 "scaled by the new turn over the demonstrated one",
+                {},
+            ),
+        )
+    )
+    flip = read_demo_csv(demos_dir / "rotate_grasp_axis.csv")
+    lib.add(
+        learnt_skill(
+            "rotate_grasp_axis",
+            Action.ROTATE_GRASP_AXIS,
+            Space.ABSOLUTE,
+            # The turn's axis is horizontal (through the palms) and turns with the box's yaw:
+            # the rotation forcing is turned about the vertical and scaled onto the new turn.
+            fit_pose(
+                flip.demonstration,
+                position_scaling=Scaling.NONE,
+                orientation_scaling=Scaling.ROTATION_Z,
+            ),
+            (AffordanceElement.ROTATABLE, AffordanceElement.GRASPABLE_LATERAL),
+            Provenance(
+                ("rotate_grasp_axis.csv",),
+                BUILT_AT,
+                "pose DMP, 50 RBF per dimension, ridge regression; rotation forcing turned "
+                "about the vertical and scaled onto the new turn about the grasp axis",
                 {},
             ),
         )

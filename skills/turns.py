@@ -38,9 +38,18 @@ def wrap_angle(angle: float) -> float:
 
 
 def yaw_of(quaternion: ArrayLike) -> float:
-    """Rotation about world z of a frame's x axis, rad, from a quaternion ``(x, y, z, w)``."""
+    """Rotation about world z of a frame's x axis, rad, from a quaternion ``(x, y, z, w)``.
+
+    A frame turned on its side about its y axis (a box flipped about the palms' axis) has its
+    x axis near vertical, whose heading is undefined: its yaw is then its y axis's heading
+    less a quarter turn, which is the same angle for an upright frame.
+    """
     x, y, z, w = (float(v) for v in np.asarray(quaternion, dtype=float))
-    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+    x_up = 2.0 * (x * z - w * y)  # world z of the frame's x axis
+    y_up = 2.0 * (y * z + w * x)  # world z of its y axis
+    if abs(x_up) <= abs(y_up) or abs(x_up) < math.sqrt(0.5):
+        return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+    return math.atan2(-2.0 * (x * y - w * z), 1.0 - 2.0 * (x * x + z * z))
 
 
 def grip_yaw(object_yaw: float, quarter_turns: int, robot_yaw: float = 0.0) -> float:

@@ -34,6 +34,7 @@ class Action(StrEnum):
     GRASP_LATERAL = "grasp_lateral"
     TRANSPORT = "transport"
     ROTATE_Z = "rotate_z"
+    ROTATE_GRASP_AXIS = "rotate_grasp_axis"
     AVOID_OBSTACLE = "avoid_obstacle"
     AVOID_LINKS = "avoid_links"
     HOLD_LATERAL = "hold_lateral"

@@ -10,6 +10,7 @@ import math
 
 from affordances import ObjectContext, RobotCapabilities
 from affordances.context import Obstacle
+from skills.flip import grasp_axis_turn
 from worlds.robots import robot_model_of
 from worlds.spec import ObjectSpec, ObstacleSpec, RobotModelName, Shape, ShapeSpec, WorldSpec
 from worlds.world_file import World, as_world_spec
@@ -90,6 +91,14 @@ def _object_context(
         goals=tuple(m.goal_position for m in moves),
         goal_yaw=moves[-1].goal_yaw if moves else None,
         goal_yaws=tuple(m.goal_yaw for m in moves),
+        goal_grasp_turns=tuple(
+            grasp_axis_turn(a, b)
+            for a, b in zip(
+                (obj.quaternion, *(m.goal_quaternion for m in moves)),
+                (m.goal_quaternion for m in moves),
+                strict=False,
+            )
+        ),
     )
 
 

@@ -21,6 +21,7 @@ from collections.abc import Collection
 
 import numpy as np
 
+from skills.flip import vertical_half_extent
 from worlds.collision import penetration_depth
 from worlds.spec import ObjectSpec, ObstacleSpec, WorldSpec
 from worlds.world_errors import WorldFileProblem
@@ -48,10 +49,7 @@ def vec(values: tuple[float, ...] | np.ndarray) -> str:
 
 def resting_half_height(obj: ObjectSpec, quaternion: Quat) -> float:
     """Half the object's extent along world z when turned by ``quaternion``, m."""
-    x, y, z, w = quaternion
-    # Third row of the rotation matrix: how much of each body axis points up.
-    row = np.array([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)])
-    return 0.5 * float(np.abs(row) @ np.asarray(obj.shape.extents(), dtype=float))
+    return float(vertical_half_extent(obj.shape.extents(), quaternion))
 
 
 def start_problems(

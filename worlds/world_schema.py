@@ -474,7 +474,21 @@ class GoalRegion(Region):
         "straight path, under the lift; ahead: in front (+x) of the carry); [] for none",
     )
 
+    pitch_deg: tuple[_Finite, ...] = Field(
+        default=(),
+        description="pitches the goal is drawn from, one with equal chance, degrees, each -90, "
+        "0 or 90: a turn about the box's y axis (the palms' axis) that sets it down on its "
+        "side; default: upright",
+    )
+
     _yaw = field_validator("yaw_deg")(_yaw_in_a_turn)
+
+    @field_validator("pitch_deg")
+    @classmethod
+    def _quarter_turns(cls, pitches: tuple[float, ...]) -> tuple[float, ...]:
+        if any(p not in (-90.0, 0.0, 90.0) for p in pitches):
+            raise field_problem("pitches of -90, 0 or 90 degrees", pitches)
+        return pitches
 
     @field_validator("obstacles")
     @classmethod
@@ -628,6 +642,21 @@ class TrialSettings(_FileModel):
         default_factory=HardSettings,
         description="with --hard, how each trial's physics is drawn to differ from the file",
     )
+    size_scale: OptionalRange = Field(
+        default=None,
+        description="[low, high] of a factor each trial scales the object's box extents by "
+        "(one factor per axis), > 0; default: the file's size",
+    )
+    mass_kg: OptionalRange = Field(
+        default=None, description="[low, high] of the object's mass, kg, > 0; default: the file's"
+    )
+
+    @field_validator("size_scale", "mass_kg")
+    @classmethod
+    def _positive_or_none(cls, bounds: tuple[float, float] | None) -> tuple[float, float] | None:
+        if bounds is not None and bounds[0] <= 0.0:
+            raise field_problem("values > 0", bounds)
+        return bounds
 
     @field_validator("sphere_radius")
     @classmethod
@@ -671,6 +700,12 @@ class TrialSettings(_FileModel):
                 data.pop("hard", None)
             for key in ("moves",) if not self.moves else _PAPER_REGIONS:
                 data.pop(key, None)
+            for key in ("size_scale", "mass_kg"):
+                if data.get(key) is None:
+                    data.pop(key, None)
+            for move in data.get("moves", ()):
+                if isinstance(move, dict) and not move.get("pitch_deg"):
+                    move.pop("pitch_deg", None)
         return data
 
 

@@ -2,6 +2,7 @@
 
 from planner.leaves.approach import Approach
 from planner.leaves.base import MotionLeaf, WorldLeaf
+from planner.leaves.clears_table import TurnClearsTable
 from planner.leaves.conditions import AtGoal, IsHeld, PathClear
 from planner.leaves.grasp import Grasp
 from planner.leaves.release import Release, Retreat
@@ -21,5 +22,6 @@ __all__ = [
     "Retreat",
     "SelectSkills",
     "Transport",
+    "TurnClearsTable",
     "WorldLeaf",
 ]

@@ -1,4 +1,4 @@
-"""Write the four synthetic demonstrations the default library is learnt from.
+"""Write the five synthetic demonstrations the default library is learnt from.
 
 Run ``python -m skills.demos.generate [--out DIR] [--seed N]``. The same seed writes the same
 files byte for byte. The teachers are synthetic and human-like (see ``README.md`` here):
@@ -12,6 +12,8 @@ files byte for byte. The teachers are synthetic and human-like (see ``README.md`
 4. ``grasp_maintenance.csv``: a palm's pose in the object frame while the teacher holds the
    parcel's face and the palm is pushed off and pulls back (a spring-damper the fit recovers);
    column ``force`` is the contact force the teacher's palm sensor read.
+5. ``rotate_grasp_axis.csv``: a 90 degree turn about the horizontal axis through the palms
+   (the box's y axis: a pitch) with the box held lifted (:mod:`skills.demos.rotation`).
 """
 
 from __future__ import annotations
@@ -66,6 +68,12 @@ def rotate_z(rng: np.random.Generator) -> tuple[Array, Array, Array]:
     return rotation_demo(np.pi / 2, 0.0, (0.6, 0.0, 0.78), 2.0, 300, 0.005, rng)
 
 
+def rotate_grasp_axis(rng: np.random.Generator) -> tuple[Array, Array, Array]:
+    """A 90 degree turn about the palms' axis (world y, the box at yaw 0), held lifted: the
+    box's centre 0.2 m above the table top, where a parcel's corners clear it as it turns."""
+    return rotation_demo(np.pi / 2, 0.0, (0.6, 0.0, 0.8), 2.0, 300, 0.005, rng, axis=1)
+
+
 def avoid(rng: np.random.Generator) -> tuple[tuple[Array, ...], Array, Array, float]:
     """A reach whose straight line passes through a sphere; the teacher goes over it.
 
@@ -112,7 +120,7 @@ def grasp_maintenance(
 
 
 def write_all(out: Path = HERE, seed: int = DEFAULT_SEED) -> list[Path]:
-    """Write the four CSV files into ``out``; returns their paths."""
+    """Write the five CSV files into ``out``; returns their paths."""
     rng = np.random.default_rng(seed)
     paths = [write_demo_csv(out / "pick_place.csv", *pick_place(rng))]
     paths.append(write_demo_csv(out / "rotate_z.csv", *rotate_z(rng)))
@@ -137,6 +145,8 @@ def write_all(out: Path = HERE, seed: int = DEFAULT_SEED) -> list[Path]:
     )
     t, p, q, force = grasp_maintenance(rng)
     paths.append(write_demo_csv(out / "grasp_maintenance.csv", t, p, q, {"force": force}))
+    # Last: the draws of the files above stay those they were written with.
+    paths.append(write_demo_csv(out / "rotate_grasp_axis.csv", *rotate_grasp_axis(rng)))
     return paths
 
 

@@ -1,4 +1,5 @@
-"""A synthetic human-like teacher turning an object about the world vertical axis."""
+"""A synthetic human-like teacher turning an object about a world axis (the vertical, or the
+horizontal axis through two palms holding it)."""
 
 from __future__ import annotations
 
@@ -19,15 +20,17 @@ def rotation_demo(
     n_samples: int = 400,
     noise: float = 0.005,
     rng: np.random.Generator | None = None,
+    axis: int = 2,
 ) -> tuple[Array, Array, Array]:
-    """Turn by ``angle`` about world z with a minimum-jerk angle profile, at a fixed position.
+    """Turn by ``angle`` about world axis ``axis`` with a minimum-jerk angle profile, at a
+    fixed position.
 
     Parameters
     ----------
     angle : float
         Turn, rad (signed; non-zero).
     start_yaw : float
-        Initial yaw about world z, rad.
+        Initial angle about the turn's axis, rad.
     position : array_like, shape (3,)
         Where the object is held, m.
     duration : float
@@ -35,10 +38,13 @@ def rotation_demo(
     n_samples : int
         At least 20.
     noise : float
-        Standard deviation of a smooth wobble, rad, on yaw and on tilts about x and y; it
-        fades out at both ends so the demonstration starts and ends at rest.
+        Standard deviation of a smooth wobble, rad, on the turn and on tilts about the two
+        other axes; it fades out at both ends so the demonstration starts and ends at rest.
     rng : numpy.random.Generator, optional
         Source of the wobble; None uses seed 0.
+    axis : int
+        The world axis turned about: 0 (x), 1 (y: a box held on its y faces at yaw 0 turns
+        about the palms' axis) or 2 (z, the vertical).
 
     Returns
     -------
@@ -61,7 +67,12 @@ def rotation_demo(
     gen = rng if rng is not None else np.random.default_rng(0)
     t = np.linspace(0.0, tau, n)
     wobble = tremor(n, 3, sigma, max(n // 40, 1), gen)
-    yaw = float(start_yaw) + a * min_jerk(t / tau) + wobble[:, 2]
-    turn = quat.from_axis_angle(np.array((0.0, 0.0, 1.0)), yaw)
-    tilt = quat.exp(0.5 * np.column_stack((wobble[:, 0], wobble[:, 1], np.zeros(n))))
+    if axis not in (0, 1, 2):
+        raise ValueError(f"axis: expected 0, 1 or 2 (world x, y, z), got {axis!r}")
+    angle_t = float(start_yaw) + a * min_jerk(t / tau) + wobble[:, axis]
+    turn = quat.from_axis_angle(np.eye(3)[axis], angle_t)
+    # The wobble on the two other axes tilts the turning object a little.
+    tilts = wobble.copy()
+    tilts[:, axis] = 0.0
+    tilt = quat.exp(0.5 * tilts)
     return t, np.tile(y, (n, 1)), quat.multiply(tilt, turn)
