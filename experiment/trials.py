@@ -357,7 +357,8 @@ def _draw_trial(
 
 
 def riding(world: World) -> list[int]:
-    """Indices of the objects riding on ``objects[0]`` at the start (:func:`worlds.trays.riders`)."""
+    """Indices of the objects riding on ``objects[0]`` at the start
+    (:func:`worlds.trays.riders`)."""
     spec = as_world_spec(world)
     carried = [step.object for step in world.task]
     on = {o.name for o in riders(spec.scene.objects, world.objects[0].name, carried)}
