@@ -1,4 +1,4 @@
-"""Write the four synthetic demonstrations the default library is learnt from.
+"""Write the five synthetic demonstrations the default library is learnt from.
 
 Run ``python -m skills.demos.generate [--out DIR] [--seed N]``. The same seed writes the same
 files byte for byte. The teachers are synthetic and human-like (see ``README.md`` here):
@@ -140,7 +140,7 @@ def level_carry(
 
 
 def write_all(out: Path = HERE, seed: int = DEFAULT_SEED) -> list[Path]:
-    """Write the four CSV files into ``out``; returns their paths."""
+    """Write the five CSV files into ``out``; returns their paths."""
     rng = np.random.default_rng(seed)
     paths = [write_demo_csv(out / "pick_place.csv", *pick_place(rng))]
     paths.append(write_demo_csv(out / "rotate_z.csv", *rotate_z(rng)))
