@@ -25,6 +25,7 @@ from experiment.figures import Animation, MoveTrace, demonstrated_path, trajecto
 from experiment.grip_recorder import GripRecorder
 from experiment.judge import judge, move_labels
 from experiment.metrics import GripMetrics
+from experiment.tray import tray_verdicts
 from planner.atomic_file import atomic_open, stale_temporaries
 from planner.btlog import BtLog
 from planner.default_tree import TaskStep, default_tree
@@ -90,6 +91,9 @@ class EpisodeReport:
     forearm_contacts: dict[str, int] = field(default_factory=dict)
     #: Smallest FCL distance from a forearm to an active obstacle, m (inf: none measured).
     min_forearm_distance_m: float = math.inf
+    #: Per carried tray and ball loose on it, its peak tilt and the ball's path relative to
+    #: the tray (:meth:`experiment.tray.TrayVerdict.summary`); empty without trays.
+    tray: list[dict[str, Any]] = field(default_factory=list)
 
     def summary(self) -> dict[str, Any]:
         """Plain JSON-safe dictionary (infinite distances as None).
@@ -104,6 +108,8 @@ class EpisodeReport:
         if self.disturbances:
             applied = sum(1 for e in self.disturbances if e["steps"] > 0)
             extra["disturbances"] = {"applied": applied, "entries": self.disturbances}
+        if self.tray:
+            extra["tray"] = self.tray
         return {
             "success": self.success,
             "failure": self.failure,
@@ -454,6 +460,10 @@ def run_episode(
         objects = [name for name, _ in recorder.finals]
         errors_m, errors_deg = recorder.column("error_m"), recorder.column("error_deg")
         ok, failure = judge(result, sim, objects, errors_m, errors_deg)
+        trays = tray_verdicts(sim.scene.spec.objects, sim.watched, recorder.grip)
+        tray_failure = next((v.failure for v in trays if not v.ok), "")
+        if ok and tray_failure:
+            ok, failure = False, tray_failure
         report = EpisodeReport(
             ok,
             result.status.value,
@@ -477,6 +487,7 @@ def run_episode(
         report.grip = recorder.grip.metrics(HELD_FORCE_N)
         report.forearm_contacts = dict(sim.safety.forearm_contacts)
         report.min_forearm_distance_m = sim.safety.min_forearm_distance_m
+        report.tray = [v.summary() for v in trays]
         if out is not None:
             if log is not None and log.error is not None:
                 report.output_errors.append(log.error)

@@ -62,12 +62,14 @@ from planner.user_leaves import register_leaves
 from skills.turns import grip_yaw, lateral_quarter_turns, turn_steps
 from worlds.adapters import robot_capabilities
 from worlds.scene import Scene, lateral_grasp_palm_poses
+from worlds.trays import riders
 from worlds.world_file import (
     GoalRegion,
     ObstacleKind,
     Region,
     TrialSettings,
     World,
+    as_world_spec,
     world_from_data,
 )
 
@@ -340,6 +342,10 @@ def _draw_trial(
         data["objects"][0]["shape"]["size"] = drawn.size.tolist()
     if drawn.mass is not None:
         data["objects"][0]["mass"] = drawn.mass
+    # What rides on the object (a ball loose on a tray) starts where it did on it.
+    for k in riding(base):
+        shifted = np.asarray(base.objects[k].pose.position) + start - obj.pose.position
+        data["objects"][k]["pose"]["position"] = shifted.tolist()
     data["obstacles"] = [
         {
             "name": s.name,
@@ -368,6 +374,15 @@ def _draw_trial(
 def _half(posture: Posture, half: np.ndarray) -> np.ndarray:
     """The box's half extents as held in ``posture``."""
     return half if posture.half_extents is None else posture.half_extents
+
+
+def riding(world: World) -> list[int]:
+    """Indices of the objects riding on ``objects[0]`` at the start
+    (:func:`worlds.trays.riders`)."""
+    spec = as_world_spec(world)
+    carried = [step.object for step in world.task]
+    on = {o.name for o in riders(spec.scene.objects, world.objects[0].name, carried)}
+    return [k for k, o in enumerate(world.objects) if o.name in on]
 
 
 def _draw_sphere(
@@ -438,9 +453,9 @@ def check_trial_layout(base: World, seed: int, label: str) -> None:
     drawing one costs a fraction of a second, and tells before a campaign starts.
     """
     obj = base.objects[0]
-    if obj.shape.type != "box":
+    if obj.shape.type not in ("box", "tray"):
         raise TrialLayoutError(
-            f"{label}: objects[0].shape: expected a box object for trials (their obstacles "
+            f"{label}: objects[0].shape: expected a box or tray object for trials (their obstacles "
             f"and grasps are drawn around a box), got a {obj.shape.type} ({obj.name!r})"
         )
     try:

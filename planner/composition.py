@@ -27,6 +27,7 @@ from skills.couplings.steering import ObstacleSteering
 from skills.couplings.term import CouplingTerm
 from skills.dual_arm import GraspGeometry
 from skills.flip import vertical_half_extent
+from skills.level_carry import level_carry_tau, max_carry_acceleration
 from skills.library import SkillLibrary
 from skills.pose_dmp import PoseState
 from skills.skill import Skill, SkillKind
@@ -205,6 +206,36 @@ def transport_skill(library: SkillLibrary, key: str) -> Skill:
     return skill
 
 
+def level_carry_key(plan: SemanticAction, library: SkillLibrary) -> str | None:
+    """The label of the level carry (``keep_level``) when the plan keeps the object level and
+    the library has a learnt absolute motion so labelled; else None (the plan's transport)."""
+    if plan.skill(Action.KEEP_LEVEL) is None:
+        return None
+    key = Action.KEEP_LEVEL.value
+    try:
+        skill = library.named(key, Space.ABSOLUTE)
+    except KeyError:
+        return None
+    return key if skill.kind is SkillKind.LEARNT_DMP else None
+
+
+def level_carry_duration(world: WorldPort, name: str, move: Move) -> float:
+    """The shortest ``tau`` that keeps the balls loose on ``name`` on it across ``move`` (0 if
+    it carries none): :func:`skills.level_carry.max_carry_acceleration` at the judge's tilt."""
+    balls = world.loose_balls(name)
+    if not balls:
+        return 0.0
+    start = world.object_pose(name).position
+    across = float(np.linalg.norm(np.asarray(move.goal.position)[:2] - np.asarray(start)[:2]))
+    bound = min(max_carry_acceleration(b, gravity=world.gravity()) for b in balls)
+    if bound <= 0.0:
+        raise SkillChoiceError(
+            f"{name}: no level carry keeps its loose balls on (their rim is too low to hold "
+            "them at the tilt allowed)"
+        )
+    return level_carry_tau(across, bound)
+
+
 def _skill_for(
     library: SkillLibrary, selection: SkillSelection, transport: Skill | None = None
 ) -> Skill:
@@ -223,6 +254,7 @@ def carried_skill(
     sel = plan.skill(Action.TRANSPORT)
     if sel is None or sel.space is not Space.ABSOLUTE or sel.weight == 0.0:
         return None
+    key = key or level_carry_key(plan, library)
     if key:
         return transport_skill(library, key).name
     return _skill_for(library, sel).name
@@ -463,9 +495,11 @@ def transport_composition(
     if sel is not None:
         s = TransportSettings(_param(sel, "max_speed", s.max_speed), s.lift_m)
     tau = move_duration(state.object.position, move.goal.position, s)
+    key = skill or move.skill or level_carry_key(plan, library)
+    if plan.skill(Action.KEEP_LEVEL) is not None:
+        tau = max(tau, level_carry_duration(world, name, move))
     geometry = held_lateral_geometry(world, name, state)
     points = box_points(world.object_extents(name))
-    key = skill or move.skill
     carry = transport_skill(library, key) if key else None
     extents = world.object_extents(name)
     rest = min(

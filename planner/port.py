@@ -27,6 +27,7 @@ from numpy.typing import ArrayLike
 from affordances import ObjectContext, RobotCapabilities, SceneQuery
 from skills import quaternion as quat
 from skills import turns
+from skills.level_carry import LooseBall
 from skills.state import validated_pose
 from skills.types import Array
 from skills.vocabulary import Arm
@@ -218,6 +219,11 @@ class ObjectSensing(Protocol):
 
     def gravity(self) -> float:
         """Magnitude of the world's gravity, m/s^2 (what a grip must carry)."""
+        ...
+
+    def loose_balls(self, name: str) -> tuple[LooseBall, ...]:
+        """The balls lying loose on an object (a rimmed tray), as the level carry needs them;
+        empty for an object that carries none."""
         ...
 
 

@@ -7,6 +7,9 @@ lacked (all its failures were forearms hitting the obstacle):
 skill              space       learnt how                                             from
 =================  ==========  =====================================================  ========
 pick_and_place     absolute    RBF forcing by ridge regression, horizontal rotation   CSV
+level_carry        absolute    as pick_and_place, from a waiter's level carry;        CSV
+                               labelled keep_level (the reasoner's choice for an
+                               object that contains loose items)
 rotate_z           absolute    RBF forcing by ridge regression                        CSV
 rotate_grasp_axis  absolute    RBF forcing by ridge regression, horizontal rotation   CSV
 avoid_obstacle     absolute    steering gains by least squares (Rai et al. 2014)      CSV
@@ -151,6 +154,33 @@ def build_default_library(demos_dir: Path = DEMOS_DIR) -> SkillLibrary:
                 "scaled about the vertical to new starts and goals",
                 {},
             ),
+        )
+    )
+    level = read_demo_csv(demos_dir / "level_carry.csv")
+    lib.add(
+        learnt_skill(
+            "level_carry",
+            Action.TRANSPORT,
+            Space.ABSOLUTE,
+            fit_pose(
+                level.demonstration,
+                position_scaling=Scaling.ROTATION_Z,
+                orientation_scaling=Scaling.NONE,
+            ),
+            (
+                AffordanceElement.ON_SURFACE,
+                AffordanceElement.GRASPABLE_LATERAL,
+                AffordanceElement.CONTAINS_ITEMS,
+            ),
+            Provenance(
+                ("level_carry.csv",),
+                BUILT_AT,
+                "pose DMP, 50 RBF per dimension, ridge regression, from a waiter's level "
+                "carry; its duration bounded by what keeps a loose ball on "
+                "(skills.level_carry)",
+                {},
+            ),
+            label=Action.KEEP_LEVEL.value,
         )
     )
     rot = read_demo_csv(demos_dir / "rotate_z.csv")

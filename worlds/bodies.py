@@ -183,7 +183,25 @@ def create_obstacle(client: int, obstacle: ObstacleSpec, position: Sequence[floa
 
 def shape_ids(client: int, shape: ShapeSpec, rgba: Sequence[float]) -> tuple[int, int]:
     """Collision and visual shape ids of ``shape``, coloured ``rgba`` (4,)."""
-    if shape.kind == Shape.BOX:
+    if shape.is_tray:
+        # One body of five boxes: a loose item inside rolls on the floor against the walls.
+        boxes = shape.tray_boxes()
+        halves = [list(h) for h, _ in boxes]
+        centres = [list(c) for _, c in boxes]
+        col = pb.createCollisionShapeArray(
+            [pb.GEOM_BOX] * len(boxes),
+            halfExtents=halves,
+            collisionFramePositions=centres,
+            physicsClientId=client,
+        )
+        vis = pb.createVisualShapeArray(
+            [pb.GEOM_BOX] * len(boxes),
+            halfExtents=halves,
+            visualFramePositions=centres,
+            rgbaColors=[list(rgba)] * len(boxes),
+            physicsClientId=client,
+        )
+    elif shape.kind == Shape.BOX:
         half = [s / 2.0 for s in shape.size]
         col = pb.createCollisionShape(pb.GEOM_BOX, halfExtents=half, physicsClientId=client)
         vis = pb.createVisualShape(

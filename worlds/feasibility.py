@@ -130,10 +130,12 @@ def feasibility_problems(
     def usable(options: tuple[GraspOption, ...]) -> list[GraspOption]:
         return [o for o in options if grasps is None or o.grasp in grasps]
 
+    # An object the task does not move (a ball loose on a tray) need not be graspable.
+    moved = {step.object for step in spec.task}
     for k, obj in enumerate(spec.scene.objects):
         hard = assess(contexts[obj.name], robot, config)
         graspable[obj.name] = bool(usable(hard.options))
-        if not graspable[obj.name]:
+        if not graspable[obj.name] and obj.name in moved:
             problems.append(
                 WorldFileProblem(
                     f"objects[{k}]",

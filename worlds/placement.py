@@ -21,9 +21,10 @@ from collections.abc import Collection
 
 import numpy as np
 
+from skills import quaternion as quat
 from skills.flip import vertical_half_extent
 from worlds.collision import penetration_depth
-from worlds.spec import ObjectSpec, ObstacleSpec, WorldSpec
+from worlds.spec import ObjectSpec, ObstacleSpec, ShapeSpec, WorldSpec
 from worlds.world_errors import WorldFileProblem
 
 #: How far below the table top an object's bottom may start, m (a millimetre of numerical
@@ -136,9 +137,26 @@ def start_problems(
 def _depth(
     obj: ObjectSpec, position: tuple[float, float, float], quaternion: Quat, other: ObjectSpec
 ) -> float:
-    return penetration_depth(
-        obj.shape, (position, quaternion), other.shape, (other.position, other.quaternion)
+    # A tray is its floor and walls: a ball lying inside it is clear of it.
+    return max(
+        penetration_depth(a, pose_a, b, pose_b)
+        for a, pose_a in _parts(obj.shape, position, quaternion)
+        for b, pose_b in _parts(other.shape, other.position, other.quaternion)
     )
+
+
+def _parts(
+    shape: ShapeSpec, position: Vec3, quaternion: Quat
+) -> list[tuple[ShapeSpec, tuple[Vec3, Quat]]]:
+    """A shape as solid parts with their world poses: a tray's boxes, else the shape itself."""
+    if not shape.is_tray:
+        return [(shape, (position, quaternion))]
+    q = np.asarray(quaternion, dtype=float)
+    parts: list[tuple[ShapeSpec, tuple[Vec3, Quat]]] = []
+    for half, centre in shape.tray_boxes():
+        x, y, z = (float(v) for v in np.asarray(position) + quat.rotate(q, np.asarray(centre)))
+        parts.append((ShapeSpec.box(2.0 * np.asarray(half)), ((x, y, z), quaternion)))
+    return parts
 
 
 def _obstacle_depth(

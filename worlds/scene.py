@@ -495,8 +495,22 @@ class Scene:
         contacts = self._palm_contacts(arm, name)
         # PyBullet's normal points from the object (B) to the palm (A): the solver pushes A
         # along it and along the friction directions, and the object the opposite way
-        # (checked: a lifted box's two loads sum to its weight).
-        return -float(sum(c[9] * c[7][2] + c[10] * c[11][2] + c[12] * c[13][2] for c in contacts))
+        # (checked: a lifted box's two loads sum to its weight). With a compound object (a
+        # tray's floor and walls) PyBullet turns the normal to the asked order but leaves the
+        # friction in the order Bullet's compound algorithm swapped the pair into (checked: a
+        # lifted tray's two loads summed to minus its weight), so the friction's sign flips.
+        friction_sign = -1.0 if self._compound(name) else 1.0
+        return -float(
+            sum(
+                c[9] * c[7][2] + friction_sign * (c[10] * c[11][2] + c[12] * c[13][2])
+                for c in contacts
+            )
+        )
+
+    def _compound(self, name: str) -> bool:
+        """Whether object ``name``'s collision shape is a compound of several shapes."""
+        body = self._object(name)
+        return len(pb.getCollisionShapeData(body, -1, physicsClientId=self.client)) > 1
 
     def _palm_contacts(self, arm: Arm, name: str) -> tuple[Any, ...]:
         """PyBullet's contact points of ``arm``'s palm (body A) with object ``name`` (body B)."""

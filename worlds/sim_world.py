@@ -27,6 +27,7 @@ from affordances import ObjectContext, RobotCapabilities, SceneQuery
 from affordances.scene import GeometricSceneQuery
 from planner.port import Move, ObstacleInfo, PathCheck, Pose, stepped_moves
 from skills import quaternion as quat
+from skills.level_carry import LooseBall
 from skills.types import Array
 from skills.vocabulary import ARMS, Arm
 from worlds.adapters import object_contexts, robot_capabilities
@@ -35,6 +36,7 @@ from worlds.collision import CollisionWorld, arm_group
 from worlds.control import ImpedanceGains, PalmCommand
 from worlds.scene import LATERAL_PALM_QUATERNIONS, Scene
 from worlds.spec import Shape, ShapeSpec, WorldSpec
+from worlds.trays import TrayFrame, riders
 from worlds.truth import PhysicalTruth, sensed_pose
 from worlds.world_file import World, as_world_spec
 
@@ -392,6 +394,15 @@ class SimWorld:
         """Measured twist of an object's centre, (6,)."""
         v, w = self.scene.object_velocity(name)
         return np.concatenate((v, w))
+
+    def loose_balls(self, name: str) -> tuple[LooseBall, ...]:
+        """The balls riding loose on ``name`` at the start (:func:`worlds.trays.riders`)."""
+        objects = self.scene.spec.objects
+        on = riders(objects, name, self.watched)
+        if not on:
+            return ()
+        inside = TrayFrame.of(next(o for o in objects if o.name == name).shape)
+        return tuple(inside.loose_ball(o.shape.radius) for o in on)
 
     def object_extents(self, name: str) -> Array:
         """Bounding-box extents (3,), m."""

@@ -58,6 +58,11 @@ class ShapeSpec:
         convex hull.
     scale : float
         Uniform mesh scale (MESH).
+    floor, rim : float
+        A rimmed tray (BOX with ``rim > 0``): an open box of outer extents ``size``, its floor
+        ``floor`` m thick at the bottom and its four walls ``rim`` m thick, up to the top. Every
+        reader that needs only the outer box (extents, grasps, the reasoner, FCL) reads it as
+        the box ``size``; the physics builds the floor and walls (:meth:`tray_boxes`).
     """
 
     kind: Shape
@@ -66,6 +71,8 @@ class ShapeSpec:
     height: float = 0.0
     mesh_path: Path | None = None
     scale: float = 1.0
+    floor: float = 0.0
+    rim: float = 0.0
 
     def __post_init__(self) -> None:
         ok = {
@@ -78,12 +85,50 @@ class ShapeSpec:
             raise ValueError(
                 f"ShapeSpec: expected positive dimensions for a {self.kind}, got {self}"
             )
+        if self.rim > 0.0 and not (
+            self.kind == Shape.BOX
+            and 0.0 < self.floor < self.size[2]
+            and 2.0 * self.rim < min(self.size[0], self.size[1])
+        ):
+            raise ValueError(
+                "ShapeSpec: expected a tray's floor thinner than its height and its rims "
+                f"narrower than half its width, got {self}"
+            )
+
+    @property
+    def is_tray(self) -> bool:
+        """Whether this is a rimmed tray (an open box), not a solid box."""
+        return self.rim > 0.0
+
+    def tray_boxes(self) -> list[tuple[Vec3, Vec3]]:
+        """A tray's floor and four walls as boxes: (half extents, centre) each, body frame, m.
+
+        The walls along x (the +-y walls) run the tray's full length and the +-x walls fit
+        between them, so the boxes do not overlap.
+        """
+        x, y, z = (s / 2.0 for s in self.size)
+        f, r = self.floor / 2.0, self.rim / 2.0
+        wall = z - f  # half height of a wall, standing on the floor
+        wz = -z + self.floor + wall
+        return [
+            ((x, y, f), (0.0, 0.0, -z + f)),
+            ((x, r, wall), (0.0, y - r, wz)),
+            ((x, r, wall), (0.0, -y + r, wz)),
+            ((r, y - self.rim, wall), (x - r, 0.0, wz)),
+            ((r, y - self.rim, wall), (-x + r, 0.0, wz)),
+        ]
 
     @staticmethod
     def box(size: ArrayLike) -> ShapeSpec:
         """Box of full extents ``size`` (3,), m."""
         x, y, z = (float(v) for v in np.asarray(size, dtype=float).reshape(3))
         return ShapeSpec(Shape.BOX, size=(x, y, z))
+
+    @staticmethod
+    def tray(size: ArrayLike, floor: float, rim: float) -> ShapeSpec:
+        """Rimmed tray of outer extents ``size`` (3,), floor and rim thicknesses, m."""
+        x, y, z = (float(v) for v in np.asarray(size, dtype=float).reshape(3))
+        return ShapeSpec(Shape.BOX, size=(x, y, z), floor=float(floor), rim=float(rim))
 
     @staticmethod
     def sphere(radius: float) -> ShapeSpec:

@@ -71,6 +71,7 @@ from worlds.world_schema import (
     SphereShape,
     Table,
     TaskStep,
+    TrayShape,
     TrialSettings,
     World,
     WorldObject,
@@ -102,6 +103,7 @@ __all__ = [
     "SphereShape",
     "Table",
     "TaskStep",
+    "TrayShape",
     "TrialSettings",
     "World",
     "WorldFileError",
@@ -270,6 +272,8 @@ def world_json_schema() -> dict[str, Any]:
 def _shape_spec(shape: ShapeModel, world: World) -> ShapeSpec:
     if isinstance(shape, BoxShape):
         return ShapeSpec.box(shape.size)
+    if isinstance(shape, TrayShape):
+        return ShapeSpec.tray(shape.size, shape.floor, shape.rim)
     if isinstance(shape, SphereShape):
         return ShapeSpec.sphere(shape.radius)
     if isinstance(shape, CylinderShape):

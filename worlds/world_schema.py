@@ -181,6 +181,31 @@ class BoxShape(_FileModel):
     size: PositiveVector3 = Field(description="full extents [x, y, z] in the body frame, m")
 
 
+class TrayShape(_FileModel):
+    """A rimmed tray centred on its pose: an open box, a floor and four walls up to the top.
+
+    The palms squeeze the outer faces of its +-y walls, as they squeeze a box's y faces.
+    """
+
+    type: Literal["tray"] = "tray"
+    size: PositiveVector3 = Field(description="outer extents [x, y, height] in the body frame, m")
+    floor: _Positive = Field(description="floor thickness, m, > 0 and below the height")
+    rim: _Positive = Field(description="wall thickness, m, > 0 and below half of x and y")
+
+    @model_validator(mode="after")
+    def _fits(self) -> TrayShape:
+        if self.floor >= self.size[2]:
+            raise field_problem(
+                f"a floor thinner than the tray's height ({self.size[2]:g} m)", self.floor, "floor"
+            )
+        half = min(self.size[0], self.size[1]) / 2.0
+        if self.rim >= half:
+            raise field_problem(
+                f"a rim thinner than half the tray's width ({half:g} m)", self.rim, "rim"
+            )
+        return self
+
+
 class CylinderShape(_FileModel):
     """A cylinder centred on its pose, axis along the body z axis."""
 
@@ -232,7 +257,7 @@ def _check_mesh(path: Path, file: str, expected: str) -> None:
 
 
 ShapeModel = Annotated[
-    BoxShape | CylinderShape | SphereShape | MeshShape,
+    BoxShape | TrayShape | CylinderShape | SphereShape | MeshShape,
     Field(discriminator="type"),
 ]
 """Geometry of an object or obstacle, selected by its ``type`` key (a :class:`Shape`)."""

@@ -35,6 +35,7 @@ from affordances.scene import GeometricSceneQuery
 from planner.port import Move, ObstacleInfo, PathCheck, Pose, stepped_moves
 from skills import quaternion as quat
 from skills.dual_arm import GraspGeometry
+from skills.level_carry import LooseBall
 from skills.turns import yaw_of
 from skills.types import Array
 from skills.vocabulary import ARMS, Arm
@@ -200,6 +201,10 @@ class FakeWorld:
         if self._held[name] is None:
             return np.zeros(6)
         return 0.5 * (self._palm_twists[Arm.LEFT] + self._palm_twists[Arm.RIGHT])
+
+    def loose_balls(self, name: str) -> tuple[LooseBall, ...]:
+        """None: the fake world's objects carry nothing loose."""
+        return ()
 
     def object_extents(self, name: str) -> Array:
         """Box extents (3,), m."""

@@ -14,6 +14,9 @@ files byte for byte. The teachers are synthetic and human-like (see ``README.md`
    column ``force`` is the contact force the teacher's palm sensor read.
 5. ``rotate_grasp_axis.csv``: a 90 degree turn about the horizontal axis through the palms
    (the box's y axis: a pitch) with the box held lifted (:mod:`skills.demos.rotation`).
+6. ``level_carry.csv``: a waiter's carry of a tray with a loose ball on it: the same 0.3 m
+   across, lifted only 6 cm, taken over 4 s, minimum-jerk, the tray held level (a steadier
+   hand: half the tremor, a tenth of the wobble).
 """
 
 from __future__ import annotations
@@ -29,6 +32,7 @@ from skills.demos.avoidance import avoidance_demo, straight_demo
 from skills.demos.io import write_demo_csv
 from skills.demos.rotation import rotation_demo
 from skills.dual_arm import GraspGeometry
+from skills.level_carry import CARRY_SHARE
 from skills.types import Array
 from skills.vocabulary import Arm
 
@@ -119,6 +123,30 @@ def grasp_maintenance(
     return t, positions, orientations, contact
 
 
+def level_carry(
+    rng: np.random.Generator, n: int = 480, duration: float = 4.0
+) -> tuple[Array, Array, Array]:
+    """A waiter's level carry: lift 6 cm, carry 0.3 m along -y, lower; tray level throughout.
+
+    The carry begins only once the lift is under way and ends before the lowering, as in
+    :func:`pick_place`, but over 4 s instead of 2.5 (a peak acceleration of about 0.13 m/s^2
+    across), lower, and with a steadier hand: what a teacher does with something loose on top.
+    """
+    t = np.linspace(0.0, duration, n)
+    u = t / duration
+    start = np.array([0.55, 0.15, 0.675])
+    goal = np.array([0.55, -0.15, 0.675])
+    carry = min_jerk(np.clip((u - (1.0 - CARRY_SHARE) / 2.0) / CARRY_SHARE, 0.0, 1.0))
+    up = min_jerk(np.clip(u / 0.35, 0.0, 1.0)) * min_jerk(np.clip((1.0 - u) / 0.35, 0.0, 1.0))
+    positions = start + carry[:, None] * (goal - start)
+    positions[:, 2] += 0.06 * up
+    positions += tremor(n, 3, 0.75e-3, 12, rng)
+    # Small tilts about x and y as well as a yaw wobble: the tray is level within 0.1 degree.
+    wobble = tremor(n, 3, 1e-3, 12, rng)
+    orientations = quat.from_rotation_vector(wobble)
+    return t, positions, orientations
+
+
 def write_all(out: Path = HERE, seed: int = DEFAULT_SEED) -> list[Path]:
     """Write the five CSV files into ``out``; returns their paths."""
     rng = np.random.default_rng(seed)
@@ -147,6 +175,10 @@ def write_all(out: Path = HERE, seed: int = DEFAULT_SEED) -> list[Path]:
     paths.append(write_demo_csv(out / "grasp_maintenance.csv", t, p, q, {"force": force}))
     # Last: the draws of the files above stay those they were written with.
     paths.append(write_demo_csv(out / "rotate_grasp_axis.csv", *rotate_grasp_axis(rng)))
+    # A stream of its own, so the four files above are the bytes they were before this one.
+    paths.append(
+        write_demo_csv(out / "level_carry.csv", *level_carry(np.random.default_rng([seed, 5])))
+    )
     return paths
 
 
