@@ -23,6 +23,7 @@ from py_trees.common import Status
 import planner.leaves  # noqa: F401  (registers the leaves for the XML loader)
 from experiment.figures import Animation, MoveTrace, demonstrated_path, trajectory_figure
 from experiment.grip_recorder import GripRecorder
+from experiment.insertion import insertion_verdict
 from experiment.judge import judge, move_labels
 from experiment.metrics import GripMetrics
 from planner.atomic_file import atomic_open, stale_temporaries
@@ -90,6 +91,8 @@ class EpisodeReport:
     forearm_contacts: dict[str, int] = field(default_factory=dict)
     #: Smallest FCL distance from a forearm to an active obstacle, m (inf: none measured).
     min_forearm_distance_m: float = math.inf
+    #: A world with fixtures: the insertion's figures (:mod:`experiment.insertion`).
+    insertion: dict[str, Any] = field(default_factory=dict)
 
     def summary(self) -> dict[str, Any]:
         """Plain JSON-safe dictionary (infinite distances as None).
@@ -104,6 +107,8 @@ class EpisodeReport:
         if self.disturbances:
             applied = sum(1 for e in self.disturbances if e["steps"] > 0)
             extra["disturbances"] = {"applied": applied, "entries": self.disturbances}
+        if self.insertion:
+            extra["insertion"] = self.insertion
         return {
             "success": self.success,
             "failure": self.failure,
@@ -454,6 +459,9 @@ def run_episode(
         objects = [name for name, _ in recorder.finals]
         errors_m, errors_deg = recorder.column("error_m"), recorder.column("error_deg")
         ok, failure = judge(result, sim, objects, errors_m, errors_deg)
+        inserted = insertion_verdict(sim)
+        if inserted is not None and ok and not inserted.ok:
+            ok, failure = False, inserted.reason
         report = EpisodeReport(
             ok,
             result.status.value,
@@ -477,6 +485,8 @@ def run_episode(
         report.grip = recorder.grip.metrics(HELD_FORCE_N)
         report.forearm_contacts = dict(sim.safety.forearm_contacts)
         report.min_forearm_distance_m = sim.safety.min_forearm_distance_m
+        if inserted is not None:
+            report.insertion = inserted.figures
         if out is not None:
             if log is not None and log.error is not None:
                 report.output_errors.append(log.error)

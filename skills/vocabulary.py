@@ -43,6 +43,7 @@ class Action(StrEnum):
     LIMIT_REPULSION = "limit_repulsion"
     RELEASE = "release"
     RETREAT = "retreat"
+    INSERT = "insert"
 
 
 class AffordanceElement(StrEnum):
@@ -62,6 +63,7 @@ class AffordanceElement(StrEnum):
     OBSTACLE_NEAR_LINKS = "obstacle_near_links"
     ON_SURFACE = "on_surface"
     ROTATABLE = "rotatable"
+    IN_FIXTURE = "in_fixture"
 
 
 class GraspType(StrEnum):

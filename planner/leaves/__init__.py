@@ -4,6 +4,7 @@ from planner.leaves.approach import Approach
 from planner.leaves.base import MotionLeaf, WorldLeaf
 from planner.leaves.conditions import AtGoal, IsHeld, PathClear
 from planner.leaves.grasp import Grasp
+from planner.leaves.insert import Insert
 from planner.leaves.release import Release, Retreat
 from planner.leaves.select import SelectSkills
 from planner.leaves.transport import Transport
@@ -14,6 +15,7 @@ __all__ = [
     "AtGoal",
     "Grasp",
     "GripTurns",
+    "Insert",
     "IsHeld",
     "MotionLeaf",
     "PathClear",

@@ -1,4 +1,4 @@
-"""Write the four synthetic demonstrations the default library is learnt from.
+"""Write the five synthetic demonstrations the default library is learnt from.
 
 Run ``python -m skills.demos.generate [--out DIR] [--seed N]``. The same seed writes the same
 files byte for byte. The teachers are synthetic and human-like (see ``README.md`` here):
@@ -12,6 +12,9 @@ files byte for byte. The teachers are synthetic and human-like (see ``README.md`
 4. ``grasp_maintenance.csv``: a palm's pose in the object frame while the teacher holds the
    parcel's face and the palm is pushed off and pulls back (a spring-damper the fit recovers);
    column ``force`` is the contact force the teacher's palm sensor read.
+5. ``insertion.csv``: a box lowered into an open fixture, reacting to a wall it meets
+   (:mod:`skills.demos.insertion`); ``fx, fy, fz`` the fixture's force on the box, ``bx, by,
+   bz`` the teacher's plan, ``gx, gy, gz`` the seated goal.
 """
 
 from __future__ import annotations
@@ -24,6 +27,7 @@ import numpy as np
 from skills import quaternion as quat
 from skills.demos._smooth import min_jerk, tremor
 from skills.demos.avoidance import avoidance_demo, straight_demo
+from skills.demos.insertion import insertion_demo
 from skills.demos.io import write_demo_csv
 from skills.demos.rotation import rotation_demo
 from skills.dual_arm import GraspGeometry
@@ -112,7 +116,7 @@ def grasp_maintenance(
 
 
 def write_all(out: Path = HERE, seed: int = DEFAULT_SEED) -> list[Path]:
-    """Write the four CSV files into ``out``; returns their paths."""
+    """Write the five CSV files into ``out``; returns their paths."""
     rng = np.random.default_rng(seed)
     paths = [write_demo_csv(out / "pick_place.csv", *pick_place(rng))]
     paths.append(write_demo_csv(out / "rotate_z.csv", *rotate_z(rng)))
@@ -137,6 +141,13 @@ def write_all(out: Path = HERE, seed: int = DEFAULT_SEED) -> list[Path]:
     )
     t, p, q, force = grasp_maintenance(rng)
     paths.append(write_demo_csv(out / "grasp_maintenance.csv", t, p, q, {"force": force}))
+    # Last: the files above draw from the generator as they did before this one existed.
+    t, p, q, fixture_force, plan, goal = insertion_demo(rng)
+    n = t.shape[0]
+    extra = {f"f{a}": fixture_force[:, i] for i, a in enumerate("xyz")}
+    extra.update({f"b{a}": plan[:, i] for i, a in enumerate("xyz")})
+    extra.update({f"g{a}": np.full(n, goal[i]) for i, a in enumerate("xyz")})
+    paths.append(write_demo_csv(out / "insertion.csv", t, p, q, extra))
     return paths
 
 
