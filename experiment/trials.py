@@ -45,6 +45,7 @@ import numpy as np
 import pybullet as pb
 
 from experiment.hard import HardTrial, draw_hard, with_pushes
+from experiment.insertion_trials import place_fixture
 from experiment.records import campaign_key, owned_by, tree_hash
 from experiment.results import (
     ResultsFileError,
@@ -346,6 +347,9 @@ def _draw_trial(
             ],
         }
     ]
+    if layout.insertion is not None:
+        # From a stream of its own: the draws above stay those of a world without it.
+        data = place_fixture(data, np.random.default_rng([seed, trial, 3, redraw]))
     data["name"] = f"{base.name}_trial_{trial}"
     return world_from_data(data, base.source), kinds
 

@@ -716,9 +716,6 @@ class World(_FileModel):
     table: Table
     objects: tuple[WorldObject, ...] = Field(min_length=1, description="at least 1 object")
     obstacles: tuple[Obstacle, ...] = Field(default=(), description="may be empty")
-    fixtures: tuple[Fixture, ...] = Field(
-        default=(), description="open fixtures on the table an object is inserted into"
-    )
     task: tuple[TaskStep, ...] = Field(min_length=1, description="at least 1 step")
     sim: SimSettings = Field(default_factory=SimSettings)
     skills: SkillSettings = Field(default_factory=SkillSettings)
@@ -732,6 +729,10 @@ class World(_FileModel):
         "relative to the world file's folder, with the shipped tree's Task, PickAndPlace and "
         "Move subtrees (one PickAndPlace per task step, one Move per move is made of it); "
         "default planner/trees/pick_and_place.xml",
+    )
+
+    fixtures: tuple[Fixture, ...] = Field(
+        default=(), description="open fixtures on the table an object is inserted into"
     )
 
     @field_validator("tree")

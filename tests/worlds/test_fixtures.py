@@ -40,7 +40,7 @@ def test_slot_world_loads_with_a_fitting_fixture() -> None:
     (fixture,) = spec.scene.fixtures
     assert fixture.for_object == "parcel"
     assert_allclose(fixture.inner, (0.21, 0.31))  # the parcel's footprint + 5 mm per side
-    assert_allclose(fixture.position, (0.60, -0.17, 0.6))
+    assert_allclose(fixture.position, (0.60, -0.18, 0.6))
     assert spec.task[0].moves[0].fixture == "slot"
     tree = world.tree_path()
     assert tree is not None and tree.resolve() == REPO / "planner" / "trees" / "slot_insertion.xml"
@@ -76,7 +76,7 @@ def test_walls_stay_below_the_palms_holding_the_seated_box() -> None:
         (lambda d: d["fixtures"][0].update(colour="red"), r"fixtures\[0\]\.colour"),
         (lambda d: d["task"][0]["moves"][0].update(fixture="hole"), r"moves\[0\]\.fixture.*'slot'"),
         (
-            lambda d: d["task"][0]["moves"][0]["goal"].update(position=[0.6, -0.16, 0.675]),
+            lambda d: d["task"][0]["moves"][0]["goal"].update(position=[0.6, -0.17, 0.675]),
             r"moves\[0\]\.goal.*seated in fixture 'slot'",
         ),
         (lambda d: d["trials"]["insertion"].update(fixture="hole"), r"trials\.insertion\.fixture"),
@@ -123,5 +123,5 @@ def test_fixture_built_in_pybullet_and_fcl_where_the_file_says() -> None:
         assert FIXTURES in sim.collision.group_names()
         # The -y wall's inner face is 0.31 / 2 from the centre: a point just inside it is
         # 5 mm... from the wall: FCL sees the walls where PyBullet has them.
-        d, _ = sim.collision.query(np.array([[0.60, -0.17 - 0.155 + 0.005, 0.62]]))
+        d, _ = sim.collision.query(np.array([[0.60, -0.18 - 0.155 + 0.005, 0.62]]))
         assert d[0] == pytest.approx(0.005, abs=1e-4) or d[0] > 0.0
