@@ -29,6 +29,7 @@ DEFAULT_SPACE: Mapping[Action, Space] = MappingProxyType(
         Action.LIMIT_REPULSION: Space.ABSOLUTE,
         Action.RELEASE: Space.RELATIVE,
         Action.RETREAT: Space.ABSOLUTE,
+        Action.INSERT: Space.ABSOLUTE,
     }
 )
 

@@ -23,6 +23,7 @@ from py_trees.common import Status
 import planner.leaves  # noqa: F401  (registers the leaves for the XML loader)
 from experiment.figures import Animation, MoveTrace, demonstrated_path, trajectory_figure
 from experiment.grip_recorder import GripRecorder
+from experiment.insertion import insertion_verdict
 from experiment.judge import judge, move_labels
 from experiment.metrics import GripMetrics
 from experiment.tray import tray_verdicts
@@ -94,6 +95,8 @@ class EpisodeReport:
     #: Per carried tray and ball loose on it, its peak tilt and the ball's path relative to
     #: the tray (:meth:`experiment.tray.TrayVerdict.summary`); empty without trays.
     tray: list[dict[str, Any]] = field(default_factory=list)
+    #: A world with fixtures: the insertion's figures (:mod:`experiment.insertion`).
+    insertion: dict[str, Any] = field(default_factory=dict)
 
     def summary(self) -> dict[str, Any]:
         """Plain JSON-safe dictionary (infinite distances as None).
@@ -110,6 +113,8 @@ class EpisodeReport:
             extra["disturbances"] = {"applied": applied, "entries": self.disturbances}
         if self.tray:
             extra["tray"] = self.tray
+        if self.insertion:
+            extra["insertion"] = self.insertion
         return {
             "success": self.success,
             "failure": self.failure,
@@ -464,6 +469,9 @@ def run_episode(
         tray_failure = next((v.failure for v in trays if not v.ok), "")
         if ok and tray_failure:
             ok, failure = False, tray_failure
+        inserted = insertion_verdict(sim)
+        if inserted is not None and ok and not inserted.ok:
+            ok, failure = False, inserted.reason
         report = EpisodeReport(
             ok,
             result.status.value,
@@ -488,6 +496,8 @@ def run_episode(
         report.forearm_contacts = dict(sim.safety.forearm_contacts)
         report.min_forearm_distance_m = sim.safety.min_forearm_distance_m
         report.tray = [v.summary() for v in trays]
+        if inserted is not None:
+            report.insertion = inserted.figures
         if out is not None:
             if log is not None and log.error is not None:
                 report.output_errors.append(log.error)

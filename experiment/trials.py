@@ -46,6 +46,7 @@ import pybullet as pb
 
 from experiment.flip_draws import draw_object, goal_half_height, pitched_goal_postures
 from experiment.hard import HardTrial, draw_hard, with_pushes
+from experiment.insertion_trials import place_fixture
 from experiment.records import campaign_key, owned_by, tree_hash
 from experiment.results import (
     ResultsFileError,
@@ -367,6 +368,9 @@ def _draw_trial(
             ],
         }
     ]
+    if layout.insertion is not None:
+        # From a stream of its own: the draws above stay those of a world without it.
+        data = place_fixture(data, np.random.default_rng([seed, trial, 3, redraw]))
     data["name"] = f"{base.name}_trial_{trial}"
     return world_from_data(data, base.source), kinds
 

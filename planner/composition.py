@@ -16,6 +16,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from affordances import SemanticAction, SkillSelection, spare_grip_acceleration
+from planner.fixture_moves import fixture_grasp_height, hover_move
 from planner.port import Move, ObjectSensing, PalmControl, Pose, WorldPort
 from skills import quaternion as quat
 from skills.composer import DualArmComposer, DualArmState, commands_for, relative_from_world
@@ -135,7 +136,9 @@ def lateral_geometry(
     k = grasp_quarter_turns(world, name) if quarter_turns is None else quarter_turns
     extents = world.object_extents(name)
     width = float(extents[1] if k % 2 == 0 else extents[0])
-    return GraspGeometry.lateral(width, world.palm_thickness(), quarter_turns=k)
+    # Up the faces, over the walls of a fixture the object goes into (0 in most worlds).
+    height = fixture_grasp_height(world, world, name)
+    return GraspGeometry.lateral(width, world.palm_thickness(), quarter_turns=k, height=height)
 
 
 def held_lateral_geometry(world: WorldPort, name: str, state: DualArmState) -> GraspGeometry:
@@ -546,6 +549,9 @@ class MovePlan:
         The skill a port asked for by name (None: the move's or the plan's).
     skill : str or None
         The learnt transport skill composed (:func:`carried_skill`), None without one.
+    above_fixture : bool
+        Composed to the hover goal above a fixture move's seated goal
+        (:func:`planner.fixture_moves.hover_goal`).
     start : DualArmState
         The composer's first state (``from_state`` with the phase restarted).
     """
@@ -560,6 +566,7 @@ class MovePlan:
     composer: DualArmComposer
     requested_skill: str | None = None
     skill: str | None = None
+    above_fixture: bool = False
     start: DualArmState = field(init=False)
 
     def __post_init__(self) -> None:
@@ -595,14 +602,19 @@ def compose_move(
     avoid_gain: float = 1.0,
     transport_weight: float = 1.0,
     skill: str | None = None,
+    above_fixture: bool = False,
 ) -> MovePlan:
     """Activate move ``index``'s obstacles and compose it from ``state``.
 
     The one place a move's obstacles are switched on: the composition asks the world for
     the obstacles present, so they must be the move's before it is built. Arguments as
     :func:`transport_composition`'s; ``index`` must be one of ``world.task_moves(name)``.
+    ``above_fixture``: a move into a fixture is composed to its hover goal
+    (:func:`planner.fixture_moves.hover_goal`); no other move changes.
     """
     move = world.task_moves(name)[index]
+    if above_fixture:
+        move = hover_move(world, move)
     world.set_active_obstacles(move.obstacles)
     composer = transport_composition(
         plan,
@@ -627,6 +639,7 @@ def compose_move(
         composer,
         skill,
         carried_skill(reweight(plan, avoid_gain, transport_weight), library, skill or move.skill),
+        above_fixture,
     )
 
 

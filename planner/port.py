@@ -77,6 +77,9 @@ class Move:
         (a step of); None for a move not made by :func:`stepped_moves`.
     final : bool
         The last step of its task move: its goal is the task move's goal.
+    fixture : str or None
+        The fixture (:class:`FixtureInfo`) the move seats the object in: its goal is the
+        seated pose; None for a placement on the table.
     """
 
     goal: Pose
@@ -84,6 +87,7 @@ class Move:
     skill: str | None = None
     task_move: int | None = None
     final: bool = True
+    fixture: str | None = None
 
 
 def stepped_moves(
@@ -128,6 +132,7 @@ def stepped_moves(
                     skill=move.skill,
                     task_move=index,
                     final=last,
+                    fixture=move.fixture,
                 )
             )
         yaw = goal_yaw
@@ -150,6 +155,33 @@ class ObstacleInfo:
     name: str
     position: Array
     radius: float
+
+
+@dataclass(frozen=True)
+class FixtureInfo:
+    """An open fixture on the table an object is inserted into: four walls around a slot.
+
+    Attributes
+    ----------
+    name : str
+    for_object : str
+        The object it is made for.
+    position : ndarray, shape (3,)
+        Centre of the inside at its floor (the table top), m.
+    yaw : float
+        Turn about world z, rad.
+    inner : ndarray, shape (2,)
+        Inside extents along the fixture's x and y, m.
+    wall_height : float
+        Height of the walls above the floor, m.
+    """
+
+    name: str
+    for_object: str
+    position: Array
+    yaw: float
+    inner: Array
+    wall_height: float
 
 
 @dataclass(frozen=True)
@@ -224,6 +256,15 @@ class ObjectSensing(Protocol):
     def loose_balls(self, name: str) -> tuple[LooseBall, ...]:
         """The balls lying loose on an object (a rimmed tray), as the level carry needs them;
         empty for an object that carries none."""
+        ...
+
+    def fixtures(self) -> tuple[FixtureInfo, ...]:
+        """The open fixtures on the table (always present; none in most worlds)."""
+        ...
+
+    def fixture_force(self, name: str) -> Array:
+        """Force (3,) the fixtures exert on an object, N, world frame (normal and friction;
+        zeros without contact): a wall pressing the object pushes it away from the wall."""
         ...
 
 

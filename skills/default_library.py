@@ -16,6 +16,7 @@ avoid_obstacle     absolute    steering gains by least squares (Rai et al. 2014)
 avoid_links        absolute    Park et al. 2008 dynamic potential, set by hand        --
 workspace_limits   absolute    Gams et al. 2009 repulsion from the table top, by hand --
 hold_lateral       relative    spring-damper and squeeze fitted to a held palm        CSV
+insert             absolute    pose DMP of a descent; admittance by least squares     CSV
 =================  ==========  =====================================================  ========
 """
 
@@ -23,7 +24,7 @@ from __future__ import annotations
 
 import sys
 import tempfile
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -32,6 +33,7 @@ from skills import file_cache
 from skills.couplings.steering_fit import AvoidanceDemo, fit_obstacle_steering
 from skills.demonstration import Demonstration
 from skills.demos.io import DemoFile, columns, read_demo_csv
+from skills.insertion_fit import fit_insertion
 from skills.library import ARRAYS_FILE, META_FILE, LibraryFileError, SkillLibrary
 from skills.pose_dmp import fit_pose
 from skills.scaling import Scaling
@@ -316,7 +318,49 @@ def build_default_library(demos_dir: Path = DEMOS_DIR) -> SkillLibrary:
             ),
         )
     )
+    lib.add(insertion_skill(read_demo_csv(demos_dir / "insertion.csv")))
     return lib
+
+
+def insertion_skill(demo_file: DemoFile) -> Skill:
+    """The ``insert`` skill: a pose DMP of the teacher's planned descent into a fixture, with
+    the force coupling (:func:`skills.insertion_fit.fit_insertion`) as its parameters."""
+    demo = demo_file.demonstration
+    plan = Demonstration.create(
+        demo.t,
+        columns(demo_file, ["bx", "by", "bz"]),
+        demo.orientations,
+        name=f"{demo.name} (plan)",
+    )
+    fit = fit_insertion(demo_file)
+    skill = learnt_skill(
+        "insert",
+        Action.INSERT,
+        Space.ABSOLUTE,
+        fit_pose(plan, position_scaling=Scaling.ROTATION_Z, orientation_scaling=Scaling.NONE),
+        (AffordanceElement.IN_FIXTURE,),
+        Provenance(
+            ("insertion.csv",),
+            BUILT_AT,
+            "pose DMP of the teacher's planned descent, 50 RBF per dimension; admittance "
+            "(compliance, centring) fitted by linear least squares to what the teacher did "
+            "beyond the plan against the recorded fixture forces",
+            {
+                "residual_rms": fit.residual_rms,
+                "relative_residual": fit.relative_residual,
+                "n_contact_samples": float(fit.contact_samples),
+            },
+        ),
+    )
+    g = fit.gains
+    params = {
+        **skill.params,
+        "compliance": g.compliance,
+        "centring": g.centring,
+        "soft_force_n": g.soft_force_n,
+        "stop_force_n": g.stop_force_n,
+    }
+    return replace(skill, params=params)
 
 
 #: The package whose source the learning runs: all of it keys the cached library.

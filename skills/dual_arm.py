@@ -124,6 +124,7 @@ class GraspGeometry:
         normal_axis: ArrayLike = (0.0, 0.0, 1.0),
         down_axis: ArrayLike = (1.0, 0.0, 0.0),
         quarter_turns: int = 0,
+        height: float = 0.0,
     ) -> GraspGeometry:
         """Two palms flat on the object's +y (left) and -y (right) faces, or on the pair of
         side faces ``quarter_turns`` quarter turns about the object's z axis from them.
@@ -143,6 +144,9 @@ class GraspGeometry:
             Which pair of side faces: 0 the +-y faces (left on +y), 1 the left palm on the
             -x face, 2 on -y, 3 on +x (:mod:`skills.turns`). ``width`` is the distance
             between the faces of that pair.
+        height : float
+            Palm centres above the object's centre along its z axis, m (0: centred on the
+            faces; :func:`skills.insertion.grasp_height` raises them over a fixture's walls).
         """
         if not (np.isfinite(width) and width > 0):
             raise ValueError(f"width: expected a positive distance in m, got {width!r}")
@@ -158,10 +162,11 @@ class GraspGeometry:
         left_in = np.array([0.0, -1.0, 0.0])  # the left palm pushes towards -y
         right_in = np.array([0.0, 1.0, 0.0])
         turn = quat.from_axis_angle(np.array([0.0, 0.0, 1.0]), int(quarter_turns) * np.pi / 2.0)
+        up = np.array([0.0, 0.0, float(height)])
         return GraspGeometry(
-            quat.rotate(turn, np.array([0.0, offset, 0.0])),
+            quat.rotate(turn, np.array([0.0, offset, 0.0])) + up,
             quat.multiply(turn, _frame(n, d, left_in)),
-            quat.rotate(turn, np.array([0.0, -offset, 0.0])),
+            quat.rotate(turn, np.array([0.0, -offset, 0.0])) + up,
             quat.multiply(turn, _frame(n, d, right_in)),
             quat.rotate(turn, left_in),
             quat.rotate(turn, right_in),

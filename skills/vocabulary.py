@@ -44,6 +44,7 @@ class Action(StrEnum):
     LIMIT_REPULSION = "limit_repulsion"
     RELEASE = "release"
     RETREAT = "retreat"
+    INSERT = "insert"
 
 
 class AffordanceElement(StrEnum):
@@ -63,6 +64,7 @@ class AffordanceElement(StrEnum):
     OBSTACLE_NEAR_LINKS = "obstacle_near_links"
     ON_SURFACE = "on_surface"
     ROTATABLE = "rotatable"
+    IN_FIXTURE = "in_fixture"
 
 
 class GraspType(StrEnum):

@@ -32,6 +32,7 @@ from skills import file_cache
 from skills import quaternion as quat
 from skills.types import Array
 from skills.vocabulary import Arm
+from worlds.fixture_spec import WALL_NAMES
 from worlds.scene import Scene
 from worlds.spec import Shape, ShapeSpec
 
@@ -40,6 +41,8 @@ IntArray = NDArray[np.intp]
 
 TABLE = "table"
 OBSTACLES = "obstacles"
+#: Group of the fixtures' walls (always present; ``"<fixture>/<wall>"`` elements).
+FIXTURES = "fixtures"
 
 
 def arm_group(arm: Arm) -> str:
@@ -333,6 +336,18 @@ class CollisionWorld:
             self._obstacles[obstacle.name] = len(self._elements)
             self._add(obstacle.name, OBSTACLES, geometry, centre, radius)
             fixed.append((len(self._elements) - 1, np.asarray(obstacle.position, float)))
+        turned: list[tuple[int, FloatArray, FloatArray]] = []
+        for fixture in scene.spec.fixtures:
+            rotation = np.asarray(
+                quat.to_matrix(np.asarray(fixture.quaternion, dtype=float)), dtype=np.float64
+            )
+            for (centre, half), wall in zip(
+                zip(*fixture.walls(), strict=True), WALL_NAMES, strict=True
+            ):
+                geometry, local, radius = _shape_geometry(ShapeSpec.box(2.0 * half))
+                self._add(f"{fixture.name}/{wall}", FIXTURES, geometry, local, radius)
+                position = np.asarray(fixture.position, float) + rotation @ centre
+                turned.append((len(self._elements) - 1, position, rotation))
         # Every element's pose, world frame, as the last sync read it: the bounding spheres'
         # centres (E, 3) at once, for the screens; each FCL transform is set from the rotation
         # (E, 3, 3) and position (E, 3) when a query first needs it (``_stale``).
@@ -356,6 +371,8 @@ class CollisionWorld:
         self._stale = np.zeros(count, dtype=bool)
         for row, position in fixed:
             self._set_poses(np.array([row]), position[None], np.eye(3)[None])
+        for row, position, rotation in turned:
+            self._set_poses(np.array([row]), position[None], rotation[None])
         self._palm_rows = {
             arm: self._index(f"{arm_group(arm)}/palm") for arm in (Arm.LEFT, Arm.RIGHT)
         }

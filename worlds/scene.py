@@ -38,6 +38,7 @@ from worlds.bodies import (
 )
 from worlds.control import DualArmImpedanceController, ImpedanceGains, PalmCommand, PalmState
 from worlds.disturbances import Disturbances
+from worlds.fixtures import create_fixture, fixture_force
 from worlds.palm_ik import solve_palms
 from worlds.spec import ObstacleSpec, Quat, SceneSpec, WorldSpec
 from worlds.truth import PhysicalTruth, physical_scene
@@ -213,6 +214,8 @@ class Scene:
             o.name: create_obstacle(c, o, self._parking(o)) for o in self.spec.obstacles
         }
         self._active_obstacles: set[str] = set()
+        #: The fixtures' bodies, by name (always present: :mod:`worlds.fixtures`).
+        self.fixture_ids = {f.name: create_fixture(c, f) for f in self.spec.fixtures}
         self.disturbances = Disturbances(
             c, self.spec.disturbances, self.object_ids, self.spec.physics_hz, self.is_held
         )
@@ -523,6 +526,11 @@ class Scene:
                 physicsClientId=self.client,
             )
         )
+
+    def fixture_force(self, fixture: str, name: str) -> FloatArray:
+        """Force (3,) N, world frame, that fixture ``fixture`` exerts on object ``name``."""
+        force = fixture_force(self.client, self.fixture_ids[fixture], self._object(name))
+        return np.asarray(force, dtype=np.float64)
 
     def arm_contact_force(self, arm: Arm, body_id: int) -> float:
         """Sum of contact normal forces between any link of ``arm``'s body and a body, N."""

@@ -25,15 +25,16 @@ from numpy.typing import NDArray
 
 from affordances import ObjectContext, RobotCapabilities, SceneQuery
 from affordances.scene import GeometricSceneQuery
-from planner.port import Move, ObstacleInfo, PathCheck, Pose, stepped_moves
+from planner.port import FixtureInfo, Move, ObstacleInfo, PathCheck, Pose, stepped_moves
 from skills import quaternion as quat
 from skills.level_carry import LooseBall
 from skills.types import Array
 from skills.vocabulary import ARMS, Arm
 from worlds.adapters import object_contexts, robot_capabilities
 from worlds.arm_prediction import ArmPredictor
-from worlds.collision import CollisionWorld, arm_group
+from worlds.collision import FIXTURES, CollisionWorld, arm_group
 from worlds.control import ImpedanceGains, PalmCommand
+from worlds.fixtures import FixtureLog, wall_forces
 from worlds.scene import LATERAL_PALM_QUATERNIONS, Scene
 from worlds.spec import Shape, ShapeSpec, WorldSpec
 from worlds.trays import TrayFrame, riders
@@ -162,7 +163,12 @@ def task_moves(spec: WorldSpec, name: str) -> tuple[Move, ...]:
     obj = next(o for o in spec.scene.objects if o.name == name)
     return stepped_moves(
         (
-            Move(Pose.of(m.goal_position, m.goal_quaternion), m.obstacles, skill=m.skill)
+            Move(
+                Pose.of(m.goal_position, m.goal_quaternion),
+                m.obstacles,
+                skill=m.skill,
+                fixture=m.fixture,
+            )
             for m in spec.moves_of(name)
         ),
         obj.yaw,
@@ -249,6 +255,19 @@ class SimWorld:
                 for e in self.collision.arm_links(a)
                 if e.split("/", 1)[1].split("#", 1)[0] in names
             )
+        #: The fixtures' walls' forces and the robot's touches, every physics step.
+        self.fixture_log = FixtureLog(self.scene.physics_dt)
+        self._fixture_info = tuple(
+            FixtureInfo(
+                f.name,
+                f.for_object,
+                np.asarray(f.position, float),
+                float(f.yaw),
+                np.asarray(f.inner, float),
+                float(f.wall_height),
+            )
+            for f in spec.scene.fixtures
+        )
         self._rest_z = {
             o.name: float(o.position[2]) for o in self.scene.physical.objects
         }  # resting centre height, on the true table
@@ -298,8 +317,12 @@ class SimWorld:
         for _ in range(steps):
             self.scene.step(1)
             self._watch_contacts()
+            if self.scene.fixture_ids:
+                self._watch_fixtures()
         self.collision.sync()
         self._watch_distances()
+        if self._fixture_info:
+            self._watch_fixture_distances()
         self._watch_drop()
         if self._unlocated:
             self._locate_held()
@@ -346,6 +369,34 @@ class SimWorld:
                 ]
             ):
                 self.safety.arm_contacts += 1
+
+    def _watch_fixtures(self) -> None:
+        """Each fixture's walls' forces on the objects, and any robot body touching it."""
+        c = self.scene.client
+        log = self.fixture_log
+        for f in self.scene.spec.fixtures:
+            body = self.scene.fixture_ids[f.name]
+            forces = np.zeros(4)
+            for obj in self.scene.object_ids.values():
+                forces += wall_forces(c, body, f, obj)
+            log.wall_forces.setdefault(f.name, []).append(forces)
+            points = pb.getContactPoints(bodyA=body, physicsClientId=c)
+            if not points:
+                continue
+            for a in ARMS:
+                robot_body, links = self._watched_bodies[f"{a.value}_arm"]
+                if touching(_points_on(points, robot_body, links)):
+                    key = f"{a.value}_arm ~ {f.name}"
+                    log.robot_contacts[key] = log.robot_contacts.get(key, 0) + 1
+
+    def _watch_fixture_distances(self) -> None:
+        """The arms' (palms included) smallest FCL distance to a fixture's walls."""
+        log = self.fixture_log
+        for arm in ARMS:
+            prox = self.collision.closer_than(arm_group(arm), FIXTURES, log.min_robot_distance_m)
+            if prox is not None:
+                log.min_robot_distance_m = prox.distance
+                log.robot_closest = f"{prox.element_a} ~ {prox.element_b}"
 
     def _watch_distances(self) -> None:
         if not self.scene.active_obstacles:
@@ -438,6 +489,17 @@ class SimWorld:
     def gravity(self) -> float:
         """Magnitude of the scene's gravity, m/s^2."""
         return abs(float(self.scene.spec.gravity))
+
+    def fixtures(self) -> tuple[FixtureInfo, ...]:
+        """The world's fixtures, each with the object its task moves seat in it."""
+        return self._fixture_info
+
+    def fixture_force(self, name: str) -> Array:
+        """Force (3,) of all fixtures on object ``name``, N, world frame."""
+        total = np.zeros(3)
+        for fixture in self.scene.fixture_ids:
+            total += self.scene.fixture_force(fixture, name)
+        return total
 
     # -- palms -------------------------------------------------------------------------------
     def palm_pose(self, arm: Arm) -> Pose:

@@ -20,6 +20,7 @@ from numpy.typing import ArrayLike
 
 # One vocabulary for every layer: the reasoner's shape, fragility and state enums.
 from affordances.context import Fragility, ObjectState, Shape
+from worlds.fixture_spec import FixtureSpec
 
 Vec3 = tuple[float, float, float]
 Quat = tuple[float, float, float, float]
@@ -415,6 +416,8 @@ class SceneSpec:
         Seed of the scene's random generator.
     disturbances : tuple of DisturbanceSpec
         Scripted pushes on the objects, in the world file's order (none by default).
+    fixtures : tuple of FixtureSpec
+        Open fixtures standing on the table (always present; none by default).
     """
 
     robot: RobotSpec = field(default_factory=RobotSpec)
@@ -426,6 +429,7 @@ class SceneSpec:
     gravity: float = -9.81
     seed: int = 0
     disturbances: tuple[DisturbanceSpec, ...] = ()
+    fixtures: tuple[FixtureSpec, ...] = ()
 
     def __post_init__(self) -> None:
         if self.physics_hz <= 0 or self.control_hz <= 0 or self.physics_hz % self.control_hz:
@@ -434,6 +438,7 @@ class SceneSpec:
                 f"got {self.physics_hz} and {self.control_hz}"
             )
         names = [o.name for o in self.objects] + [o.name for o in self.obstacles]
+        names += [f.name for f in self.fixtures]
         duplicates = sorted({n for n in names if names.count(n) > 1})
         if duplicates:
             raise ValueError(f"SceneSpec: expected unique names, got duplicates {duplicates}")
@@ -470,6 +475,9 @@ class MoveSpec:
     skill : str or None
         Name or label of the library's absolute skill the move is carried with; None for the
         plan's transport skill.
+    fixture : str or None
+        The fixture the move seats the object in (its goal is the seated pose); None for a
+        placement on the table.
     """
 
     goal_position: Vec3
@@ -477,6 +485,7 @@ class MoveSpec:
     goal_yaw: float
     obstacles: tuple[str, ...] = ()
     skill: str | None = None
+    fixture: str | None = None
 
 
 @dataclass(frozen=True)
@@ -530,6 +539,7 @@ class WorldSpec:
 __all__ = [
     "STEP_ROUNDING",
     "DisturbanceSpec",
+    "FixtureSpec",
     "Fragility",
     "MoveSpec",
     "ObjectSpec",

@@ -31,8 +31,10 @@ import yaml
 from pydantic import ValidationError
 
 from affordances.safe_yaml import YamlFileError, parse_yaml, read_bounded
+from worlds.fixture_schema import Fixture
 from worlds.spec import (
     DisturbanceSpec,
+    FixtureSpec,
     Fragility,
     MoveSpec,
     ObjectSpec,
@@ -306,6 +308,26 @@ def _move_spec(move: MoveEntry) -> MoveSpec:
         goal_yaw=math.radians(move.goal.rpy_deg[2]),
         obstacles=tuple(move.obstacles),
         skill=move.skill,
+        fixture=move.fixture,
+    )
+
+
+def _fixture_spec(fixture: Fixture, world: World) -> FixtureSpec:
+    size = world.object_named(fixture.for_object).shape
+    assert isinstance(size, BoxShape)  # validated: a fixture is made for a box
+    x, y = fixture.position
+    return FixtureSpec(
+        name=fixture.name,
+        position=(x, y, float(world.table.position[2])),
+        yaw=math.radians(fixture.yaw_deg),
+        inner=(
+            size.size[0] + 2.0 * fixture.clearance,
+            size.size[1] + 2.0 * fixture.clearance,
+        ),
+        wall_thickness=float(fixture.wall_thickness),
+        wall_height=float(fixture.wall_height),
+        friction=float(fixture.friction),
+        for_object=fixture.for_object,
     )
 
 
@@ -358,6 +380,7 @@ def world_spec(world: World) -> WorldSpec:
             )
             for d in world.disturbances
         ),
+        fixtures=tuple(_fixture_spec(f, world) for f in world.fixtures),
     )
     return WorldSpec(
         name=world.name,

@@ -32,6 +32,7 @@ from pydantic import (
     model_validator,
 )
 
+from worlds.fixture_schema import Fixture, InsertionTrials, fixture_issues
 from worlds.spec import Fragility, ObjectState, ObstacleKind, RobotModelName, Shape
 from worlds.world_errors import FieldProblems, Issue, Shown, field_problem, format_path, show_value
 
@@ -369,6 +370,11 @@ class MoveEntry(_FileModel):
         description="name or label of the library's absolute skill this move is carried with "
         "(a taught skill's label); default: the plan's transport skill",
     )
+    fixture: _Name | None = Field(
+        default=None,
+        description="the fixture (fixtures[].name) this move seats the object in; the goal "
+        "must then be the seated pose",
+    )
 
     @field_validator("skill")
     @classmethod
@@ -376,6 +382,15 @@ class MoveEntry(_FileModel):
         if skill is not None and _SKILL_NAME.fullmatch(skill) is None:
             raise field_problem("a skill name or label (letters, digits, '_' or '-')", skill)
         return skill
+
+    @model_serializer(mode="wrap")
+    def _without_no_fixture(self, handler: SerializerFunctionWrapHandler) -> Any:
+        # A move into no fixture dumps as before fixtures existed (its world's content hash
+        # names its trial campaigns, experiment.records).
+        data = handler(self)
+        if self.fixture is None and isinstance(data, dict):
+            data.pop("fixture", None)
+        return data
 
 
 class TaskStep(_FileModel):
@@ -683,6 +698,11 @@ class TrialSettings(_FileModel):
             raise field_problem("values > 0", bounds)
         return bounds
 
+    insertion: InsertionTrials | None = Field(
+        default=None,
+        description="where a trial draws a fixture (and the box it fits); default: as is",
+    )
+
     @field_validator("sphere_radius")
     @classmethod
     def _radius_positive(cls, radius: tuple[float, float]) -> tuple[float, float]:
@@ -723,6 +743,8 @@ class TrialSettings(_FileModel):
         if isinstance(data, dict):
             if self.hard == HardSettings():
                 data.pop("hard", None)
+            if self.insertion is None:
+                data.pop("insertion", None)
             for key in ("moves",) if not self.moves else _PAPER_REGIONS:
                 data.pop(key, None)
             for key in ("size_scale", "mass_kg"):
@@ -768,6 +790,10 @@ class World(_FileModel):
         "relative to the world file's folder, with the shipped tree's Task, PickAndPlace and "
         "Move subtrees (one PickAndPlace per task step, one Move per move is made of it); "
         "default planner/trees/pick_and_place.xml",
+    )
+
+    fixtures: tuple[Fixture, ...] = Field(
+        default=(), description="open fixtures on the table an object is inserted into"
     )
 
     @field_validator("tree")
@@ -884,6 +910,7 @@ class World(_FileModel):
                         show_value(disturbance.object),
                     )
                 )
+        issues += fixture_issues(self)
         low = self.trials.hard.table_dz_m[0]
         if self.table.size[2] + low <= 0.0:
             issues.append(
@@ -910,6 +937,8 @@ class World(_FileModel):
             data.pop("disturbances", None)
         if self.tree is None and isinstance(data, dict):
             data.pop("tree", None)
+        if not self.fixtures and isinstance(data, dict):
+            data.pop("fixtures", None)
         return data
 
 

@@ -5,6 +5,7 @@ from planner.leaves.base import MotionLeaf, WorldLeaf
 from planner.leaves.clears_table import TurnClearsTable
 from planner.leaves.conditions import AtGoal, IsHeld, PathClear
 from planner.leaves.grasp import Grasp
+from planner.leaves.insert import Insert
 from planner.leaves.release import Release, Retreat
 from planner.leaves.select import SelectSkills
 from planner.leaves.transport import Transport
@@ -15,6 +16,7 @@ __all__ = [
     "AtGoal",
     "Grasp",
     "GripTurns",
+    "Insert",
     "IsHeld",
     "MotionLeaf",
     "PathClear",

@@ -185,6 +185,12 @@ def composition_ports() -> dict[str, PortInformation]:
             description="name or label of the learnt skill to carry the object with; "
             "default: the world's move's skill, else the plan's transport skill",
         ),
+        "above_fixture": PortInformation(
+            bool,
+            required=False,
+            default_value=False,
+            description="a move into a fixture ends above it, held, for Insert to lower it in",
+        ),
     }
 
 
@@ -209,6 +215,7 @@ def composed_move(leaf: WorldLeaf, name: str, index: int) -> MovePlan:
         avoid_gain=float(leaf.get_input("avoid_gain")),
         transport_weight=float(leaf.get_input("transport_weight")),
         skill=leaf.optional_input("skill"),
+        above_fixture=bool(leaf.get_input("above_fixture")),
     )
 
 

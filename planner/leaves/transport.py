@@ -122,6 +122,7 @@ class Transport(MotionLeaf):
         transport_weight = float(self.get_input("transport_weight"))
         skill: str | None = self.optional_input("skill")
         checked: MovePlan | None = self.optional_input("composition")
+        above_fixture = bool(self.get_input("above_fixture"))
         if checked is None:
             try:
                 checked = composed_move(self, name, index)
@@ -136,6 +137,7 @@ class Transport(MotionLeaf):
                 "avoid_gain": avoid_gain,
                 "transport_weight": transport_weight,
                 "skill": skill,
+                "above_fixture": above_fixture,
             }
             theirs = (
                 checked.object,
@@ -144,6 +146,7 @@ class Transport(MotionLeaf):
                 checked.avoid_gain,
                 checked.transport_weight,
                 checked.requested_skill,
+                checked.above_fixture,
             )
             wrong = [
                 f"{port} {value!r}, checked with {other!r}"
@@ -157,6 +160,8 @@ class Transport(MotionLeaf):
                 return
         self.move: Move = checked.move
         self.skill = checked.skill
+        #: Ends held above a fixture (Insert lowers it in): no set-down by feel.
+        self.hovering = checked.above_fixture and checked.move.fixture is not None
         # The ports a running carry reads every tick, read once as it starts (a port's value
         # does not change under a running move; the blackboard's checks cost more than a step).
         self.object_name = name
@@ -212,7 +217,9 @@ class Transport(MotionLeaf):
         )
         settled = elapsed > tau + self.settle_s
         if arrived or settled:
-            if (lowering := self._set_down(name, commanded.position[2])) is not None:
+            # A carry to above a fixture arrives still carried on purpose: Insert lowers it.
+            lowering = None if self.hovering else self._set_down(name, commanded.position[2])
+            if lowering is not None:
                 return lowering
             # ... but the move is judged on the object as measured: a held object hangs below
             # its commanded pose, and only the measured pose is where it was put.

@@ -32,7 +32,7 @@ from affordances import (
 )
 from affordances.context import PAPER_ROBOT
 from affordances.scene import GeometricSceneQuery
-from planner.port import Move, ObstacleInfo, PathCheck, Pose, stepped_moves
+from planner.port import FixtureInfo, Move, ObstacleInfo, PathCheck, Pose, stepped_moves
 from skills import quaternion as quat
 from skills.dual_arm import GraspGeometry
 from skills.level_carry import LooseBall
@@ -79,10 +79,12 @@ class FakeWorld:
         contact_stiffness: float = 1000.0,
         palm_friction: float = 0.8,
         shoulders: dict[Arm, Array] | None = None,
+        fixtures: Iterable[FixtureInfo] = (),
     ) -> None:
         objs = list(objects) or [FakeObject("parcel", np.array([0.20, 0.30, 0.15]))]
         self._objects = {o.name: o for o in objs}
         self._all_obstacles = {o.name: o for o in obstacles}
+        self._fixtures = tuple(fixtures)
         self._active: set[str] = set()
         # As a world shows them: turns beyond the paper robot's grip split into steps.
         self._moves = {
@@ -245,6 +247,28 @@ class FakeWorld:
     def gravity(self) -> float:
         """m/s^2."""
         return GRAVITY
+
+    def fixtures(self) -> tuple[FixtureInfo, ...]:
+        """The fixtures given."""
+        return self._fixtures
+
+    def fixture_force(self, name: str) -> Array:
+        """Spring force (contact stiffness) of each wall the object's footprint overlaps
+        below the walls' tops, pushing it back inside, N; the object taken as turned with the
+        fixture."""
+        obj = self._objects[name]
+        total = np.zeros(3)
+        for f in self._fixtures:
+            bottom = obj.pose.position[2] - obj.extents[2] / 2.0
+            if bottom >= f.position[2] + f.wall_height:
+                continue
+            c, s = np.cos(f.yaw), np.sin(f.yaw)
+            d = obj.pose.position[:2] - f.position[:2]
+            local = np.array([c * d[0] + s * d[1], -s * d[0] + c * d[1]])
+            depth = np.abs(local) + obj.extents[:2] / 2.0 - f.inner / 2.0
+            push = -np.sign(local) * self.contact_stiffness * np.maximum(depth, 0.0)
+            total[:2] += np.array([c * push[0] - s * push[1], s * push[0] + c * push[1]])
+        return total
 
     # -- WorldPort: palms --------------------------------------------------------------------
     def palm_pose(self, arm: Arm) -> Pose:

@@ -17,6 +17,9 @@ files byte for byte. The teachers are synthetic and human-like (see ``README.md`
 6. ``level_carry.csv``: a waiter's carry of a tray with a loose ball on it: the same 0.3 m
    across, lifted only 6 cm, taken over 4 s, minimum-jerk, the tray held level (a steadier
    hand: half the tremor, a tenth of the wobble).
+7. ``insertion.csv``: a box lowered into an open fixture, reacting to a wall it meets
+   (:mod:`skills.demos.insertion`); ``fx, fy, fz`` the fixture's force on the box, ``bx, by,
+   bz`` the teacher's plan, ``gx, gy, gz`` the seated goal.
 """
 
 from __future__ import annotations
@@ -29,6 +32,7 @@ import numpy as np
 from skills import quaternion as quat
 from skills.demos._smooth import min_jerk, tremor
 from skills.demos.avoidance import avoidance_demo, straight_demo
+from skills.demos.insertion import insertion_demo
 from skills.demos.io import write_demo_csv
 from skills.demos.rotation import rotation_demo
 from skills.dual_arm import GraspGeometry
@@ -179,6 +183,13 @@ def write_all(out: Path = HERE, seed: int = DEFAULT_SEED) -> list[Path]:
     paths.append(
         write_demo_csv(out / "level_carry.csv", *level_carry(np.random.default_rng([seed, 5])))
     )
+    # A stream of its own, so the files above are the bytes they were before this one.
+    t, p, q, fixture_force, plan, goal = insertion_demo(np.random.default_rng([seed, 7]))
+    n = t.shape[0]
+    extra = {f"f{a}": fixture_force[:, i] for i, a in enumerate("xyz")}
+    extra.update({f"b{a}": plan[:, i] for i, a in enumerate("xyz")})
+    extra.update({f"g{a}": np.full(n, goal[i]) for i, a in enumerate("xyz")})
+    paths.append(write_demo_csv(out / "insertion.csv", t, p, q, extra))
     return paths
 
 
