@@ -470,9 +470,9 @@ CASES: dict[str, Case] = {
     ),
     "library_nan_gain": Case(
         11,
-        library_edit(_param(2, "gamma", float("nan"))),
+        library_edit(_param(4, "gamma", float("nan"))),  # avoid_obstacle's steering gain
         2,
-        r"skills\[2\]\.params\.gamma: expected a number in \[0, 1e\+07\], got nan",
+        r"skills\[4\]\.params\.gamma: expected a number in \[0, 1e\+07\], got nan",
     ),
     "library_alpha_1e308": Case(
         11,
@@ -549,7 +549,7 @@ CASES: dict[str, Case] = {
             "trials",
         ),
         2,
-        r"objects\[0\]\.shape: expected a box object for trials .*got a cylinder \('parcel'\)",
+        r"objects\[0\]\.shape: expected a box or tray object for trials .*got a cylinder \('parcel'\)",
     ),
     "gui_without_a_display": Case(
         17,
