@@ -21,7 +21,7 @@ import numpy as np
 from skills import quaternion as quat
 from worlds.spec import ShapeSpec
 from worlds.trays import TrayFrame
-from worlds.world_file import World
+from worlds.world_file import SphereShape, TrayShape, World
 from worlds.world_schema import RiderTrials
 
 __all__ = [
@@ -54,8 +54,16 @@ def tray_height(file_height: float, scaled_height: float, palm_length: float) ->
     return max(scaled_height, min(file_height, least_tray_height(palm_length)))
 
 
-def _tray_shape(obj: Any, size: Sequence[float]) -> ShapeSpec:
-    return ShapeSpec.tray(size, obj.shape.floor, obj.shape.rim)
+def _tray_shape(tray: TrayShape, size: Sequence[float] | np.ndarray) -> ShapeSpec:
+    return ShapeSpec.tray(size, tray.floor, tray.rim)
+
+
+def _radius(world: World, k: int) -> float:
+    """The radius of ``world.objects[k]``, a ball riding on the tray (a sphere), m."""
+    shape = world.objects[k].shape
+    if not isinstance(shape, SphereShape):
+        raise ValueError(f"tray_draws: expected a ball (a sphere) at objects[{k}], got {shape}")
+    return float(shape.radius)
 
 
 def _room(inside: TrayFrame, radius: float, gap: float) -> np.ndarray:
@@ -72,26 +80,27 @@ def tray_layout_problem(base: World, riding: Sequence[int]) -> str | None:
     """
     layout = base.trials
     obj = base.objects[0]
-    if layout.riders is not None and (obj.shape.type != "tray" or not riding):
+    tray = obj.shape
+    if layout.riders is not None and (not isinstance(tray, TrayShape) or not riding):
         return (
             "trials.riders: expected objects[0] to be a tray with a ball loose on it, got "
             f"a {obj.shape.type} ({obj.name!r}) with {len(riding)} ball(s) on it"
         )
-    if obj.shape.type != "tray" or not riding:
+    if not isinstance(tray, TrayShape) or not riding:
         return None
-    size = np.asarray(obj.shape.size, dtype=float)
+    size = np.asarray(tray.size, dtype=float)
     low = 1.0 if layout.size_scale is None else layout.size_scale[0]
     palm = float(base.robot.palm_size[0])
     smallest = np.array([*(size[:2] * low), tray_height(size[2], size[2] * low, palm)])
     riders = layout.riders or RiderTrials()
     gap = riders.wall_gap
     grow = 1.0 if riders.radius_scale is None else riders.radius_scale[1]
-    largest = max(float(base.objects[k].shape.radius) for k in riding) * grow
-    inner = smallest[:2] / 2.0 - obj.shape.rim
-    if smallest[2] <= obj.shape.floor or np.any(inner - largest - gap <= 0.0):
+    largest = max(_radius(base, k) for k in riding) * grow
+    inner = smallest[:2] / 2.0 - tray.rim
+    if smallest[2] <= tray.floor or np.any(inner - largest - gap <= 0.0):
         return (
             f"trials.size_scale: expected the smallest tray drawn ({_vec(smallest)} m, "
-            f"{obj.shape.rim:g} m walls, {obj.shape.floor:g} m floor) to hold the largest ball "
+            f"{tray.rim:g} m walls, {tray.floor:g} m floor) to hold the largest ball "
             f"drawn ({largest:g} m radius, {gap:g} m from each wall), got a low end of {low:g}"
         )
     return None
@@ -124,7 +133,7 @@ def place_riders(
         If the balls' drawn starts overlap in every one of :data:`RIDER_ATTEMPTS` draws.
     """
     obj = base.objects[0]
-    if not riding:
+    if not riding or not isinstance(obj.shape, TrayShape):
         return
     if base.trials.riders is None and base.trials.size_scale is None:
         for k in riding:  # the same arithmetic as before: the draws stay bit for bit
@@ -134,8 +143,8 @@ def place_riders(
     seed, trial, redraw = rng_words
     rng = np.random.default_rng([seed, trial, RIDER_STREAM, redraw])
     tray2world = quat.from_rpy(np.radians(obj.pose.rpy_deg))
-    file_inside = TrayFrame.of(_tray_shape(obj, obj.shape.size))
-    inside = TrayFrame.of(_tray_shape(obj, size))
+    file_inside = TrayFrame.of(_tray_shape(obj.shape, obj.shape.size))
+    inside = TrayFrame.of(_tray_shape(obj.shape, size))
     riders = base.trials.riders or RiderTrials()
     gap = riders.wall_gap
     radii: list[float] = []
@@ -143,7 +152,7 @@ def place_riders(
     fractions: list[np.ndarray] = []
     for k in riding:
         ball = base.objects[k]
-        r_file = float(ball.shape.radius)
+        r_file = _radius(base, k)
         scale = riders.radius_scale
         radii.append(r_file if scale is None else r_file * float(rng.uniform(*scale)))
         masses.append(None if riders.mass_kg is None else float(rng.uniform(*riders.mass_kg)))

@@ -69,6 +69,7 @@ from worlds.world_file import (
     GoalRegion,
     ObstacleKind,
     Region,
+    TrayShape,
     TrialSettings,
     World,
     as_world_spec,
@@ -282,7 +283,7 @@ def _draw_trial(
     drawn = draw_object(
         layout, regions, getattr(obj.shape, "size", (0.2, 0.3, 0.15)), seed, trial, redraw
     )
-    if obj.shape.type == "tray" and layout.size_scale is not None:
+    if isinstance(obj.shape, TrayShape) and layout.size_scale is not None:
         # Its walls stay as tall as the palms need (experiment.tray_draws).
         palm = float(base.robot.palm_size[0])
         drawn.size[2] = tray_height(obj.shape.size[2], float(drawn.size[2]), palm)
