@@ -59,6 +59,7 @@ from experiment.results import (
 from experiment.summary import composition_label as composition_label
 from experiment.summary import reason_of as reason_of
 from experiment.summary import summarise as summarise
+from experiment.tray_draws import place_riders, tray_height, tray_layout_problem
 from planner.user_leaves import register_leaves
 from skills.turns import grip_yaw, lateral_quarter_turns, turn_steps
 from worlds.adapters import robot_capabilities
@@ -68,6 +69,7 @@ from worlds.world_file import (
     GoalRegion,
     ObstacleKind,
     Region,
+    TrayShape,
     TrialSettings,
     World,
     as_world_spec,
@@ -281,6 +283,10 @@ def _draw_trial(
     drawn = draw_object(
         layout, regions, getattr(obj.shape, "size", (0.2, 0.3, 0.15)), seed, trial, redraw
     )
+    if isinstance(obj.shape, TrayShape) and layout.size_scale is not None:
+        # Its walls stay as tall as the palms need (experiment.tray_draws).
+        palm = float(base.robot.palm_size[0])
+        drawn.size[2] = tray_height(obj.shape.size[2], float(drawn.size[2]), palm)
     half = drawn.size / 2.0
     z = base.table.position[2] + half[2]
     start = _in_region(rng, layout.start, z)
@@ -343,10 +349,8 @@ def _draw_trial(
         data["objects"][0]["shape"]["size"] = drawn.size.tolist()
     if drawn.mass is not None:
         data["objects"][0]["mass"] = drawn.mass
-    # What rides on the object (a ball loose on a tray) starts where it did on it.
-    for k in riding(base):
-        shifted = np.asarray(base.objects[k].pose.position) + start - obj.pose.position
-        data["objects"][k]["pose"]["position"] = shifted.tolist()
+    # What rides on the object (a ball loose on a tray) starts on it: where it did, or drawn.
+    place_riders(data, base, riding(base), start, drawn.size, (seed, trial, redraw))
     data["obstacles"] = [
         {
             "name": s.name,
@@ -462,6 +466,9 @@ def check_trial_layout(base: World, seed: int, label: str) -> None:
             f"{label}: objects[0].shape: expected a box or tray object for trials (their obstacles "
             f"and grasps are drawn around a box), got a {obj.shape.type} ({obj.name!r})"
         )
+    problem = tray_layout_problem(base, riding(base))
+    if problem is not None:
+        raise TrialLayoutError(f"{label}: {problem}")
     try:
         draw_trial(base, seed, 0)
     except RuntimeError as err:

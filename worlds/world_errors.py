@@ -209,6 +209,15 @@ def _tagged_members(annotation: Any) -> dict[str, type[BaseModel]]:
     return members
 
 
+def _unwrap_optional(annotation: Any) -> Any:
+    """The ``X`` of an optional ``X | None`` (so an unknown key in an optional section lists
+    that section's keys); any other annotation as it is."""
+    if typing.get_origin(annotation) not in (typing.Union, types.UnionType):
+        return annotation
+    present = [a for a in typing.get_args(annotation) if a is not type(None)]
+    return _strip_annotated(present[0]) if len(present) == 1 else annotation
+
+
 def _element_type(annotation: Any, index: int) -> Any:
     args = typing.get_args(annotation)
     if typing.get_origin(annotation) is tuple and args:
@@ -238,7 +247,7 @@ def _locate(loc: Sequence[str | int], root: type[BaseModel]) -> _Located:
     parent: type[BaseModel] | None = None
     field: FieldInfo | None = None
     for item in loc:
-        annotation = _strip_annotated(annotation)
+        annotation = _unwrap_optional(_strip_annotated(annotation))
         if isinstance(item, int):
             path.append(item)
             annotation = _element_type(annotation, item)

@@ -619,6 +619,53 @@ class HardSettings(_FileModel):
         return dz
 
 
+def _fraction_of_room(bounds: tuple[float, float] | None) -> tuple[float, float] | None:
+    if bounds is not None and (bounds[0] < -1.0 or bounds[1] > 1.0):
+        raise field_problem("fractions within [-1, 1]", bounds)
+    return bounds
+
+
+class RiderTrials(_FileModel):
+    """How ``app.py trials`` draws the balls loose on a tray (``objects[0]``,
+    :func:`worlds.trays.riders`): where each starts on the floor, its radius and its mass.
+
+    A start is a fraction, per axis of the tray's frame, of how far the ball's centre can go
+    from the tray's centre with ``wall_gap`` m left to the walls (-1 and 1: that close to
+    the -x or +x wall), so every start lies inside whatever tray the trial draws.
+    """
+
+    x: OptionalRange = Field(
+        default=None,
+        description="[low, high] of the ball's start along the tray's x, a fraction of its "
+        "room, within [-1, 1]; default: the file's place (the same fraction of the room)",
+    )
+    y: OptionalRange = Field(
+        default=None,
+        description="[low, high] of the ball's start along the tray's y, a fraction of its "
+        "room, within [-1, 1]; default: the file's place (the same fraction of the room)",
+    )
+    radius_scale: OptionalRange = Field(
+        default=None,
+        description="[low, high] of a factor the ball's radius is scaled by, > 0; "
+        "default: the file's radius",
+    )
+    mass_kg: OptionalRange = Field(
+        default=None, description="[low, high] of the ball's mass, kg, > 0; default: the file's"
+    )
+    wall_gap: _NonNegative = Field(
+        default=0.005, description="least gap between the ball and a wall at its start, m"
+    )
+
+    _fraction = field_validator("x", "y")(_fraction_of_room)
+
+    @field_validator("radius_scale", "mass_kg")
+    @classmethod
+    def _positive_or_none(cls, bounds: tuple[float, float] | None) -> tuple[float, float] | None:
+        if bounds is not None and bounds[0] <= 0.0:
+            raise field_problem("values > 0", bounds)
+        return bounds
+
+
 class TrialSettings(_FileModel):
     """How ``app.py trials`` draws the paper's experiment in this world.
 
@@ -685,7 +732,8 @@ class TrialSettings(_FileModel):
     size_scale: OptionalRange = Field(
         default=None,
         description="[low, high] of a factor each trial scales the object's box extents by "
-        "(one factor per axis), > 0; default: the file's size",
+        "(one factor per axis), > 0; a tray's height never below the least the palms need "
+        "(experiment.tray_draws) or the file's; default: the file's size",
     )
     mass_kg: OptionalRange = Field(
         default=None, description="[low, high] of the object's mass, kg, > 0; default: the file's"
@@ -701,6 +749,11 @@ class TrialSettings(_FileModel):
     insertion: InsertionTrials | None = Field(
         default=None,
         description="where a trial draws a fixture (and the box it fits); default: as is",
+    )
+    riders: RiderTrials | None = Field(
+        default=None,
+        description="how a trial draws the balls loose on a tray (objects[0]); default: "
+        "each where the file puts it on the tray, its own radius and mass",
     )
 
     @field_validator("sphere_radius")
@@ -745,6 +798,8 @@ class TrialSettings(_FileModel):
                 data.pop("hard", None)
             if self.insertion is None:
                 data.pop("insertion", None)
+            if self.riders is None:
+                data.pop("riders", None)
             for key in ("moves",) if not self.moves else _PAPER_REGIONS:
                 data.pop(key, None)
             for key in ("size_scale", "mass_kg"):
