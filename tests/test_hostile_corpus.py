@@ -549,7 +549,8 @@ CASES: dict[str, Case] = {
             "trials",
         ),
         2,
-        r"objects\[0\]\.shape: expected a box or tray object for trials .*got a cylinder \('parcel'\)",
+        r"objects\[0\]\.shape: expected a box or tray object for trials "
+        r".*got a cylinder \('parcel'\)",
     ),
     "gui_without_a_display": Case(
         17,
