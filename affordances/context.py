@@ -233,6 +233,9 @@ class ObjectContext:
         Turn about the grasp axis (the object's y axis, through a lateral grasp's palms) each
         move of ``goals`` makes, radians, in visiting order (:func:`skills.flip.grasp_axis_turn`
         from the previous goal's orientation); may be empty (no such turn).
+    goal_fixtures : tuple of str
+        The fixture each move of ``goals`` seats the object in ("" for none), in visiting
+        order; may be empty (no move into a fixture).
     """
 
     name: str
@@ -251,6 +254,7 @@ class ObjectContext:
     goal_yaw: float | None = None
     goal_yaws: tuple[float, ...] = ()
     goal_grasp_turns: tuple[float, ...] = ()
+    goal_fixtures: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name:
@@ -294,6 +298,16 @@ class ObjectContext:
             "goal_grasp_turns",
             tuple(check_finite(a, owner, f"goal_grasp_turns[{i}]") for i, a in enumerate(turns)),
         )
+        fixtures = self.goal_fixtures
+        if (
+            isinstance(fixtures, str | bytes)
+            or not isinstance(fixtures, Iterable)
+            or not all(isinstance(f, str) for f in fixtures)
+        ):
+            raise ValueError(
+                f"{owner}.goal_fixtures: expected a list of fixture names, got {fixtures!r}"
+            )
+        put(self, "goal_fixtures", tuple(fixtures))
 
 
 def _check_dimensions(value: Any, shape: Shape, owner: str) -> tuple[float, ...]:

@@ -539,6 +539,12 @@ def _common_skills(
             f"hard: goal turns the object {_fmt(math.degrees(flip))} deg about the grasp axis: "
             "rotate about it"
         )
+    # A goal inside a fixture's walls is reached by lowering into it under compliance (the
+    # learnt insertion), not by the carry's set-down.
+    fixtures = sorted({f for f in context.goal_fixtures if f})
+    if fixtures:
+        skills.append(SkillSelection(Action.INSERT, DEFAULT_SPACE[Action.INSERT]))
+        because.append(f"hard: goal in fixture {', '.join(map(repr, fixtures))}: insert into it")
     return skills, because
 
 
@@ -605,6 +611,8 @@ def assess(
     if context.fragility == Fragility.FRAGILE:
         elements.add(AffordanceElement.FRAGILE)
     elements.update(_STATE_ELEMENTS[s] for s in context.state if s in _STATE_ELEMENTS)
+    if any(context.goal_fixtures):
+        elements.add(AffordanceElement.IN_FIXTURE)
 
     lateral, lateral_notes, lateral_why = _lateral(context, robot, config)
     if lateral is not None:

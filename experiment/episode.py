@@ -257,11 +257,19 @@ class _Recorder:
     def _true_error_m(self, key: tuple[str, int], position: np.ndarray, told: float) -> float:
         """The placement error judged on the physics: ``told`` (the leaf's, from the goal as
         the file states it) unless the truth moved the table, then from the goal on the true
-        table top (:func:`worlds.truth.true_goal_position`)."""
-        dz = self.sim.scene.truth.table_dz_m
+        table top (:func:`worlds.truth.true_goal_position`), or the move's fixture, then from
+        its goal moved with it."""
+        truth = self.sim.scene.truth
+        move = self.stepped[key[0]][key[1]]
+        if move.fixture is not None:
+            shift = truth.fixture_shift(move.fixture)
+            if not shift.any():
+                return told
+            return float(np.linalg.norm(position - np.asarray(move.goal.position) - shift))
+        dz = truth.table_dz_m
         if not dz:
             return told
-        goal = self.stepped[key[0]][key[1]].goal
+        goal = move.goal
         table = self.sim.spec.scene.table
         true_goal = true_goal_position(
             goal.position,

@@ -6,8 +6,10 @@ and the trial's index alone, within the world file's ``trials.hard`` ranges
 (:class:`worlds.world_file.HardSettings`):
 
 - each object's mass and friction scaled, the palms' friction scaled, the table top raised or
-  lowered (the object starting on it): :class:`worlds.truth.PhysicalTruth`, which only the
-  physics sees; the reasoner, the tree and the skills read the world file's values;
+  lowered (the object starting on it), each fixture moved sideways (a distance uniform in
+  ``fixture_offset_m``, a direction uniform on the table): :class:`worlds.truth.PhysicalTruth`,
+  which only the physics sees; the reasoner, the tree and the skills read the world file's
+  values;
 - each object's sensed start pose off by a normal error along x, y and in yaw, until both
   palms first hold it (:class:`worlds.sim_world.SimWorld`);
 - the actuators' faults: a torque scale and a bias per joint, one lag time constant for all,
@@ -34,13 +36,13 @@ import numpy as np
 from worlds.actuators import ActuatorFaults
 from worlds.robots import robot_model_of
 from worlds.spec import DisturbanceSpec
-from worlds.truth import ObjectTruth, PhysicalTruth
+from worlds.truth import FixtureTruth, ObjectTruth, PhysicalTruth
 from worlds.world_file import HardSettings, World, as_world_spec, world_from_data
 
 #: Third key of every Hard trial's generators.
 HARD_STREAM = 3
 #: Fourth key, per kind of draw.
-OBJECTS, BODIES, ACTUATORS, PUSHES = range(4)
+OBJECTS, BODIES, ACTUATORS, PUSHES, FIXTURES = range(5)
 
 
 @dataclass(frozen=True)
@@ -152,7 +154,15 @@ def draw_hard(world: World, seed: int, trial: int) -> HardTrial:
             ranges.push_duration_s,
         )
     )
-    return HardTrial(PhysicalTruth(tuple(objects), palm, table_dz, faults), pushes)
+    rng = _rng(seed, trial, FIXTURES)
+    fixtures = []
+    for fixture in spec.scene.fixtures:
+        distance = _uniform(rng, ranges.fixture_offset_m)
+        heading = float(rng.uniform(0.0, 2.0 * math.pi))
+        offset = (distance * math.cos(heading), distance * math.sin(heading))
+        fixtures.append(FixtureTruth(fixture.name, offset))
+    truth = PhysicalTruth(tuple(objects), palm, table_dz, faults, tuple(fixtures))
+    return HardTrial(truth, pushes)
 
 
 def with_pushes(world: World, pushes: tuple[DisturbanceSpec, ...]) -> World:

@@ -144,9 +144,12 @@ def judge_insertion(
 
 def insertion_verdict(sim: Any) -> InsertionVerdict | None:
     """:func:`judge_insertion` on a finished :class:`worlds.sim_world.SimWorld`; None for a
-    world without fixtures. The objects are measured as they are now (the run's end)."""
+    world without fixtures. The objects are measured as they are now (the run's end), against
+    the fixtures where the physics put them (:attr:`worlds.scene.Scene.physical`: a Hard
+    trial's fixture may stand off its file place, its floor with the true table)."""
     spec = sim.spec
-    fixtures = {f.name: f for f in spec.scene.fixtures}
+    told = {f.name: f for f in spec.scene.fixtures}
+    fixtures = {f.name: f for f in sim.scene.physical.fixtures}
     if not fixtures:
         return None
     seats: dict[str, tuple[float, float, float]] = {}
@@ -156,10 +159,12 @@ def insertion_verdict(sim: Any) -> InsertionVerdict | None:
             if move.fixture is None:
                 continue
             position, orientation = sim.scene.object_pose(step.object)
+            # The seated goal moves with its fixture.
+            shift = np.subtract(fixtures[move.fixture].position, told[move.fixture].position)
             seats[move.fixture] = seating_error(
                 position,
                 orientation,
-                move.goal_position,
+                np.asarray(move.goal_position, dtype=float) + shift,
                 move.goal_quaternion,
                 float(obj.shape.extents()[2]) / 2.0,
                 float(fixtures[move.fixture].position[2]),

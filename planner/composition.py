@@ -301,7 +301,9 @@ def absolute_terms(
     for sel in plan.skills:
         if sel.space is not Space.ABSOLUTE or sel.weight == 0.0:
             continue
-        if sel.action in (Action.APPROACH, Action.RETREAT):
+        # The insertion is the move's carried motion itself (``transport``), composed by the
+        # Insert leaf; a carry to above the fixture does not descend with it.
+        if sel.action in (Action.APPROACH, Action.RETREAT, Action.INSERT):
             continue
         skill = _skill_for(library, sel, transport)
         if skill.kind is SkillKind.LEARNT_DMP:

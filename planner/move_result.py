@@ -49,6 +49,10 @@ class MoveResult:
         At SUCCESS after a set-down (the surface was felt above or below where the goal puts
         it), the height of the object's centre resting on it, m; the goal holds it as its
         height from then on. None otherwise.
+    found_xy : tuple of float or None
+        At SUCCESS of an insertion whose fixture stood off the goal's place (found by touch,
+        :class:`planner.leaves.Insert`), where the object's centre was seated, (x, y) m, world
+        frame; the goal holds it as its place from then on. None otherwise.
     """
 
     object: str
@@ -60,6 +64,7 @@ class MoveResult:
     placement_error_rad: float | None = None
     skill: str | None = None
     rested_z: float | None = None
+    found_xy: tuple[float, float] | None = None
 
 
 def publish_move_result(result: MoveResult, writer: str) -> None:

@@ -267,6 +267,12 @@ class ObjectSensing(Protocol):
         zeros without contact): a wall pressing the object pushes it away from the wall."""
         ...
 
+    def fixture_torque(self, name: str) -> Array:
+        """Torque (3,) the fixtures' contacts exert on an object about its centre, N m, world
+        frame (zeros without contact): where a wall bears on it (the box's edge on a wall's
+        top, :func:`skills.insertion.bearing_point`)."""
+        ...
+
 
 @runtime_checkable
 class PalmControl(Protocol):

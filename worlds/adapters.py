@@ -99,6 +99,7 @@ def _object_context(
                 strict=False,
             )
         ),
+        goal_fixtures=tuple(m.fixture or "" for m in moves),
     )
 
 

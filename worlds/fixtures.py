@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 import pybullet as pb
+from numpy.typing import ArrayLike
 
 from skills.types import Array
 from worlds.fixture_spec import FixtureSpec
@@ -56,19 +57,39 @@ def _points(client: int, fixture_id: int, body: int) -> tuple[Any, ...]:
     return tuple(pb.getContactPoints(bodyA=fixture_id, bodyB=body, physicsClientId=client))
 
 
-def force_on_body(points: Sequence[Sequence[Any]]) -> Array:
-    """Total force (3,) N, world frame, that body A of PyBullet contact points exerts on body
-    B: normal and friction (the normal points from B to A; A pushes B the other way)."""
-    if not points:
-        return np.zeros(3)
+def _contact_forces(points: Sequence[Sequence[Any]]) -> Array:
+    """Each contact's force (k, 3) N, world frame, that body A exerts on body B: normal and
+    friction (the normal points from B to A; A pushes B the other way)."""
     p = np.array([[*c[7], *c[11], *c[13]] for c in points], dtype=float).reshape(-1, 3, 3)
     f = np.array([[c[9], c[10], c[12]] for c in points], dtype=float)
-    return -np.einsum("ki,kij->j", f, p)
+    return -np.einsum("ki,kij->kj", f, p)
+
+
+def force_on_body(points: Sequence[Sequence[Any]]) -> Array:
+    """Total force (3,) N, world frame, that body A of PyBullet contact points exerts on body
+    B: normal and friction."""
+    if not points:
+        return np.zeros(3)
+    return np.asarray(_contact_forces(points).sum(axis=0))
+
+
+def torque_on_body(points: Sequence[Sequence[Any]], centre: ArrayLike) -> Array:
+    """Total torque (3,) N m, world frame, about ``centre`` (3,) m, that body A of PyBullet
+    contact points exerts on body B, each force acting at its point on B."""
+    if not points:
+        return np.zeros(3)
+    r = np.array([c[6] for c in points], dtype=float) - np.asarray(centre, dtype=float)
+    return np.asarray(np.cross(r, _contact_forces(points)).sum(axis=0))
 
 
 def fixture_force(client: int, fixture_id: int, body: int) -> Array:
     """Force (3,) N, world frame, that the fixture exerts on ``body`` now."""
     return force_on_body(_points(client, fixture_id, body))
+
+
+def fixture_torque(client: int, fixture_id: int, body: int, centre: ArrayLike) -> Array:
+    """Torque (3,) N m, world frame, about ``centre`` that the fixture exerts on ``body`` now."""
+    return torque_on_body(_points(client, fixture_id, body), centre)
 
 
 def wall_forces(client: int, fixture_id: int, fixture: FixtureSpec, body: int) -> Array:
@@ -83,7 +104,15 @@ def wall_forces(client: int, fixture_id: int, fixture: FixtureSpec, body: int) -
     return out
 
 
-__all__ = ["FIXTURE_RGBA", "create_fixture", "fixture_force", "force_on_body", "wall_forces"]
+__all__ = [
+    "FIXTURE_RGBA",
+    "create_fixture",
+    "fixture_force",
+    "fixture_torque",
+    "force_on_body",
+    "torque_on_body",
+    "wall_forces",
+]
 
 
 class FixtureLog:

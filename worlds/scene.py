@@ -38,7 +38,7 @@ from worlds.bodies import (
 )
 from worlds.control import DualArmImpedanceController, ImpedanceGains, PalmCommand, PalmState
 from worlds.disturbances import Disturbances
-from worlds.fixtures import create_fixture, fixture_force
+from worlds.fixtures import create_fixture, fixture_force, fixture_torque
 from worlds.palm_ik import solve_palms
 from worlds.spec import ObstacleSpec, Quat, SceneSpec, WorldSpec
 from worlds.truth import PhysicalTruth, physical_scene
@@ -215,7 +215,7 @@ class Scene:
         }
         self._active_obstacles: set[str] = set()
         #: The fixtures' bodies, by name (always present: :mod:`worlds.fixtures`).
-        self.fixture_ids = {f.name: create_fixture(c, f) for f in self.spec.fixtures}
+        self.fixture_ids = {f.name: create_fixture(c, f) for f in self.physical.fixtures}
         self.disturbances = Disturbances(
             c, self.spec.disturbances, self.object_ids, self.spec.physics_hz, self.is_held
         )
@@ -531,6 +531,14 @@ class Scene:
         """Force (3,) N, world frame, that fixture ``fixture`` exerts on object ``name``."""
         force = fixture_force(self.client, self.fixture_ids[fixture], self._object(name))
         return np.asarray(force, dtype=np.float64)
+
+    def fixture_torque(self, fixture: str, name: str) -> FloatArray:
+        """Torque (3,) N m, world frame, that fixture ``fixture`` exerts on object ``name``
+        about the object's centre."""
+        body = self._object(name)
+        centre = self.object_pose(name)[0]
+        torque = fixture_torque(self.client, self.fixture_ids[fixture], body, centre)
+        return np.asarray(torque, dtype=np.float64)
 
     def arm_contact_force(self, arm: Arm, body_id: int) -> float:
         """Sum of contact normal forces between any link of ``arm``'s body and a body, N."""

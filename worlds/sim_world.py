@@ -374,7 +374,7 @@ class SimWorld:
         """Each fixture's walls' forces on the objects, and any robot body touching it."""
         c = self.scene.client
         log = self.fixture_log
-        for f in self.scene.spec.fixtures:
+        for f in self.scene.physical.fixtures:  # where they stand, to tell their walls apart
             body = self.scene.fixture_ids[f.name]
             forces = np.zeros(4)
             for obj in self.scene.object_ids.values():
@@ -499,6 +499,13 @@ class SimWorld:
         total = np.zeros(3)
         for fixture in self.scene.fixture_ids:
             total += self.scene.fixture_force(fixture, name)
+        return total
+
+    def fixture_torque(self, name: str) -> Array:
+        """Torque (3,) of all fixtures on object ``name`` about its centre, N m, world frame."""
+        total = np.zeros(3)
+        for fixture in self.scene.fixture_ids:
+            total += self.scene.fixture_torque(fixture, name)
         return total
 
     # -- palms -------------------------------------------------------------------------------

@@ -11,6 +11,9 @@ The perception error (``sensed_offset_m``, ``sensed_yaw_offset_rad``) is a const
 the object's pose as the robot senses it (:func:`sensed_pose`), from the start until the robot
 first holds the object in both palms (:class:`worlds.sim_world.SimWorld`): a camera's error on
 an object seen from afar, corrected once the grasp locates it.
+
+A fixture (:class:`FixtureTruth`) may stand elsewhere than the file says, off sideways on the
+table top: the robot carries to the slot it was told of and finds the walls by touch.
 """
 
 from __future__ import annotations
@@ -86,6 +89,32 @@ class ObjectTruth:
 
 
 @dataclass(frozen=True)
+class FixtureTruth:
+    """How one fixture's place differs from its world file entry.
+
+    Attributes
+    ----------
+    name : str
+        The fixture.
+    offset_m : tuple of float
+        (2,) its true centre less the file's, along world x and y, m.
+    """
+
+    name: str
+    offset_m: tuple[float, float] = (0.0, 0.0)
+
+    def __post_init__(self) -> None:
+        if len(self.offset_m) != 2 or not all(math.isfinite(v) for v in self.offset_m):
+            raise ValueError(
+                f"FixtureTruth {self.name!r}: expected a finite (2,) offset_m, got {self.offset_m}"
+            )
+
+    def summary(self) -> dict[str, Any]:
+        """JSON-ready: every value, as held."""
+        return {"name": self.name, "offset_m": list(self.offset_m)}
+
+
+@dataclass(frozen=True)
 class PhysicalTruth:
     """How a run's physics differs from its world file; the default differs in nothing.
 
@@ -99,12 +128,16 @@ class PhysicalTruth:
         The table top's true height less the file's, m; every object starts resting on it.
     actuators : ActuatorFaults or None
         The arms' actuators (:mod:`worlds.actuators`); None: ideal.
+    fixtures : tuple of FixtureTruth
+        Per fixture; a fixture not named here stands where its file entry says (on the
+        table top, raised with it by ``table_dz_m``).
     """
 
     objects: tuple[ObjectTruth, ...] = ()
     palm_friction_scale: float = 1.0
     table_dz_m: float = 0.0
     actuators: ActuatorFaults | None = None
+    fixtures: tuple[FixtureTruth, ...] = ()
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.palm_friction_scale) and self.palm_friction_scale >= 0.0):
@@ -114,13 +147,20 @@ class PhysicalTruth:
             )
         if not math.isfinite(self.table_dz_m):
             raise ValueError(f"PhysicalTruth: expected table_dz_m finite, got {self.table_dz_m}")
-        names = [o.name for o in self.objects]
-        if len(set(names)) != len(names):
-            raise ValueError(f"PhysicalTruth: expected each object once, got {names}")
+        for kind, items in (("object", self.objects), ("fixture", self.fixtures)):
+            names = [o.name for o in items]
+            if len(set(names)) != len(names):
+                raise ValueError(f"PhysicalTruth: expected each {kind} once, got {names}")
 
     def of(self, name: str) -> ObjectTruth:
         """The truth of object ``name`` (as its file entry says if not named here)."""
         return next((o for o in self.objects if o.name == name), ObjectTruth(name))
+
+    def fixture_shift(self, name: str) -> FloatArray:
+        """Where fixture ``name`` truly stands less where the file says, (3,) m, world frame:
+        its own sideways offset and the table's height."""
+        t = next((f for f in self.fixtures if f.name == name), FixtureTruth(name))
+        return np.array([*t.offset_m, self.table_dz_m], dtype=float)
 
     def summary(self) -> dict[str, Any]:
         """JSON-ready: every value, as held."""
@@ -129,6 +169,7 @@ class PhysicalTruth:
             "palm_friction_scale": self.palm_friction_scale,
             "table_dz_m": self.table_dz_m,
             "actuators": None if self.actuators is None else self.actuators.summary(),
+            "fixtures": [f.summary() for f in self.fixtures],
         }
 
 
@@ -164,17 +205,23 @@ def true_goal_position(
 
 def physical_scene(spec: SceneSpec, truth: PhysicalTruth) -> SceneSpec:
     """The scene as the physics builds it: true masses and frictions, the table's top
-    ``table_dz_m`` higher (its height above the floor with it), each object that much higher.
+    ``table_dz_m`` higher (its height above the floor with it), each object and fixture that
+    much higher, each fixture moved by its offset.
 
     Raises
     ------
     ValueError
-        If the truth names an object the scene lacks, or the table would sink into the floor.
+        If the truth names an object or a fixture the scene lacks, or the table would sink
+        into the floor.
     """
-    names = [o.name for o in spec.objects]
-    unknown = [o.name for o in truth.objects if o.name not in names]
-    if unknown:
-        raise ValueError(f"physical_scene: expected object names in {names}, got {unknown}")
+    for kind, have, named in (
+        ("object", spec.objects, truth.objects),
+        ("fixture", spec.fixtures, truth.fixtures),
+    ):
+        names = [o.name for o in have]
+        unknown = [o.name for o in named if o.name not in names]
+        if unknown:
+            raise ValueError(f"physical_scene: expected {kind} names in {names}, got {unknown}")
     dz = truth.table_dz_m
     table = spec.table
     if table.size[2] + dz <= 0.0:
@@ -196,10 +243,17 @@ def physical_scene(spec: SceneSpec, truth: PhysicalTruth) -> SceneSpec:
                 position=(px, py, pz + dz),
             )
         )
+    fixtures = []
+    for fixture in spec.fixtures:
+        fx, fy, fz = (
+            float(v) for v in np.asarray(fixture.position) + truth.fixture_shift(fixture.name)
+        )
+        fixtures.append(replace(fixture, position=(fx, fy, fz)))
     return replace(
         spec,
         table=replace(table, position=(x, y, z + dz), size=(sx, sy, sz + dz)),
         objects=tuple(objects),
+        fixtures=tuple(fixtures),
     )
 
 
@@ -228,4 +282,11 @@ def sensed_pose(
     return sensed, np.asarray(quat.multiply(turn, np.asarray(quaternion, dtype=float)))
 
 
-__all__ = ["ObjectTruth", "PhysicalTruth", "physical_scene", "sensed_pose", "true_goal_position"]
+__all__ = [
+    "FixtureTruth",
+    "ObjectTruth",
+    "PhysicalTruth",
+    "physical_scene",
+    "sensed_pose",
+    "true_goal_position",
+]

@@ -85,7 +85,8 @@ class IsHeld(WorldLeaf):
 class AtGoal(WorldLeaf):
     """The object is within tolerance of a move's goal pose (at the height its Transport
     set it down at, when it felt the surface elsewhere:
-    :attr:`~planner.move_result.MoveResult.rested_z`)."""
+    :attr:`~planner.move_result.MoveResult.rested_z`; at the place its Insert seated it, when
+    it found the fixture elsewhere: :attr:`~planner.move_result.MoveResult.found_xy`)."""
 
     WORLD_ROLES: ClassVar[tuple[type, ...]] = (ObjectSensing,)
 
@@ -116,6 +117,9 @@ class AtGoal(WorldLeaf):
             # Its Transport felt the surface elsewhere than the goal's height: the goal is the
             # same place on the surface as found.
             goal = Pose(np.array([*goal.position[:2], placed.rested_z]), goal.orientation)
+        if placed is not None and placed.found_xy is not None:
+            # Its Insert found the fixture by touch elsewhere than the goal's place.
+            goal = Pose(np.array([*placed.found_xy, goal.position[2]]), goal.orientation)
         err_m, err_rad = goal_error(self.world, name, goal)
         deg = float(np.degrees(err_rad))
         text = f"{err_m * 1000:.1f} mm and {deg:.1f} deg from goal {index}"

@@ -15,9 +15,9 @@ from planner.leaves.transport import SUPPORTED_LOAD_FRACTION
 from planner.move_result import MoveResult, publish_move_result
 from planner.port import Clock, Move, ObjectSensing, ObstacleScene, PalmControl, Pose
 from skills.composer import DualArmComposer, DualArmState
-from skills.insertion import AdmittanceGains, admittance_step
+from skills.insertion import MAX_SHIFT_M, SEARCH_SPEED_M_S, AdmittanceGains, admittance_step
 from skills.types import Array
-from skills.vocabulary import ARMS, Action, Space
+from skills.vocabulary import ARMS, Action
 
 #: How fast the palms go on down once the learnt descent has ended with the box still carried
 #: (it may hang a little in the grip), m/s, and how far, m.
@@ -28,20 +28,27 @@ PRESS_DEPTH_M = 0.02
 class Insert(MotionLeaf):
     """Lower the held box from above its fixture into it, yielding to the walls.
 
-    The library's ``insert`` skill (the learnt descent, :class:`~skills.vocabulary.Action`
-    ``INSERT``) is composed with the plan's other skills towards the move's seated goal
+    The plan's insertion (:class:`~skills.vocabulary.Action` ``INSERT``, which the reasoner
+    selects for a move whose goal is in a fixture; the library's learnt descent so labelled)
+    is composed with the plan's other skills towards the move's seated goal
     (:func:`planner.composition.transport_composition`, eq. 5), from the handed-over state
     (the box held above the fixture by a Transport with ``above_fixture``). Each control step
-    the fixture's force on the box (:meth:`~planner.port.ObjectSensing.fixture_force`) couples
-    in (:func:`skills.insertion.admittance_step`, gains the skill's): the palms' targets shift
-    sideways away from a wall pressing the box and towards where the composition wants the
-    box, and the descent's phase slows, or stops while the force exceeds the bound.
+    the fixture's force on the box (:meth:`~planner.port.ObjectSensing.fixture_force`) and
+    its torque about the box's centre (:meth:`~planner.port.ObjectSensing.fixture_torque`)
+    couple in (:func:`skills.insertion.admittance_step`, gains the skill's): the palms'
+    targets shift sideways away from a wall pressing the box and towards where the
+    composition wants the box, search off a wall's top the box came down on, and the
+    descent's phase slows, or stops while the force exceeds the bound.
 
     Not a set-down by feel: Transport's (:mod:`planner.leaves.transport`) is off for the carry
     that ends above the fixture. Succeeds once the descent has ended and the box rests (the
-    palms no longer carry it) within ``tolerance_m`` and ``tolerance_deg`` of the goal; a box
-    still carried then is pressed on down at :data:`PRESS_SPEED_M_S`, at most
-    :data:`PRESS_DEPTH_M`. Fails, saying why, if the grip is lost or it rests elsewhere.
+    palms no longer carry it) at the goal's height within ``tolerance_m``, turned within
+    ``tolerance_deg`` of it, and sideways no farther from it than the coupling may shift it
+    (``max_shift`` plus ``tolerance_m``: a fixture that stands off where the robot was told
+    seats the box where it truly is; at the goal's height the box is inside its walls); a
+    box still carried then is pressed on down at :data:`PRESS_SPEED_M_S`, at most
+    :data:`PRESS_DEPTH_M`. Fails, saying why, if the plan selects no insertion, the grip is
+    lost or the box rests elsewhere.
     """
 
     WORLD_ROLES: ClassVar[tuple[type, ...]] = (Clock, ObjectSensing, PalmControl, ObstacleScene)
@@ -95,13 +102,30 @@ class Insert(MotionLeaf):
             self.problem = f"move {index} of {name!r} goes into no fixture"
             return
         plan: SemanticAction = self.get_input("plan")
-        skill = self.library.first(Action.INSERT, Space.ABSOLUTE)
+        selected = plan.skill(Action.INSERT)
+        if selected is None:
+            self.problem = (
+                f"the plan for {name!r} selects no {Action.INSERT.value} skill (it has "
+                f"{', '.join(a.value for a in plan.actions)}): move {index} goes into fixture "
+                f"{move.fixture!r}, which the reasoner's plan must say"
+            )
+            return
+        try:
+            skill = self.library.first(Action.INSERT, selected.space)
+        except KeyError:
+            self.problem = (
+                f"the library has no {Action.INSERT.value} skill in {selected.space.value} "
+                f"space for the plan's insertion (its skills: {', '.join(self.library.names())})"
+            )
+            return
         p = skill.params
         self.gains = AdmittanceGains(
             float(p["compliance"]),
             float(p["centring"]),
             float(p["soft_force_n"]),
             float(p["stop_force_n"]),
+            search_speed=float(p.get("search_speed", SEARCH_SPEED_M_S)),
+            max_shift=float(p.get("max_shift", MAX_SHIFT_M)),
         )
         world.set_active_obstacles(move.obstacles)
         self.composer = transport_composition(
@@ -122,6 +146,7 @@ class Insert(MotionLeaf):
         self.ended_at: float | None = None
         self.weak_ticks = 0
         self.peak_force = 0.0
+        self.found_xy: tuple[float, float] | None = None
         self.min_force_n = float(self.get_input("min_force_n"))
         self.supported_below_n = (
             SUPPORTED_LOAD_FRACTION * world.object_context(name).mass_kg * world.gravity()
@@ -140,7 +165,9 @@ class Insert(MotionLeaf):
         self.peak_force = max(self.peak_force, float(np.linalg.norm(force)))
         commanded = self.composer.state.object.position
         error = commanded[:2] - world.object_pose(name).position[:2]
-        self.offset, rate = admittance_step(self.offset, force, error, self.gains, dt)
+        self.offset, rate = admittance_step(
+            self.offset, force, error, self.gains, dt, world.fixture_torque(name)
+        )
         cmd = self.composer.step(dt * rate)
         self.phase_time += dt * rate
         shift = np.array([*self.offset, -self.press])
@@ -165,18 +192,27 @@ class Insert(MotionLeaf):
             self.press = min(self.press + PRESS_SPEED_M_S * dt * rate, PRESS_DEPTH_M)
         twist = world.object_twist(name)
         still = np.linalg.norm(twist[:3]) < 5e-3 and np.linalg.norm(twist[3:]) < 0.05
-        err_m, err_rad = goal_error(world, name, self.move.goal)
+        _, err_rad = goal_error(world, name, self.move.goal)
+        err = world.object_pose(name).position - np.asarray(self.move.goal.position)
         tol_m, tol_deg = (
             float(self.get_input("tolerance_m")),
             float(self.get_input("tolerance_deg")),
         )
-        off = f"{err_m * 1000:.1f} mm, {np.degrees(err_rad):.1f} deg from the seated goal"
+        aside = float(np.linalg.norm(err[:2]))
+        off = (
+            f"{err[2] * 1000:.1f} mm above and {aside * 1000:.1f} mm aside of the seated goal, "
+            f"{np.degrees(err_rad):.1f} deg"
+        )
         if (
             still
             and load <= self.supported_below_n
-            and err_m <= tol_m
+            and abs(err[2]) <= tol_m
+            and aside <= self.gains.max_shift + tol_m
             and np.degrees(err_rad) <= tol_deg
         ):
+            if aside > tol_m:  # the fixture stands elsewhere than the goal: where it seated
+                position = world.object_pose(name).position
+                self.found_xy = (float(position[0]), float(position[1]))
             self._set_output("to_state", self.composer.state)
             return self.succeed(f"seated {off} (peak fixture force {self.peak_force:.1f} N)")
         if (
@@ -202,6 +238,16 @@ class Insert(MotionLeaf):
             else (None, None)
         )
         publish_move_result(
-            MoveResult(self.name_, self.index, 1.0, 1.0, status, err_m, err_rad, self.skill_name),
+            MoveResult(
+                self.name_,
+                self.index,
+                1.0,
+                1.0,
+                status,
+                err_m,
+                err_rad,
+                self.skill_name,
+                found_xy=self.found_xy if status == Status.SUCCESS else None,
+            ),
             self.name,
         )

@@ -270,6 +270,10 @@ class FakeWorld:
             total[:2] += np.array([c * push[0] - s * push[1], s * push[0] + c * push[1]])
         return total
 
+    def fixture_torque(self, name: str) -> Array:
+        """Zeros, N m: the fake walls' springs push through the object's centre."""
+        return np.zeros(3)
+
     # -- WorldPort: palms --------------------------------------------------------------------
     def palm_pose(self, arm: Arm) -> Pose:
         """Where the palm is."""
