@@ -318,6 +318,7 @@ class _Recorder:
                     orientations=np.array(orientations).reshape(-1, 4),
                     shape=shapes[key[0]],
                     skill=track.skill,
+                    fixtures=tuple(spec.scene.fixtures),
                     demonstrated=(
                         demonstrated_path(skill, start[0], start[1], goal.goal_position, goal_q)
                         if skill is not None

@@ -26,6 +26,7 @@ from skills.pose_dmp import pose_rollout
 from skills.skill import Skill, SkillKind
 from skills.state import PoseState
 from skills.types import Array
+from worlds.fixture_spec import FixtureSpec
 from worlds.spec import ObstacleSpec, Shape, ShapeSpec
 
 #: Heading arrows drawn along each executed path.
@@ -56,6 +57,8 @@ class MoveTrace:
         The object's shape, for its footprint.
     skill : str or None
         The learnt transport skill the move ran.
+    fixtures : tuple of FixtureSpec
+        The open fixtures on the table (their walls drawn grey).
     demonstrated : ndarray, shape (K, 3), or None
         That skill alone from ``start`` to ``goal`` (:func:`demonstrated_path`); None when the
         move was never carried.
@@ -72,6 +75,7 @@ class MoveTrace:
     shape: ShapeSpec | None = None
     skill: str | None = None
     demonstrated: Array | None = None
+    fixtures: tuple[FixtureSpec, ...] = ()
 
 
 def demonstrated_path(
@@ -224,6 +228,15 @@ def draw_move(ax: Any, tr: MoveTrace, view: View) -> list[Array]:
     from matplotlib.patches import Circle, Polygon
 
     drawn: list[Array] = []
+    for fixture in tr.fixtures:
+        centres, halves = fixture.walls()
+        q = np.asarray(fixture.quaternion, dtype=float)
+        r = quat.to_matrix(q)
+        for centre, half in zip(centres, halves, strict=True):
+            where = np.asarray(fixture.position, dtype=float) + r @ centre
+            poly = outline(ShapeSpec.box(tuple(2.0 * half)), where, q, view)
+            ax.add_patch(Polygon(poly, closed=True, color="0.55", alpha=0.7, label="fixture"))
+            drawn.append(poly)
     for ob in tr.obstacles:
         # A side view flattens depth: an obstacle beside the move's plane is drawn pale and
         # says how far beside it is, so a path drawn across it is not read as a collision.
@@ -362,7 +375,8 @@ def _trajectory_figure(traces: Sequence[MoveTrace], path: Path, title: str) -> P
             legend.values(),
             legend.keys(),
             loc="lower center",
-            ncol=min(len(legend), 6),
+            # as many entries across as the figure's width holds (about 2.2 in each)
+            ncol=max(1, min(len(legend), 6, int(width / 2.2))),
             fontsize=8,
             bbox_to_anchor=(0.5, 0.08 / height),
         )
