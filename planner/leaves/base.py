@@ -145,6 +145,17 @@ class WorldLeaf(BehaviourWithPorts):
             return "not set up: expected setup(world=...)"
         return None
 
+    def object_and_move(self) -> tuple[str, int] | str:
+        """The ``object`` and ``move`` ports' values, or why the leaf cannot use them (not
+        set up, or no such move of the object's task)."""
+        if (why := self.connected()) is not None:
+            return why
+        name = self.get_input("object")
+        index = int(self.get_input("move"))
+        if (bad := self.bad_move_index(name, index)) is not None:
+            return bad
+        return name, index
+
     def bad_move_index(self, name: str, index: int) -> str | None:
         """Why ``index`` names no move of ``name``'s task (as the robot makes it), or None."""
         count = len(self.world.task_moves(name))

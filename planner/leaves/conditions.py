@@ -105,12 +105,10 @@ class AtGoal(WorldLeaf):
 
     def update(self) -> Status:
         """SUCCESS within tolerance; FAILURE naming the errors otherwise."""
-        if (why := self.connected()) is not None:
-            return self.fail(why)
-        name = self.get_input("object")
-        index = int(self.get_input("move"))
-        if (bad := self.bad_move_index(name, index)) is not None:
-            return self.fail(bad)
+        inputs = self.object_and_move()
+        if isinstance(inputs, str):
+            return self.fail(inputs)
+        name, index = inputs
         goal = self.world.task_moves(name)[index].goal
         placed = move_results().get((name, index))
         if placed is not None and placed.rested_z is not None:
@@ -160,13 +158,11 @@ class PathClear(WorldLeaf):
 
     def update(self) -> Status:
         """Roll the composition out open loop and check it; SUCCESS if clear."""
-        if (why := self.connected()) is not None:
-            return self.fail(why)
+        inputs = self.object_and_move()
+        if isinstance(inputs, str):
+            return self.fail(inputs)
+        name, index = inputs
         world = self.world
-        name = self.get_input("object")
-        index = int(self.get_input("move"))
-        if (bad := self.bad_move_index(name, index)) is not None:
-            return self.fail(bad)
         try:
             checked = composed_move(self, name, index)
         except SkillChoiceError as err:

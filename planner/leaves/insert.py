@@ -88,15 +88,12 @@ class Insert(MotionLeaf):
         """Compose the descent to the seated goal with the learnt insertion skill."""
         self.composer: DualArmComposer | None = None
         self.problem: str | None = None
-        if (why := self.connected()) is not None:
-            self.problem = why
+        inputs = self.object_and_move()
+        if isinstance(inputs, str):
+            self.problem = inputs
             return
         world = self.world
-        name = self.get_input("object")
-        index = int(self.get_input("move"))
-        if (bad := self.bad_move_index(name, index)) is not None:
-            self.problem = bad
-            return
+        name, index = inputs
         move: Move = world.task_moves(name)[index]
         if move.fixture is None:
             self.problem = f"move {index} of {name!r} goes into no fixture"

@@ -106,15 +106,12 @@ class Transport(MotionLeaf):
         """Run the checked composition, or activate the move's obstacles and compose it."""
         self.composer: DualArmComposer | None = None
         self.problem: str | None = None
-        if (why := self.connected()) is not None:
-            self.problem = why
+        inputs = self.object_and_move()
+        if isinstance(inputs, str):
+            self.problem = inputs
             return
         world = self.world
-        name = self.get_input("object")
-        index = int(self.get_input("move"))
-        if (bad := self.bad_move_index(name, index)) is not None:
-            self.problem = bad
-            return
+        name, index = inputs
         plan: SemanticAction = self.get_input("plan")
         force = self.palm_squeeze_force(plan)
         state: DualArmState = self.get_input("from_state")

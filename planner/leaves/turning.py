@@ -45,13 +45,11 @@ class GripTurns(WorldLeaf):
 
     def update(self) -> Status:
         """SUCCESS if the grip can make the turn (or nothing is held); FAILURE otherwise."""
-        if (why := self.connected()) is not None:
-            return self.fail(why)
+        inputs = self.object_and_move()
+        if isinstance(inputs, str):
+            return self.fail(inputs)
+        name, index = inputs
         world = self.world
-        name = self.get_input("object")
-        index = int(self.get_input("move"))
-        if (bad := self.bad_move_index(name, index)) is not None:
-            return self.fail(bad)
         forces = [world.contact_force(arm, name) for arm in ARMS]
         if min(forces) < float(self.get_input("min_force_n")):
             return self.succeed("not held: no grip to turn")
