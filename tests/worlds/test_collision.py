@@ -8,6 +8,7 @@ import numpy as np
 import pybullet as pb
 import pytest
 
+from skills import quaternion as quat
 from skills.vocabulary import Arm
 from worlds.collision import OBSTACLES, TABLE, CollisionWorld, arm_group
 from worlds.scene import LATERAL_PALM_QUATERNIONS, Scene, lateral_grasp_palm_poses
@@ -273,3 +274,36 @@ def test_carried_forearms_start_where_they_are_and_may_not_narrow_their_gap() ->
         ahead = up.copy()
         ahead[:] = up[-1] - [0.0, 0.0, 0.02]
         assert not world.check_attached_links(ahead, q, 4, margin).any()
+
+
+def test_link_frames_posed_as_the_rigid_carry_give_its_answer() -> None:
+    """check_link_frames (links posed by predicted frames, as the iCub's IK prediction poses
+    them) and check_attached_links (the rigid carry) share one check: link frames carried
+    rigidly with the palm give the same verdict at every waypoint, towards and away from a
+    ball above the wrist."""
+    with Scene(SceneSpec()) as bare:
+        palm = np.asarray(bare.palm_state(Arm.LEFT).position, dtype=float)
+    ball = ObstacleSpec("ball", ShapeSpec.sphere(0.03), tuple(palm + [0.0, 0.0, 0.16]))
+    with Scene(SceneSpec(obstacles=(ball,))) as scene:
+        scene.set_active_obstacles(["ball"])
+        world = CollisionWorld(scene)
+        world.sync()
+        links = world.arm_moving_links(Arm.LEFT)[-4:]
+        body = scene.robot_ids[scene.robot.arms[Arm.LEFT].body]
+        read = pb.getLinkStates(body, list(links), physicsClientId=scene.client)
+        frame_p = np.array([s[0] for s in read])
+        frame_r = quat.to_matrix(np.array([s[1] for s in read]))
+        start_gap = float(world.link_distances(Arm.LEFT).distances[-5:-1].min())
+        verdicts = []
+        for shift in ([0.0, 0.0, -0.05], [0.0, 0.0, 0.05], [0.0, 0.04, 0.04]):
+            p, q = _left_palm_path(scene, np.array(shift))
+            turn = quat.to_matrix(q[:, 0]) @ quat.to_matrix(q[0, 0]).T  # (N, 3, 3)
+            positions = np.einsum("nij,lj->nli", turn, frame_p - p[0, 0]) + p[:, 0, None]
+            rotations = np.einsum("nij,ljk->nlik", turn, frame_r)
+            quaternions = quat.from_matrix(rotations)
+            for margin in (start_gap - 0.01, start_gap + 0.03):
+                rigid = world.check_attached_links(p, q, 4, margin)
+                posed = world.check_link_frames(Arm.LEFT, links, positions, quaternions, margin)
+                np.testing.assert_array_equal(posed, rigid)
+                verdicts.append(bool(rigid.any()))
+        assert any(verdicts) and not all(verdicts)  # both answers were asked for
