@@ -627,9 +627,11 @@ def _trials_command(args: argparse.Namespace) -> int:
         return 130
     bar.close()
     summary = summarise(records)
-    # Hard trials are not the paper's experiment: no comparison with its 16 of 20.
+    # Only the paper's experiment (its three goal regions, Easy) compares with its 16 of 20:
+    # Hard trials and a world's own moves (the task suite) are other experiments.
     mode = "Hard trials" if args.hard else "trials"
-    paper = "" if args.hard else " (the paper: 16 of 20)"
+    papers = not args.hard and not world.trials.moves
+    paper = " (the paper: 16 of 20)" if papers else ""
     print(
         f"{summary['successes']} of {summary['trials']} {mode} succeeded{paper}; "
         f"results in {out / 'results.jsonl'}"

@@ -231,3 +231,26 @@ def test_trials_hard_is_a_campaign_of_its_own(
     assert app.main(["report", out]) == app.EXIT_OK
     report = capsys.readouterr().out
     assert "seed 0, Hard: 1 trials" in report and "seed 0: 1 trials" in report
+
+
+@pytest.mark.sim
+def test_only_the_papers_experiment_is_compared_with_its_16_of_20(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A world's own moves (``trials.moves``, as the task suite's worlds have) are another
+    experiment than the paper's three goal regions: its summary makes no comparison."""
+    import app
+
+    data = yaml.safe_load(_short_world(tmp_path).read_text(encoding="utf-8"))
+    regions = [data["trials"].pop(k) for k in ("centre", "right", "left") if k in data["trials"]]
+    data["trials"]["moves"] = regions or [
+        {"x": [0.58, 0.68], "y": [-0.03, 0.03]},
+        {"x": [0.55, 0.65], "y": [-0.18, -0.12]},
+        {"x": [0.55, 0.65], "y": [0.12, 0.18]},
+    ]
+    path = tmp_path / "own_moves.yaml"
+    path.write_text(yaml.safe_dump(data), encoding="utf-8")
+    out = str(tmp_path / "out")
+    app.main(["trials", str(path), "--n", "1", "--workers", "1", "--out", out])
+    text = capsys.readouterr().out
+    assert "0 of 1 trials succeeded; results in" in text and "the paper" not in text
