@@ -630,8 +630,7 @@ def _trials_command(args: argparse.Namespace) -> int:
     # Only the paper's experiment (its three goal regions, Easy) compares with its 16 of 20:
     # Hard trials and a world's own moves (the task suite) are other experiments.
     mode = "Hard trials" if args.hard else "trials"
-    papers = not args.hard and not world.trials.moves
-    paper = " (the paper: 16 of 20)" if papers else ""
+    paper = " (the paper: 16 of 20)" if not (args.hard or world.trials.moves) else ""
     print(
         f"{summary['successes']} of {summary['trials']} {mode} succeeded{paper}; "
         f"results in {out / 'results.jsonl'}"

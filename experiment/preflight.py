@@ -65,7 +65,7 @@ def preflight_problems(
         if tree_problems:
             return [str(p) for p in tree_problems]
     try:
-        if template is not None:
+        if template is not None:  # made into this task as a run would, for its structure
             task_xml([TaskStep(s.object, len(s.moves)) for s in world.task], template)
         if tree is not None:
             doc = read_tree_document(tree, main_tree_id=main_tree)

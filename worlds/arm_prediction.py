@@ -102,8 +102,6 @@ class ArmPredictor:
         n = positions.shape[0]
         driven = robot.driven_joints()
         rest_all = scene.controller.rest_posture()
-        shared = robot.shared_joints
-        weight = shared.posture_weight if shared is not None else 1.0
         out: dict[Arm, LinkFrames] = {}
         for index in dict.fromkeys(robot.arms[a].body for a in (Arm.LEFT, Arm.RIGHT)):
             arms = [a for a in (Arm.LEFT, Arm.RIGHT) if robot.arms[a].body == index]
@@ -112,7 +110,7 @@ class ArmPredictor:
             lower = np.array([driven[k].lower for k in rows])
             upper = np.array([driven[k].upper for k in rows])
             rest = rest_all[rows]
-            cost = np.array([1.0 if driven[k].arm is not None else max(weight, 1e-3) for k in rows])
+            cost = np.array([robot.ik_cost(driven[k]) for k in rows])
             states = pb.getJointStates(scene.robot_ids[index], joints, physicsClientId=scene.client)
             q = np.array([s[0] for s in states])
             copy = self._ids[index]

@@ -561,10 +561,14 @@ class CollisionWorld:
             asked = min(float(margins[w]), allowed[o])
             collides[w] = _hit(probe, rotations[w], positions[w], obstacle, asked)
 
+    def _track(self, arm: Arm) -> _LinkTrack:
+        """``arm``'s link track (they are built left, then right)."""
+        return self._link_tracks[(Arm.LEFT, Arm.RIGHT).index(Arm(arm))]
+
     def arm_moving_links(self, arm: Arm) -> tuple[int, ...]:
         """Link indices, on ``arm``'s body, of the arm's elements that move, palm excluded
         (on a body that carries both arms, the left arm's include the trunk's)."""
-        _, links, _, rows, _, _ = self._link_tracks[(Arm.LEFT, Arm.RIGHT).index(Arm(arm))]
+        _, links, _, rows, _, _ = self._track(arm)
         palm = self._palm_rows[Arm(arm)]
         return tuple(
             dict.fromkeys(k for k, r in zip(links, rows, strict=True) if k >= 0 and r != palm)
@@ -607,9 +611,7 @@ class CollisionWorld:
         margins = np.broadcast_to(np.asarray(margin, dtype=float), (n,))
         self._place()
         column = {link: k for k, link in enumerate(links)}
-        _, track_links, _, rows, local_p, local_r = self._link_tracks[
-            (Arm.LEFT, Arm.RIGHT).index(Arm(arm))
-        ]
+        _, track_links, _, rows, local_p, local_r = self._track(arm)
         for i, (link, row) in enumerate(zip(track_links, rows, strict=True)):
             k = column.get(link)
             if k is None:

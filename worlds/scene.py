@@ -401,8 +401,6 @@ class Scene:
         body = self.robot_ids[index]
         driven = [d for d in self.robot.driven_joints() if d.body == index]
         arms = [a for a in Arm if self.robot.arms[a].body == index]
-        shared = self.robot.shared_joints
-        weight = shared.posture_weight if shared is not None else 1.0
         c = self.client
         joints = [d.joint for d in driven]
         q0 = np.array([s[0] for s in pb.getJointStates(body, joints, physicsClientId=c)])
@@ -424,7 +422,7 @@ class Scene:
             np.array([d.lower for d in driven]),
             np.array([d.upper for d in driven]),
             np.array([d.rest for d in driven]),
-            np.array([1.0 if d.arm is not None else max(weight, 1e-3) for d in driven]),
+            np.array([self.robot.ik_cost(d) for d in driven]),
         )
         return {
             a: np.array([v for v, d in zip(q, driven, strict=True) if d.arm is a]) for a in arms

@@ -228,6 +228,14 @@ class RobotModel:
                 )
         object.__setattr__(self, "arms", MappingProxyType(dict(self.arms)))
 
+    def ik_cost(self, joint: DrivenJoint) -> float:
+        """What moving ``joint`` costs in a whole-body palm solve (the weights ``W`` of
+        :func:`worlds.palm_ik.dls_step`): 1 for an arm's joint; for a shared one, the shared
+        joints' posture weight (at least 1e-3), so they move only as much as the palms need."""
+        if joint.arm is not None or self.shared_joints is None:
+            return 1.0
+        return max(self.shared_joints.posture_weight, 1e-3)
+
     def driven_joints(self) -> tuple[DrivenJoint, ...]:
         """Every joint the controller drives, in its order: body by body (in the order the
         arms name them, left first), each body's joints by PyBullet index. For the iiwa pair
