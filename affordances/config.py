@@ -34,6 +34,10 @@ class ReasonerConfig:
         An obstacle closer than this to the predicted arm links adds link avoidance, m.
     yaw_tolerance_rad : float
         Goal yaw differences below this need no ``rotate_z``, radians.
+    carry_lift_m : float
+        How high a carry may lift the object above its rest height, m: the scene checks
+        sweep the object's and the arms' paths from rest height up to it (the learnt
+        pick-and-place rises about 8 cm over a short move).
     """
 
     safety_factor: float = 1.5
@@ -43,6 +47,7 @@ class ReasonerConfig:
     path_margin_m: float = 0.05
     link_margin_m: float = 0.05
     yaw_tolerance_rad: float = math.radians(5.0)
+    carry_lift_m: float = 0.12
 
     def __post_init__(self) -> None:
         for name in (
@@ -53,6 +58,7 @@ class ReasonerConfig:
             "path_margin_m",
             "link_margin_m",
             "yaw_tolerance_rad",
+            "carry_lift_m",
         ):
             object.__setattr__(
                 self, name, check_positive(getattr(self, name), "ReasonerConfig", name)

@@ -140,11 +140,18 @@ class GeometricSceneQuery:
         Radius of the capsule around each arm segment, metres.
     samples_per_segment : int
         Palm positions sampled per path segment to predict the arm segments.
+    hands : mapping of Arm to (ndarray (K, 3), ndarray (K,))
+        Bounding spheres of what is welded to each palm (a hand standing out of the grip):
+        centres in the palm frame and radii, metres. The palm frame of the lateral grasp has
+        x down and z along the push into the object (:meth:`skills.dual_arm.GraspGeometry
+        .lateral`), the other palm being across the object; the spheres ride along the palm's
+        path. None for an arm: nothing welded.
     """
 
     shoulders: Mapping[Arm, Vector3] = field(default_factory=lambda: dict(DEFAULT_SHOULDERS))
     link_radius_m: float = 0.04
     samples_per_segment: int = 8
+    hands: Mapping[Arm, tuple[FloatArray, FloatArray]] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         owner = "GeometricSceneQuery"
@@ -191,8 +198,37 @@ class GeometricSceneQuery:
                 np.asarray(self.shoulders[arm], dtype=np.float64), palms.shape
             )
             nearest = segment_distances(centres, shoulder, palms).min(axis=1)
-            result[arm] = np.asarray(nearest - radii - self.link_radius_m, dtype=np.float64)
+            gap = np.asarray(nearest - radii - self.link_radius_m, dtype=np.float64)
+            hand = self._hand_clearance(arm, palm_paths, palms, centres, radii)
+            result[arm] = gap if hand is None else np.minimum(gap, hand)
         return result
+
+    def _hand_clearance(
+        self,
+        arm: Arm,
+        palm_paths: Mapping[Arm, FloatArray],
+        palms: FloatArray,
+        centres: FloatArray,
+        radii: FloatArray,
+    ) -> FloatArray | None:
+        """Clearance (m) of ``arm``'s hand spheres carried along its sampled ``palms`` from each
+        obstacle, or None (nothing welded, or no other palm to say which way it faces)."""
+        local, hand_radii = self.hands.get(arm, (np.zeros((0, 3)), np.zeros(0)))
+        others = [a for a in palm_paths if a != arm]
+        if len(local) == 0 or not others:
+            return None
+        start = np.asarray(palm_paths[arm], dtype=np.float64).reshape(-1, 3)[0]
+        across = np.asarray(palm_paths[others[0]], dtype=np.float64).reshape(-1, 3)[0] - start
+        inward = np.array([across[0], across[1], 0.0])
+        if np.linalg.norm(inward) < 1e-9:
+            return None
+        z = inward / np.linalg.norm(inward)
+        x = np.array([0.0, 0.0, -1.0])
+        frame = np.column_stack((x, np.cross(z, x), z))  # palm axes in {W}
+        spheres = palms[:, None, :] + (np.asarray(local) @ frame.T)[None]  # (S, K, 3)
+        d = np.linalg.norm(spheres[None] - centres[:, None, None, :], axis=-1)  # (m, S, K)
+        gaps = d - np.asarray(hand_radii)[None, None, :] - radii[:, None, None]
+        return np.asarray(gaps.min(axis=(1, 2)), dtype=np.float64)
 
 
 @dataclass(frozen=True)
@@ -248,7 +284,11 @@ def check_scene(
     elements: set[AffordanceElement] = set()
     because: list[str] = []
 
-    path_gap = scene.path_clearance(path, bounding_radius(context), obstacles)
+    lifts = [np.array([0.0, 0.0, h]) for h in np.linspace(0.0, config.carry_lift_m, 3)]
+    path_gap = np.min(
+        [scene.path_clearance(path + up, bounding_radius(context), obstacles) for up in lifts],
+        axis=0,
+    )
     near = [i for i in range(len(obstacles)) if path_gap[i] < config.path_margin_m]
     if near:
         names = tuple(obstacles[i].name for i in near)
@@ -273,7 +313,11 @@ def check_scene(
         arm: np.asarray(palm, dtype=np.float64) + offsets
         for arm, palm in zip(option.arms, option.palms, strict=True)
     }
-    link_gap = scene.link_clearance(palm_paths, obstacles)
+    swept = [
+        scene.link_clearance({arm: p + up for arm, p in palm_paths.items()}, obstacles)
+        for up in lifts
+    ]
+    link_gap = {arm: np.min([g[arm] for g in swept], axis=0) for arm in swept[0]}
     near_arms = tuple(
         arm for arm in Arm if arm in link_gap and bool(np.any(link_gap[arm] < config.link_margin_m))
     )

@@ -271,6 +271,7 @@ def absolute_terms(
     points_object: np.ndarray,
     transport: Skill | None = None,
     rest_half_height: float | None = None,
+    held: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> list[tuple[CouplingTerm, float]]:
     """Coupling terms and weights of the plan's absolute skills.
 
@@ -291,6 +292,9 @@ def absolute_terms(
     rest_half_height : float, optional
         The least half height (m) the object rests at over the move (lower than half its z
         extent when the move sets it down on its side): the workspace floor follows it.
+    held : (ndarray (K, 3), ndarray (K,)), optional
+        Bounding spheres of what moves rigidly with the held object (:func:`held_spheres`),
+        object frame, m: link-level avoidance steers them (:func:`held_steering`).
     """
     terms: list[tuple[CouplingTerm, float]] = []
     if transport is not None and plan.skill(Action.TRANSPORT) is None:
@@ -329,6 +333,9 @@ def absolute_terms(
                 influence=float(skill.params["influence"]),
             )
             terms.append((field_term, sel.weight))
+            hands = held_steering(library, world, held, _param(sel, "link_gain", 1.0))
+            if hands is not None:
+                terms.append((hands, sel.weight))
         elif skill.kind is SkillKind.WORKSPACE_REPULSION:
             lower, upper = world.workspace_bounds(name)
             if rest_half_height is not None:
@@ -352,6 +359,49 @@ def absolute_terms(
                 )
             )
     return terms
+
+
+def held_steering(
+    library: SkillLibrary,
+    world: WorldPort,
+    held: tuple[np.ndarray, np.ndarray] | None,
+    gain: float = 1.0,
+) -> ObstacleSteering | None:
+    """The link-level avoidance of what is welded to the palms (a hand standing out of the
+    grip): it moves rigidly with the held object, so the object's own human-like steering
+    law, with the library's learnt gains, steers it around the obstacles (Park et al.'s
+    field over the link points fades with their speed, and a carry's attractor can press a
+    slow hand into an obstacle). None without held spheres or a steering skill."""
+    steering = [
+        s
+        for s in library.by_action(Action.AVOID_OBSTACLE, Space.ABSOLUTE)
+        if s.kind is SkillKind.OBSTACLE_STEERING
+    ]
+    if held is None or held[0].shape[0] == 0 or not steering:
+        return None
+    params = steering[0].params
+    obstacles = world.obstacles()
+    return ObstacleSteering(
+        gamma=float(params["gamma"]) * gain,
+        beta=float(params["beta"]),
+        k=float(params["k"]),
+        centres=np.array([o.position for o in obstacles]).reshape(-1, 3),
+        radii=np.array([o.radius for o in obstacles]),
+        held=held[0],
+        held_radii=held[1],
+        steer_object=False,
+    )
+
+
+def held_spheres(world: WorldPort, state: DualArmState) -> tuple[np.ndarray, np.ndarray]:
+    """What is welded to the palms (:meth:`WorldPort.welded_spheres`), placed in the object
+    frame by the grip of the handed-over ``state``: centres (K, 3) m and radii (K,) m."""
+    centres, radii = [], []
+    for arm, palm in ((Arm.LEFT, state.left), (Arm.RIGHT, state.right)):
+        local, r = world.welded_spheres(arm)
+        centres.append(palm.position + local @ quat.to_matrix(palm.orientation).T)
+        radii.append(r)
+    return np.concatenate(centres).reshape(-1, 3), np.concatenate(radii)
 
 
 def hold_terms(
@@ -512,7 +562,14 @@ def transport_composition(
         float(vertical_half_extent(extents, move.goal.orientation)),
     )
     terms = absolute_terms(
-        reweight(plan, avoid_gain, transport_weight), library, world, name, points, carry, rest
+        reweight(plan, avoid_gain, transport_weight),
+        library,
+        world,
+        name,
+        points,
+        carry,
+        rest,
+        held_spheres(world, state),
     )
     absolute = saturate_avoidance(terms, grip_acceleration_limit(world, name, squeeze_force_n))
     # The handed-over palm poses are the squeezed grip already: hold them as they are.

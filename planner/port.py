@@ -367,6 +367,12 @@ class ObstacleScene(Protocol):
         """Points on the arms' links to keep away from obstacles, (M, 3), world frame."""
         ...
 
+    def welded_spheres(self, arm: Arm) -> tuple[Array, Array]:
+        """Bounding spheres of what is welded to ``arm``'s palm (a hand), palm apart: centres
+        (K, 3) in the palm frame and radii (K,), m. It moves rigidly with a held object, so
+        the object's obstacle steering steers it too; K may be 0."""
+        ...
+
     def distance_query(self, points: Array) -> tuple[Array, Array]:
         """Distance (N,) from each point (N, 3) to the nearest obstacle, and its closest point."""
         ...

@@ -621,6 +621,25 @@ class CollisionWorld:
             self._check_posed(row, rot, pos, margins, collides)
         return collides
 
+    def welded_spheres(
+        self, arm: Arm, palm_position: ArrayLike, palm_quaternion: ArrayLike
+    ) -> tuple[FloatArray, FloatArray]:
+        """Bounding spheres of ``arm``'s elements on links welded to its palm, palm apart.
+
+        A link is welded to the palm when a chain of fixed joints joins them (the iCub's hand,
+        the iiwa's flange): while the palms hold an object, it moves rigidly with it. Centres
+        (K, 3) in the frame of the palm posed at ``palm_position`` (3,) and
+        ``palm_quaternion`` (4,) (the palm as the last :meth:`sync` read it), radii (K,), m.
+        """
+        body, links, _, rows, _, _ = self._track(arm)
+        palm_row = self._palm_rows[Arm(arm)]
+        welded = welded_links(body, self.scene.robot.arms[Arm(arm)].palm_link, self.scene.client)
+        chosen = [r for k, r in zip(links, rows, strict=True) if k in welded and r != palm_row]
+        self._place()
+        rotation = quat.to_matrix(np.asarray(palm_quaternion, dtype=float))
+        centres = (self._centres[chosen] - np.asarray(palm_position, dtype=float)) @ rotation
+        return np.asarray(centres, dtype=float).reshape(-1, 3), self._radii[chosen].copy()
+
     def arm_links(self, arm: Arm) -> tuple[str, ...]:
         """Element names of an arm, base to palm."""
         group = arm_group(arm)
@@ -1054,3 +1073,21 @@ def penetration_depth(
     if not fcl.collide(objects[0], objects[1], request, result) or not result.contacts:
         return 0.0
     return max(float(result.contacts[0].penetration_depth), 0.0)
+
+
+def welded_links(body: int, link: int, client: int) -> frozenset[int]:
+    """Links of ``body`` joined to ``link`` by chains of fixed joints (``link`` included; -1
+    is the base)."""
+    parent: dict[int, tuple[int, bool]] = {}
+    for j in range(pb.getNumJoints(body, physicsClientId=client)):
+        info = pb.getJointInfo(body, j, physicsClientId=client)
+        parent[j] = (int(info[16]), int(info[2]) == pb.JOINT_FIXED)
+    welded = {link}
+    grown = True
+    while grown:
+        grown = False
+        for child, (up, fixed) in parent.items():
+            if fixed and (child in welded) != (up in welded):
+                welded |= {child, up}
+                grown = True
+    return frozenset(welded)

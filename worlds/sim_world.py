@@ -210,6 +210,13 @@ class SimWorld:
         )
         self.gains = self.scene.controller.gains(Arm.LEFT)
         self.collision = CollisionWorld(self.scene)
+        # What is welded to each palm, in the palm frame: constant, so read once, here.
+        self._welded = {
+            arm: self.collision.welded_spheres(
+                arm, self.scene.palm_state(arm).position, self.scene.palm_state(arm).quaternion
+            )
+            for arm in ARMS
+        }
         # Arms that share joints (a torso) are predicted by inverse kinematics on a copy of
         # the robot, built at the first path check (worlds.arm_prediction).
         self._arm_predictor: ArmPredictor | None = None
@@ -699,6 +706,11 @@ class SimWorld:
             pts.append(ld.link_points[ok])
         return np.concatenate(pts) if pts else np.zeros((0, 3))
 
+    def welded_spheres(self, arm: Arm) -> tuple[Array, Array]:
+        """Bounding spheres of the links welded to ``arm``'s palm, palm frame (constant)."""
+        centres, radii = self._welded[arm]
+        return centres.copy(), radii.copy()
+
     def distance_query(self, points: Array) -> tuple[Array, Array]:
         """Distance (N,) from points (N, 3) to the nearest active obstacle, closest points."""
         return self.collision.query(points)
@@ -720,7 +732,7 @@ class SimWorld:
             body = self.scene.robot.bodies[spec.body]
             base = np.asarray(body.base2world_position, dtype=float)
             shoulders[arm] = tuple((base + np.array([0.0, 0.0, 0.36])).tolist())
-        return GeometricSceneQuery(shoulders=shoulders)
+        return GeometricSceneQuery(shoulders=shoulders, hands=dict(self._welded))
 
     # -- reporting ---------------------------------------------------------------------------
     def palm_quaternion(self, arm: Arm) -> Array:

@@ -411,6 +411,10 @@ class FakeWorld:
         palms = np.array([self._palms[Arm.LEFT].position, self._palms[Arm.RIGHT].position])
         return self._arm_points(palms, np.array([0, 1])).reshape(-1, 3)
 
+    def welded_spheres(self, arm: Arm) -> tuple[Array, Array]:
+        """None: the fake arms are segments ending at their palms."""
+        return np.zeros((0, 3)), np.zeros(0)
+
     def distance_query(self, points: Array) -> tuple[Array, Array]:
         """Distance to the nearest present obstacle surface and the closest point on it."""
         return self._sphere_distance(np.asarray(points, dtype=float))

@@ -26,6 +26,13 @@ Decisions
   stays continuous (any offset breaks the tie); dead behind (``phi = pi``) Hoffmann's law is
   itself discontinuous, and zero is the middle of its two one-sided limits.
 * Zero when the speed is below ``min_speed``.
+* The held assembly (an extension): what moves rigidly with the object while it is held,
+  such as a hand welded to a palm, can stand well out of the object's sphere. Each of its
+  bounding spheres (``held``, offsets in the object frame) is steered by the same law at its
+  own position ``y + R r`` and velocity ``v + omega x R r``, and the object takes the sum of
+  the accelerations (linear only, as for the object's own sphere). Without held spheres the
+  term is Hoffmann's law on the object alone, bit for bit. ``steer_object=False`` steers the
+  held spheres alone (link-level avoidance composes it for the hands).
 """
 
 from __future__ import annotations
@@ -36,8 +43,9 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike
 
+from skills import quaternion as quat
 from skills.couplings._checks import ZERO3, non_negative, positive, vector
-from skills.kernel import kernel
+from skills.kernel import kernel, matrix_q, quaternion_at
 from skills.program import Kind, Packer
 from skills.state import PoseState, PoseTarget
 from skills.types import Array
@@ -117,6 +125,13 @@ class ObstacleSteering:
         Obstacles at ``phi >= max_angle`` are ignored, rad in (0, pi]; pi keeps them all.
     min_speed : float
         Below this speed (m/s) the term is zero.
+    held : array_like, shape (P, 3), optional
+        Centres of the bounding spheres of what moves rigidly with the object while held
+        (links welded to the palms), object frame, m; each is steered too.
+    held_radii : array_like, shape (P,), optional
+        Their radii, m (>= 0).
+    steer_object : bool
+        False steers the held spheres alone, not the object's own sphere.
     """
 
     gamma: float
@@ -127,6 +142,9 @@ class ObstacleSteering:
     object_radius: float
     max_angle: float
     min_speed: float
+    held: Array
+    held_radii: Array
+    steer_object: bool
     _reach: Array = field(init=False, repr=False)
 
     def __init__(
@@ -139,8 +157,12 @@ class ObstacleSteering:
         object_radius: float = 0.0,
         max_angle: float = math.pi,
         min_speed: float = 1e-6,
+        held: ArrayLike | None = None,
+        held_radii: ArrayLike | None = None,
+        steer_object: bool = True,
     ) -> None:
         set_ = object.__setattr__
+        set_(self, "steer_object", bool(steer_object))
         set_(self, "gamma", positive(gamma, "gamma"))
         set_(self, "beta", positive(beta, "beta"))
         set_(self, "k", non_negative(k, "k"))
@@ -166,6 +188,22 @@ class ObstacleSteering:
             raise ValueError(f"radii: expected values >= 0 m, got {r.tolist()}")
         set_(self, "centres", c)
         set_(self, "radii", r)
+        h = vector(
+            np.reshape(np.asarray(() if held is None else held, float), (-1, 3)), (-1, 3), "held"
+        )
+        hr = vector(
+            np.reshape(np.asarray(() if held_radii is None else held_radii, float), (-1,)),
+            (-1,),
+            "held_radii",
+        )
+        if hr.shape[0] != h.shape[0]:
+            raise ValueError(
+                f"held_radii: expected one radius per held sphere ({h.shape[0]}), got {hr.shape[0]}"
+            )
+        if np.any(hr < 0.0):
+            raise ValueError(f"held_radii: expected values >= 0 m, got {hr.tolist()}")
+        set_(self, "held", h)
+        set_(self, "held_radii", hr)
         reach = r + self.object_radius
         reach.setflags(write=False)
         set_(self, "_reach", reach)
@@ -181,6 +219,9 @@ class ObstacleSteering:
             self.object_radius,
             self.max_angle,
             self.min_speed,
+            self.held,
+            self.held_radii,
+            self.steer_object,
         )
 
     def acceleration(self, state: PoseState, target: PoseTarget) -> tuple[Array, Array]:
@@ -192,7 +233,8 @@ class ObstacleSteering:
         Parameters
         ----------
         state : PoseState
-            Uses ``position`` and ``velocity``.
+            Uses ``position`` and ``velocity`` (and, with held spheres, ``orientation`` and
+            ``angular_velocity``).
         target : PoseTarget
             Unused.
 
@@ -200,25 +242,34 @@ class ObstacleSteering:
         -------
         linear, angular : ndarray, shape (3,)
         """
-        v = np.asarray(state.velocity, dtype=float)
-        if float(v @ v) <= self.min_speed * self.min_speed or self._reach.shape[0] == 0:
+        if self._reach.shape[0] == 0:
             return ZERO3.copy(), ZERO3.copy()
-        a = steering_accelerations(
-            np.asarray(state.position, dtype=float)[None],
-            v[None],
-            self.centres,
-            self._reach,
-            self.gamma,
-            self.beta,
-            self.k,
-            self.max_angle,
-        )
-        return a[0], ZERO3.copy()
+        y = np.asarray(state.position, dtype=float)
+        v = np.asarray(state.velocity, dtype=float)
+        total = ZERO3.copy()
+        if self.steer_object and float(v @ v) > self.min_speed * self.min_speed:
+            total = total + self._steer(y, v, self._reach)
+        if self.held.shape[0]:
+            arms = self.held @ quat.to_matrix(np.asarray(state.orientation, dtype=float)).T
+            omega = np.asarray(state.angular_velocity, dtype=float)
+            for arm, radius in zip(arms, self.held_radii, strict=True):
+                vp = v + np.cross(omega, arm)
+                if float(vp @ vp) > self.min_speed * self.min_speed:
+                    total = total + self._steer(y + arm, vp, self.radii + radius)
+        return total, ZERO3.copy()
+
+    def _steer(self, y: Array, v: Array, reach: Array) -> Array:
+        """The law at one steered sphere's centre ``y`` moving at ``v``, reach per obstacle."""
+        a: Array = steering_accelerations(
+            y[None], v[None], self.centres, reach, self.gamma, self.beta, self.k, self.max_angle
+        )[0]
+        return a
 
     def pack(self, packer: Packer, weight: float) -> None:
         """A STEERING block: ``[w, gamma, beta, k, max_angle, min_speed, M, M x (centre,
-        reach)]``."""
+        reach), P, steer_object, P x (held centre, held radius), M x obstacle radius]``."""
         obstacles = np.hstack((self.centres, self._reach[:, None])).ravel().tolist()
+        held = np.hstack((self.held, self.held_radii[:, None])).ravel().tolist()
         packer.add(
             Kind.STEERING,
             [
@@ -230,6 +281,10 @@ class ObstacleSteering:
                 self.min_speed,
                 float(self.centres.shape[0]),
                 *obstacles,
+                float(self.held.shape[0]),
+                float(self.steer_object),
+                *held,
+                *self.radii.tolist(),
             ],
         )
 
@@ -242,20 +297,52 @@ STEERING_HEADER = 7
 def steering_kernel(x: Array, b: int, data: Array, o: int, a: Array) -> None:
     """:meth:`ObstacleSteering.acceleration` of the state at ``x[b:]`` from its block at
     ``data[o:]``, into ``a`` (6)."""
-    gamma, beta, kc, max_angle, min_speed = (
-        data[o + 1],
-        data[o + 2],
-        data[o + 3],
-        data[o + 4],
-        data[o + 5],
-    )
+    min_speed = data[o + 5]
     m = int(data[o + 6])
-    vx, vy, vz = x[b + 3], x[b + 4], x[b + 5]
-    vv = vx * vx + vy * vy + vz * vz
     a[:] = 0.0
-    if vv <= min_speed * min_speed:
+    vx, vy, vz = x[b + 3], x[b + 4], x[b + 5]
+    held = o + STEERING_HEADER + 4 * m
+    if data[held + 1] != 0.0 and vx * vx + vy * vy + vz * vz > min_speed * min_speed:
+        steer_sphere(data, o, x[b], x[b + 1], x[b + 2], vx, vy, vz, -1.0, a)
+    p = int(data[held])
+    if p == 0:
         return
-    px, py, pz = x[b], x[b + 1], x[b + 2]
+    rot = matrix_q(quaternion_at(x, b + 9))
+    wx, wy, wz = x[b + 13], x[b + 14], x[b + 15]
+    for j in range(p):
+        h = held + 2 + 4 * j
+        ax = rot[0] * data[h] + rot[1] * data[h + 1] + rot[2] * data[h + 2]  # R r_j
+        ay = rot[3] * data[h] + rot[4] * data[h + 1] + rot[5] * data[h + 2]
+        az = rot[6] * data[h] + rot[7] * data[h + 1] + rot[8] * data[h + 2]
+        ux = vx + (wy * az - wz * ay)
+        uy = vy + (wz * ax - wx * az)
+        uz = vz + (wx * ay - wy * ax)
+        if ux * ux + uy * uy + uz * uz > min_speed * min_speed:
+            steer_sphere(
+                data, o, x[b] + ax, x[b + 1] + ay, x[b + 2] + az, ux, uy, uz, data[h + 3], a
+            )
+
+
+@kernel
+def steer_sphere(
+    data: Array,
+    o: int,
+    px: float,
+    py: float,
+    pz: float,
+    vx: float,
+    vy: float,
+    vz: float,
+    radius: float,
+    a: Array,
+) -> None:
+    """Add into ``a[:3]`` the law at one steered sphere's centre ``p`` moving at ``v``:
+    ``radius < 0`` is the object's own sphere (the block's reaches), else a held sphere's
+    radius (added to each obstacle's)."""
+    gamma, beta, kc, max_angle = data[o + 1], data[o + 2], data[o + 3], data[o + 4]
+    m = int(data[o + 6])
+    radii = o + STEERING_HEADER + 4 * m + 2 + 4 * int(data[o + STEERING_HEADER + 4 * m])
+    vv = vx * vx + vy * vy + vz * vz
     along = 0.0  # sum of w (D.v)
     sx = sy = sz = 0.0  # sum of w D
     for i in range(m):
@@ -267,12 +354,13 @@ def steering_kernel(x: Array, b: int, data: Array, o: int, a: Array) -> None:
         phi = math.atan2(cross, dv)
         if phi >= max_angle or cross <= _COLLINEAR * math.sqrt(dd * vv):
             continue
-        clearance = max(math.sqrt(dd) - data[c + 3], 0.0)
+        reach = data[c + 3] if radius < 0.0 else data[radii + i] + radius
+        clearance = max(math.sqrt(dd) - reach, 0.0)
         w = gamma * phi * math.exp(-beta * phi - kc * clearance * clearance) / cross
         along += w * dv
         sx += w * dx
         sy += w * dy
         sz += w * dz
-    a[0] = along * vx - vv * sx
-    a[1] = along * vy - vv * sy
-    a[2] = along * vz - vv * sz
+    a[0] += along * vx - vv * sx
+    a[1] += along * vy - vv * sy
+    a[2] += along * vz - vv * sz

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from affordances import GeometricSceneQuery, Obstacle, reason
+from affordances import GeometricSceneQuery, Obstacle, ReasonerConfig, reason
 from affordances.scene import FloatArray, sample_polyline, segment_distances
 from skills.vocabulary import Action, Arm, GraspType, Space
 from tests.affordances.cases import ROBOT, parcel, small_box
@@ -83,6 +83,37 @@ def test_obstacle_near_the_arm_but_off_the_path_adds_link_avoidance() -> None:
     assert avoid.params["arms"] == ("left",)
     assert avoid.params["obstacles"] == ("lamp",)
     assert any(line.startswith("scene: lamp") and "left arm" in line for line in top.because)
+
+
+def test_an_obstacle_above_the_path_within_the_carry_lift_adds_obstacle_steering() -> None:
+    # 0.33 m over the path: 0.105 m clear of the parcel's sphere at rest height, touching it
+    # once the carry has lifted it 0.12 m.
+    lamp = {"name": "lamp", "position": (0.4, 0.0, 0.1 + 0.33), "radius": 0.03}
+    context = parcel(position=START, goals=[GOAL], obstacles=[lamp])
+    assert Action.AVOID_OBSTACLE in reason(context, ROBOT)[0].actions
+    flat = ReasonerConfig(carry_lift_m=1e-3)
+    assert Action.AVOID_OBSTACLE not in reason(context, ROBOT, config=flat)[0].actions
+
+
+def test_a_hand_welded_above_the_palm_rides_along_its_path() -> None:
+    shoulders = {Arm.LEFT: (0.0, 0.2, 0.4), Arm.RIGHT: (0.0, -0.2, 0.4)}
+    palms = {Arm.LEFT: np.array([[0.4, 0.1, 0.1]]), Arm.RIGHT: np.array([[0.4, -0.1, 0.1]])}
+    # Palm frame: x down, z into the object (towards the other palm): a hand 0.1 m above the
+    # left palm is at (0.4, 0.1, 0.2); the ball 0.2 m above the palm is 0.1 m from its centre.
+    hand = (np.array([[-0.1, 0.0, 0.0]]), np.array([0.03]))
+    ball = [Obstacle("ball", (0.4, 0.1, 0.3), 0.02)]
+    bare = GeometricSceneQuery(shoulders=shoulders).link_clearance(palms, ball)
+    handed = GeometricSceneQuery(shoulders=shoulders, hands={Arm.LEFT: hand})
+    gaps = handed.link_clearance(palms, ball)
+    assert_allclose(gaps[Arm.LEFT], [0.1 - 0.03 - 0.02])
+    assert bare[Arm.LEFT][0] > gaps[Arm.LEFT][0]
+    assert_allclose(gaps[Arm.RIGHT], bare[Arm.RIGHT])  # no hand on the right
+    # Behind the face (-z): the left palm pushes towards -y, so behind it is +y.
+    behind = GeometricSceneQuery(
+        shoulders=shoulders, hands={Arm.LEFT: (np.array([[0.0, 0.0, -0.1]]), np.array([0.03]))}
+    )
+    side = [Obstacle("ball", (0.4, 0.3, 0.1), 0.02)]
+    assert_allclose(behind.link_clearance(palms, side)[Arm.LEFT], [0.1 - 0.03 - 0.02])
 
 
 def test_far_obstacle_adds_neither() -> None:

@@ -237,3 +237,87 @@ def test_fit_rejects_no_demos_and_no_avoidance() -> None:
         fit_obstacle_steering(AvoidanceDemo.create(still, [1.0, 0, 0], 0.1))
     with pytest.raises(ValueError, match="radii: expected one radius per centre"):
         AvoidanceDemo.create(still, [[1.0, 0, 0]], [0.1, 0.2])
+
+
+def turning(position: object, velocity: object, q: object, omega: object) -> PoseState:
+    z = np.zeros(3)
+    return PoseState(
+        np.asarray(position, dtype=float),
+        np.asarray(velocity, dtype=float),
+        z,
+        np.asarray(q, dtype=float),
+        np.asarray(omega, dtype=float),
+        z,
+    )
+
+
+def test_a_held_sphere_is_steered_where_it_is_and_as_it_moves() -> None:
+    rng = np.random.default_rng(8)
+    centres = rng.normal(size=(3, 3))
+    radii = rng.uniform(0.0, 0.2, 3)
+    held = rng.normal(scale=0.1, size=(2, 3))
+    held_radii = np.array([0.05, 0.09])
+    steer = ObstacleSteering(3.0, 1.5, 2.0, centres, radii, 0.1, held=held, held_radii=held_radii)
+    for _ in range(10):
+        y, v, w = rng.normal(size=3), rng.normal(size=3), rng.normal(size=3)
+        q = quat.exp(rng.normal(size=3))
+        rotation = quat.to_matrix(q)
+        # By hand: the object's sphere, then each held sphere at y + R r, v + w x R r.
+        law = steering_accelerations(y[None], v[None], centres, radii + 0.1, 3.0, 1.5, 2.0)[0]
+        for r, rho in zip(held, held_radii, strict=True):
+            arm = rotation @ r
+            law = (
+                law
+                + steering_accelerations(
+                    (y + arm)[None],
+                    (v + np.cross(w, arm))[None],
+                    centres,
+                    radii + rho,
+                    3.0,
+                    1.5,
+                    2.0,
+                )[0]
+            )
+        state = turning(y, v, q, w)
+        lin, ang = steer.acceleration(state, TARGET)
+        assert_allclose([*lin, *ang], [*law, 0.0, 0.0, 0.0], rtol=1e-10, atol=1e-14)
+        fast = np.concatenate(kernel_acceleration(steer, state, TARGET))
+        assert_allclose(fast, [*law, 0.0, 0.0, 0.0], rtol=1e-10, atol=1e-14)
+
+
+def test_without_held_spheres_the_term_is_the_objects_alone() -> None:
+    rng = np.random.default_rng(9)
+    centres, radii = rng.normal(size=(2, 3)), rng.uniform(0.0, 0.2, 2)
+    plain = ObstacleSteering(3.0, 1.5, 2.0, centres, radii, 0.1)
+    empty = ObstacleSteering(3.0, 1.5, 2.0, centres, radii, 0.1, held=np.zeros((0, 3)))
+    for _ in range(10):
+        state = turning(rng.normal(size=3), rng.normal(size=3), quat.IDENTITY, rng.normal(size=3))
+        law = steering_accelerations(
+            state.position[None], state.velocity[None], centres, radii + 0.1, 3.0, 1.5, 2.0
+        )[0]
+        fast = np.concatenate(kernel_acceleration(plain, state, TARGET))
+        assert np.array_equal(fast, np.concatenate(kernel_acceleration(empty, state, TARGET)))
+        assert_allclose(fast[:3], law, rtol=1e-10, atol=1e-14)
+
+
+def test_a_hand_standing_above_the_object_is_steered_under_an_obstacle_the_object_clears() -> None:
+    # The object passes 20 cm below a ball; a sphere held 15 cm above it would hit the ball.
+    obstacle = np.array([[0.0, 0.0, 0.2]])
+    state = turning([0.0, -0.3, 0.0], [0.0, 0.5, 0.0], quat.IDENTITY, np.zeros(3))
+    alone = ObstacleSteering(3.0, 1.5, 20.0, obstacle, [0.02], 0.05)
+    held = ObstacleSteering(
+        3.0, 1.5, 20.0, obstacle, [0.02], 0.05, held=[[0.0, 0.0, 0.15]], held_radii=[0.05]
+    )
+    down_alone = alone.acceleration(state, TARGET)[0][2]
+    down_held = held.acceleration(state, TARGET)[0][2]
+    assert down_held < down_alone < 0.0  # steered downwards, away, and more with the hand
+    assert abs(down_held) > 1.5 * abs(down_alone)
+
+
+def test_bad_held_spheres_name_the_field() -> None:
+    with pytest.raises(ValueError, match="held_radii: expected one radius per held sphere"):
+        ObstacleSteering(1.0, 1.0, 1.0, held=[[0, 0, 0]], held_radii=[0.1, 0.2])
+    with pytest.raises(ValueError, match="held_radii: expected values >= 0"):
+        ObstacleSteering(1.0, 1.0, 1.0, held=[[0, 0, 0]], held_radii=[-0.1])
+    with pytest.raises(ValueError, match="held: expected finite"):
+        ObstacleSteering(1.0, 1.0, 1.0, held=[[0, np.inf, 0]], held_radii=[0.1])

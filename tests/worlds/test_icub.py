@@ -15,9 +15,10 @@ import pybullet as pb
 import pytest
 from numpy.typing import NDArray
 
+from skills import quaternion as quat
 from skills.vocabulary import ARMS, Arm
 from tests.worlds.test_grasp import Log, minimum_jerk, tilt_deg
-from worlds.collision import CollisionWorld
+from worlds.collision import CollisionWorld, welded_links
 from worlds.control import PalmCommand
 from worlds.robots.icub import ARM_JOINTS, TORSO_JOINTS
 from worlds.scene import Scene, lateral_grasp_palm_poses
@@ -282,3 +283,27 @@ def test_the_torso_stays_upright_while_the_palms_hold_still(world: World) -> Non
         # Within 0.5 degrees of where it started, and 3 degrees of upright.
         assert worst < np.radians(0.5), f"torso moved {np.degrees(worst):.3f} deg"
         assert np.abs(torso(scene)).max() < np.radians(3.0), np.degrees(torso(scene))
+
+
+def test_the_hand_welded_to_each_palm_is_a_sphere_above_and_behind_it(world: World) -> None:
+    with icub_scene(world) as scene:
+        collision = CollisionWorld(scene)
+        for arm, side in ((Arm.LEFT, "l"), (Arm.RIGHT, "r")):
+            spec = scene.robot.arms[arm]
+            body = scene.robot_ids[spec.body]
+            welded = welded_links(body, spec.palm_link, scene.client)
+            names = {pb.getJointInfo(body, k)[12].decode() for k in welded}
+            assert f"{side}_hand" in names  # the palm's own link and the hand, nothing movable
+            assert f"{side}_wrist_1" not in names
+            palm = scene.palm_state(arm)
+            centres, radii = collision.welded_spheres(arm, palm.position, palm.quaternion)
+            assert centres.shape == (1, 3) and radii.shape == (1,)
+            # The palm frame's x points down in the grasp and z into the object: the hand
+            # stands above the palm (-x) and behind its face (-z), larger than the palm box.
+            assert centres[0, 0] < -0.02 and centres[0, 2] < 0.0
+            assert radii[0] > float(np.max(world.robot.palm_size))
+            # Put back in the world, the sphere is centred on the hand's collision geometry.
+            hand = next(k for k in welded if k != spec.palm_link)
+            low, high = (np.asarray(v) for v in pb.getAABB(body, hand, scene.client))
+            centre = palm.position + quat.to_matrix(palm.quaternion) @ centres[0]
+            assert np.linalg.norm((low + high) / 2.0 - centre) < 0.03
