@@ -307,3 +307,15 @@ def test_the_hand_welded_to_each_palm_is_a_sphere_above_and_behind_it(world: Wor
             low, high = (np.asarray(v) for v in pb.getAABB(body, hand, scene.client))
             centre = palm.position + quat.to_matrix(palm.quaternion) @ centres[0]
             assert np.linalg.norm((low + high) / 2.0 - centre) < 0.03
+
+
+def test_the_reasoner_sees_the_hands_ride_along_the_palms(world: World) -> None:
+    from worlds.sim_world import SimWorld
+
+    with SimWorld(world) as sim:
+        query = sim.scene_query()
+        for arm in ARMS:
+            centres, radii = sim.welded_spheres(arm)
+            hand_centres, hand_radii = query.hands[arm]
+            np.testing.assert_array_equal(hand_centres, centres)
+            np.testing.assert_array_equal(hand_radii, radii)
