@@ -333,7 +333,7 @@ def absolute_terms(
                 influence=float(skill.params["influence"]),
             )
             terms.append((field_term, sel.weight))
-            hands = held_steering(library, world, held, _param(sel, "link_gain", 1.0))
+            hands = held_steering(library, world, held, radius, _param(sel, "link_gain", 1.0))
             if hands is not None:
                 terms.append((hands, sel.weight))
         elif skill.kind is SkillKind.WORKSPACE_REPULSION:
@@ -365,13 +365,16 @@ def held_steering(
     library: SkillLibrary,
     world: WorldPort,
     held: tuple[np.ndarray, np.ndarray] | None,
+    object_radius: float = 0.0,
     gain: float = 1.0,
 ) -> ObstacleSteering | None:
     """The link-level avoidance of what is welded to the palms (a hand standing out of the
     grip): it moves rigidly with the held object, so the object's own human-like steering
-    law, with the library's learnt gains, steers it around the obstacles (Park et al.'s
-    field over the link points fades with their speed, and a carry's attractor can press a
-    slow hand into an obstacle). None without held spheres or a steering skill."""
+    law, with the library's learnt gains, steers it around the obstacles it is nearer to
+    than the object's sphere of ``object_radius`` (:class:`ObstacleSteering`'s held
+    assembly; Park et al.'s field over the link points fades with their speed, and a
+    carry's attractor can press a slow hand into an obstacle). None without held spheres or
+    a steering skill."""
     steering = [
         s
         for s in library.by_action(Action.AVOID_OBSTACLE, Space.ABSOLUTE)
@@ -387,6 +390,7 @@ def held_steering(
         k=float(params["k"]),
         centres=np.array([o.position for o in obstacles]).reshape(-1, 3),
         radii=np.array([o.radius for o in obstacles]),
+        object_radius=object_radius,
         held=held[0],
         held_radii=held[1],
         steer_object=False,

@@ -27,12 +27,15 @@ Decisions
   itself discontinuous, and zero is the middle of its two one-sided limits.
 * Zero when the speed is below ``min_speed``.
 * The held assembly (an extension): what moves rigidly with the object while it is held,
-  such as a hand welded to a palm, can stand well out of the object's sphere. Each of its
-  bounding spheres (``held``, offsets in the object frame) is steered by the same law at its
-  own position ``y + R r`` and velocity ``v + omega x R r``, and the object takes the sum of
-  the accelerations (linear only, as for the object's own sphere). Without held spheres the
-  term is Hoffmann's law on the object alone, bit for bit. ``steer_object=False`` steers the
-  held spheres alone (link-level avoidance composes it for the hands).
+  such as a hand welded to a palm, can stand well out of the object's sphere. Each obstacle
+  is steered around by the member of the assembly nearest to it (least clearance: the
+  object's sphere or one of the ``held`` spheres, offsets in the object frame), with the law
+  at that member's position ``y + R r`` and velocity ``v + omega x R r``; the object takes
+  the sum over obstacles (linear only). One obstacle is never steered by several members at
+  once, which would multiply the deflection and could push the object's own corner into
+  another. Without held spheres the term is Hoffmann's law on the object alone, bit for bit.
+  ``steer_object=False`` steers only the obstacles a held sphere is nearest to (link-level
+  avoidance composes it for the hands; the object's own steering is another term).
 """
 
 from __future__ import annotations
@@ -41,7 +44,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
 from skills import quaternion as quat
 from skills.couplings._checks import ZERO3, non_negative, positive, vector
@@ -247,21 +250,33 @@ class ObstacleSteering:
         y = np.asarray(state.position, dtype=float)
         v = np.asarray(state.velocity, dtype=float)
         total = ZERO3.copy()
-        if self.steer_object and float(v @ v) > self.min_speed * self.min_speed:
-            total = total + self._steer(y, v, self._reach)
-        if self.held.shape[0]:
-            arms = self.held @ quat.to_matrix(np.asarray(state.orientation, dtype=float)).T
-            omega = np.asarray(state.angular_velocity, dtype=float)
-            for arm, radius in zip(arms, self.held_radii, strict=True):
-                vp = v + np.cross(omega, arm)
-                if float(vp @ vp) > self.min_speed * self.min_speed:
-                    total = total + self._steer(y + arm, vp, self.radii + radius)
+        if not self.held.shape[0]:
+            if self.steer_object and float(v @ v) > self.min_speed * self.min_speed:
+                total = total + self._steer(y, v, self.centres, self._reach)
+            return total, ZERO3.copy()
+        arms = self.held @ quat.to_matrix(np.asarray(state.orientation, dtype=float)).T
+        omega = np.asarray(state.angular_velocity, dtype=float)
+        points = np.vstack((y, y + arms))  # the object's centre, then each held sphere's
+        speeds = np.vstack((v, v + np.cross(omega, arms)))
+        reach = np.vstack((self._reach, self.radii + self.held_radii[:, None]))  # (1 + P, M)
+        gaps = np.linalg.norm(self.centres[None] - points[:, None], axis=-1) - reach
+        owner = np.argmin(gaps, axis=0)  # the first of equals: the object before a hand
+        for member in range(points.shape[0]):
+            mine = owner == member
+            if not mine.any() or (member == 0 and not self.steer_object):
+                continue
+            u = speeds[member]
+            if float(u @ u) > self.min_speed * self.min_speed:
+                total = total + self._steer(
+                    points[member], u, self.centres[mine], reach[member, mine]
+                )
         return total, ZERO3.copy()
 
-    def _steer(self, y: Array, v: Array, reach: Array) -> Array:
-        """The law at one steered sphere's centre ``y`` moving at ``v``, reach per obstacle."""
+    def _steer(self, y: Array, v: Array, centres: Array, reach: Array) -> Array:
+        """The law at one steered sphere's centre ``y`` moving at ``v`` around the obstacles at
+        ``centres``, with their reaches."""
         a: Array = steering_accelerations(
-            y[None], v[None], self.centres, reach, self.gamma, self.beta, self.k, self.max_angle
+            y[None], v[None], centres, reach, self.gamma, self.beta, self.k, self.max_angle
         )[0]
         return a
 
@@ -299,28 +314,69 @@ def steering_kernel(x: Array, b: int, data: Array, o: int, a: Array) -> None:
     ``data[o:]``, into ``a`` (6)."""
     min_speed = data[o + 5]
     m = int(data[o + 6])
-    a[:] = 0.0
-    vx, vy, vz = x[b + 3], x[b + 4], x[b + 5]
     held = o + STEERING_HEADER + 4 * m
-    if data[held + 1] != 0.0 and vx * vx + vy * vy + vz * vz > min_speed * min_speed:
-        steer_sphere(data, o, x[b], x[b + 1], x[b + 2], vx, vy, vz, -1.0, a)
     p = int(data[held])
-    if p == 0:
-        return
-    rot = matrix_q(quaternion_at(x, b + 9))
-    wx, wy, wz = x[b + 13], x[b + 14], x[b + 15]
-    for j in range(p):
-        h = held + 2 + 4 * j
-        ax = rot[0] * data[h] + rot[1] * data[h + 1] + rot[2] * data[h + 2]  # R r_j
-        ay = rot[3] * data[h] + rot[4] * data[h + 1] + rot[5] * data[h + 2]
-        az = rot[6] * data[h] + rot[7] * data[h + 1] + rot[8] * data[h + 2]
-        ux = vx + (wy * az - wz * ay)
-        uy = vy + (wz * ax - wx * az)
-        uz = vz + (wx * ay - wy * ax)
-        if ux * ux + uy * uy + uz * uz > min_speed * min_speed:
-            steer_sphere(
-                data, o, x[b] + ax, x[b + 1] + ay, x[b + 2] + az, ux, uy, uz, data[h + 3], a
-            )
+    own = data[held + 1] != 0.0
+    radii = held + 2 + 4 * p  # the obstacles' own radii
+    a[:] = 0.0
+    # Members of the held assembly: 0 the object's centre, then each held sphere.
+    pos = np.empty((p + 1, 3))
+    vel = np.empty((p + 1, 3))
+    pos[0, 0], pos[0, 1], pos[0, 2] = x[b], x[b + 1], x[b + 2]
+    vel[0, 0], vel[0, 1], vel[0, 2] = x[b + 3], x[b + 4], x[b + 5]
+    owner = np.zeros(m, dtype=np.int64)
+    if p > 0:
+        rot = matrix_q(quaternion_at(x, b + 9))
+        wx, wy, wz = x[b + 13], x[b + 14], x[b + 15]
+        for j in range(p):
+            h = held + 2 + 4 * j
+            ax = rot[0] * data[h] + rot[1] * data[h + 1] + rot[2] * data[h + 2]  # R r_j
+            ay = rot[3] * data[h] + rot[4] * data[h + 1] + rot[5] * data[h + 2]
+            az = rot[6] * data[h] + rot[7] * data[h + 1] + rot[8] * data[h + 2]
+            pos[j + 1, 0], pos[j + 1, 1], pos[j + 1, 2] = x[b] + ax, x[b + 1] + ay, x[b + 2] + az
+            vel[j + 1, 0] = x[b + 3] + (wy * az - wz * ay)
+            vel[j + 1, 1] = x[b + 4] + (wz * ax - wx * az)
+            vel[j + 1, 2] = x[b + 5] + (wx * ay - wy * ax)
+        for i in range(m):
+            c = o + STEERING_HEADER + 4 * i
+            best = _gap(data, c, pos, 0, data[c + 3])
+            for j in range(p):
+                gap = _gap(data, c, pos, j + 1, data[radii + i] + data[held + 2 + 4 * j + 3])
+                if gap < best:
+                    best = gap
+                    owner[i] = j + 1
+    for member in range(p + 1):
+        if member == 0 and not own:
+            continue
+        vx, vy, vz = vel[member, 0], vel[member, 1], vel[member, 2]
+        if vx * vx + vy * vy + vz * vz <= min_speed * min_speed:
+            continue
+        radius = -1.0 if member == 0 else data[held + 2 + 4 * (member - 1) + 3]
+        steer_sphere(
+            data,
+            o,
+            pos[member, 0],
+            pos[member, 1],
+            pos[member, 2],
+            vx,
+            vy,
+            vz,
+            radius,
+            owner,
+            member,
+            a,
+        )
+
+
+@kernel
+def _gap(data: Array, c: int, pos: Array, member: int, reach: float) -> float:
+    """Clearance of member ``member`` of the held assembly from the obstacle at ``data[c:]``."""
+    dx, dy, dz = (
+        data[c] - pos[member, 0],
+        data[c + 1] - pos[member, 1],
+        data[c + 2] - pos[member, 2],
+    )
+    return math.sqrt(dx * dx + dy * dy + dz * dz) - reach
 
 
 @kernel
@@ -334,11 +390,13 @@ def steer_sphere(
     vy: float,
     vz: float,
     radius: float,
+    owner: NDArray[np.int64],
+    member: int,
     a: Array,
 ) -> None:
-    """Add into ``a[:3]`` the law at one steered sphere's centre ``p`` moving at ``v``:
-    ``radius < 0`` is the object's own sphere (the block's reaches), else a held sphere's
-    radius (added to each obstacle's)."""
+    """Add into ``a[:3]`` the law at one member's centre ``p`` moving at ``v``, around the
+    obstacles it is nearest to (``owner[i] == member``): ``radius < 0`` is the object's own
+    sphere (the block's reaches), else a held sphere's radius (added to each obstacle's)."""
     gamma, beta, kc, max_angle = data[o + 1], data[o + 2], data[o + 3], data[o + 4]
     m = int(data[o + 6])
     radii = o + STEERING_HEADER + 4 * m + 2 + 4 * int(data[o + STEERING_HEADER + 4 * m])
@@ -346,6 +404,8 @@ def steer_sphere(
     along = 0.0  # sum of w (D.v)
     sx = sy = sz = 0.0  # sum of w D
     for i in range(m):
+        if owner[i] != member:
+            continue
         c = o + STEERING_HEADER + 4 * i
         dx, dy, dz = data[c] - px, data[c + 1] - py, data[c + 2] - pz
         dv = dx * vx + dy * vy + dz * vz

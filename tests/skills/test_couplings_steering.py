@@ -251,38 +251,76 @@ def turning(position: object, velocity: object, q: object, omega: object) -> Pos
     )
 
 
-def test_a_held_sphere_is_steered_where_it_is_and_as_it_moves() -> None:
+def _by_nearest_member(
+    y: np.ndarray,
+    v: np.ndarray,
+    rotation: np.ndarray,
+    w: np.ndarray,
+    centres: np.ndarray,
+    radii: np.ndarray,
+    held: np.ndarray,
+    held_radii: np.ndarray,
+    object_radius: float,
+    steer_object: bool = True,
+) -> np.ndarray:
+    """The held assembly's steering by hand: each obstacle steered by its nearest member."""
+    total = np.zeros(3)
+    for c, r in zip(centres, radii, strict=True):
+        members = [(y, v, r + object_radius)]
+        for h, rho in zip(held, held_radii, strict=True):
+            arm = rotation @ h
+            members.append((y + arm, v + np.cross(w, arm), r + rho))
+        gaps = [np.linalg.norm(c - p) - reach for p, _, reach in members]
+        k = int(np.argmin(gaps))
+        if k == 0 and not steer_object:
+            continue
+        p, u, reach = members[k]
+        total += steering_accelerations(
+            p[None], u[None], c[None], np.array([reach]), 3.0, 1.5, 2.0
+        )[0]
+    return total
+
+
+@pytest.mark.parametrize("steer_object", [True, False])
+def test_each_obstacle_is_steered_by_the_nearest_member_of_the_held_assembly(
+    steer_object: bool,
+) -> None:
     rng = np.random.default_rng(8)
-    centres = rng.normal(size=(3, 3))
-    radii = rng.uniform(0.0, 0.2, 3)
-    held = rng.normal(scale=0.1, size=(2, 3))
+    held = rng.normal(scale=0.3, size=(2, 3))
     held_radii = np.array([0.05, 0.09])
-    steer = ObstacleSteering(3.0, 1.5, 2.0, centres, radii, 0.1, held=held, held_radii=held_radii)
-    for _ in range(10):
-        y, v, w = rng.normal(size=3), rng.normal(size=3), rng.normal(size=3)
+    owners = set()
+    for _ in range(20):
+        centres = rng.normal(scale=0.6, size=(4, 3))
+        radii = rng.uniform(0.0, 0.1, 4)
+        steer = ObstacleSteering(
+            3.0,
+            1.5,
+            2.0,
+            centres,
+            radii,
+            0.1,
+            held=held,
+            held_radii=held_radii,
+            steer_object=steer_object,
+        )
+        y, v, w = rng.normal(scale=0.1, size=3), rng.normal(size=3), rng.normal(size=3)
         q = quat.exp(rng.normal(size=3))
         rotation = quat.to_matrix(q)
-        # By hand: the object's sphere, then each held sphere at y + R r, v + w x R r.
-        law = steering_accelerations(y[None], v[None], centres, radii + 0.1, 3.0, 1.5, 2.0)[0]
-        for r, rho in zip(held, held_radii, strict=True):
-            arm = rotation @ r
-            law = (
-                law
-                + steering_accelerations(
-                    (y + arm)[None],
-                    (v + np.cross(w, arm))[None],
-                    centres,
-                    radii + rho,
-                    3.0,
-                    1.5,
-                    2.0,
-                )[0]
-            )
+        law = _by_nearest_member(
+            y, v, rotation, w, centres, radii, held, held_radii, 0.1, steer_object
+        )
+        for c, r in zip(centres, radii, strict=True):
+            gaps = [np.linalg.norm(c - y) - r - 0.1] + [
+                np.linalg.norm(c - y - rotation @ h) - r - rho
+                for h, rho in zip(held, held_radii, strict=True)
+            ]
+            owners.add(int(np.argmin(gaps)))
         state = turning(y, v, q, w)
         lin, ang = steer.acceleration(state, TARGET)
-        assert_allclose([*lin, *ang], [*law, 0.0, 0.0, 0.0], rtol=1e-10, atol=1e-14)
+        assert_allclose([*lin, *ang], [*law, 0.0, 0.0, 0.0], rtol=1e-9, atol=1e-12)
         fast = np.concatenate(kernel_acceleration(steer, state, TARGET))
-        assert_allclose(fast, [*law, 0.0, 0.0, 0.0], rtol=1e-10, atol=1e-14)
+        assert_allclose(fast, [*law, 0.0, 0.0, 0.0], rtol=1e-9, atol=1e-12)
+    assert owners == {0, 1, 2}  # the draws exercised every member
 
 
 def test_without_held_spheres_the_term_is_the_objects_alone() -> None:
@@ -300,18 +338,29 @@ def test_without_held_spheres_the_term_is_the_objects_alone() -> None:
         assert_allclose(fast[:3], law, rtol=1e-10, atol=1e-14)
 
 
-def test_a_hand_standing_above_the_object_is_steered_under_an_obstacle_the_object_clears() -> None:
-    # The object passes 20 cm below a ball; a sphere held 15 cm above it would hit the ball.
-    obstacle = np.array([[0.0, 0.0, 0.2]])
+def test_a_hand_standing_above_the_object_steers_around_the_ball_it_nears() -> None:
+    # The object passes 20 cm below a ball, a hand held 15 cm above it nearer the ball: the
+    # hand, not the object, is steered around it; a ball at the object's height is the
+    # object's to steer around, so the hands' term (steer_object=False) leaves it.
     state = turning([0.0, -0.3, 0.0], [0.0, 0.5, 0.0], quat.IDENTITY, np.zeros(3))
-    alone = ObstacleSteering(3.0, 1.5, 20.0, obstacle, [0.02], 0.05)
-    held = ObstacleSteering(
-        3.0, 1.5, 20.0, obstacle, [0.02], 0.05, held=[[0.0, 0.0, 0.15]], held_radii=[0.05]
+    hand = {"held": [[0.0, 0.0, 0.15]], "held_radii": [0.05]}
+    above = ObstacleSteering(3.0, 1.5, 20.0, [[0.0, 0.0, 0.2]], [0.02], 0.05, **hand)
+    at_hand = steering_accelerations(
+        np.array([[0.0, -0.3, 0.15]]),
+        np.array([[0.0, 0.5, 0.0]]),
+        np.array([[0.0, 0.0, 0.2]]),
+        np.array([0.07]),
+        3.0,
+        1.5,
+        20.0,
+    )[0]
+    lin = above.acceleration(state, TARGET)[0]
+    assert_allclose(lin, at_hand, rtol=1e-12)
+    assert lin[2] < 0.0  # steered down, away from the ball
+    level = ObstacleSteering(
+        3.0, 1.5, 20.0, [[0.0, 0.0, 0.02]], [0.02], 0.05, steer_object=False, **hand
     )
-    down_alone = alone.acceleration(state, TARGET)[0][2]
-    down_held = held.acceleration(state, TARGET)[0][2]
-    assert down_held < down_alone < 0.0  # steered downwards, away, and more with the hand
-    assert abs(down_held) > 1.5 * abs(down_alone)
+    assert np.all(level.acceleration(state, TARGET)[0] == 0.0)
 
 
 def test_bad_held_spheres_name_the_field() -> None:
