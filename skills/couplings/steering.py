@@ -175,36 +175,10 @@ class ObstacleSteering:
         if not 0.0 < angle <= math.pi:
             raise ValueError(f"max_angle: expected a value in (0, pi] rad, got {max_angle!r}")
         set_(self, "max_angle", angle)
-        c = vector(
-            np.reshape(np.asarray(() if centres is None else centres, float), (-1, 3)),
-            (-1, 3),
-            "centres",
-        )
-        r = vector(
-            np.reshape(np.asarray(() if radii is None else radii, float), (-1,)), (-1,), "radii"
-        )
-        if r.shape[0] != c.shape[0]:
-            raise ValueError(
-                f"radii: expected one radius per centre ({c.shape[0]}), got {r.shape[0]}"
-            )
-        if np.any(r < 0.0):
-            raise ValueError(f"radii: expected values >= 0 m, got {r.tolist()}")
+        c, r = _spheres(centres, radii, "centres", "radii", "centre")
         set_(self, "centres", c)
         set_(self, "radii", r)
-        h = vector(
-            np.reshape(np.asarray(() if held is None else held, float), (-1, 3)), (-1, 3), "held"
-        )
-        hr = vector(
-            np.reshape(np.asarray(() if held_radii is None else held_radii, float), (-1,)),
-            (-1,),
-            "held_radii",
-        )
-        if hr.shape[0] != h.shape[0]:
-            raise ValueError(
-                f"held_radii: expected one radius per held sphere ({h.shape[0]}), got {hr.shape[0]}"
-            )
-        if np.any(hr < 0.0):
-            raise ValueError(f"held_radii: expected values >= 0 m, got {hr.tolist()}")
+        h, hr = _spheres(held, held_radii, "held", "held_radii", "held sphere")
         set_(self, "held", h)
         set_(self, "held_radii", hr)
         reach = r + self.object_radius
@@ -302,6 +276,23 @@ class ObstacleSteering:
                 *self.radii.tolist(),
             ],
         )
+
+
+def _spheres(
+    centres: ArrayLike | None, radii: ArrayLike | None, where: str, sizes: str, each: str
+) -> tuple[Array, Array]:
+    """Sphere centres (M, 3) and radii (M,) validated, errors naming the fields."""
+    c = vector(
+        np.reshape(np.asarray(() if centres is None else centres, float), (-1, 3)), (-1, 3), where
+    )
+    r = vector(np.reshape(np.asarray(() if radii is None else radii, float), (-1,)), (-1,), sizes)
+    if r.shape[0] != c.shape[0]:
+        raise ValueError(
+            f"{sizes}: expected one radius per {each} ({c.shape[0]}), got {r.shape[0]}"
+        )
+    if np.any(r < 0.0):
+        raise ValueError(f"{sizes}: expected values >= 0 m, got {r.tolist()}")
+    return c, r
 
 
 #: Where a steering block's obstacles start (after the weight and the parameters).
