@@ -313,15 +313,8 @@ def absolute_terms(
         if skill.kind is SkillKind.LEARNT_DMP:
             terms.append((LearntForcing(skill.pose_model()), sel.weight))
         elif skill.kind is SkillKind.OBSTACLE_STEERING:
-            obstacles = world.obstacles()
-            steering = ObstacleSteering(
-                gamma=float(skill.params["gamma"]) * _param(sel, "obstacle_gain", 1.0),
-                beta=float(skill.params["beta"]),
-                k=float(skill.params["k"]),
-                object_radius=radius,
-            ).with_obstacles(
-                np.array([o.position for o in obstacles]).reshape(-1, 3),
-                np.array([o.radius for o in obstacles]),
+            steering = learnt_steering(
+                skill, world, _param(sel, "obstacle_gain", 1.0), object_radius=radius
             )
             terms.append((steering, sel.weight))
         elif skill.kind is SkillKind.POTENTIAL_FIELD:
@@ -382,18 +375,31 @@ def held_steering(
     ]
     if held is None or held[0].shape[0] == 0 or not steering:
         return None
-    params = steering[0].params
-    obstacles = world.obstacles()
-    return ObstacleSteering(
-        gamma=float(params["gamma"]) * gain,
-        beta=float(params["beta"]),
-        k=float(params["k"]),
-        centres=np.array([o.position for o in obstacles]).reshape(-1, 3),
-        radii=np.array([o.radius for o in obstacles]),
+    return learnt_steering(
+        steering[0],
+        world,
+        gain,
         object_radius=object_radius,
         held=held[0],
         held_radii=held[1],
         steer_object=False,
+    )
+
+
+def learnt_steering(
+    skill: Skill, world: WorldPort, gain: float = 1.0, **held: object
+) -> ObstacleSteering:
+    """The obstacle steering ``skill`` learnt (its gamma times ``gain``, beta, k) around the
+    world's present obstacles; ``held`` passes :class:`ObstacleSteering`'s object radius and
+    held assembly."""
+    obstacles = world.obstacles()
+    return ObstacleSteering(
+        gamma=float(skill.params["gamma"]) * gain,
+        beta=float(skill.params["beta"]),
+        k=float(skill.params["k"]),
+        centres=np.array([o.position for o in obstacles]).reshape(-1, 3),
+        radii=np.array([o.radius for o in obstacles]),
+        **held,  # type: ignore[arg-type]
     )
 
 

@@ -295,6 +295,9 @@ def _spheres(
     return c, r
 
 
+#: The owners :func:`steer_sphere` reads when it steers around every obstacle (none).
+_EVERY = np.zeros(0, dtype=np.int64)
+
 #: Where a steering block's obstacles start (after the weight and the parameters).
 STEERING_HEADER = 7
 
@@ -310,32 +313,36 @@ def steering_kernel(x: Array, b: int, data: Array, o: int, a: Array) -> None:
     own = data[held + 1] != 0.0
     radii = held + 2 + 4 * p  # the obstacles' own radii
     a[:] = 0.0
+    vx, vy, vz = x[b + 3], x[b + 4], x[b + 5]
+    if p == 0:  # the object alone (no held assembly): every obstacle is its own
+        if own and vx * vx + vy * vy + vz * vz > min_speed * min_speed:
+            steer_sphere(data, o, x[b], x[b + 1], x[b + 2], vx, vy, vz, -1.0, _EVERY, -1, a)
+        return
     # Members of the held assembly: 0 the object's centre, then each held sphere.
     pos = np.empty((p + 1, 3))
     vel = np.empty((p + 1, 3))
     pos[0, 0], pos[0, 1], pos[0, 2] = x[b], x[b + 1], x[b + 2]
-    vel[0, 0], vel[0, 1], vel[0, 2] = x[b + 3], x[b + 4], x[b + 5]
+    vel[0, 0], vel[0, 1], vel[0, 2] = vx, vy, vz
     owner = np.zeros(m, dtype=np.int64)
-    if p > 0:
-        rot = matrix_q(quaternion_at(x, b + 9))
-        wx, wy, wz = x[b + 13], x[b + 14], x[b + 15]
+    rot = matrix_q(quaternion_at(x, b + 9))
+    wx, wy, wz = x[b + 13], x[b + 14], x[b + 15]
+    for j in range(p):
+        h = held + 2 + 4 * j
+        ax = rot[0] * data[h] + rot[1] * data[h + 1] + rot[2] * data[h + 2]  # R r_j
+        ay = rot[3] * data[h] + rot[4] * data[h + 1] + rot[5] * data[h + 2]
+        az = rot[6] * data[h] + rot[7] * data[h + 1] + rot[8] * data[h + 2]
+        pos[j + 1, 0], pos[j + 1, 1], pos[j + 1, 2] = x[b] + ax, x[b + 1] + ay, x[b + 2] + az
+        vel[j + 1, 0] = vx + (wy * az - wz * ay)
+        vel[j + 1, 1] = vy + (wz * ax - wx * az)
+        vel[j + 1, 2] = vz + (wx * ay - wy * ax)
+    for i in range(m):
+        c = o + STEERING_HEADER + 4 * i
+        best = _gap(data, c, pos, 0, data[c + 3])
         for j in range(p):
-            h = held + 2 + 4 * j
-            ax = rot[0] * data[h] + rot[1] * data[h + 1] + rot[2] * data[h + 2]  # R r_j
-            ay = rot[3] * data[h] + rot[4] * data[h + 1] + rot[5] * data[h + 2]
-            az = rot[6] * data[h] + rot[7] * data[h + 1] + rot[8] * data[h + 2]
-            pos[j + 1, 0], pos[j + 1, 1], pos[j + 1, 2] = x[b] + ax, x[b + 1] + ay, x[b + 2] + az
-            vel[j + 1, 0] = x[b + 3] + (wy * az - wz * ay)
-            vel[j + 1, 1] = x[b + 4] + (wz * ax - wx * az)
-            vel[j + 1, 2] = x[b + 5] + (wx * ay - wy * ax)
-        for i in range(m):
-            c = o + STEERING_HEADER + 4 * i
-            best = _gap(data, c, pos, 0, data[c + 3])
-            for j in range(p):
-                gap = _gap(data, c, pos, j + 1, data[radii + i] + data[held + 2 + 4 * j + 3])
-                if gap < best:
-                    best = gap
-                    owner[i] = j + 1
+            gap = _gap(data, c, pos, j + 1, data[radii + i] + data[held + 2 + 4 * j + 3])
+            if gap < best:
+                best = gap
+                owner[i] = j + 1
     for member in range(p + 1):
         if member == 0 and not own:
             continue
@@ -386,8 +393,9 @@ def steer_sphere(
     a: Array,
 ) -> None:
     """Add into ``a[:3]`` the law at one member's centre ``p`` moving at ``v``, around the
-    obstacles it is nearest to (``owner[i] == member``): ``radius < 0`` is the object's own
-    sphere (the block's reaches), else a held sphere's radius (added to each obstacle's)."""
+    obstacles it is nearest to (``owner[i] == member``; ``member < 0``: every obstacle):
+    ``radius < 0`` is the object's own sphere (the block's reaches), else a held sphere's
+    radius (added to each obstacle's)."""
     gamma, beta, kc, max_angle = data[o + 1], data[o + 2], data[o + 3], data[o + 4]
     m = int(data[o + 6])
     radii = o + STEERING_HEADER + 4 * m + 2 + 4 * int(data[o + STEERING_HEADER + 4 * m])
@@ -395,7 +403,7 @@ def steer_sphere(
     along = 0.0  # sum of w (D.v)
     sx = sy = sz = 0.0  # sum of w D
     for i in range(m):
-        if owner[i] != member:
+        if member >= 0 and owner[i] != member:
             continue
         c = o + STEERING_HEADER + 4 * i
         dx, dy, dz = data[c] - px, data[c + 1] - py, data[c + 2] - pz

@@ -32,15 +32,7 @@ GOAL = np.array([0.4, 0.3, 0.8])
 
 
 def moving(position: object, velocity: object) -> PoseState:
-    z = np.zeros(3)
-    return PoseState(
-        np.asarray(position, dtype=float),
-        np.asarray(velocity, dtype=float),
-        z,
-        quat.IDENTITY.copy(),
-        z,
-        z,
-    )
+    return turning(position, velocity, quat.IDENTITY, np.zeros(3))
 
 
 def test_is_a_coupling_term() -> None:

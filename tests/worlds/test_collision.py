@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Iterator
+from contextlib import contextmanager
 
 import numpy as np
 import pybullet as pb
@@ -247,8 +248,9 @@ def _left_palm_path(scene: Scene, shift: np.ndarray, n: int = 40) -> tuple[np.nd
     return positions, quaternions
 
 
-def test_carried_forearms_start_where_they_are_and_may_not_narrow_their_gap() -> None:
-    # A ball 6 cm above the left wrist: a forearm margin wider than the gap it starts with.
+@contextmanager
+def _ball_above_left_wrist() -> Iterator[tuple[Scene, CollisionWorld]]:
+    """A ball 16 cm above the left palm at rest (6 cm above its wrist), present and synced."""
     with Scene(SceneSpec()) as bare:
         palm = np.asarray(bare.palm_state(Arm.LEFT).position, dtype=float)
     ball = ObstacleSpec("ball", ShapeSpec.sphere(0.03), tuple(palm + [0.0, 0.0, 0.16]))
@@ -256,6 +258,12 @@ def test_carried_forearms_start_where_they_are_and_may_not_narrow_their_gap() ->
         scene.set_active_obstacles(["ball"])
         world = CollisionWorld(scene)
         world.sync()
+        yield scene, world
+
+
+def test_carried_forearms_start_where_they_are_and_may_not_narrow_their_gap() -> None:
+    # A ball 6 cm above the left wrist: a forearm margin wider than the gap it starts with.
+    with _ball_above_left_wrist() as (scene, world):
         wrist = world.link_distances(Arm.LEFT).distances[-5:-1]  # the carried links
         start_gap = float(wrist.min())
         assert 0.01 < start_gap < 0.2
@@ -281,13 +289,7 @@ def test_link_frames_posed_as_the_rigid_carry_give_its_answer() -> None:
     them) and check_attached_links (the rigid carry) share one check: link frames carried
     rigidly with the palm give the same verdict at every waypoint, towards and away from a
     ball above the wrist."""
-    with Scene(SceneSpec()) as bare:
-        palm = np.asarray(bare.palm_state(Arm.LEFT).position, dtype=float)
-    ball = ObstacleSpec("ball", ShapeSpec.sphere(0.03), tuple(palm + [0.0, 0.0, 0.16]))
-    with Scene(SceneSpec(obstacles=(ball,))) as scene:
-        scene.set_active_obstacles(["ball"])
-        world = CollisionWorld(scene)
-        world.sync()
+    with _ball_above_left_wrist() as (scene, world):
         links = world.arm_moving_links(Arm.LEFT)[-4:]
         body = scene.robot_ids[scene.robot.arms[Arm.LEFT].body]
         read = pb.getLinkStates(body, list(links), physicsClientId=scene.client)

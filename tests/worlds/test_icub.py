@@ -22,6 +22,7 @@ from worlds.collision import CollisionWorld, welded_links
 from worlds.control import PalmCommand
 from worlds.robots.icub import ARM_JOINTS, TORSO_JOINTS
 from worlds.scene import Scene, lateral_grasp_palm_poses
+from worlds.sim_world import SimWorld
 from worlds.world_file import World, as_world_spec, load_world, world_from_data
 
 pytestmark = pytest.mark.sim
@@ -310,8 +311,6 @@ def test_the_hand_welded_to_each_palm_is_a_sphere_above_and_behind_it(world: Wor
 
 
 def test_the_reasoner_sees_the_hands_ride_along_the_palms(world: World) -> None:
-    from worlds.sim_world import SimWorld
-
     with SimWorld(world) as sim:
         query = sim.scene_query()
         for arm in ARMS:
