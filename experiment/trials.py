@@ -181,6 +181,11 @@ class RobotClearance:
             )
         self._thickness = float(world.robot.palm_size[2])
         self._posed_at: tuple[float, ...] | None = None
+        # Each posture's joint positions, per robot body and joint, as first solved (from the
+        # posture tried before it, as every solve was when each candidate re-solved): a layout
+        # draw tries hundreds of candidate spheres against the same few postures, and one
+        # inverse-kinematics solve each, not one per candidate, makes the draw ~10x cheaper.
+        self._solved: dict[tuple[float, ...], list[tuple[int, int, float]]] = {}
         client = self._scene.client
         shape = pb.createCollisionShape(
             pb.GEOM_SPHERE, radius=self.PROBE_RADIUS, physicsClientId=client
@@ -193,14 +198,7 @@ class RobotClearance:
         client = self._scene.client
         key = (*(float(v) for v in posture.position), posture.grip_yaw, posture.half_span)
         if key != self._posed_at:
-            self._scene.place_palms(
-                lateral_grasp_palm_poses(
-                    posture.position,
-                    posture.half_span,
-                    self._thickness,
-                    grip_yaw=posture.grip_yaw,
-                )
-            )
+            self._pose(key, posture)
             pb.performCollisionDetection(physicsClientId=client)
             self._posed_at = key
         pb.resetBasePositionAndOrientation(
@@ -212,6 +210,44 @@ class RobotClearance:
             for point in pb.getClosestPoints(self._probe, body, 1.0, physicsClientId=client)
         ]
         return min(gaps, default=math.inf) - (radius - self.PROBE_RADIUS)
+
+    def _pose(self, key: tuple[float, ...], posture: Posture) -> None:
+        """Pose the robot holding the object in ``posture`` (keyed ``key``): solved the first
+        time, reset to its solution after."""
+        solved = self._solved.get(key)
+        if solved is None:
+            self._scene.place_palms(
+                lateral_grasp_palm_poses(
+                    posture.position,
+                    posture.half_span,
+                    self._thickness,
+                    grip_yaw=posture.grip_yaw,
+                )
+            )
+            solved = self._solved[key] = self._joint_positions()
+        else:
+            self._reset(solved)
+
+    def _joint_positions(self) -> list[tuple[int, int, float]]:
+        """(body, joint, position) of every joint of the robot."""
+        client = self._scene.client
+        return [
+            (body, joint, float(state[0]))
+            for body in self._scene.robot_ids
+            for joint, state in enumerate(
+                pb.getJointStates(
+                    body,
+                    range(pb.getNumJoints(body, physicsClientId=client)),
+                    physicsClientId=client,
+                )
+            )
+        ]
+
+    def _reset(self, positions: list[tuple[int, int, float]]) -> None:
+        """Reset every joint to its position in ``positions`` (:meth:`_joint_positions`)."""
+        client = self._scene.client
+        for body, joint, value in positions:
+            pb.resetJointState(body, joint, value, 0.0, physicsClientId=client)
 
     def close(self) -> None:
         """Disconnect the scene."""
