@@ -191,11 +191,26 @@ class RobotClearance:
             pb.GEOM_SPHERE, radius=self.PROBE_RADIUS, physicsClientId=client
         )
         self._probe = pb.createMultiBody(0.0, shape, physicsClientId=client)
+        self._loaded = self._joint_positions()
 
-    def distance(self, posture: Posture, centre: np.ndarray, radius: float) -> float:
+    def restart(self) -> None:
+        """Forget every posture solved, and stand the robot as it was loaded: a draw that
+        starts here measures what it would in a scene of its own."""
+        self._solved.clear()
+        self._posed_at = None
+        self._reset(self._loaded)
+
+    #: Farthest gap measured, m: beyond it :meth:`distance` is inf.
+    REACH = 1.0
+
+    def distance(
+        self, posture: Posture, centre: np.ndarray, radius: float, within: float = REACH
+    ) -> float:
         """Gap between a sphere and the nearest robot link holding the object in ``posture``,
-        m (negative: overlap)."""
+        m (negative: overlap); inf if it is over ``within`` m (the links farther away are
+        never measured: a draw asks only whether a sphere clears the robot by a margin)."""
         client = self._scene.client
+        reach = min(within, self.REACH) + radius - self.PROBE_RADIUS
         key = (*(float(v) for v in posture.position), posture.grip_yaw, posture.half_span)
         if key != self._posed_at:
             self._pose(key, posture)
@@ -207,7 +222,7 @@ class RobotClearance:
         gaps = [
             point[8]
             for body in self._scene.robot_ids
-            for point in pb.getClosestPoints(self._probe, body, 1.0, physicsClientId=client)
+            for point in pb.getClosestPoints(self._probe, body, reach, physicsClientId=client)
         ]
         return min(gaps, default=math.inf) - (radius - self.PROBE_RADIUS)
 
@@ -285,6 +300,7 @@ def draw_trial(
     if robot is None:
         with RobotClearance(base) as own:
             return draw_trial(base, seed, trial, own)
+    robot.restart()
     turning = any(_turns(region) for region in base.trials.goal_regions())
     for redraw in range(TRIAL_REDRAWS if turning else 1):
         try:
@@ -477,7 +493,8 @@ def _draw_sphere(
         box = min(_box_gap(p.position, _half(p, half), centre, p.object_yaw) for p in postures)
         if box - radius < layout.clearance:
             continue
-        if any(robot.distance(p, centre, radius) < layout.robot_clearance for p in grasps):
+        clearance = layout.robot_clearance
+        if any(robot.distance(p, centre, radius, clearance) < clearance for p in grasps):
             continue
         return Sphere(name, (float(centre[0]), float(centre[1]), float(centre[2])), radius, kind)
     raise RuntimeError(f"{name}: could not place a sphere clear of the start and goal")

@@ -244,6 +244,12 @@ class SimWorld:
             for a in ARMS
         }
         self._watched_bodies.update({n: (b, None) for n, b in self.scene.object_ids.items()})
+        # The groups whose clearance the judge watches every control step: both arms (palms
+        # included) and every object.
+        self._clearance_groups = (
+            *(arm_group(a) for a in ARMS),
+            *self.scene.object_ids,
+        )
         self._forearm_links: dict[str, tuple[int, frozenset[int]]] = {}
         self._forearm_elements: list[str] = []
         for a in ARMS:
@@ -408,7 +414,7 @@ class SimWorld:
     def _watch_distances(self) -> None:
         if not self.scene.active_obstacles:
             return
-        for group in (arm_group(Arm.LEFT), arm_group(Arm.RIGHT), *self.scene.object_ids):
+        for group in self._clearance_groups:
             prox = self.collision.closer_than(
                 group, "obstacles", self.safety.min_obstacle_distance_m
             )

@@ -231,3 +231,24 @@ def test_a_negative_clearance_counts_as_an_obstacle_contact() -> None:
     s = summarise(records)
     assert s["obstacle_contacts"] == 1
     assert s["failure_reasons"] == {"obstacle penetration": 1}
+
+
+def test_a_shared_robot_draws_each_trial_as_one_of_its_own(
+    base: World, robot: RobotClearance
+) -> None:
+    # The shared robot solves each posture once per draw, from the robot as loaded, as a
+    # scene of its own does: the trials drawn in a row are those drawn alone, bit for bit.
+    in_a_row = [draw_trial(base, 2, t, robot)[0].model_dump() for t in (4, 0, 4)]
+    alone = [draw_trial(base, 2, t)[0].model_dump() for t in (4, 0)]
+    assert in_a_row == [alone[0], alone[1], alone[0]]
+
+
+@pytest.mark.sim
+def test_robot_clearance_measures_within_a_reach(base: World, robot: RobotClearance) -> None:
+    centre = np.array(base.objects[0].pose.position)
+    posture = Posture(centre, 0.0, 0.0, base.objects[0].shape.size[1] / 2.0)  # type: ignore[union-attr]
+    ball = centre + np.array([0.0, 0.0, 0.3])
+    gap = robot.distance(posture, ball, 0.02)
+    assert 0.0 < gap < 0.3
+    assert robot.distance(posture, ball, 0.02, within=gap + 0.01) == gap
+    assert robot.distance(posture, ball, 0.02, within=gap - 0.01) == math.inf
