@@ -214,7 +214,6 @@ class RobotClearance:
         key = (*(float(v) for v in posture.position), posture.grip_yaw, posture.half_span)
         if key != self._posed_at:
             self._pose(key, posture)
-            pb.performCollisionDetection(physicsClientId=client)
             self._posed_at = key
         pb.resetBasePositionAndOrientation(
             self._probe, list(centre), [0, 0, 0, 1], physicsClientId=client
@@ -244,19 +243,19 @@ class RobotClearance:
             self._reset(solved)
 
     def _joint_positions(self) -> list[tuple[int, int, float]]:
-        """(body, joint, position) of every joint of the robot."""
+        """(body, joint, position) of every joint of the robot that moves (fixed ones have
+        no position to set)."""
         client = self._scene.client
-        return [
-            (body, joint, float(state[0]))
-            for body in self._scene.robot_ids
-            for joint, state in enumerate(
-                pb.getJointStates(
-                    body,
-                    range(pb.getNumJoints(body, physicsClientId=client)),
-                    physicsClientId=client,
-                )
-            )
-        ]
+        out: list[tuple[int, int, float]] = []
+        for body in self._scene.robot_ids:
+            joints = [
+                j
+                for j in range(pb.getNumJoints(body, physicsClientId=client))
+                if pb.getJointInfo(body, j, physicsClientId=client)[2] != pb.JOINT_FIXED
+            ]
+            states = pb.getJointStates(body, joints, physicsClientId=client)
+            out.extend((body, j, float(s[0])) for j, s in zip(joints, states, strict=True))
+        return out
 
     def _reset(self, positions: list[tuple[int, int, float]]) -> None:
         """Reset every joint to its position in ``positions`` (:meth:`_joint_positions`)."""
@@ -551,7 +550,7 @@ def run_trial(job: tuple[dict[str, Any], int, int]) -> dict[str, Any]:
         # The user's leaves the tree may use, registered in this process too (a spawned
         # worker starts without them; a forked one finds them registered already).
         register_leaves(base_data.get("leaves", ()))
-        world, kinds = draw_trial(base, seed, trial)
+        world, kinds = draw_trial(base, seed, trial, _worker_clearance(base))
         if base_data.get("hard"):
             hard = draw_hard(world, seed, trial)
             world = with_pushes(world, hard.pushes)
@@ -585,6 +584,23 @@ def run_trial(job: tuple[dict[str, Any], int, int]) -> dict[str, Any]:
     if hard is not None:
         record.update({"mode": "hard", "hard": hard.summary()})
     return record
+
+
+#: This process's RobotClearance and the base world it was built for (see _worker_clearance).
+_CLEARANCE: dict[str, Any] = {}
+
+
+def _worker_clearance(base: World) -> RobotClearance:
+    """One :class:`RobotClearance` per process for its campaign's base world: a worker builds
+    the robot's scene once, not once per trial (each draw restarts it, and so draws what a
+    scene of its own would). A forked process builds its own."""
+    key = (os.getpid(), base.model_dump_json())
+    if _CLEARANCE.get("key") != key:
+        if _CLEARANCE and _CLEARANCE["key"][0] == os.getpid():
+            _CLEARANCE["robot"].close()
+        _CLEARANCE.update(key=key, robot=RobotClearance(base))
+    robot: RobotClearance = _CLEARANCE["robot"]
+    return robot
 
 
 def _layout_of(world: World) -> dict[str, Any]:
