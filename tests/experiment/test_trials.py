@@ -252,3 +252,17 @@ def test_robot_clearance_measures_within_a_reach(base: World, robot: RobotCleara
     assert 0.0 < gap < 0.3
     assert robot.distance(posture, ball, 0.02, within=gap + 0.01) == gap
     assert robot.distance(posture, ball, 0.02, within=gap - 0.01) == math.inf
+
+
+def test_a_worker_keeps_one_robot_per_base_world() -> None:
+    from experiment.trials import _CLEARANCE, _worker_clearance
+
+    iiwas = load_world(WORLDS / "parcel_pick_place.yaml")
+    icub = load_world(WORLDS / "icub_parcel_pick_place.yaml")
+    first = _worker_clearance(iiwas)
+    assert _worker_clearance(iiwas) is first  # built once for its campaign's world
+    other = _worker_clearance(icub)
+    assert other is not first  # another world: another robot, the first one closed
+    assert draw_trial(icub, 3, 2, other)[0].model_dump() == draw_trial(icub, 3, 2)[0].model_dump()
+    other.close()
+    _CLEARANCE.clear()
