@@ -596,11 +596,17 @@ def _worker_clearance(base: World) -> RobotClearance:
     scene of its own would). A forked process builds its own."""
     key = (os.getpid(), base.model_dump_json())
     if _CLEARANCE.get("key") != key:
-        if _CLEARANCE and _CLEARANCE["key"][0] == os.getpid():
-            _CLEARANCE["robot"].close()
+        _close_worker_clearance()
         _CLEARANCE.update(key=key, robot=RobotClearance(base))
     robot: RobotClearance = _CLEARANCE["robot"]
     return robot
+
+
+def _close_worker_clearance() -> None:
+    """Close this process's :func:`_worker_clearance` robot, if it built one."""
+    if _CLEARANCE and _CLEARANCE["key"][0] == os.getpid():
+        _CLEARANCE["robot"].close()
+    _CLEARANCE.clear()
 
 
 def _layout_of(world: World) -> dict[str, Any]:
@@ -968,8 +974,11 @@ def _run_locked(
         if backend == "ray":
             _run_on_ray(jobs, workers, address, keep)
         elif workers <= 1:
-            for job in jobs:
-                keep(run_trial(job))
+            try:
+                for job in jobs:
+                    keep(run_trial(job))
+            finally:
+                _close_worker_clearance()  # this process goes on: leave no scene behind
         else:
             _run_on_pool(jobs, workers, keep)
     return [done[t] for t in range(n) if t in done]

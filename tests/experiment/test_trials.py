@@ -255,7 +255,7 @@ def test_robot_clearance_measures_within_a_reach(base: World, robot: RobotCleara
 
 
 def test_a_worker_keeps_one_robot_per_base_world() -> None:
-    from experiment.trials import _CLEARANCE, _worker_clearance
+    from experiment.trials import _close_worker_clearance, _worker_clearance
 
     iiwas = load_world(WORLDS / "parcel_pick_place.yaml")
     icub = load_world(WORLDS / "icub_parcel_pick_place.yaml")
@@ -264,5 +264,4 @@ def test_a_worker_keeps_one_robot_per_base_world() -> None:
     other = _worker_clearance(icub)
     assert other is not first  # another world: another robot, the first one closed
     assert draw_trial(icub, 3, 2, other)[0].model_dump() == draw_trial(icub, 3, 2)[0].model_dump()
-    other.close()
-    _CLEARANCE.clear()
+    _close_worker_clearance()

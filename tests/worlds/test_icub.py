@@ -54,7 +54,10 @@ def test_icub_loads_as_one_body_with_torso_and_two_arms(world: World) -> None:
         assert len(scene.robot_ids) == 1  # torso and both arms under one controller
         body = scene.robot_ids[0]
         c = scene.client
-        infos = [pb.getJointInfo(body, j, physicsClientId=c) for j in range(pb.getNumJoints(body))]
+        infos = [
+            pb.getJointInfo(body, j, physicsClientId=c)
+            for j in range(pb.getNumJoints(body, physicsClientId=c))
+        ]
         movable = [i[1].decode() for i in infos if i[2] != pb.JOINT_FIXED]
         arms = [f"{side}_{name}" for side in "lr" for name in ARM_JOINTS]
         assert movable == [*TORSO_JOINTS, *arms]
@@ -293,7 +296,9 @@ def test_the_hand_welded_to_each_palm_is_a_sphere_above_and_behind_it(world: Wor
             spec = scene.robot.arms[arm]
             body = scene.robot_ids[spec.body]
             welded = welded_links(body, spec.palm_link, scene.client)
-            names = {pb.getJointInfo(body, k)[12].decode() for k in welded}
+            names = {
+                pb.getJointInfo(body, k, physicsClientId=scene.client)[12].decode() for k in welded
+            }
             assert f"{side}_hand" in names  # the palm's own link and the hand, nothing movable
             assert f"{side}_wrist_1" not in names
             palm = scene.palm_state(arm)
