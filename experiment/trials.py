@@ -243,19 +243,18 @@ class RobotClearance:
             self._reset(solved)
 
     def _joint_positions(self) -> list[tuple[int, int, float]]:
-        """(body, joint, position) of every joint of the robot that moves (fixed ones have
-        no position to set)."""
+        """(body, joint, position) of every joint the controller drives: all that placing the
+        palms sets (:meth:`worlds.robots.RobotModel.driven_joints`)."""
         client = self._scene.client
-        out: list[tuple[int, int, float]] = []
-        for body in self._scene.robot_ids:
-            joints = [
-                j
-                for j in range(pb.getNumJoints(body, physicsClientId=client))
-                if pb.getJointInfo(body, j, physicsClientId=client)[2] != pb.JOINT_FIXED
-            ]
-            states = pb.getJointStates(body, joints, physicsClientId=client)
-            out.extend((body, j, float(s[0])) for j, s in zip(joints, states, strict=True))
-        return out
+        ids = self._scene.robot_ids
+        return [
+            (
+                ids[d.body],
+                d.joint,
+                float(pb.getJointState(ids[d.body], d.joint, physicsClientId=client)[0]),
+            )
+            for d in self._scene.robot.driven_joints()
+        ]
 
     def _reset(self, positions: list[tuple[int, int, float]]) -> None:
         """Reset every joint to its position in ``positions`` (:meth:`_joint_positions`)."""
