@@ -63,6 +63,7 @@ from experiment.tray_draws import place_riders, tray_height, tray_layout_problem
 from planner.user_leaves import register_leaves
 from skills.turns import grip_yaw, lateral_quarter_turns, turn_steps
 from worlds.adapters import robot_capabilities
+from worlds.bodies import build_robot
 from worlds.scene import Scene, lateral_grasp_palm_poses
 from worlds.trays import riders
 from worlds.world_file import (
@@ -626,14 +627,17 @@ def campaign_of(
     """The key of the campaign of ``base``, ``seed``, ``tree``, the tree's own ``leaves``, the
     ``main_tree`` run of it and whether it is ``hard`` (:func:`experiment.records.campaign_key`).
 
-    A Hard campaign's settings hold its ranges (``trials.hard``, every value); the world's
-    content hash leaves them out, so an Easy campaign's key does not depend on them.
+    A Hard campaign's settings hold its ranges (``trials.hard``, every value) and the robot's
+    torque loop, which acts only on faulty actuators; the world's content hash leaves the
+    ranges out, so an Easy campaign's key does not depend on them.
     """
     settings: dict[str, Any] = {"leaves": [_leaf_source(s) for s in leaves]} if leaves else {}
     if main_tree:
         settings["main_tree"] = main_tree
     if hard:
         settings["hard"] = base.trials.hard.model_dump(mode="json")
+        loop = build_robot(as_world_spec(base).scene.robot).torque_loop
+        settings["torque_loop"] = None if loop is None else loop.summary()
     template = base.tree_path() if tree is None else None
     if template is not None:  # the world's own tree: its content, not only its path
         settings["world_tree_sha256"] = tree_hash(template)

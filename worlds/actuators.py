@@ -20,6 +20,12 @@ At tick 0 the actuators are taken to have held tick 0's torque for ever (the lat
 full of it, the lag settled on it), so that switching on causes no transient of its own.
 
 Joints are ordered as the controller stacks them: the left arm's, then the right arm's.
+
+A robot whose joints sense their torque closes a loop around such actuators
+(:class:`TorqueLoop`, :func:`torque_loop_step`): integral action on the gap between the
+torque the law asked for and the torque the joint sensed, added to what is sent. It removes
+a constant bias and a scale error (the gravity load held by a scaled motor) in a few of its
+time constants; the lag and the latency it leaves alone, as they pass on what is sent.
 """
 
 from __future__ import annotations
@@ -167,4 +173,127 @@ def actuator_step(
     return ActuatorState(queue, lagged), np.minimum(np.maximum(lagged, -bound), bound)
 
 
-__all__ = ["ActuatorFaults", "ActuatorState", "actuator_start", "actuator_step", "lag_gain"]
+@dataclass(frozen=True)
+class TorqueLoop:
+    """Integral action on each joint's torque, from the joint's torque sensor.
+
+    The sensed torque is the one the actuator applied over the last tick (a joint torque
+    sensor between motor and link, as in every joint of the KUKA LBR iiwa; the iCub
+    estimates its arms' joint torques from the force-torque sensors in its upper arms). Each
+    tick, the gap ``asked - sensed`` of the last tick is low-passed (time constant
+    ``filter_s``) and integrated (``integral_s``: a constant gap ``e`` adds ``e`` to what is
+    sent every ``integral_s`` seconds), and the integral, within ``+-limit`` of each joint's
+    torque limit, is added to what the law asks.
+
+    Without the filter the loop integrates the lag's own gap, ``lag * d(torque)/dt``: a gain
+    of ``lag / integral_s`` more on the law's fast torques, which set the iiwa's light wrist
+    oscillating (a 0.1 s integral with a 19 ms lag, Hard trial 18 of seed 0). The filter keeps
+    that gain off the fast torques: at 0.2 s and 0.05 s the loop crosses over near 5 rad/s
+    with a phase margin near 60 degrees for a lag of up to 30 ms and a tick of latency.
+
+    Attributes
+    ----------
+    integral_s : float
+        Integral time constant, s, > 0.
+    filter_s : float
+        Time constant of the low-pass filter on the gap, s, >= 0 (0: none).
+    limit : float
+        Largest integral as a fraction of each joint's torque limit, in (0, 1].
+    """
+
+    integral_s: float = 0.2
+    filter_s: float = 0.05
+    limit: float = 0.25
+
+    def __post_init__(self) -> None:
+        name = "TorqueLoop"
+        if not (math.isfinite(self.integral_s) and self.integral_s > 0.0):
+            raise ValueError(f"{name}: expected integral_s finite and > 0, got {self.integral_s}")
+        if not (math.isfinite(self.filter_s) and self.filter_s >= 0.0):
+            raise ValueError(f"{name}: expected filter_s finite and >= 0, got {self.filter_s}")
+        if not (math.isfinite(self.limit) and 0.0 < self.limit <= 1.0):
+            raise ValueError(f"{name}: expected limit in (0, 1], got {self.limit}")
+
+    def summary(self) -> dict[str, Any]:
+        """JSON-ready: every value."""
+        return {"integral_s": self.integral_s, "filter_s": self.filter_s, "limit": self.limit}
+
+
+@dataclass(frozen=True)
+class TorqueLoopState:
+    """The torque loop's memory between ticks.
+
+    Attributes
+    ----------
+    asked : ndarray
+        (m,) torques the law asked for at the last tick, N m.
+    gap : ndarray
+        (m,) the filtered gap ``asked - sensed``, N m.
+    integral : ndarray
+        (m,) the integral added to what is sent, N m.
+    """
+
+    asked: FloatArray
+    gap: FloatArray
+    integral: FloatArray
+
+
+def torque_loop_start(joints: int) -> TorqueLoopState:
+    """The loop before its first tick: nothing asked, nothing integrated."""
+    zeros = np.zeros(joints)
+    return TorqueLoopState(zeros, zeros.copy(), zeros.copy())
+
+
+def torque_loop_step(
+    state: TorqueLoopState,
+    sensed: ArrayLike | None,
+    asked: ArrayLike,
+    loop: TorqueLoop,
+    dt: float,
+    limit: ArrayLike,
+) -> tuple[TorqueLoopState, FloatArray]:
+    """One tick of the torque loop: the torques (m,) to send and the state after it.
+
+    Parameters
+    ----------
+    state : TorqueLoopState
+        After the last tick (:func:`torque_loop_start` before the first).
+    sensed : array_like, optional
+        (m,) torques the joints sensed over the last tick, N m; None at the first tick.
+    asked : array_like
+        (m,) torques the law asks for this tick, within the limits, N m.
+    loop : TorqueLoop
+    dt : float
+        The tick, s.
+    limit : array_like
+        (m,) each joint's torque limit, N m, > 0.
+
+    Returns
+    -------
+    TorqueLoopState
+    ndarray
+        (m,) ``asked`` plus the integral, within ``+-limit``.
+    """
+    bound = np.asarray(limit, dtype=float)
+    want = np.asarray(asked, dtype=float)
+    gap, integral = state.gap, state.integral
+    if sensed is not None:
+        error = state.asked - np.asarray(sensed, dtype=float)
+        gap = error if loop.filter_s == 0.0 else gap + (dt / loop.filter_s) * (error - gap)
+        reach = loop.limit * bound
+        integral = np.minimum(np.maximum(integral + (dt / loop.integral_s) * gap, -reach), reach)
+    sent = np.minimum(np.maximum(want + integral, -bound), bound)
+    return TorqueLoopState(want.copy(), gap, integral), sent
+
+
+__all__ = [
+    "ActuatorFaults",
+    "ActuatorState",
+    "TorqueLoop",
+    "TorqueLoopState",
+    "actuator_start",
+    "actuator_step",
+    "lag_gain",
+    "torque_loop_start",
+    "torque_loop_step",
+]

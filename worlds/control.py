@@ -23,9 +23,13 @@ from skills.vocabulary import Arm
 from worlds.actuators import (
     ActuatorFaults,
     ActuatorState,
+    TorqueLoop,
+    TorqueLoopState,
     actuator_start,
     actuator_step,
     lag_gain,
+    torque_loop_start,
+    torque_loop_step,
 )
 from worlds.impedance import (
     GainArrays,
@@ -82,6 +86,11 @@ class DualArmImpedanceController:
         How the actuators differ from ideal torque sources (one entry per driven joint, in
         :meth:`worlds.robots.RobotModel.driven_joints` order); None: the computed torques are
         applied as they are.
+    torque_loop : TorqueLoop, optional
+        Integral action on each joint's sensed torque (:class:`worlds.actuators.TorqueLoop`);
+        default: the robot's (:attr:`worlds.robots.RobotModel.torque_loop`). With ideal
+        actuators the sensed torque is the one sent, the loop would add exactly nothing, and it
+        is not run.
     """
 
     ARMS = (Arm.LEFT, Arm.RIGHT)
@@ -96,6 +105,7 @@ class DualArmImpedanceController:
         refresh_every: int = 1,
         relinearise_tolerance: float = 0.0,
         faults: ActuatorFaults | None = None,
+        torque_loop: TorqueLoop | None = None,
     ) -> None:
         name = "DualArmImpedanceController"
         if len(body_ids) != len(robot.bodies):
@@ -128,6 +138,9 @@ class DualArmImpedanceController:
         self.faults = faults
         self._lag_gain = lag_gain(faults.lag_s, physics_dt) if faults is not None else 1.0
         self._actuators: ActuatorState | None = None
+        self.torque_loop = torque_loop if torque_loop is not None else robot.torque_loop
+        self._loop = torque_loop_start(total)
+        self._sensed: FloatArray | None = None
         self._arm_body = [int(body_ids[spec.body]) for spec in self._specs]
         # One law per body: its joints (all movable ones, which PyBullet's Jacobian and inverse
         # dynamics take), their rows in the driven vector, and the arms whose palms it carries.
@@ -480,14 +493,30 @@ class DualArmImpedanceController:
         self._steps_since_target += 1
 
     def _actuate(self, tau: FloatArray) -> FloatArray:
-        """The torques the faulty actuators apply this tick for the computed ``tau`` (N,)."""
+        """The torques the faulty actuators apply this tick for the computed ``tau`` (N,),
+        through the torque loop where the robot has one."""
         assert self.faults is not None
+        if self.torque_loop is not None:
+            self._loop, tau = torque_loop_step(
+                self._loop,
+                self._sensed,
+                tau,
+                self.torque_loop,
+                self.physics_dt,
+                self._max_torque,
+            )
         if self._actuators is None:
             self._actuators = actuator_start(tau, self.faults)
         self._actuators, applied = actuator_step(
             self._actuators, tau, self.faults, self._lag_gain, self._max_torque
         )
+        # The joints' torque sensors read what the actuators applied.
+        self._sensed = applied
         return applied
+
+    def torque_loop_state(self) -> TorqueLoopState:
+        """The torque loop's asked torques, filtered gap and integral (zeros until it runs)."""
+        return self._loop
 
     # -- outputs -----------------------------------------------------------------------------
 

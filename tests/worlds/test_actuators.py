@@ -116,6 +116,7 @@ def test_the_controller_applies_the_faults_and_nothing_without() -> None:
     bias = np.linspace(-0.5, 0.5, n)
     faults = ActuatorFaults(tuple(scale), tuple(bias), latency_ticks=1)
     with Scene(truth=PhysicalTruth(actuators=faults)) as late:
+        late.controller.torque_loop = None  # the faults alone (the loop: test_torque_loop.py)
         computed, applied = run(late)
     # One tick late, scaled and biased: tick k applies what tick k - 1 computed.
     assert_allclose(applied[1:], scale * computed[:-1] + bias, rtol=0, atol=1e-12)

@@ -30,6 +30,7 @@ import numpy as np
 
 from skills import quaternion as quat
 from skills.vocabulary import Arm, EndEffector
+from worlds.actuators import TorqueLoop
 from worlds.robots.cache import cached_urdf
 from worlds.robots.model import ArmSpec, BodySpec, RobotModel, SharedJointsSpec
 
@@ -399,6 +400,9 @@ def icub_model(
             arm: frozenset(f"{side}_{name}" for name in FOREARM_LINKS)
             for arm, side in ((Arm.LEFT, "l"), (Arm.RIGHT, "r"))
         },
+        # The iCub estimates its arms' joint torques from the force-torque sensors in its
+        # upper arms (and the torso's from the rest of its model): a torque loop as the iiwa's.
+        torque_loop=TorqueLoop(),
     )
 
 

@@ -18,6 +18,7 @@ import pybullet_data
 
 from skills import quaternion as quat
 from skills.vocabulary import Arm, EndEffector
+from worlds.actuators import TorqueLoop
 from worlds.robots.cache import cached_urdf
 from worlds.robots.model import ArmSpec, BodySpec, RobotModel
 
@@ -267,6 +268,8 @@ def kuka_iiwa_model(
         arms=arms,
         palm2flange_position=palm2flange_position(palm_size),
         forearm_link_names={arm: FOREARM_LINKS for arm in (Arm.LEFT, Arm.RIGHT)},
+        # The LBR iiwa senses the torque at every joint.
+        torque_loop=TorqueLoop(),
     )
 
 

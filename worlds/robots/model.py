@@ -21,6 +21,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from skills.vocabulary import Arm, EndEffector
+from worlds.actuators import TorqueLoop
 
 FloatArray = NDArray[np.float64]
 
@@ -195,6 +196,9 @@ class RobotModel:
     forearm_link_names : Mapping[Arm, frozenset of str]
         The links of each arm counted as its forearm (forearm, wrist, hand; the palm apart) in
         the trials' forearm-to-obstacle figures; empty: none counted.
+    torque_loop : TorqueLoop, optional
+        The loop the joints' torque sensors close around each motor
+        (:class:`worlds.actuators.TorqueLoop`); None: the joints sense no torque.
     """
 
     name: str
@@ -208,6 +212,7 @@ class RobotModel:
     shoulder_at_first_joint: bool = False
     shared_joints: SharedJointsSpec | None = None
     forearm_link_names: Mapping[Arm, frozenset[str]] = field(default_factory=dict)
+    torque_loop: TorqueLoop | None = None
 
     def __post_init__(self) -> None:
         if set(self.arms) != {Arm.LEFT, Arm.RIGHT}:
