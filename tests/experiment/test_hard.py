@@ -136,6 +136,13 @@ def test_hard_campaigns_have_keys_of_their_own_and_easy_keys_stay(world: World) 
         assert not owned_by(record, campaign_of(base, 0, None, hard=True))
     easy, hard = campaign_of(world, 0, None), campaign_of(world, 0, None, hard=True)
     assert hard["settings"]["hard"] == world.trials.hard.model_dump(mode="json")
+    # The robot's torque loop acts only on faulty actuators: a Hard key names it.
+    assert hard["settings"]["torque_loop"]["integral_s"] > 0.0
+    assert "torque_loop" not in easy["settings"]
+    old_hard = json.loads(
+        (REPO / "bench" / "results" / "hard_no_torque_loop_seed0_n300.jsonl").read_text().splitlines()[0]
+    )
+    assert not owned_by(old_hard, hard)  # recorded before the loop: not resumed into it
     assert {k: v for k, v in hard.items() if k != "settings"} == {
         k: v for k, v in easy.items() if k != "settings"
     }

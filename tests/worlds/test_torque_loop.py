@@ -3,6 +3,9 @@ torque, around actuators with scale, bias, lag and latency errors."""
 
 from __future__ import annotations
 
+from dataclasses import replace
+from pathlib import Path
+
 import numpy as np
 import pytest
 from numpy.testing import assert_allclose, assert_array_equal
@@ -70,6 +73,19 @@ def test_a_step_settles_without_ringing_at_the_worst_lag_and_scale() -> None:
     assert after.max() < 5.0 * 1.15 + 1.2
 
 
+def test_the_proportional_part_shortens_the_lag_the_joint_sees() -> None:
+    faults = ActuatorFaults((0.85, 0.85), (0.0, 0.0), lag_s=0.03, latency_ticks=1)
+    asked = np.zeros((int(2.0 / DT), 2))
+    asked[int(1.0 / DT) :] = 1.0
+
+    def rise_ticks(loop: TorqueLoop) -> int:
+        applied, _ = _closed_loop(faults, asked, loop)
+        return int(np.argmax(applied[int(1.0 / DT) :, 0] >= 1.0 - np.exp(-1.0)))
+
+    # 63 % of a step: 10 ticks (42 ms) through the integral alone, 6 (25 ms) at 0.5.
+    assert rise_ticks(TorqueLoop(proportional=0.5)) <= 0.65 * rise_ticks(TorqueLoop())
+
+
 def test_the_integral_stays_within_its_limit() -> None:
     # A motor at a tenth of its strength cannot give what is asked: the integral stops at
     # its limit instead of winding up.
@@ -95,6 +111,8 @@ def test_ideal_actuators_leave_the_loop_nothing_to_do() -> None:
         ({"filter_s": -0.01}, "filter_s"),
         ({"limit": 1.5}, "limit"),
         ({"integral_s": float("nan")}, "integral_s"),
+        ({"proportional": 1.0}, "proportional"),
+        ({"proportional": -0.1}, "proportional"),
     ],
 )
 def test_bad_loops_are_refused(kwargs: dict[str, float], match: str) -> None:
@@ -134,3 +152,42 @@ def test_in_physics_the_loop_holds_biased_palms_where_they_are_told() -> None:
     # them to within 2 mm (0.1 mm).
     assert without > 0.01
     assert with_loop < 0.002
+
+
+@pytest.mark.sim
+def test_in_physics_the_icub_arms_settle_under_the_slowest_lag_only_with_their_loop() -> None:
+    from skills.vocabulary import ARMS
+    from worlds.impedance import PalmCommand
+    from worlds.robots.icub import icub_model
+    from worlds.scene import Scene
+    from worlds.truth import PhysicalTruth
+    from worlds.world_file import as_world_spec, load_world
+
+    world = Path(__file__).resolve().parents[2] / "worlds" / "icub_parcel_pick_place.yaml"
+    spec = as_world_spec(load_world(world)).scene
+
+    def step_error(loop: TorqueLoop | None) -> float:
+        with Scene(spec) as probe:
+            n = len(probe.robot.driven_joints())
+        faults = ActuatorFaults((1.0,) * n, (0.0,) * n, lag_s=0.03, latency_ticks=1)
+        with Scene(spec, truth=PhysicalTruth(actuators=faults)) as scene:
+            scene.controller.torque_loop = loop
+            scene.step(120)
+            targets = {}
+            for arm in ARMS:
+                held = scene.controller.command(arm)
+                targets[arm] = held.position + np.array([0.0, 0.0, 0.03])
+                scene.set_palm_command(arm, PalmCommand(targets[arm], held.quaternion))
+            worst = 0.0
+            for _ in range(2):  # the error over the second of the two seconds after the step
+                scene.step(240)
+                worst = max(
+                    float(np.linalg.norm(scene.palm_state(a).position - targets[a])) for a in ARMS
+                )
+            return worst
+
+    robot_loop = icub_model().torque_loop
+    assert robot_loop is not None and robot_loop.proportional > 0.0
+    # The integral alone leaves the arms flailing (palms about 0.1 m off when written).
+    assert step_error(replace(robot_loop, proportional=0.0)) > 0.02
+    assert step_error(robot_loop) < 0.005
