@@ -8,8 +8,13 @@ subtree's ``regrasp`` branch; re-grasps that a turn needs stay)::
 
     python bench/ablate_tree.py planner/trees/pick_and_place.xml --without regrasp \
         --out /tmp/no_regrasp.xml
-    python app.py trials worlds/parcel_pick_place.yaml --hard --n 100 --seed 0 \
-        --tree /tmp/no_regrasp.xml
+    # a copy of the world whose ``tree:`` is /tmp/no_regrasp.xml (and another name)
+    python app.py trials /tmp/no_regrasp_world.yaml --hard --n 100 --seed 0
+
+The copy goes in a world's ``tree`` field, not ``--tree``: a world's tree is made into each
+trial's task (a turned goal the grip cannot make in one move is several moves), while a tree
+given with ``--tree`` runs as written, with the shipped file's three moves; on trials with
+turned goals its later moves are never made, and the judge says "not placed".
 """
 
 from __future__ import annotations

@@ -139,9 +139,8 @@ def test_hard_campaigns_have_keys_of_their_own_and_easy_keys_stay(world: World) 
     # The robot's torque loop acts only on faulty actuators: a Hard key names it.
     assert hard["settings"]["torque_loop"]["integral_s"] > 0.0
     assert "torque_loop" not in easy["settings"]
-    old_hard = json.loads(
-        (REPO / "bench" / "results" / "hard_no_torque_loop_seed0_n300.jsonl").read_text().splitlines()[0]
-    )
+    before_loop = REPO / "bench" / "results" / "hard_no_torque_loop_seed0_n300.jsonl"
+    old_hard = json.loads(before_loop.read_text(encoding="utf-8").splitlines()[0])
     assert not owned_by(old_hard, hard)  # recorded before the loop: not resumed into it
     assert {k: v for k, v in hard.items() if k != "settings"} == {
         k: v for k, v in easy.items() if k != "settings"
