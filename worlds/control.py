@@ -3,7 +3,8 @@
 :class:`DualArmImpedanceController` reads the joint state, re-linearises the law of
 :mod:`worlds.impedance` (Jacobian, gravity, inertia from PyBullet), adds the joint-limit
 repulsion, clips to the torque limits and sends the torques with TORQUE_CONTROL, through the
-actuators' faults (:mod:`worlds.actuators`) when it is given any.
+actuators' faults (:mod:`worlds.actuators`) when it is given any, and then through the loop
+each joint closes on its sensed torque (:class:`worlds.actuators.TorqueLoop`).
 
 Quaternions are scalar-last (x, y, z, w); twists are (linear, angular) in the world frame.
 """
@@ -24,7 +25,6 @@ from worlds.actuators import (
     ActuatorFaults,
     ActuatorState,
     TorqueLoop,
-    TorqueLoopState,
     actuator_start,
     actuator_step,
     lag_gain,
@@ -87,7 +87,7 @@ class DualArmImpedanceController:
         :meth:`worlds.robots.RobotModel.driven_joints` order); None: the computed torques are
         applied as they are.
     torque_loop : TorqueLoop, optional
-        Integral action on each joint's sensed torque (:class:`worlds.actuators.TorqueLoop`);
+        The loop each joint closes on its sensed torque (:class:`worlds.actuators.TorqueLoop`);
         default: the robot's (:attr:`worlds.robots.RobotModel.torque_loop`). With ideal
         actuators the sensed torque is the one sent, the loop would add exactly nothing, and it
         is not run.
@@ -513,10 +513,6 @@ class DualArmImpedanceController:
         # The joints' torque sensors read what the actuators applied.
         self._sensed = applied
         return applied
-
-    def torque_loop_state(self) -> TorqueLoopState:
-        """The torque loop's asked torques, filtered gap and integral (zeros until it runs)."""
-        return self._loop
 
     # -- outputs -----------------------------------------------------------------------------
 
