@@ -14,7 +14,7 @@ subtree's ``regrasp`` branch; re-grasps that a turn needs stay)::
 The copy goes in a world's ``tree`` field, not ``--tree``: a world's tree is made into each
 trial's task (a turned goal the grip cannot make in one move is several moves), while a tree
 given with ``--tree`` runs as written, with the shipped file's three moves; on trials with
-turned goals its later moves are never made, and the judge says "not placed".
+turned goals a trial with more moves than the file names fails at once, saying so.
 """
 
 from __future__ import annotations

@@ -16,7 +16,7 @@ from planner.default_tree import PICK_AND_PLACE_XML, TaskStep, task_xml
 from planner.tree_dataflow import RUN_WRITES
 from planner.tree_objects import check_tree_objects
 from planner.tree_problems import TreeFileError
-from planner.tree_reading import read_tree_document
+from planner.tree_reading import TreeDocument, read_tree_document
 from planner.tree_task import check_tree_moves, tree_grasps
 from planner.validate import validate_tree
 from worlds.feasibility import feasibility_problems
@@ -75,14 +75,21 @@ def preflight_problems(
         return [str(p) for p in err.problems]
     lines = [p.format(world_file) for p in feasibility_problems(world, tree_grasps(doc))]
     if tree is not None:
-        spec = world_spec(world)
-        # The moves as the robot makes them (a turn its grip cannot make is several), which
-        # is what a tree's move indices count.
-        moves = {step.object: len(task_moves(spec, step.object)) for step in spec.task}
-        lines += [str(p) for p in check_tree_moves(doc, moves, bound_object(world))]
-        names = [o.name for o in world.objects]
-        lines += [str(p) for p in check_tree_objects(doc, names)]
+        lines += tree_task_problems(world, doc)
     return lines + move_skill_problems(world, world_file)
+
+
+def tree_task_problems(world: World, doc: TreeDocument) -> list[str]:
+    """One line per way a tree (``--tree``, run as written) does not fit the world's task:
+    a move index the task lacks or a move it has that no Move makes, an object it names
+    that the world lacks."""
+    spec = world_spec(world)
+    # The moves as the robot makes them (a turn its grip cannot make is several), which
+    # is what a tree's move indices count.
+    moves = {step.object: len(task_moves(spec, step.object)) for step in spec.task}
+    lines = [str(p) for p in check_tree_moves(doc, moves, bound_object(world))]
+    names = [o.name for o in world.objects]
+    return lines + [str(p) for p in check_tree_objects(doc, names)]
 
 
 def move_skill_problems(world: World, world_file: str) -> list[str]:

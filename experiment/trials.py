@@ -47,6 +47,7 @@ import pybullet as pb
 from experiment.flip_draws import draw_object, goal_half_height, pitched_goal_postures
 from experiment.hard import HardTrial, draw_hard, with_pushes
 from experiment.insertion_trials import place_fixture
+from experiment.preflight import tree_task_problems
 from experiment.records import campaign_key, owned_by, tree_hash
 from experiment.results import (
     ResultsFileError,
@@ -60,6 +61,7 @@ from experiment.summary import composition_label as composition_label
 from experiment.summary import reason_of as reason_of
 from experiment.summary import summarise as summarise
 from experiment.tray_draws import place_riders, tray_height, tray_layout_problem
+from planner.tree_reading import read_tree_document
 from planner.user_leaves import register_leaves
 from skills.turns import grip_yaw, lateral_quarter_turns, turn_steps
 from worlds.adapters import robot_capabilities
@@ -555,17 +557,23 @@ def run_trial(job: tuple[dict[str, Any], int, int]) -> dict[str, Any]:
             hard = draw_hard(world, seed, trial)
             world = with_pushes(world, hard.pushes)
         where = _layout_of(world)
-        report = run_episode(
-            world,
-            tree,
-            out=None,
-            animation=False,
-            main_tree=base_data.get("main_tree"),
-            truth=None if hard is None else hard.truth,
-        )
-        record = report.summary()
-        record.pop("outputs", None)
-        failure = record["failure"] or ""
+        misfit = _tree_misfit(world, tree, base_data.get("main_tree"))
+        record: dict[str, Any]
+        if misfit:
+            record = {"success": False, "sim_time_s": 0.0, "wall_time_s": 0.0}
+            failure = misfit
+        else:
+            report = run_episode(
+                world,
+                tree,
+                out=None,
+                animation=False,
+                main_tree=base_data.get("main_tree"),
+                truth=None if hard is None else hard.truth,
+            )
+            record = report.summary()
+            record.pop("outputs", None)
+            failure = record["failure"] or ""
     except Exception as err:  # a trial that crashes is a failed trial with its reason
         record = {"success": False, "sim_time_s": 0.0, "wall_time_s": 0.0}
         kinds, where = [], {}
@@ -584,6 +592,26 @@ def run_trial(job: tuple[dict[str, Any], int, int]) -> dict[str, Any]:
     if hard is not None:
         record.update({"mode": "hard", "hard": hard.summary()})
     return record
+
+
+def _tree_misfit(world: World, tree: Path | None, main_tree: str | None) -> str:
+    """Why a tree given with ``--tree`` cannot make this trial's task ("" when it can).
+
+    Such a tree runs as written, with the moves its file names; a trial's turned goals may
+    make more moves than the world file's (a turn the grip cannot make in one move is
+    several), and a Move it lacks would never be made. The trial fails at once, saying so,
+    instead of running the moves it has.
+    """
+    if tree is None:
+        return ""
+    problems = tree_task_problems(world, read_tree_document(tree, main_tree_id=main_tree))
+    if not problems:
+        return ""
+    return (
+        f"tree does not fit this trial's task: {problems[0]} (a tree given with --tree runs "
+        "as written; a copy of the shipped tree in the world's tree field is made into each "
+        "trial's task)"
+    )
 
 
 #: This process's RobotClearance and the base world it was built for (see _worker_clearance).

@@ -265,3 +265,25 @@ def test_a_worker_keeps_one_robot_per_base_world() -> None:
     assert other is not first  # another world: another robot, the first one closed
     assert draw_trial(icub, 3, 2, other)[0].model_dump() == draw_trial(icub, 3, 2)[0].model_dump()
     _close_worker_clearance()
+
+
+def test_a_tree_given_as_written_that_lacks_a_trials_moves_fails_it_at_once() -> None:
+    from experiment.episode import robot_moves
+    from experiment.trials import campaign_of, run_trial
+    from planner.default_tree import PICK_AND_PLACE_XML
+
+    base = load_world(WORLDS / "parcel_pick_place.yaml")
+    # Trial 1 of seed 0 turns goals further than one grip can: seven moves, not three.
+    trial, _ = draw_trial(base, 0, 1)
+    assert sum(len(m) for m in robot_moves(trial).values()) > 3
+    payload = {
+        "world": base.model_dump(mode="json"),
+        "source": str(base.source),
+        "tree": str(PICK_AND_PLACE_XML),
+        "key": campaign_of(base, 0, PICK_AND_PLACE_XML),
+    }
+    record = run_trial((payload, 0, 1))
+    assert not record["success"] and record["sim_time_s"] == 0.0
+    assert record["failure"].startswith("tree does not fit this trial's task: ")
+    assert "would be left undone" in record["failure"]
+    assert "the world's tree field" in record["failure"]
