@@ -287,3 +287,57 @@ def test_a_tree_given_as_written_that_lacks_a_trials_moves_fails_it_at_once() ->
     assert record["failure"].startswith("tree does not fit this trial's task: ")
     assert "would be left undone" in record["failure"]
     assert "the world's tree field" in record["failure"]
+
+
+def test_ending_a_pool_whose_wakeup_pipe_is_gone_still_ends_its_workers() -> None:
+    # A Ctrl-C that breaks the pool may leave shutdown() raising BrokenPipeError; ending the
+    # pool must not raise it in place of the KeyboardInterrupt being handled.
+    from experiment.trials import _end_pool
+
+    class Worker:
+        terminated = False
+
+        def terminate(self) -> None:
+            self.terminated = True
+
+    class BrokenPool:
+        def __init__(self) -> None:
+            self._processes = {1: Worker(), 2: Worker()}
+
+        def shutdown(self, wait: bool, cancel_futures: bool) -> None:
+            raise BrokenPipeError(32, "Broken pipe")
+
+    pool = BrokenPool()
+    _end_pool(pool)
+    assert all(w.terminated for w in pool._processes.values())
+
+
+def test_a_broken_pipe_met_while_handling_ctrl_c_is_an_interruption(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import argparse
+
+    import app
+
+    def interrupted(args: argparse.Namespace) -> int:
+        try:
+            raise KeyboardInterrupt
+        except KeyboardInterrupt:
+            raise BrokenPipeError(32, "Broken pipe") from None
+
+    def reader_gone(args: argparse.Namespace) -> int:
+        raise BrokenPipeError(32, "Broken pipe")
+
+    class Parser:
+        def __init__(self, handler: object) -> None:
+            self.handler = handler
+
+        def parse_args(self, argv: object) -> argparse.Namespace:
+            return argparse.Namespace(handler=self.handler)
+
+    monkeypatch.setattr(app, "build_parser", lambda: Parser(interrupted))
+    assert app.main([]) == 130
+    assert capsys.readouterr().err == "interrupted\n"
+    monkeypatch.setattr(app, "build_parser", lambda: Parser(reader_gone))
+    monkeypatch.setattr(app.sys, "stdout", app.sys.stdout)  # main replaces it: put it back
+    assert app.main([]) == app.EXIT_OK
