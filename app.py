@@ -888,12 +888,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130
-    except BrokenPipeError as err:
-        if isinstance(err.__context__, KeyboardInterrupt):
-            # Raised while a Ctrl-C was being handled (a pipe of a worker pool it broke):
-            # the run was interrupted, not finished.
-            print("interrupted", file=sys.stderr)
-            return 130
+    except BrokenPipeError:
         # The reader (e.g. `| head`) went away: not an error of ours.
         sys.stdout = open(os.devnull, "w")
         return EXIT_OK

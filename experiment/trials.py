@@ -821,14 +821,7 @@ def _end_pool(pool: Any) -> None:
     """Stop a process pool now, its running trials too (they have no record: they run again
     when the campaign resumes)."""
     processes = list((getattr(pool, "_processes", None) or {}).values())
-    try:
-        pool.shutdown(wait=False, cancel_futures=True)
-    except OSError:
-        # A pool a Ctrl-C has just broken (a worker forked before it could ignore SIGINT)
-        # may have closed the pipe that wakes its manager thread: shutting it down then
-        # raises BrokenPipeError, which would replace the KeyboardInterrupt being handled
-        # and end an interrupted campaign as if it had finished. Its processes go below.
-        pass
+    pool.shutdown(wait=False, cancel_futures=True)
     # Python 3.14 has ProcessPoolExecutor.terminate_workers(); before it, its processes.
     for process in processes:
         process.terminate()

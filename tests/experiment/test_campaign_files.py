@@ -114,7 +114,7 @@ def test_ctrl_c_with_two_workers_ends_them_without_tracebacks(tmp_path: Path) ->
     _wait_for_records(tmp_path / "results.jsonl", 1, proc)
     os.killpg(proc.pid, signal.SIGINT)  # what a terminal's Ctrl-C does: the whole group
     _, err = proc.communicate(timeout=60)
-    assert proc.returncode == 130, err[-3000:]
+    assert proc.returncode == 130
     assert "Traceback" not in err and "KeyboardInterrupt" not in err
     assert "run the same command again to resume" in err
     time.sleep(0.5)
