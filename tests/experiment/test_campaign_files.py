@@ -91,6 +91,16 @@ def test_a_resumed_campaign_appends_after_a_torn_line(tmp_path: Path) -> None:
     assert [r["trial"] for r in read.records] == [0, 1, 2] and read.skipped == 0
 
 
+def _terminal_sigint() -> None:
+    """In the campaign's process before it starts: SIGINT as a terminal's job has it.
+
+    A command a non-interactive shell starts in the background (``make test &``, ``nohup
+    ... &``) ignores SIGINT, and so does everything it starts, this test's campaign too: it
+    would run to its end under the Ctrl-C. A terminal's Ctrl-C is what is tested.
+    """
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def _group_alive(pgid: int) -> bool:
     try:
         os.killpg(pgid, 0)
@@ -110,11 +120,13 @@ def _wait_for_records(path: Path, count: int, proc: subprocess.Popen[str]) -> No
 
 @pytest.mark.sim
 def test_ctrl_c_with_two_workers_ends_them_without_tracebacks(tmp_path: Path) -> None:
-    proc = trials(tmp_path, 8, "--workers", "2", start_new_session=True)
+    proc = trials(
+        tmp_path, 8, "--workers", "2", start_new_session=True, preexec_fn=_terminal_sigint
+    )
     _wait_for_records(tmp_path / "results.jsonl", 1, proc)
     os.killpg(proc.pid, signal.SIGINT)  # what a terminal's Ctrl-C does: the whole group
     _, err = proc.communicate(timeout=60)
-    assert proc.returncode == 130
+    assert proc.returncode == 130, err[-3000:]
     assert "Traceback" not in err and "KeyboardInterrupt" not in err
     assert "run the same command again to resume" in err
     time.sleep(0.5)
