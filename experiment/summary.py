@@ -46,7 +46,9 @@ def reason_of(failure: str) -> str:
         touching = failure.split(": ", 1)[1] if ": " in failure else ""
         parts = {p.split(" ~ ")[0] for p in touching.split(", ") if p}
         return "obstacle contact: " + "/".join(sorted(parts))
-    return failure.split(":")[0].split(" placed")[0]
+    head = failure.split(":")[0]
+    # "parcel move 1 placed 2.3 cm, ..." is its move's; "not placed: ..." stays itself.
+    return head if head == "not placed" else head.split(" placed")[0]
 
 
 def composition_label(composition: dict[str, float]) -> str:

@@ -170,6 +170,7 @@ def test_results_resume_and_summarise(tmp_path: Path) -> None:
         "pick-and-place x0.25, no avoidance": 1,
     }
     assert reason_of("move 2 placed 3.1 cm, 1.0 deg from its goal") == "move 2"
+    assert reason_of("not placed: parcel move 2, parcel move 3") == "not placed"
 
 
 def test_a_campaign_owns_the_records_of_its_world_seed_and_tree(tmp_path: Path) -> None:
