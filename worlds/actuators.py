@@ -25,13 +25,14 @@ A robot whose joints sense their torque closes a loop around such actuators
 (:class:`TorqueLoop`, :func:`torque_loop_step`): integral action on the gap between the
 torque the law asked for and the torque the joint sensed, added to what is sent. It removes
 a constant bias and a scale error (the gravity load held by a scaled motor) in a few of its
-time constants; the lag and the latency it leaves alone, as they pass on what is sent.
+time constants. A proportional part on the same gap shortens the lag as the joint sees it
+(63 % of a step through a 30 ms lag in 25 ms, not 42, at a gain of 0.5).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from typing import Any
 
 import numpy as np
@@ -175,7 +176,7 @@ def actuator_step(
 
 @dataclass(frozen=True)
 class TorqueLoop:
-    """Integral action on each joint's torque, from the joint's torque sensor.
+    """Integral and proportional action on each joint's torque, from its torque sensor.
 
     The sensed torque is the one the actuator applied over the last tick (a joint torque
     sensor between motor and link, as in every joint of the KUKA LBR iiwa; the iCub
@@ -228,12 +229,7 @@ class TorqueLoop:
 
     def summary(self) -> dict[str, Any]:
         """JSON-ready: every value."""
-        return {
-            "integral_s": self.integral_s,
-            "filter_s": self.filter_s,
-            "limit": self.limit,
-            "proportional": self.proportional,
-        }
+        return asdict(self)
 
 
 @dataclass(frozen=True)
@@ -300,7 +296,7 @@ def torque_loop_step(
         gap = error if loop.filter_s == 0.0 else gap + (dt / loop.filter_s) * (error - gap)
         reach = loop.limit * bound
         integral = np.minimum(np.maximum(integral + (dt / loop.integral_s) * gap, -reach), reach)
-        extra = integral + loop.proportional * error if loop.proportional else integral
+        extra = integral + loop.proportional * error  # exactly the integral at 0
     sent = np.minimum(np.maximum(want + extra, -bound), bound)
     return TorqueLoopState(want.copy(), gap, integral), sent
 

@@ -140,7 +140,6 @@ class DualArmImpedanceController:
         self._actuators: ActuatorState | None = None
         self.torque_loop = torque_loop if torque_loop is not None else robot.torque_loop
         self._loop = torque_loop_start(total)
-        self._sensed: FloatArray | None = None
         self._arm_body = [int(body_ids[spec.body]) for spec in self._specs]
         # One law per body: its joints (all movable ones, which PyBullet's Jacobian and inverse
         # dynamics take), their rows in the driven vector, and the arms whose palms it carries.
@@ -497,9 +496,11 @@ class DualArmImpedanceController:
         through the torque loop where the robot has one."""
         assert self.faults is not None
         if self.torque_loop is not None:
+            # The joints' torque sensors read what the actuators applied over the last tick.
+            sensed = None if self._actuators is None else self._applied
             self._loop, tau = torque_loop_step(
                 self._loop,
-                self._sensed,
+                sensed,
                 tau,
                 self.torque_loop,
                 self.physics_dt,
@@ -510,8 +511,6 @@ class DualArmImpedanceController:
         self._actuators, applied = actuator_step(
             self._actuators, tau, self.faults, self._lag_gain, self._max_torque
         )
-        # The joints' torque sensors read what the actuators applied.
-        self._sensed = applied
         return applied
 
     # -- outputs -----------------------------------------------------------------------------
