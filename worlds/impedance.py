@@ -1,4 +1,4 @@
-"""The palm impedance law: its values and the pure, vectorised linearisation.
+"""The palm impedance law: its values and its pure linearisation, compiled body by body.
 
 Each palm is pulled to a target pose by a task-space spring-damper; gravity is compensated with
 PyBullet's inverse dynamics; a rest-posture spring acts in the Jacobian null space; a repulsive
@@ -43,6 +43,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from skills import quaternion as quat
+from skills.kernel import kernel, quaternion_at, rotation_error_q
 
 FloatArray = NDArray[np.float64]
 
@@ -325,6 +326,70 @@ class ImpedanceTerms:
     palm_quaternion: FloatArray
 
 
+@kernel
+def _terms_kernel(
+    jacobian: FloatArray,
+    q: FloatArray,
+    rest_posture: FloatArray,
+    stiffness: FloatArray,
+    damping: FloatArray,
+    null_stiffness: FloatArray,
+    null_damping: FloatArray,
+    joint_damping: FloatArray,
+    posture_weight: FloatArray,
+    mass_matrix: FloatArray,
+    dt: float,
+    pinv_damping: float,
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
+    """:func:`impedance_terms`' arithmetic, body by body, compiled (the module doc's formulas).
+
+    Returns ``a_base`` (gravity not yet added), ``error_gain``, ``twist_gain``, ``b``, ``c``;
+    ``dt`` 0 leaves the damping explicit (``mass_matrix`` then unread).
+    """
+    k, m, n = jacobian.shape
+    eye_n = np.eye(n)
+    eye_m = np.eye(m)
+    a_base = np.empty((k, n))
+    error_gain = np.empty((k, n, m))
+    twist_gain = np.empty((k, n, m))
+    b = np.empty((k, n, n))
+    c = np.empty((k, n, n))
+    for j in range(k):
+        jac = np.ascontiguousarray(jacobian[j])
+        jt = np.ascontiguousarray(jac.T)
+        jt_k = jt * stiffness[j]
+        jt_d = jt * damping[j]
+        # P = I - J^T (J J^T + l^2 I)^-1 J: symmetric, removes every palm's directions.
+        projector = eye_n - jt @ np.linalg.solve(jac @ jt + (pinv_damping**2) * eye_m, jac)
+        # The posture torque P W (q_rest - q): a joint-space spring, weighed per joint.
+        posture = projector * posture_weight[j]
+        rest = posture_weight[j] * rest_posture[j]
+        bj = -(jt_k @ jac + null_stiffness[j] * posture)
+        cj = -(jt_d @ jac + null_damping[j] * posture + joint_damping[j] * eye_n)
+        aj = jt_k @ (jac @ q[j]) + null_stiffness[j] * (projector @ rest)
+        if dt > 0.0:
+            # G X = M (M - dt C)^-1 X, every term in one solve.
+            stacked = np.empty((n, 2 * n + 2 * m + 1))
+            stacked[:, :n] = bj
+            stacked[:, n : 2 * n] = cj
+            stacked[:, 2 * n : 2 * n + m] = jt_k
+            stacked[:, 2 * n + m : 2 * n + 2 * m] = jt_d
+            stacked[:, 2 * n + 2 * m] = aj
+            mass = np.ascontiguousarray(mass_matrix[j])
+            stacked = mass @ np.linalg.solve(mass - dt * cj, stacked)
+            bj = stacked[:, :n]
+            cj = stacked[:, n : 2 * n]
+            jt_k = stacked[:, 2 * n : 2 * n + m]
+            jt_d = stacked[:, 2 * n + m : 2 * n + 2 * m]
+            aj = stacked[:, 2 * n + 2 * m]
+        a_base[j] = aj
+        error_gain[j] = jt_k
+        twist_gain[j] = jt_d
+        b[j] = bj
+        c[j] = cj
+    return a_base, error_gain, twist_gain, b, c
+
+
 def impedance_terms(
     jacobian: FloatArray,
     palm_position: FloatArray,
@@ -376,41 +441,28 @@ def impedance_terms(
     -------
     ImpedanceTerms
     """
-    n = q.shape[-1]
-    m = jacobian.shape[-2]
-    eye = np.eye(n)
-    jt = np.swapaxes(jacobian, -1, -2)  # (k, n, 6t)
-    jt_k = jt * gains.stiffness[:, None, :]
-    jt_d = jt * gains.damping[:, None, :]
-    gram = jacobian @ jt + (pinv_damping**2) * np.eye(m)
-    # P = I - J^T (J J^T + l^2 I)^-1 J: symmetric, removes every palm's directions.
-    projector = eye - jt @ np.linalg.solve(gram, jacobian)
-    # The posture torque P W (q_rest - q): a joint-space spring, weighed per joint, projected.
-    # Unweighted (W = I, every arm alone on its body) it is left as P: the same numbers.
-    posture = projector
-    rest = rest_posture
-    if gains.posture_weight is not None:
-        posture = projector * gains.posture_weight[:, None, :]
-        rest = gains.posture_weight * rest_posture
-    k_null = gains.null_stiffness[:, None, None]
-    b = -(jt_k @ jacobian + k_null * posture)
-    c = -(
-        jt_d @ jacobian
-        + gains.null_damping[:, None, None] * posture
-        + gains.joint_damping[:, None, None] * eye
+    k, n = q.shape
+    implicit = mass_matrix is not None and dt > 0.0
+    a_base, error_gain, twist_gain, b, c = _terms_kernel(
+        np.ascontiguousarray(jacobian, dtype=float),
+        np.ascontiguousarray(q, dtype=float),
+        np.ascontiguousarray(rest_posture, dtype=float),
+        np.ascontiguousarray(gains.stiffness, dtype=float),
+        np.ascontiguousarray(gains.damping, dtype=float),
+        np.ascontiguousarray(gains.null_stiffness, dtype=float),
+        np.ascontiguousarray(gains.null_damping, dtype=float),
+        np.ascontiguousarray(gains.joint_damping, dtype=float),
+        np.ones((k, n))
+        if gains.posture_weight is None
+        else np.ascontiguousarray(gains.posture_weight, dtype=float),
+        np.ascontiguousarray(mass_matrix, dtype=float) if implicit else np.empty((k, n, n)),
+        float(dt) if implicit else 0.0,
+        float(pinv_damping),
     )
-    a_base = (jt_k @ (jacobian @ q[..., None]) + k_null * (projector @ rest[..., None]))[..., 0]
-    if mass_matrix is not None and dt > 0.0:
-        # G X = M (M - dt C)^-1 X, every term in one solve.
-        stacked = np.concatenate([b, c, jt_k, jt_d, a_base[..., None]], axis=-1)
-        stacked = mass_matrix @ np.linalg.solve(mass_matrix - dt * c, stacked)
-        b, c = stacked[..., :n], stacked[..., n : 2 * n]
-        jt_k, jt_d = stacked[..., 2 * n : 2 * n + m], stacked[..., 2 * n + m : 2 * n + 2 * m]
-        a_base = stacked[..., 2 * n + 2 * m]
     return ImpedanceTerms(
         a_base=a_base + gravity_torque,
-        error_gain=jt_k,
-        twist_gain=jt_d,
+        error_gain=error_gain,
+        twist_gain=twist_gain,
         b=b,
         c=c,
         palm_position=palm_position,
@@ -457,6 +509,43 @@ def limit_posture(
     )
 
 
+@kernel
+def _affine_kernel(
+    a_base: FloatArray,
+    error_gain: FloatArray,
+    twist_gain: FloatArray,
+    palm_position: FloatArray,
+    palm_quaternion: FloatArray,
+    target_position: FloatArray,
+    target_quaternion: FloatArray,
+    target_twist: FloatArray,
+) -> tuple[FloatArray, FloatArray]:
+    """:func:`affine_law`'s ``a`` and ``a_rate``, compiled: the pose errors (position; rotation
+    vector of ``target * palm^-1``) and twists stacked palm by palm through the gains."""
+    k, t = target_position.shape[0], target_position.shape[1]
+    n = a_base.shape[1]
+    a = np.empty((k, n))
+    a_rate = np.empty((k, n))
+    error = np.empty(6 * t)
+    twist = np.empty(6 * t)
+    for j in range(k):
+        for s in range(t):
+            for axis in range(3):
+                error[6 * s + axis] = target_position[j, s, axis] - palm_position[j, s, axis]
+            rx, ry, rz = rotation_error_q(
+                quaternion_at(target_quaternion[j, s], 0), quaternion_at(palm_quaternion[j, s], 0)
+            )
+            error[6 * s + 3] = rx
+            error[6 * s + 4] = ry
+            error[6 * s + 5] = rz
+            for axis in range(6):
+                twist[6 * s + axis] = target_twist[j, s, axis]
+        gain = np.ascontiguousarray(error_gain[j])
+        a_rate[j] = gain @ twist
+        a[j] = a_base[j] + gain @ error + np.ascontiguousarray(twist_gain[j]) @ twist
+    return a, a_rate
+
+
 def affine_law(
     terms: ImpedanceTerms,
     target_position: FloatArray,
@@ -480,18 +569,23 @@ def affine_law(
     -------
     AffineTorqueLaw
     """
-    k = target_position.shape[0]
-    error = np.concatenate(
-        [
-            target_position - terms.palm_position,
-            quat.rotation_error(target_quaternion, terms.palm_quaternion),
-        ],
-        axis=-1,
-    ).reshape(k, -1)
-    target_twist = target_twist.reshape(k, -1)
-    a_rate = (terms.error_gain @ target_twist[..., None])[..., 0]
-    a = terms.a_base + (terms.error_gain @ error[..., None])[..., 0]
-    a = a + (terms.twist_gain @ target_twist[..., None])[..., 0]
+    k = len(terms.a_base)
+
+    def palms(
+        x: ArrayLike, width: int
+    ) -> FloatArray:  # (k, t, width), one palm a body as (k, width)
+        return np.ascontiguousarray(np.reshape(x, (k, -1, width)), dtype=float)
+
+    a, a_rate = _affine_kernel(
+        np.ascontiguousarray(terms.a_base, dtype=float),
+        np.ascontiguousarray(terms.error_gain, dtype=float),
+        np.ascontiguousarray(terms.twist_gain, dtype=float),
+        palms(terms.palm_position, 3),
+        palms(terms.palm_quaternion, 4),
+        palms(target_position, 3),
+        palms(target_quaternion, 4),
+        palms(target_twist, 6),
+    )
     return AffineTorqueLaw(a=a, a_rate=a_rate, b=terms.b, c=terms.c)
 
 
