@@ -30,6 +30,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from skills import file_cache
 from skills import quaternion as quat
+from skills.kernel import kernel
 from skills.types import Array
 from skills.vocabulary import Arm
 from worlds.fixture_spec import WALL_NAMES
@@ -48,6 +49,32 @@ FIXTURES = "fixtures"
 def arm_group(arm: Arm) -> str:
     """Group name of an arm's links: ``"left_arm"`` or ``"right_arm"``."""
     return f"{Arm(arm).value}_arm"
+
+
+@kernel
+def _sphere_gaps(
+    centres: FloatArray, radii: FloatArray, rows_a: IntArray, rows_b: IntArray
+) -> FloatArray:
+    """(A, B) gaps between the spheres ``rows_a`` and ``rows_b`` of ``centres`` (E, 3) and
+    ``radii`` (E,): centre distance less both radii, m (a lower bound of the elements')."""
+    gaps = np.empty((rows_a.size, rows_b.size))
+    for i in range(rows_a.size):
+        a = rows_a[i]
+        for j in range(rows_b.size):
+            b = rows_b[j]
+            dx = centres[a, 0] - centres[b, 0]
+            dy = centres[a, 1] - centres[b, 1]
+            dz = centres[a, 2] - centres[b, 2]
+            gaps[i, j] = math.sqrt(dx * dx + dy * dy + dz * dz) - radii[a] - radii[b]
+    return gaps
+
+
+@kernel
+def _nearest_gap(
+    centres: FloatArray, radii: FloatArray, rows_a: IntArray, rows_b: IntArray
+) -> float:
+    """The least of :func:`_sphere_gaps`, m."""
+    return _sphere_gaps(centres, radii, rows_a, rows_b).min()
 
 
 # ---------------------------------------------------------------------------------------------
@@ -780,23 +807,14 @@ class CollisionWorld:
         self, rows_a: list[int], rows_b: list[int], ceiling: float
     ) -> Proximity | None:
         """The closest pair of elements ``rows_a`` x ``rows_b`` if nearer than ``ceiling``."""
+        a_rows = np.asarray(rows_a, dtype=np.intp)
+        b_rows = np.asarray(rows_b, dtype=np.intp)
         if self._read is not None and math.isfinite(ceiling):
             # Not placed since the last sync: screen on the positions read first.
-            origins = self._origins()
-            reach = (
-                np.linalg.norm(origins[rows_a][:, None] - origins[rows_b][None], axis=-1)
-                - self._reach[rows_a][:, None]
-                - self._reach[rows_b]
-            )
-            if reach.min() >= ceiling:
+            if _nearest_gap(self._origins(), self._reach, a_rows, b_rows) >= ceiling:
                 return None
         self._place()
-        ca, cb = self._centres[rows_a], self._centres[rows_b]
-        bounds = (
-            np.linalg.norm(ca[:, None] - cb[None], axis=-1)
-            - self._radii[rows_a][:, None]
-            - self._radii[rows_b]
-        )
+        bounds = _sphere_gaps(self._centres, self._radii, a_rows, b_rows)
         best: Proximity | None = None
         for flat in np.argsort(bounds, axis=None):
             a, b = np.unravel_index(flat, bounds.shape)

@@ -19,6 +19,7 @@ import pybullet as pb
 from numpy.typing import ArrayLike, NDArray
 
 from skills import quaternion as quat
+from skills.kernel import kernel
 from skills.types import Array
 from skills.vocabulary import Arm
 from worlds.actuators import (
@@ -45,6 +46,34 @@ from worlds.impedance import (
 from worlds.robots import ArmSpec, RobotModel
 
 FloatArray = NDArray[np.float64]
+
+
+@kernel
+def _torques(
+    a: FloatArray,
+    a_rate: FloatArray,
+    elapsed: float,
+    b: FloatArray,
+    c: FloatArray,
+    q: FloatArray,
+    qd: FloatArray,
+    limit_k: FloatArray,
+    soft_lower: FloatArray,
+    soft_upper: FloatArray,
+    max_torque: FloatArray,
+) -> FloatArray:
+    """One physics step's torques (N,): the affine law (:mod:`worlds.impedance`)
+    ``a + a_rate * elapsed + B q + C qd``, the joint-limit repulsion inside the soft limits,
+    clipped to the torque limits."""
+    n = q.size
+    tau = np.empty(n)
+    for i in range(n):
+        t = a[i] + elapsed * a_rate[i]
+        for j in range(n):
+            t += b[i, j] * q[j] + c[i, j] * qd[j]
+        t += limit_k[i] * (min(max(q[i], soft_lower[i]), soft_upper[i]) - q[i])
+        tau[i] = min(max(t, -max_torque[i]), max_torque[i])
+    return tau
 
 
 # ---------------------------------------------------------------------------------------------
@@ -182,7 +211,6 @@ class DualArmImpedanceController:
         self._lower = np.array([d.lower for d in driven], dtype=float)
         self._upper = np.array([d.upper for d in driven], dtype=float)
         self._max_torque = np.array([d.max_torque for d in driven], dtype=float)
-        self._min_torque = -self._max_torque
         self._rest = np.array([d.rest for d in driven], dtype=float)  # (N,)
         # The posture factor per joint (shared joints held more firmly); None where every
         # joint has 1, as the law then takes its unweighted form.
@@ -459,8 +487,6 @@ class DualArmImpedanceController:
             raise RuntimeError("DualArmImpedanceController.apply: call enable() first")
         self._read_joints()
         q = self._q
-        # Per physics step, numpy's ufuncs are called bare (np.max, np.clip without their
-        # Python wrappers: the same reductions and the same min(max(x, lo), hi)).
         if self._steps_since_refresh >= self.refresh_every or (
             self.relinearise_tolerance > 0.0
             and np.abs(q - self._q_lin).max() > self.relinearise_tolerance
@@ -468,12 +494,19 @@ class DualArmImpedanceController:
             self._relinearise()
         elif self._targets_changed:
             self._update_targets()
-        tau = self._a + self._b @ q + self._c @ self._qd
-        if self._steps_since_target:
-            tau += (self._steps_since_target * self.physics_dt) * self._a_rate
-        tau += self._limit_k * (np.minimum(np.maximum(q, self._soft_lower), self._soft_upper) - q)
-        np.maximum(tau, self._min_torque, out=tau)
-        np.minimum(tau, self._max_torque, out=tau)
+        tau = _torques(
+            self._a,
+            self._a_rate,
+            self._steps_since_target * self.physics_dt,
+            self._b,
+            self._c,
+            q,
+            self._qd,
+            self._limit_k,
+            self._soft_lower,
+            self._soft_upper,
+            self._max_torque,
+        )
         self._tau = tau
         if self.faults is not None:
             tau = self._actuate(tau)
