@@ -36,7 +36,8 @@ class Transport(MotionLeaf):
     Absolute: the learnt pick-and-place (and rotation) forcing terms, obstacle steering and
     link-level potential-field avoidance, on one transformation system towards the goal.
     Relative: grasp maintenance on each palm, squeezing. Starts from the handed-over full
-    state and hands its own on. Fails, explaining why, if the grip is lost on the way.
+    state and hands its own on, where it ends, fails or is halted. Fails, explaining why, if
+    the grip is lost on the way.
 
     Succeeds once the composition has arrived (its commanded object at the goal and still,
     after ``tau``) or ``settle_s`` later, and only if the object *as measured* is still and
@@ -276,9 +277,17 @@ class Transport(MotionLeaf):
         return replace(state, object=shifted)
 
     def terminate(self, new_status: Status) -> None:
-        """Publish how the started move ended (:mod:`planner.move_result`); halted, stop."""
+        """Publish how the started move ended (:mod:`planner.move_result`); halted, stop.
+
+        A move that failed or was halted part-way hands over the state it left the palms in,
+        as a finished one does: whatever runs next (another composition of the move, a
+        re-grasp) starts from there. The state it was handed would hold the palms' references
+        from before it moved, and a composition started from that drags the object back.
+        """
         started = getattr(self, "composer", None) is not None
         if started and (new_status != Status.INVALID or self.status == Status.RUNNING):
+            if new_status != Status.SUCCESS:
+                self._set_output("to_state", self._handed_over())
             self._publish(new_status)
         super().terminate(new_status)
 

@@ -112,3 +112,32 @@ def test_an_object_on_the_stated_table_is_placed_without_a_set_down(
     log, _ = carry_first_move(world, tick_leaf)
     assert log.final == Status.SUCCESS, log.feedback
     assert move_results()[("parcel", 0)].rested_z is None
+
+
+@pytest.mark.usefixtures("clean_blackboard")
+def test_a_move_that_failed_hands_over_where_it_left_the_palms(
+    tick_leaf: Callable[..., TickLog],
+) -> None:
+    # The set-down finds no surface: the move fails 10 cm from where it started.
+    world = lowered_table_world(SET_DOWN_DEPTH_M + 0.03)
+    log, _ = carry_first_move(world, tick_leaf)
+    assert log.final == Status.FAILURE
+    state = py_trees.blackboard.Blackboard.get("/state")
+    np.testing.assert_allclose(state.object.position[:2], [0.65, 0.0], atol=2e-3)
+    # The next composition of the move starts from there: the palms stay over where the
+    # failed one left them (it rises back to the goal's height), where from the grasp's state
+    # they were pulled 10 cm back towards the start.
+    left_at = {arm: world.palm_pose(arm).position for arm in ARMS}
+    again = tick_leaf(
+        Transport("move0_again"),
+        world,
+        max_ticks=20,
+        object="parcel",
+        move=0,
+        plan="{plan}",
+        from_state="{state}",
+        to_state="{state}",
+    )
+    assert again.final == Status.RUNNING, again.feedback
+    for arm in ARMS:
+        assert np.linalg.norm(world.palm_pose(arm).position[:2] - left_at[arm][:2]) < 0.005
