@@ -549,7 +549,7 @@ def _trials_command(args: argparse.Namespace) -> int:
         return EXIT_BAD_INPUT
     # one message now, not one per trial
     _preflight_or_exit(world, args.world, args.tree, args.main_tree)
-    from experiment.trials import TrialLayoutError, check_trial_layout
+    from experiment.layout import TrialLayoutError, check_trial_layout
 
     try:
         check_trial_layout(world, args.seed, args.world)

@@ -17,7 +17,7 @@ from dataclasses import replace
 
 from experiment.episode import run_episode
 from experiment.hard import draw_hard, with_pushes
-from experiment.trials import draw_trial
+from experiment.layout import draw_trial
 from worlds.actuators import ActuatorFaults
 from worlds.truth import PhysicalTruth
 from worlds.world_file import load_world

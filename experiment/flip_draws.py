@@ -74,7 +74,7 @@ def goal_half_height(size: np.ndarray, pitch_deg: float, yaw_deg: float = 0.0) -
 def pitched_goal_postures(
     postures: list[Any], goal: np.ndarray, half: np.ndarray, pitch_deg: float
 ) -> list[Any]:
-    """``postures`` (:class:`experiment.trials.Posture`, below which this module sits) with
+    """``postures`` (:class:`experiment.layout.Posture`, below which this module sits) with
     those at ``goal`` holding the box as turned there: a quarter turn
     about its y axis swaps its x and z extents (about the grasp, the palms' span is the same)."""
     if pitch_deg == 0.0:

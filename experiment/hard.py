@@ -1,6 +1,6 @@
 """Hard mode (``app.py trials --hard``, issue 16): each trial's physics differs from its world.
 
-A Hard trial is the Easy trial of the same seed and index (:func:`experiment.trials.draw_trial`:
+A Hard trial is the Easy trial of the same seed and index (:func:`experiment.layout.draw_trial`:
 the same start, goals and obstacles) run against a physical truth drawn, from the campaign seed
 and the trial's index alone, within the world file's ``trials.hard`` ranges
 (:class:`worlds.world_file.HardSettings`):

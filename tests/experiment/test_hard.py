@@ -14,8 +14,9 @@ import yaml
 from numpy.testing import assert_allclose
 
 from experiment.hard import draw_hard, draw_pushes, with_pushes
+from experiment.layout import draw_trial
 from experiment.records import outcome, owned_by
-from experiment.trials import campaign_of, draw_trial, run_trial
+from experiment.trials import campaign_of, run_trial
 from worlds.robots import robot_model_of
 from worlds.testing import DEFAULT_WORLD
 from worlds.world_file import World, load_world, world_spec

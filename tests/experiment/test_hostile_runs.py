@@ -11,7 +11,7 @@ import pytest
 from py_trees.common import Status
 
 from experiment.judge import judge
-from experiment.trials import TrialLayoutError, check_trial_layout
+from experiment.layout import TrialLayoutError, check_trial_layout
 from planner.runner import RunResult
 from worlds.bodies import x_display_reachable
 from worlds.sim_world import SafetyRecord, SimWorld

@@ -11,8 +11,8 @@ import pytest
 from numpy.testing import assert_allclose
 
 from experiment.episode import run_episode
+from experiment.layout import RobotClearance, draw_trial
 from experiment.preflight import preflight_problems
-from experiment.trials import RobotClearance, draw_trial
 from worlds.world_file import World, load_world, world_from_data
 
 WORLDS = Path(__file__).resolve().parents[2] / "worlds"

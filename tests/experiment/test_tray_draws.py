@@ -14,8 +14,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from experiment.layout import RobotClearance, draw_trial, riding
 from experiment.tray_draws import PALM_TABLE_GAP_M, least_tray_height, tray_height
-from experiment.trials import RobotClearance, draw_trial, riding
 from skills import quaternion as quat
 from worlds.spec import ShapeSpec
 from worlds.trays import TrayFrame

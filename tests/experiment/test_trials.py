@@ -12,18 +12,9 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
+from experiment.layout import Posture, RobotClearance, _box_gap, draw_trial, move_postures
 from experiment.results import read_results
-from experiment.trials import (
-    Posture,
-    RobotClearance,
-    _box_gap,
-    campaign_of,
-    campaign_results,
-    draw_trial,
-    move_postures,
-    reason_of,
-    summarise,
-)
+from experiment.trials import campaign_of, campaign_results, reason_of, summarise
 from worlds.adapters import robot_capabilities
 from worlds.scene import lateral_grasp_palm_poses
 from worlds.world_file import World, load_world, world_from_data

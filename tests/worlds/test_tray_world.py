@@ -11,7 +11,7 @@ import yaml
 from numpy.testing import assert_allclose
 
 from experiment.episode import run_episode
-from experiment.trials import draw_trial, riding
+from experiment.layout import draw_trial, riding
 from worlds.sim_world import SimWorld
 from worlds.trays import TrayFrame, riders
 from worlds.world_file import World, as_world_spec, load_world, world_cli_validate, world_from_data

@@ -1,0 +1,510 @@
+"""Trial layouts: what each trial of a campaign draws, and whether a world's can be drawn.
+
+Each trial draws, from ``numpy.random.default_rng([seed, trial])`` and within the world
+file's ``trials`` section (:class:`worlds.world_file.TrialSettings`, as the workspace depends
+on the robot):
+
+- the parcel's start on the table, near the robot's centre line;
+- one goal per move in its region (:meth:`~worlds.world_file.TrialSettings.goal_regions`: the
+  paper's three, centre, right (-y) and left (+y), or the section's own ``moves``), each
+  with a yaw drawn within the move's range;
+- for every move but at most one (drawn at random, and kept free with probability 1/2) a new
+  sphere, either *on the line*: above the straight path between the move's start and goal,
+  under the demonstrated lift, or *ahead*: in front (+x) of the carry at the lifted parcel's
+  height, of the kinds the move's region allows (a region without kinds gets no sphere).
+  Every sphere clears the parcel at its move's start
+  and goal (``clearance``), and the robot itself, posed grasping the parcel there, at rest
+  and lifted by ``lift`` (``robot_clearance``, measured by PyBullet on the robot's own
+  collision shapes), so only the carry can meet it: a sphere the robot would have to be in
+  to pick the parcel up or put it down is not a test of avoidance.
+
+:func:`check_trial_layout` tells, before a campaign starts, a world whose trials cannot be
+drawn. The campaign that runs them is :mod:`experiment.trials`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+from types import TracebackType
+
+import numpy as np
+import pybullet as pb
+
+from experiment.flip_draws import draw_object, goal_half_height, pitched_goal_postures
+from experiment.insertion_trials import place_fixture
+
+# Re-exported: the summary lives below the simulation, for reports that need no PyBullet.
+from experiment.summary import composition_label as composition_label
+from experiment.summary import reason_of as reason_of
+from experiment.summary import summarise as summarise
+from experiment.tray_draws import place_riders, tray_height, tray_layout_problem
+from skills.turns import grip_yaw, lateral_quarter_turns, turn_steps
+from worlds.adapters import robot_capabilities
+from worlds.scene import Scene, lateral_grasp_palm_poses
+from worlds.trays import riders
+from worlds.world_file import (
+    GoalRegion,
+    ObstacleKind,
+    Region,
+    TrayShape,
+    TrialSettings,
+    World,
+    as_world_spec,
+    world_from_data,
+)
+
+#: Goal yaws drawn for a move before giving up on placing its sphere: the robot turning the
+#: object must be clear of it too, and some turns leave no room for a sphere on the way.
+YAW_ATTEMPTS = 8
+#: Times a trial with turns is drawn again before giving up.
+TRIAL_REDRAWS = 10
+#: Spheres tried for one goal yaw.
+SPHERE_ATTEMPTS = 200
+
+
+@dataclass(frozen=True)
+class Sphere:
+    """An obstacle drawn for one move."""
+
+    name: str
+    centre: tuple[float, float, float]
+    radius: float
+    kind: ObstacleKind
+
+
+def _box_gap(centre: np.ndarray, half: np.ndarray, point: np.ndarray, yaw: float = 0.0) -> float:
+    """Distance from a point to the surface of a box turned by ``yaw`` about z (0 inside)."""
+    c, s = math.cos(yaw), math.sin(yaw)
+    dx, dy, dz = np.asarray(point, dtype=float) - centre
+    local = np.array([c * dx + s * dy, -s * dx + c * dy, dz])
+    d = np.maximum(np.abs(local) - half, 0.0)
+    return float(np.linalg.norm(d))
+
+
+@dataclass(frozen=True)
+class Posture:
+    """The robot holding the object somewhere on a move: where, and with which grip.
+
+    Attributes
+    ----------
+    position : ndarray, shape (3,)
+        The object's centre, m.
+    object_yaw : float
+        The object's yaw, rad.
+    grip_yaw : float
+        The palms' turn from their natural pose (:mod:`skills.turns`), rad.
+    half_span : float
+        Half the distance between the held faces, m.
+    half_extents : ndarray, shape (3,), optional
+        The box's half extents along its yawed frame's axes as held there (a box set down on
+        its side, :mod:`experiment.flip_draws`), m; None: its own.
+    """
+
+    position: np.ndarray
+    object_yaw: float
+    grip_yaw: float
+    half_span: float
+    half_extents: np.ndarray | None = None
+
+
+def move_postures(
+    start: np.ndarray,
+    start_yaw: float,
+    goal: np.ndarray,
+    goal_yaw: float,
+    size: np.ndarray,
+    max_turn: float,
+    robot_yaw: float = 0.0,
+) -> list[Posture]:
+    """How the robot holds the object picking it up and putting it down on one move.
+
+    A turn the grip cannot make in one grasp is made in steps at the goal
+    (:func:`planner.port.stepped_moves`): each step's grasp at its start and its end, on the
+    faces :func:`skills.turns.lateral_quarter_turns` chooses for it.
+    """
+    out: list[Posture] = []
+    yaw = start_yaw
+    for i, step in enumerate(turn_steps(start_yaw, goal_yaw, max_turn, robot_yaw)):
+        k = lateral_quarter_turns(yaw, step - yaw, robot_yaw)
+        half = float(size[1] if k % 2 == 0 else size[0]) / 2.0
+        first = grip_yaw(yaw, k, robot_yaw)
+        out.append(Posture(start if i == 0 else goal, yaw, first, half))
+        out.append(Posture(goal, step, first + (step - yaw), half))
+        yaw = step
+    return out
+
+
+class RobotClearance:
+    """Distance from a sphere to the robot grasping the object at a given centre.
+
+    The robot is posed by the same inverse-kinematics placement that starts an episode
+    (:meth:`worlds.scene.Scene.place_palms`), palms on the object's +-y faces, in a scene of
+    its own that is never stepped; PyBullet measures the distance on the robot's collision
+    shapes, from one small probe ball (the distance to a sphere is the distance to its centre
+    less its radius). Use as a context manager, or call :meth:`close`.
+    """
+
+    #: Radius of the probe ball, m.
+    PROBE_RADIUS = 1e-3
+
+    def __init__(self, world: World) -> None:
+        self._scene = Scene.from_world(world)
+        self._scene.set_active_obstacles(())
+        obj = world.objects[0]
+        size = getattr(obj.shape, "size", None)
+        if size is None:
+            raise ValueError(
+                f"trials: expected a box object to grasp, got a {obj.shape.type} ({obj.name!r})"
+            )
+        self._thickness = float(world.robot.palm_size[2])
+        self._posed_at: tuple[float, ...] | None = None
+        # Each posture's joint positions, per robot body and joint, as first solved (from the
+        # posture tried before it, as every solve was when each candidate re-solved): a layout
+        # draw tries hundreds of candidate spheres against the same few postures, and one
+        # inverse-kinematics solve each, not one per candidate, makes the draw ~10x cheaper.
+        self._solved: dict[tuple[float, ...], list[tuple[int, int, float]]] = {}
+        client = self._scene.client
+        shape = pb.createCollisionShape(
+            pb.GEOM_SPHERE, radius=self.PROBE_RADIUS, physicsClientId=client
+        )
+        self._probe = pb.createMultiBody(0.0, shape, physicsClientId=client)
+        self._loaded = self._joint_positions()
+
+    def restart(self) -> None:
+        """Forget every posture solved, and stand the robot as it was loaded: a draw that
+        starts here measures what it would in a scene of its own."""
+        self._solved.clear()
+        self._posed_at = None
+        self._reset(self._loaded)
+
+    #: Farthest gap measured, m: beyond it :meth:`distance` is inf.
+    REACH = 1.0
+
+    def distance(
+        self, posture: Posture, centre: np.ndarray, radius: float, within: float = REACH
+    ) -> float:
+        """Gap between a sphere and the nearest robot link holding the object in ``posture``,
+        m (negative: overlap); inf if it is over ``within`` m (the links farther away are
+        never measured: a draw asks only whether a sphere clears the robot by a margin)."""
+        client = self._scene.client
+        reach = min(within, self.REACH) + radius - self.PROBE_RADIUS
+        key = (*(float(v) for v in posture.position), posture.grip_yaw, posture.half_span)
+        if key != self._posed_at:
+            self._pose(key, posture)
+            self._posed_at = key
+        pb.resetBasePositionAndOrientation(
+            self._probe, list(centre), [0, 0, 0, 1], physicsClientId=client
+        )
+        gaps = [
+            point[8]
+            for body in self._scene.robot_ids
+            for point in pb.getClosestPoints(self._probe, body, reach, physicsClientId=client)
+        ]
+        return min(gaps, default=math.inf) - (radius - self.PROBE_RADIUS)
+
+    def _pose(self, key: tuple[float, ...], posture: Posture) -> None:
+        """Pose the robot holding the object in ``posture`` (keyed ``key``): solved the first
+        time, reset to its solution after."""
+        solved = self._solved.get(key)
+        if solved is None:
+            self._scene.place_palms(
+                lateral_grasp_palm_poses(
+                    posture.position,
+                    posture.half_span,
+                    self._thickness,
+                    grip_yaw=posture.grip_yaw,
+                )
+            )
+            solved = self._solved[key] = self._joint_positions()
+        else:
+            self._reset(solved)
+
+    def _joint_positions(self) -> list[tuple[int, int, float]]:
+        """(body, joint, position) of every joint the controller drives: all that placing the
+        palms sets (:meth:`worlds.robots.RobotModel.driven_joints`)."""
+        client = self._scene.client
+        ids = self._scene.robot_ids
+        return [
+            (
+                ids[d.body],
+                d.joint,
+                float(pb.getJointState(ids[d.body], d.joint, physicsClientId=client)[0]),
+            )
+            for d in self._scene.robot.driven_joints()
+        ]
+
+    def _reset(self, positions: list[tuple[int, int, float]]) -> None:
+        """Reset every joint to its position in ``positions`` (:meth:`_joint_positions`)."""
+        client = self._scene.client
+        for body, joint, value in positions:
+            pb.resetJointState(body, joint, value, 0.0, physicsClientId=client)
+
+    def close(self) -> None:
+        """Disconnect the scene."""
+        self._scene.close()
+
+    def __enter__(self) -> RobotClearance:
+        return self
+
+    def __exit__(
+        self,
+        kind: type[BaseException] | None,
+        error: BaseException | None,
+        trace: TracebackType | None,
+    ) -> None:
+        self.close()
+
+
+def _uniform(rng: np.random.Generator, bounds: tuple[float, float]) -> float:
+    return float(rng.uniform(*bounds))
+
+
+def _in_region(rng: np.random.Generator, region: Region, z: float) -> np.ndarray:
+    return np.array([_uniform(rng, region.x), _uniform(rng, region.y), z])
+
+
+def draw_trial(
+    base: World, seed: int, trial: int, robot: RobotClearance | None = None
+) -> tuple[World, list[str]]:
+    """A variant of ``base`` for one trial and the kinds of obstacle per move.
+
+    The base world gives the robot, table, object, simulation settings and the trial layout
+    (``base.trials``); this draws the object's start, a goal per move and the obstacles.
+    ``robot`` measures spheres against the robot (one is made for ``base`` if not given).
+    """
+    if robot is None:
+        with RobotClearance(base) as own:
+            return draw_trial(base, seed, trial, own)
+    robot.restart()
+    turning = any(_turns(region) for region in base.trials.goal_regions())
+    for redraw in range(TRIAL_REDRAWS if turning else 1):
+        try:
+            return _draw_trial(base, seed, trial, robot, redraw)
+        except RuntimeError:
+            # A turn that leaves no room for the next move's sphere (the arms turned across
+            # its way): the trial is drawn again from a stream of its own.
+            if redraw == TRIAL_REDRAWS - 1 or not turning:
+                raise
+    raise AssertionError("unreachable")
+
+
+def _turns(region: GoalRegion) -> bool:
+    """Whether a move's goal yaw is drawn from a range rather than fixed."""
+    assert region.yaw_deg is not None  # given by TrialSettings.goal_regions
+    return region.yaw_deg[0] != region.yaw_deg[1]
+
+
+def _yaw_range(region: GoalRegion) -> tuple[float, float]:
+    assert region.yaw_deg is not None  # given by TrialSettings.goal_regions
+    return region.yaw_deg
+
+
+def _draw_trial(
+    base: World, seed: int, trial: int, robot: RobotClearance, redraw: int
+) -> tuple[World, list[str]]:
+    """:func:`draw_trial` from stream ``redraw`` (0: the trial's own, as without turns)."""
+    layout = base.trials
+    rng = np.random.default_rng([seed, trial] if redraw == 0 else [seed, trial, 2, redraw])
+    obj = base.objects[0]
+    regions = layout.goal_regions()
+    drawn = draw_object(
+        layout, regions, getattr(obj.shape, "size", (0.2, 0.3, 0.15)), seed, trial, redraw
+    )
+    if isinstance(obj.shape, TrayShape) and layout.size_scale is not None:
+        # Its walls stay as tall as the palms need (experiment.tray_draws).
+        palm = float(base.robot.palm_size[0])
+        drawn.size[2] = tray_height(obj.shape.size[2], float(drawn.size[2]), palm)
+    half = drawn.size / 2.0
+    z = base.table.position[2] + half[2]
+    start = _in_region(rng, layout.start, z)
+    goals = [_in_region(rng, region, z) for region in regions]
+    for goal, pitch in zip(goals, drawn.pitches, strict=True):
+        goal[2] = base.table.position[2] + goal_half_height(drawn.size, pitch)
+    # The yaws come from a generator of their own, so a layout without turns draws the same
+    # starts, goals and spheres as before they were drawn.
+    turn_rng = np.random.default_rng([seed, trial, 1, redraw])
+    goal_yaws = [_uniform(turn_rng, _yaw_range(region)) for region in regions]
+    start_yaw = math.radians(obj.pose.rpy_deg[2])
+    max_turn = robot_capabilities(base).max_turn_rad
+    robot_yaw = math.radians(base.robot.base.rpy_deg[2])
+    size = 2.0 * half
+    # Every move but at most one has a sphere (the paper's at least two of three).
+    with_obstacle = [bool(region.obstacles) for region in regions]
+    # The coin is drawn before the move it decides: the order of the draws the recorded
+    # campaigns (bench/results) were drawn in.
+    keep = bool(rng.random() < 0.5)
+    free = int(rng.integers(len(regions)))
+    with_obstacle[free] = with_obstacle[free] and keep
+    spheres: list[Sphere | None] = []
+    kinds: list[str] = []
+    prev, prev_yaw = start, start_yaw
+    for i, (goal, region) in enumerate(zip(goals, regions, strict=True)):
+        sphere: Sphere | None = None
+        low, high = _yaw_range(region)
+        for attempt in range(YAW_ATTEMPTS):
+            if attempt == YAW_ATTEMPTS - 1 and low <= math.degrees(prev_yaw) <= high:
+                goal_yaws[i] = math.degrees(prev_yaw)  # at last, no turn at all
+            elif attempt:  # no sphere fits the robot turning this way: another turn
+                goal_yaws[i] = _uniform(turn_rng, (low, high))
+            yaw = math.radians(goal_yaws[i])
+            postures = move_postures(prev, prev_yaw, goal, yaw, size, max_turn, robot_yaw)
+            postures = pitched_goal_postures(postures, goal, half, drawn.pitches[i])
+            if not with_obstacle[i]:
+                break
+            try:
+                sphere = _draw_sphere(
+                    rng,
+                    f"ball_{i + 1}",
+                    prev,
+                    goal,
+                    half,
+                    layout,
+                    region.obstacles,
+                    robot,
+                    postures,
+                )
+                break
+            except RuntimeError:
+                if attempt == YAW_ATTEMPTS - 1 or low == high:
+                    raise
+        spheres.append(sphere)
+        kinds.append("none" if sphere is None else sphere.kind.value)
+        prev, prev_yaw = goal, yaw
+    data = base.model_dump(mode="json")
+    data["objects"][0]["pose"]["position"] = start.tolist()
+    if layout.size_scale is not None:
+        data["objects"][0]["shape"]["size"] = drawn.size.tolist()
+    if drawn.mass is not None:
+        data["objects"][0]["mass"] = drawn.mass
+    # What rides on the object (a ball loose on a tray) starts on it: where it did, or drawn.
+    place_riders(data, base, riding(base), start, drawn.size, (seed, trial, redraw))
+    data["obstacles"] = [
+        {
+            "name": s.name,
+            "shape": {"type": "sphere", "radius": s.radius},
+            "position": list(s.centre),
+        }
+        for s in spheres
+        if s is not None
+    ]
+    data["task"] = [
+        {
+            "object": obj.name,
+            "moves": [
+                {
+                    "goal": {"position": g.tolist(), "rpy_deg": [0.0, pitch, yaw]},
+                    "obstacles": [] if s is None else [s.name],
+                }
+                for g, yaw, pitch, s in zip(goals, goal_yaws, drawn.pitches, spheres, strict=True)
+            ],
+        }
+    ]
+    if layout.insertion is not None:
+        # From a stream of its own: the draws above stay those of a world without it.
+        data = place_fixture(data, np.random.default_rng([seed, trial, 3, redraw]))
+    data["name"] = f"{base.name}_trial_{trial}"
+    return world_from_data(data, base.source), kinds
+
+
+def _half(posture: Posture, half: np.ndarray) -> np.ndarray:
+    """The box's half extents as held in ``posture``."""
+    return half if posture.half_extents is None else posture.half_extents
+
+
+def riding(world: World) -> list[int]:
+    """Indices of the objects riding on ``objects[0]`` at the start
+    (:func:`worlds.trays.riders`)."""
+    spec = as_world_spec(world)
+    carried = [step.object for step in world.task]
+    on = {o.name for o in riders(spec.scene.objects, world.objects[0].name, carried)}
+    return [k for k, o in enumerate(world.objects) if o.name in on]
+
+
+def _draw_sphere(
+    rng: np.random.Generator,
+    name: str,
+    start: np.ndarray,
+    goal: np.ndarray,
+    half: np.ndarray,
+    layout: TrialSettings,
+    allowed: Sequence[ObstacleKind],
+    robot: RobotClearance,
+    postures: list[Posture],
+) -> Sphere:
+    """A sphere of an ``allowed`` kind, on the line or ahead of the carry, clear of the box and
+    of the robot holding it as it picks it up at the start and puts it down at the goal
+    (``postures``: turned, and at every step of a turn made in steps), at rest and lifted."""
+    top = start[2] + half[2]
+    lifted = np.array([0.0, 0.0, layout.lift])
+    grasps = [
+        replace(p, position=p.position + dz) for p in postures for dz in (0.0 * lifted, lifted)
+    ]
+    # The box's reach along x, turned as it is at the start and the goal.
+    reach_x = max(
+        abs(math.cos(p.object_yaw)) * _half(p, half)[0]
+        + abs(math.sin(p.object_yaw)) * _half(p, half)[1]
+        for p in postures
+    )
+    for _ in range(SPHERE_ATTEMPTS):  # rejection sampling
+        radius = _uniform(rng, layout.sphere_radius)
+        # Either kind with probability 1/2 (one draw, as before kinds could be restricted).
+        if len(allowed) == 1:
+            kind = allowed[0]
+        else:
+            kind = ObstacleKind.LINE if rng.random() < 0.5 else ObstacleKind.AHEAD
+        if kind is ObstacleKind.LINE:
+            t = float(rng.uniform(0.35, 0.65))
+            xy = start[:2] + t * (goal[:2] - start[:2])
+            centre = np.array([*xy, top + _uniform(rng, layout.line_gap) + radius])
+        else:
+            front = max(start[0], goal[0]) + reach_x
+            centre = np.array(
+                [
+                    front + radius + _uniform(rng, layout.ahead_gap),
+                    0.5 * (start[1] + goal[1]),
+                    top + _uniform(rng, layout.ahead_height),
+                ]
+            )
+        box = min(_box_gap(p.position, _half(p, half), centre, p.object_yaw) for p in postures)
+        if box - radius < layout.clearance:
+            continue
+        clearance = layout.robot_clearance
+        if any(robot.distance(p, centre, radius, clearance) < clearance for p in grasps):
+            continue
+        return Sphere(name, (float(centre[0]), float(centre[1]), float(centre[2])), radius, kind)
+    raise RuntimeError(f"{name}: could not place a sphere clear of the start and goal")
+
+
+class TrialLayoutError(ValueError):
+    """A world whose ``trials`` section no trial can be drawn from; one message, not one per
+    trial."""
+
+
+def check_trial_layout(base: World, seed: int, label: str) -> None:
+    """Raise :class:`TrialLayoutError` (naming ``label``, the world file) unless trials can be
+    drawn from ``base``: a box object to grasp, and trial 0 of ``seed`` drawn as every trial
+    is (its obstacles placed clear of the box and of the robot holding it).
+
+    A layout that cannot place a sphere once (``clearance: 5``) cannot place it in any trial;
+    drawing one costs a fraction of a second, and tells before a campaign starts.
+    """
+    obj = base.objects[0]
+    if obj.shape.type not in ("box", "tray"):
+        raise TrialLayoutError(
+            f"{label}: objects[0].shape: expected a box or tray object for trials (their obstacles "
+            f"and grasps are drawn around a box), got a {obj.shape.type} ({obj.name!r})"
+        )
+    problem = tray_layout_problem(base, riding(base))
+    if problem is not None:
+        raise TrialLayoutError(f"{label}: {problem}")
+    try:
+        draw_trial(base, seed, 0)
+    except RuntimeError as err:
+        layout = base.trials
+        raise TrialLayoutError(
+            f"{label}: trials: expected a layout whose obstacles can be drawn, got none for "
+            f"trial 0 ({err}); lower trials.clearance ({layout.clearance:g} m) or "
+            f"trials.robot_clearance ({layout.robot_clearance:g} m), or move the regions apart"
+        ) from None
