@@ -1,16 +1,16 @@
 """Where the arms' links go along predicted palm paths: inverse kinematics on a kinematic copy.
 
 Path checks (:meth:`worlds.sim_world.SimWorld.check_trajectory`) predict the palms and the held
-object by rolling the composition out; the links behind the palms follow from the joints. For
-an arm on its own base, the last links move nearly rigidly with the palm over one carry
-(:meth:`worlds.collision.CollisionWorld.check_attached_links`). On a robot whose arms share
-joints (the iCub's torso) that is not so: the torso swings both arms while one palm carries
-the object sideways, and a forearm ends centimetres from where the rigid carry puts it. Here
-each waypoint's palm poses are solved for every arm of a body at once
-(:func:`worlds.palm_ik.solve_palms`, warm-started from the waypoint before, the first from the
-measured joints, with the controller's null-space posture as the rest posture) on a copy of
-the robot in its own PyBullet client, so the scene's physics is never touched, and the links'
-frames are read from it.
+object by rolling the composition out; the links behind the palms follow from the joints.
+Carried rigidly with the palms (:meth:`worlds.collision.CollisionWorld.check_attached_links`),
+the links miss the elbow's swing over a carry, and on a robot whose arms share joints (the
+iCub's torso) the torso's, which swings both arms while one palm carries the object sideways:
+a forearm ends centimetres from where the rigid carry puts it. Here each waypoint's palm poses
+are solved for every arm of a body at once (:func:`worlds.palm_ik.solve_palms`, warm-started
+from the waypoint before, the first from the measured joints, with the controller's
+null-space posture as the rest posture) on a copy of the robot in its own PyBullet client, so
+the scene's physics is never touched, and the links' frames are read from it. Every robot's
+path checks use it.
 """
 
 from __future__ import annotations

@@ -41,18 +41,18 @@ from worlds.trays import TrayFrame, riders
 from worlds.truth import PhysicalTruth, sensed_pose
 from worlds.world_file import World, as_world_spec
 
-#: Extra clearance asked of predicted forearm poses (carried rigidly with the palms), m: the
-#: most, for a long carry.
+#: Extra clearance asked of predicted arm-link poses (solved for the palms' path, not run
+#: through the controller), m: the most, for a long carry.
 FOREARM_MARGIN_M = 0.03
 #: How fast that extra clearance grows with the palms' travel from the path's start, m per m.
-#: The rigid prediction misses the elbow's swing, which grows with how far the palms have
-#: gone (turns counted at :data:`FOREARM_LEVER_M` per radian); a short correction near an
-#: obstacle is not held to a long carry's doubt.
+#: The prediction misses how the controller's motion swings the elbow off the solution, which
+#: grows with how far the palms have gone (turns counted at :data:`FOREARM_LEVER_M` per
+#: radian); a short correction near an obstacle is not held to a long carry's doubt.
 FOREARM_DOUBT_PER_M = 0.2
 #: Lever that converts a palm's turn into travel for that doubt, m per rad (a forearm's length).
 FOREARM_LEVER_M = 0.3
-#: Waypoints between two solved for the arms' prediction on robots whose arms share joints
-#: (4 control steps at 60 Hz: the palms move at most a centimetre or two in between).
+#: Waypoints between two solved for the arms' prediction (4 control steps at 60 Hz: the palms
+#: move at most a centimetre or two in between).
 PREDICTION_STRIDE = 4
 #: Highest an object's centre may be carried above the table top, m.
 MAX_LIFT_M = 0.30
@@ -602,8 +602,8 @@ class SimWorld:
         palm_orientations: Array,
         margin_m: float = 0.0,
     ) -> PathCheck:
-        """FCL check of predicted palm and held-object poses, and of the forearms carried with
-        the palms (:meth:`worlds.collision.CollisionWorld.check_attached_links`), against the
+        """FCL check of predicted palm and held-object poses, and of the arm links posed by
+        inverse kinematics of the palms' path (:mod:`worlds.arm_prediction`), against the
         active obstacles."""
         return self._check_path(
             palm_positions,
@@ -618,7 +618,7 @@ class SimWorld:
         palm_orientations: Array,
         margin_m: float = 0.0,
     ) -> PathCheck:
-        """FCL check of predicted poses of empty palms and of the forearms carried with them,
+        """FCL check of predicted poses of empty palms and of the arm links that follow them,
         against the active obstacles (as :meth:`check_trajectory`, without a held object)."""
         return self._check_path(palm_positions, palm_orientations, margin_m, None)
 
@@ -638,19 +638,12 @@ class SimWorld:
             object_orientations,
             margin_m,
         )
-        # The forearms are predicted by carrying them rigidly with the palms, which misses the
-        # elbow's swing: they get extra clearance so that a doubtful path is not trusted.
-        # Where the arms share joints, the rigid carry misses the torso's swing too, which
-        # moves a forearm centimetres: those arms are solved for (_predicted_links_collide).
+        # The arms' links are solved for along the palms' path (_predicted_links_collide):
+        # carried rigidly with the palms instead, a forearm misses the elbow's swing (and a
+        # torso's), centimetres over a carry. The solution is the controller's posture, not
+        # the controller's motion: the links get extra clearance the further the palms go.
         doubt = forearm_doubt(palm_positions, palm_orientations)
-        if self.scene.robot.shared_joints is not None:
-            arms = self._predicted_links_collide(
-                palm_positions, palm_orientations, margin_m + doubt
-            )
-        else:
-            arms = self.collision.check_attached_links(
-                palm_positions, palm_orientations, 4, margin_m + doubt
-            )
+        arms = self._predicted_links_collide(palm_positions, palm_orientations, margin_m + doubt)
         pts = np.asarray(palm_positions).reshape(-1, 3)
         if object_positions is not None:
             pts = np.concatenate((object_positions, pts))
@@ -660,7 +653,7 @@ class SimWorld:
         what = "clear"
         if first is not None:
             if arms[first] and not check.collides[first]:
-                what = f"a forearm within {margin_m + doubt[first]:.3f} m"
+                what = f"an arm link within {margin_m + doubt[first]:.3f} m"
             else:
                 what = f"{'palm or object' if held else 'a palm'} within {margin_m:g} m"
             what += f" at step {first}"
