@@ -509,6 +509,12 @@ def limit_posture(
     )
 
 
+def _by_palm(x: ArrayLike, k: int, width: int) -> FloatArray:
+    """``x`` as (k, t, width) floats, contiguous: ``k`` bodies' ``t`` palms (one palm a body
+    may come as (k, width))."""
+    return np.ascontiguousarray(np.reshape(x, (k, -1, width)), dtype=float)
+
+
 @kernel
 def _affine_kernel(
     a_base: FloatArray,
@@ -570,21 +576,15 @@ def affine_law(
     AffineTorqueLaw
     """
     k = len(terms.a_base)
-
-    def palms(
-        x: ArrayLike, width: int
-    ) -> FloatArray:  # (k, t, width), one palm a body as (k, width)
-        return np.ascontiguousarray(np.reshape(x, (k, -1, width)), dtype=float)
-
     a, a_rate = _affine_kernel(
         np.ascontiguousarray(terms.a_base, dtype=float),
         np.ascontiguousarray(terms.error_gain, dtype=float),
         np.ascontiguousarray(terms.twist_gain, dtype=float),
-        palms(terms.palm_position, 3),
-        palms(terms.palm_quaternion, 4),
-        palms(target_position, 3),
-        palms(target_quaternion, 4),
-        palms(target_twist, 6),
+        _by_palm(terms.palm_position, k, 3),
+        _by_palm(terms.palm_quaternion, k, 4),
+        _by_palm(target_position, k, 3),
+        _by_palm(target_quaternion, k, 4),
+        _by_palm(target_twist, k, 6),
     )
     return AffineTorqueLaw(a=a, a_rate=a_rate, b=terms.b, c=terms.c)
 
