@@ -370,6 +370,13 @@ def icub_model(
         # the inertia is small: on the light iCub arm the default gains squeeze 79 % of
         # stiffness * offset (11.8 N for 15 N asked); less damping brings it to about 89 %
         # (13.4 N), above the grasp's 80 % threshold, and stays stable (tests/worlds/test_icub.py).
+        # Its whole body sways in the palms' null space at 1.4 Hz (torso pitch against the
+        # shoulders) after a 3 cm step of both palms. With the joint damper at 0.05 and the
+        # posture damper at 0.2 the sway decayed over about 6 s at no lag and grew under a
+        # 30 ms lag with one tick of latency (torso pitch rate 0.07 to 0.34 rad/s rms over 6 s):
+        # the arms then shook the parcel out of the grip. At 0.6 and 1.0 it decays within 2 s
+        # from no lag to 30 ms, and the palms settle under a 40 ms lag
+        # (tests/worlds/test_torque_loop.py).
         # The wrists' ranges are narrow (yaw -20..25 deg): the default joint-limit band
         # (8.6 deg at 200 N m/rad, beyond the wrist motors) pushes back over a third of one.
         # A 1.7 deg band at 50 N m/rad cut the palm error holding the parcel at table height
@@ -383,8 +390,8 @@ def icub_model(
         gain_overrides={
             "damping_linear": 30.0,
             "damping_angular": 0.5,
-            "joint_damping": 0.05,
-            "damping_null": 0.2,
+            "joint_damping": 0.6,
+            "damping_null": 1.0,
             "limit_margin": 0.03,
             "limit_stiffness": 50.0,
             "posture_limit_band": 0.15,
