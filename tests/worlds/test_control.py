@@ -131,7 +131,9 @@ def test_law_applies_the_task_space_spring_through_the_jacobian() -> None:
         x["q"],
     )
     tau = law.a + (law.b @ x["q"][..., None])[..., 0]
-    wrench = np.concatenate([1000.0 * target[0], 10.0 * np.array([0.0, 0.0, 0.1])])
+    wrench = np.concatenate(
+        [gains.stiffness_linear * target[0], gains.stiffness_angular * np.array([0.0, 0.0, 0.1])]
+    )
     np.testing.assert_allclose(tau[0], x["jacobian"][0].T @ wrench, atol=1e-9)
 
 

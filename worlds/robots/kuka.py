@@ -270,14 +270,6 @@ def kuka_iiwa_model(
         forearm_link_names={arm: FOREARM_LINKS for arm in (Arm.LEFT, Arm.RIGHT)},
         # The LBR iiwa senses the torque at every joint.
         torque_loop=TorqueLoop(),
-        # The palm's roll about the last joint is light (0.002 kg m^2 with the palm): on the
-        # default 10 N m/rad angular spring it rings at 11 Hz, faster than a 30 ms actuator lag
-        # can follow, and under Hard mode's slowest actuators that ring grew (joint rate 0.57
-        # rad/s rms six seconds after a 3 cm step) and turned a held parcel about the grip
-        # axis. At 5 N m/rad (50 rad/s) it dies out up to 30 ms and slowly at 40 ms
-        # (tests/worlds/test_torque_loop.py). Hard, first 60 trials of seed 0: 56, was 51;
-        # Easy, first 100: 100, as before; median placement 1.3 deg, was 1.2.
-        gain_overrides={"stiffness_angular": 5.0},
     )
 
 
