@@ -13,6 +13,7 @@ from planner.leaves.palm_motion import ViaPointLeaf, measured_state
 from planner.leaves.palm_routes import PalmRoute, margin_port, take_clear_route
 from planner.port import ObjectSensing, ObstacleScene, PalmControl, Pose, WorldPort
 from skills import quaternion as quat
+from skills.flip import vertical_half_extent
 from skills.turns import grip_yaw, wrap_angle, yaw_of
 from skills.vocabulary import ARMS, Arm
 
@@ -61,11 +62,40 @@ def above_rise(world: WorldPort, name: str, rise: float) -> float:
     return max(rise, top + palm_reach + 0.02)
 
 
+#: How far a resting object may lie below the table top, or beyond its edge, before it is
+#: taken to have fallen off, m: beyond the table's uncertain height (Hard mode's +-3 cm).
+OFF_TABLE_M = 0.05
+
+
+def off_the_table(world: WorldPort, name: str) -> str | None:
+    """Why the object cannot be grasped where it lies, off the table (its lowest point more
+    than :data:`OFF_TABLE_M` below the table top, or its centre that far beyond the table's
+    edge), or None."""
+    pose = world.object_pose(name)
+    extents = world.object_extents(name)
+    lower, upper = world.workspace_bounds(name)
+    top = float(lower[2] - extents[2] / 2.0)
+    below = top - float(pose.position[2] - vertical_half_extent(extents, pose.orientation))
+    beyond = float(np.max(np.maximum(lower[:2] - pose.position[:2], pose.position[:2] - upper[:2])))
+    if below <= OFF_TABLE_M and beyond <= OFF_TABLE_M:
+        return None
+    where = ", ".join(f"{v:.2f}" for v in pose.position)
+    side = (
+        f"{below:.2f} m below the table top"
+        if below > OFF_TABLE_M
+        else (f"{beyond:.2f} m beyond the table's edge")
+    )
+    return f"{name} lies off the table, out of reach: at ({where}) m, {side}"
+
+
 class Approach(ViaPointLeaf):
     """Move both palms to ``standoff`` m outside the object's faces via set-points above.
 
     The faces are the pair that suits move ``move``'s turn (:mod:`skills.turns`), from the
     object's measured yaw: after a turn, the palms meet the faces that now face them.
+
+    An object that lies off the table (:func:`off_the_table`: fallen to the floor) is out of
+    reach: the leaf fails at once, saying where it lies.
 
     Before moving, the path is predicted and checked against the obstacles
     (:mod:`planner.leaves.palm_routes`); if it is not clear by ``margin_m``, the first clear of:
@@ -106,10 +136,14 @@ class Approach(ViaPointLeaf):
         """Plan the via-point motion from where the palms are now, by a way clear of the
         obstacles."""
         self.motion = None
+        self.refusal = None
         if self.connected() is not None:
             return
         world = self.world
         name = self.get_input("object")
+        if (why := off_the_table(world, name)) is not None:
+            self.refusal = why
+            return
         turn = move_turn(world, name, int(self.get_input("move")))
         quarter_turns = grasp_quarter_turns(world, name, turn)
         g = lateral_geometry(world, name, quarter_turns)

@@ -135,11 +135,15 @@ class ViaPointLeaf(MotionLeaf):
         self.motion: ViaPointMotion | None = None
         #: Which way the palms take, when not the usual one (added to the feedback).
         self.route_note = ""
+        #: Why ``initialise()`` planned no motion (the leaf then fails at once), or None.
+        self.refusal: str | None = None
 
     def update(self) -> Status:
         """Command one step of the motion; SUCCESS at the last via-point."""
         if (why := self.connected()) is not None:
             return self.fail(why)
+        if self.refusal is not None:
+            return self.fail(self.refusal)
         assert self.motion is not None
         for arm, st in self.motion.step(self.control_dt).items():
             self.world.command_palm(arm, Pose(st.position, st.orientation), st.twist())

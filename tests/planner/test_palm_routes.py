@@ -124,3 +124,15 @@ def test_a_leaf_boxed_in_keeps_the_usual_way_and_says_so(tick_leaf: Tick) -> Non
     assert "no way predicted clear, by backing away and rising" in log.feedback
     path = commanded_path(world)
     assert_allclose(path, expected.positions[1 : len(path) + 1], rtol=0.0, atol=0.0)
+
+
+def test_approach_refuses_an_object_fallen_off_the_table_saying_where(tick_leaf: Tick) -> None:
+    fallen = FakeObject("parcel", BOX, pose=Pose.of([0.9, -0.3, 0.05]))
+    log = tick_leaf(Approach("approach"), FakeWorld(objects=[fallen]), object="parcel")
+    assert log.final == Status.FAILURE
+    assert "parcel lies off the table, out of reach: at (0.90, -0.30, 0.05) m" in log.feedback
+    assert "below the table top" in log.feedback
+    beyond = FakeObject("parcel", BOX, pose=Pose.of([1.2, 0.0, 0.675]))
+    log = tick_leaf(Approach("approach"), FakeWorld(objects=[beyond]), object="parcel")
+    assert log.final == Status.FAILURE
+    assert "beyond the table's edge" in log.feedback
