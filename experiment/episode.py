@@ -32,7 +32,7 @@ from planner.btlog import BtLog
 from planner.default_tree import TaskStep, default_tree
 from planner.leaves.conditions import IsHeld
 from planner.loader import load_tree
-from planner.move_result import move_results
+from planner.move_result import MoveResult, move_placements, move_results
 from planner.port import Move
 from planner.render import render_tree
 from planner.runlog import RunLog
@@ -187,6 +187,8 @@ class _Track:
     error_deg: float | None = None
     composition: dict[str, float] | None = None
     skill: str | None = None
+    #: The move's latest success the errors were taken from.
+    placed: MoveResult | None = None
 
 
 class _Recorder:
@@ -195,8 +197,9 @@ class _Recorder:
 
     It reads the moves' published results (:func:`planner.move_result.move_results`,
     written by the Transport leaves), not the leaves: while a move's latest result is RUNNING
-    the carried object's measured pose is sampled into that move's path; when it turns
-    SUCCESS the move's placement error, composition and skill are kept. Every tick its
+    the carried object's measured pose is sampled into that move's path; at each new success
+    (:func:`planner.move_result.move_placements`) the move's placement error, composition
+    and skill are kept. Every tick its
     :class:`experiment.grip_recorder.GripRecorder` samples the objects and palms, and the
     poses it read are the ones the paths keep.
     """
@@ -241,18 +244,26 @@ class _Recorder:
                 track.orientations.append(pose.orientation.copy())
                 self.current = key
             elif result.status == Status.SUCCESS and self.current == key:
-                assert result.placement_error_m is not None
-                assert result.placement_error_rad is not None
-                track.error_m = self._true_error_m(key, pose.position, result.placement_error_m)
-                track.error_deg = float(np.degrees(result.placement_error_rad))
                 track.positions.append(pose.position.copy())
                 track.orientations.append(pose.orientation.copy())
-                track.composition = {
-                    "transport_weight": result.transport_weight,
-                    "avoid_gain": result.avoid_gain,
-                }
-                track.skill = result.skill
                 self.current = None
+        # A move's placement is its latest success, seen even when a correction that started
+        # in the same tick replaced it as the move's latest result.
+        for key, placed in move_placements().items():
+            if key not in self.tracks or placed is self.tracks[key].placed:
+                continue
+            track = self.tracks[key]
+            assert placed.placement_error_m is not None
+            assert placed.placement_error_rad is not None
+            track.placed = placed
+            pose = poses[key[0]]
+            track.error_m = self._true_error_m(key, pose.position, placed.placement_error_m)
+            track.error_deg = float(np.degrees(placed.placement_error_rad))
+            track.composition = {
+                "transport_weight": placed.transport_weight,
+                "avoid_gain": placed.avoid_gain,
+            }
+            track.skill = placed.skill
 
     def _true_error_m(self, key: tuple[str, int], position: np.ndarray, told: float) -> float:
         """The placement error judged on the physics: ``told`` (the leaf's, from the goal as

@@ -4,9 +4,11 @@ A Transport leaf that starts carrying an object writes a :class:`MoveResult` (st
 and writes it again when it ends: SUCCESS with the placement error, FAILURE, or INVALID when a
 parent halts it mid-move. :data:`MOVE_RESULTS_KEY` holds a mapping ``(object, move) ->`` the
 latest result of that move, so a move that ends and the next that starts in the same tick are
-both seen. Readers (the experiment's recorder, after every tick) read this key instead of
-walking the tree for Transport leaves and reading their ports; the run log shows the writes
-like any other blackboard write.
+both seen. :data:`MOVE_PLACEMENTS_KEY` holds each move's latest SUCCESS: a correction that
+starts in the tick its move's carry succeeded, then fails, leaves the placement (its error, and
+the surface or fixture it found) readable. Readers (the experiment's recorder, after every
+tick) read these keys instead of walking the tree for Transport leaves and reading their
+ports; the run log shows the writes like any other blackboard write.
 """
 
 from __future__ import annotations
@@ -16,10 +18,19 @@ from dataclasses import dataclass
 import py_trees
 from py_trees.common import Access, Status
 
-__all__ = ["MOVE_RESULTS_KEY", "MoveResult", "move_results", "publish_move_result"]
+__all__ = [
+    "MOVE_PLACEMENTS_KEY",
+    "MOVE_RESULTS_KEY",
+    "MoveResult",
+    "move_placements",
+    "move_results",
+    "publish_move_result",
+]
 
 #: Absolute blackboard key of ``dict[(object, move), MoveResult]``, the latest of each move.
 MOVE_RESULTS_KEY = "/move_results"
+#: Absolute blackboard key of ``dict[(object, move), MoveResult]``, the latest SUCCESS of each.
+MOVE_PLACEMENTS_KEY = "/move_placements"
 
 
 @dataclass(frozen=True)
@@ -68,18 +79,34 @@ class MoveResult:
 
 
 def publish_move_result(result: MoveResult, writer: str) -> None:
-    """Make ``result`` its move's latest under :data:`MOVE_RESULTS_KEY`, as client ``writer``."""
-    results = {**move_results(), (result.object, result.move): result}
+    """Make ``result`` its move's latest under :data:`MOVE_RESULTS_KEY` (and, a SUCCESS, under
+    :data:`MOVE_PLACEMENTS_KEY`), as client ``writer``."""
+    key = (result.object, result.move)
+    _write(MOVE_RESULTS_KEY, {**move_results(), key: result}, writer)
+    if result.status == Status.SUCCESS:
+        _write(MOVE_PLACEMENTS_KEY, {**move_placements(), key: result}, writer)
+
+
+def _write(key: str, mapping: dict[tuple[str, int], MoveResult], writer: str) -> None:
     client = py_trees.blackboard.Client(name=writer)
-    client.register_key(key=MOVE_RESULTS_KEY, access=Access.WRITE)
-    client.set(MOVE_RESULTS_KEY, results)  # a new mapping: readers' copies never change
+    client.register_key(key=key, access=Access.WRITE)
+    client.set(key, mapping)  # a new mapping: readers' copies never change
     client.unregister(clear=False)  # the value stays; no client is left behind per write
+
+
+def _read(key: str) -> dict[tuple[str, int], MoveResult]:
+    try:
+        value = py_trees.blackboard.Blackboard.get(key)
+    except KeyError:
+        return {}
+    return dict(value) if isinstance(value, dict) else {}
 
 
 def move_results() -> dict[tuple[str, int], MoveResult]:
     """The latest published :class:`MoveResult` of each ``(object, move)``; empty before any."""
-    try:
-        value = py_trees.blackboard.Blackboard.get(MOVE_RESULTS_KEY)
-    except KeyError:
-        return {}
-    return dict(value) if isinstance(value, dict) else {}
+    return _read(MOVE_RESULTS_KEY)
+
+
+def move_placements() -> dict[tuple[str, int], MoveResult]:
+    """The latest SUCCESS of each ``(object, move)`` that has had one; empty before any."""
+    return _read(MOVE_PLACEMENTS_KEY)

@@ -11,7 +11,7 @@ from py_trees.ports import PortInformation
 from affordances import SemanticAction
 from planner.composition import MovePlan, SkillChoiceError, goal_error
 from planner.leaves.base import WorldLeaf, composed_move, composition_ports
-from planner.move_result import move_results
+from planner.move_result import move_placements
 from planner.port import ObjectSensing, ObstacleScene, PalmControl, Pose
 from skills.composer import DualArmState, relative_from_world
 from skills.dual_arm import shift_along_face
@@ -83,8 +83,8 @@ class IsHeld(WorldLeaf):
 
 
 class AtGoal(WorldLeaf):
-    """The object is within tolerance of a move's goal pose (at the height its Transport
-    set it down at, when it felt the surface elsewhere:
+    """The object is within tolerance of a move's goal pose (at the height its last
+    successful Transport set it down at, when it felt the surface elsewhere:
     :attr:`~planner.move_result.MoveResult.rested_z`; at the place its Insert seated it, when
     it found the fixture elsewhere: :attr:`~planner.move_result.MoveResult.found_xy`)."""
 
@@ -110,7 +110,7 @@ class AtGoal(WorldLeaf):
             return self.fail(inputs)
         name, index = inputs
         goal = self.world.task_moves(name)[index].goal
-        placed = move_results().get((name, index))
+        placed = move_placements().get((name, index))
         if placed is not None and placed.rested_z is not None:
             # Its Transport felt the surface elsewhere than the goal's height: the goal is the
             # same place on the surface as found.

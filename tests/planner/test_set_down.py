@@ -13,7 +13,7 @@ from py_trees.common import Status
 
 from planner.leaves import Approach, AtGoal, Grasp, SelectSkills, Transport
 from planner.leaves.transport import SET_DOWN_DEPTH_M
-from planner.move_result import move_results
+from planner.move_result import MoveResult, move_placements, move_results, publish_move_result
 from planner.testing import FakeObject, FakeWorld
 from planner.testing.fixtures import paper_moves
 from planner.testing.harness import TickLog
@@ -141,3 +141,24 @@ def test_a_move_that_failed_hands_over_where_it_left_the_palms(
     assert again.final == Status.RUNNING, again.feedback
     for arm in ARMS:
         assert np.linalg.norm(world.palm_pose(arm).position[:2] - left_at[arm][:2]) < 0.005
+
+
+@pytest.mark.usefixtures("clean_blackboard")
+def test_a_correction_that_fails_after_a_set_down_keeps_the_surface_found(
+    tick_leaf: Callable[..., TickLog],
+) -> None:
+    """A correction starts in the tick its move's carry succeeded and fails at once (the grip
+    no longer intact): the move's latest result is then that failure, but its placement, and
+    the table height it found, are still the carry's."""
+    world = lowered_table_world(0.03)
+    log, _ = carry_first_move(world, tick_leaf)
+    assert log.final == Status.SUCCESS, log.feedback
+    done = move_results()[("parcel", 0)]
+    failed = MoveResult("parcel", 0, 0.1, 0.0, Status.FAILURE)
+    publish_move_result(failed, "correction")
+    assert move_results()[("parcel", 0)] == failed
+    assert move_placements()[("parcel", 0)] == done
+    at_goal = AtGoal("at_goal")
+    assert tick_leaf(at_goal, world, object="parcel", move=0, tolerance_m=0.005).final == (
+        Status.SUCCESS
+    )
