@@ -379,8 +379,8 @@ def icub_model(
         # (tests/worlds/test_torque_loop.py).
         # Pressed to its limit under a 13 ms actuator lag, a wrist's yaw sang at 20 Hz on the
         # 50 N m/rad repulsion (Hard trial 19 of seed 0) and shook the parcel out of the grip;
-        # at 15 it rests. Hard, first 60 trials of seed 0: 58 (51 before), Easy first 100:
-        # 100 (97), and the reach map below within 0.1 mm of what it was.
+        # at 15 it rests. Hard, first 60 trials of seed 0: 58 (51 before); Easy, 100 trials:
+        # 100, as before; the reach map below within 0.1 mm of what it was.
         # The wrists' ranges are narrow (yaw -20..25 deg): the default joint-limit band
         # (8.6 deg at 200 N m/rad, beyond the wrist motors) pushes back over a third of one.
         # A 1.7 deg band at 50 N m/rad (15 since) cut the palm error holding the parcel at
