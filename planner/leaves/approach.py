@@ -80,11 +80,10 @@ def off_the_table(world: WorldPort, name: str) -> str | None:
     if below <= OFF_TABLE_M and beyond <= OFF_TABLE_M:
         return None
     where = ", ".join(f"{v:.2f}" for v in pose.position)
-    side = (
-        f"{below:.2f} m below the table top"
-        if below > OFF_TABLE_M
-        else (f"{beyond:.2f} m beyond the table's edge")
-    )
+    if below > OFF_TABLE_M:
+        side = f"{below:.2f} m below the table top"
+    else:
+        side = f"{beyond:.2f} m beyond the table's edge"
     return f"{name} lies off the table, out of reach: at ({where}) m, {side}"
 
 
