@@ -380,7 +380,8 @@ def icub_model(
         # Pressed to its limit under a 13 ms actuator lag, a wrist's yaw sang at 20 Hz on the
         # 50 N m/rad repulsion (Hard trial 19 of seed 0) and shook the parcel out of the grip;
         # at 15 it rests. Hard, first 60 trials of seed 0: 58 (51 before); Easy, 100 trials:
-        # 100, as before; the reach map below within 0.1 mm of what it was.
+        # 100, as before; the reach map (below) 0.4 mm worse at 6 of 147 points, up to 1.7 mm
+        # better at 46, the same regions within 3 mm.
         # The wrists' ranges are narrow (yaw -20..25 deg): the default joint-limit band
         # (8.6 deg at 200 N m/rad, beyond the wrist motors) pushes back over a third of one.
         # A 1.7 deg band at 50 N m/rad (15 since) cut the palm error holding the parcel at
