@@ -373,7 +373,7 @@ def icub_model(
         # Its whole body sways in the palms' null space at 1.4 Hz (torso pitch against the
         # shoulders) after a 3 cm step of both palms. With the joint damper at 0.05 and the
         # posture damper at 0.2 the sway decayed over about 6 s at no lag and grew under a
-        # 30 ms lag with one tick of latency (torso pitch rate 0.07 to 0.34 rad/s rms over 6 s):
+        # 30 ms lag with one tick of latency (torso pitch rate 0.09 to 0.34 rad/s rms over 6 s):
         # the arms then shook the parcel out of the grip. At 0.6 and 1.0 it decays within 2 s
         # from no lag to 30 ms, and the palms settle under a 40 ms lag
         # (tests/worlds/test_torque_loop.py).
