@@ -11,7 +11,7 @@ from py_trees.ports import PortInformation
 from affordances import SemanticAction
 from planner.composition import goal_error, transport_composition
 from planner.leaves.base import MotionLeaf
-from planner.leaves.transport import SUPPORTED_LOAD_FRACTION
+from planner.leaves.set_down import palm_load_n, supported_below_n
 from planner.move_result import MoveResult, publish_move_result
 from planner.port import Clock, Move, ObjectSensing, ObstacleScene, PalmControl, Pose
 from skills.composer import DualArmComposer, DualArmState
@@ -145,9 +145,7 @@ class Insert(MotionLeaf):
         self.peak_force = 0.0
         self.found_xy: tuple[float, float] | None = None
         self.min_force_n = float(self.get_input("min_force_n"))
-        self.supported_below_n = (
-            SUPPORTED_LOAD_FRACTION * world.object_context(name).mass_kg * world.gravity()
-        )
+        self.supported_below_n = supported_below_n(world, name)
         self.index = index
         self.skill_name = skill.name
         self._publish(Status.RUNNING)
@@ -184,7 +182,7 @@ class Insert(MotionLeaf):
             return self.running(f"inserting: {self.phase_time:.1f} of {tau:.1f} s")
         if self.ended_at is None:
             self.ended_at = world.time()
-        load = sum(world.palm_load(arm, name) for arm in ARMS)
+        load = palm_load_n(world, name)
         if load > self.supported_below_n and rate > 0.0:
             self.press = min(self.press + PRESS_SPEED_M_S * dt * rate, PRESS_DEPTH_M)
         twist = world.object_twist(name)

@@ -16,10 +16,12 @@ from planner.composition import (
 from planner.leaves.base import MotionLeaf
 from planner.leaves.palm_motion import ViaPointLeaf, measured_state
 from planner.leaves.palm_routes import PalmRoute, margin_port, take_clear_route
-from planner.port import Clock, ObjectSensing, ObstacleScene, PalmControl, Pose
+from planner.leaves.set_down import lowered, palm_load_n, supported_below_n
+from planner.port import Clock, ObjectSensing, ObstacleScene, PalmControl, Pose, WorldPort
 from skills import quaternion as quat
-from skills.composer import DualArmComposer, DualArmState
+from skills.composer import DualArmComposer, DualArmState, commands_for, relative_from_world
 from skills.dual_arm import GraspGeometry
+from skills.state import PoseState
 from skills.vocabulary import ARMS, Arm
 
 
@@ -42,8 +44,45 @@ def palms_facing(state: DualArmState) -> GraspGeometry:
 MAX_REOPENINGS = 2
 
 
+def held_at_rest(state: DualArmState) -> DualArmState:
+    """``state``'s poses, everything at rest: a hold that does not move."""
+    return DualArmState(
+        *(
+            PoseState.at_rest(p.position, p.orientation)
+            for p in (state.object, state.left, state.right)
+        )
+    )
+
+
+def palms_as_measured(world: WorldPort, name: str) -> DualArmState:
+    """The object as measured, each palm where it is (not where it is commanded), all at rest.
+
+    Opening from here lets the squeeze off at once, by both palms together: opening from the
+    commanded references, pressed into the faces, a palm that leaves first lets the other's
+    squeeze push the object over (a slipped parcel squeezed at 100 N toppled so).
+    """
+    obj = world.object_pose(name)
+    palms = []
+    for arm in ARMS:
+        palm = world.palm_pose(arm)
+        palms.append(
+            PoseState.at_rest(
+                *relative_from_world(obj.position, obj.orientation, palm.position, palm.orientation)
+            )
+        )
+    return DualArmState(PoseState.at_rest(obj.position, obj.orientation), *palms)
+
+
 class Release(MotionLeaf):
-    """Move each palm ``opening_m`` out along its contact normal (a relative skill)."""
+    """Move each palm ``opening_m`` out along its contact normal (a relative skill).
+
+    An object the palms still carry (their upward force above
+    :func:`~planner.leaves.set_down.supported_below_n`: no surface under it, as after a carry
+    cut short by a slip) is first set down: both palms, holding the grip, lower it straight
+    at ``set_down_speed_m_s`` until a surface takes it, searching at most ``set_down_m``
+    below where it was held (else the release fails, saying so, and holds it there).
+    Opening in the air would drop it, onto whatever stands below.
+    """
 
     WORLD_ROLES: ClassVar[tuple[type, ...]] = (Clock, ObjectSensing, PalmControl)
 
@@ -59,31 +98,83 @@ class Release(MotionLeaf):
         "open_s": PortInformation(
             float, required=False, default_value=1.0, description="time scale of opening, s"
         ),
+        "set_down_m": PortInformation(
+            float,
+            required=False,
+            default_value=0.15,
+            description="how far below where it is held the palms search for a surface to "
+            "set a carried object down on before opening, m (0: open where it is)",
+        ),
+        "set_down_speed_m_s": PortInformation(
+            float,
+            required=False,
+            default_value=0.05,
+            description="how fast the palms lower a carried object, m/s",
+        ),
     }
     OUTPUT_PORTS = {
         "to_state": PortInformation(DualArmState, description="full state after opening"),
     }
 
     def initialise(self) -> None:
-        """Compose the opening from the handed-over state."""
+        """Set down an object the palms carry, else compose the opening at once."""
         self.composer: DualArmComposer | None = None
+        self.lowering_from: float | None = None
         if self.connected() is not None:
             return
+        world = self.world
         name = self.get_input("object")
         # Open along the faces as the object stands: a box that lagged its palms in a turn
         # is not where the last move commanded it.
         self.reopenings = 0
-        self._open_from(on_measured_object(self.world, name, self.get_input("from_state")))
+        state = self.get_input("from_state")
+        self.supported_below_n = supported_below_n(world, name)
+        self.set_down_m = float(self.get_input("set_down_m"))
+        self.set_down_speed = float(self.get_input("set_down_speed_m_s"))
+        if self.set_down_m > 0.0 and palm_load_n(world, name) > self.supported_below_n:
+            if self.set_down_speed <= 0.0:
+                raise ValueError(
+                    f"set_down_speed_m_s must be positive, got {self.set_down_speed:g}"
+                )
+            self.held = held_at_rest(on_measured_object(world, name, state))
+            self.lowering_from = world.time()
+            return
+        self._open_from(palms_as_measured(world, name))
 
     def _open_from(self, state: DualArmState) -> None:
         relative = opening_terms(palms_facing(state), float(self.get_input("opening_m")))
         self.composer = static_composition(state, relative, float(self.get_input("open_s")))
         self.started = self.world.time()
 
+    def _set_down(self) -> Status:
+        """Lower the held object a control step; open once a surface carries it."""
+        world, name = self.world, self.get_input("object")
+        assert self.lowering_from is not None
+        depth = self.set_down_speed * (world.time() - self.lowering_from)
+        load = palm_load_n(world, name)
+        if load <= self.supported_below_n:
+            self.lowering_from = None
+            self._open_from(palms_as_measured(world, name))
+            return self.running(f"set down {depth * 1000:.0f} mm lower; opening")
+        if depth > self.set_down_m:
+            return self.fail(
+                f"no surface took the object within {self.set_down_m * 1000:.0f} mm below "
+                f"where it was held (the palms still carry {load:.1f} N): not letting go"
+            )
+        cmd = commands_for(lowered(self.held, depth, self.set_down_speed))
+        for i, arm in enumerate(ARMS):
+            world.command_palm(arm, Pose(cmd.positions[i], cmd.orientations[i]), cmd.twists[i])
+        return self.running(
+            f"setting down before letting go: {depth * 1000:.0f} mm lower, "
+            f"the palms carry {load:.1f} N"
+        )
+
     def update(self) -> Status:
-        """RUNNING while opening; SUCCESS when out of contact and still."""
+        """RUNNING while setting down and opening; SUCCESS when out of contact and still."""
         if (why := self.connected()) is not None:
             return self.fail(why)
+        if self.lowering_from is not None:
+            return self._set_down()
         assert self.composer is not None
         world = self.world
         cmd = self.composer.step(self.control_dt)

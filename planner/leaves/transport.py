@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from dataclasses import replace
 from typing import ClassVar
 
 import numpy as np
@@ -12,18 +11,18 @@ from py_trees.ports import PortInformation
 from affordances import SemanticAction
 from planner.composition import MovePlan, SkillChoiceError, goal_error
 from planner.leaves.base import MotionLeaf, composed_move, composition_ports
+from planner.leaves.set_down import (
+    SET_DOWN_SPEED_M_S,
+    lowered,
+    palm_load_n,
+    supported_below_n,
+)
 from planner.move_result import MoveResult, publish_move_result
 from planner.port import Clock, Move, ObjectSensing, ObstacleScene, PalmControl, Pose
 from skills.composer import DualArmComposer, DualArmState
 from skills.vocabulary import ARMS
 
-#: Below this share of the object's stated weight, the palms' summed upward force
-#: (:meth:`~planner.port.PalmControl.palm_load`) says a surface carries (part of) the object:
-#: an object of half its stated mass, hanging, still loads the palms with 0.5 of it.
-SUPPORTED_LOAD_FRACTION = 0.4
-#: How fast the palms lower an object that arrived unsupported (the surface is lower than the
-#: goal says), m/s, and how far below the goal they search before the move fails, m.
-SET_DOWN_SPEED_M_S = 0.02
+#: How far below the goal the palms search for a surface before the move fails, m.
 SET_DOWN_DEPTH_M = 0.05
 #: A supported object resting this far above where the composition holds it has met its
 #: surface above the goal: the palms' targets rise to it instead of pressing it down, m.
@@ -47,10 +46,11 @@ class Transport(MotionLeaf):
     Placing is felt, not only commanded: the goal's height is where the world file says the
     surface is, and a real surface may be elsewhere. An object that arrives still carried by
     the palms (their upward force, :meth:`~planner.port.PalmControl.palm_load`, above
-    :data:`SUPPORTED_LOAD_FRACTION` of its stated weight) is lowered at
-    :data:`SET_DOWN_SPEED_M_S` until a surface takes it, at most :data:`SET_DOWN_DEPTH_M`
-    below the goal; one stopped by a surface :data:`RAISED_SUPPORT_M` or more above where it is
-    held has the palms' targets raised to it. Either way the goal's height becomes the height
+    :func:`~planner.leaves.set_down.supported_below_n`) is lowered at
+    :data:`~planner.leaves.set_down.SET_DOWN_SPEED_M_S` until a surface takes it, at most
+    :data:`SET_DOWN_DEPTH_M` below the goal; one stopped by a surface
+    :data:`RAISED_SUPPORT_M` or more above where it is held has the palms' targets raised to
+    it. Either way the goal's height becomes the height
     the object rests at (its x, y and orientation are judged as given), and the handed-over
     state carries the shift.
     Publishes the move's composition and outcome as a :class:`~planner.move_result.MoveResult`
@@ -171,9 +171,7 @@ class Transport(MotionLeaf):
             float(self.get_input("tolerance_deg")),
         )
         #: Weight below which the palms no longer carry the object, N.
-        self.supported_below_n = (
-            SUPPORTED_LOAD_FRACTION * world.object_context(name).mass_kg * world.gravity()
-        )
+        self.supported_below_n = supported_below_n(world, name)
         #: Shift of the palms' targets along world z from the composition's, m (set-down).
         self.lift_offset = 0.0
         self.set_down_from: float | None = None  # when the set-down began, s
@@ -241,7 +239,7 @@ class Transport(MotionLeaf):
         they searched :data:`SET_DOWN_DEPTH_M` below the goal); None once one does. Raises the
         targets to an object resting above where it is held (see the class)."""
         world = self.world
-        load = sum(world.palm_load(arm, name) for arm in ARMS)
+        load = palm_load_n(world, name)
         if load > self.supported_below_n:
             if self.set_down_from is None:
                 self.set_down_from = world.time()
@@ -272,9 +270,7 @@ class Transport(MotionLeaf):
         state = self.composer.state
         if not self.lift_offset:
             return state
-        obj = state.object
-        shifted = obj._replace(position=obj.position + np.array([0.0, 0.0, self.lift_offset]))
-        return replace(state, object=shifted)
+        return lowered(state, -self.lift_offset, -state.object.velocity[2])
 
     def terminate(self, new_status: Status) -> None:
         """Publish how the started move ended (:mod:`planner.move_result`); halted, stop.
