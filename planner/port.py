@@ -193,7 +193,9 @@ class PathCheck:
     clear : bool
         No robot link, palm or the held object comes within the margin of an obstacle.
     min_distance_m : float
-        Smallest distance found along the trajectory, m.
+        Smallest distance of the path's sampled points (the held object's centre, the palms'
+        origins) from an obstacle's surface, m: it ranks paths; the bodies' own clearance is
+        what ``clear`` judges, against the margin.
     first_collision : int or None
         Index of the first waypoint in collision.
     detail : str

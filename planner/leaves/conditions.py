@@ -180,7 +180,11 @@ class PathClear(WorldLeaf):
         )
         if check.clear:
             self._set_output("composition", checked)
-            return self.succeed(f"clear by {check.min_distance_m * 1000:.0f} mm over {n} steps")
+            return self.succeed(
+                f"clear by {float(self.get_input('margin_m')) * 1000:.0f} mm or more over {n} "
+                f"steps (object centre and palms {check.min_distance_m * 1000:.0f} mm from the "
+                "nearest obstacle)"
+            )
         k = check.first_collision or 0
         where = np.round(obj_p[k], 3).tolist()
         return self.fail(

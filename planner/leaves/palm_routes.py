@@ -259,7 +259,8 @@ def take_clear_route(
     elif choice.contact_free:
         leaf.route_note = (
             f"no way clear by {margin_m:g} m: by {choice.route.name}, the most clearance "
-            f"({choice.check.min_distance_m * 1000:.0f} mm); {choice.note}"
+            f"(palms {choice.check.min_distance_m * 1000:.0f} mm from the nearest obstacle); "
+            f"{choice.note}"
         )
     else:
         leaf.route_note = f"no way predicted clear, by {choice.route.name}: {choice.note}"

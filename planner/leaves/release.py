@@ -74,7 +74,8 @@ def palms_as_measured(world: WorldPort, name: str) -> DualArmState:
 
 
 class Release(MotionLeaf):
-    """Move each palm ``opening_m`` out along its contact normal (a relative skill).
+    """Move each palm ``opening_m`` out along its contact normal (a relative skill), from where
+    the palms and the object are as measured (:func:`palms_as_measured`).
 
     An object the palms still carry (their upward force above
     :func:`~planner.leaves.set_down.supported_below_n`: no surface under it, as after a carry
@@ -124,13 +125,14 @@ class Release(MotionLeaf):
             return
         world = self.world
         name = self.get_input("object")
-        # Open along the faces as the object stands: a box that lagged its palms in a turn
-        # is not where the last move commanded it.
         self.reopenings = 0
         state = self.get_input("from_state")
         self.supported_below_n = supported_below_n(world, name)
         self.set_down_m = float(self.get_input("set_down_m"))
         self.set_down_speed = float(self.get_input("set_down_speed_m_s"))
+        # Open along the faces as the object stands (a box that lagged its palms in a turn is
+        # not where the last move commanded it), unless it must be set down first; the
+        # lowering keeps the palms' references, and so the squeeze, of the handed-over state.
         if self.set_down_m > 0.0 and palm_load_n(world, name) > self.supported_below_n:
             if self.set_down_speed <= 0.0:
                 raise ValueError(
