@@ -14,7 +14,13 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
-import numpy as np
+# isort: off
+from duet_robot.blas import pin_blas_kernel
+
+pin_blas_kernel()  # before numpy loads OpenBLAS: one BLAS kernel on every x86-64 host
+import numpy as np  # noqa: E402
+
+# isort: on
 
 EXIT_OK = 0
 EXIT_FAILURE = 1

@@ -20,8 +20,14 @@ import tempfile
 import time
 from pathlib import Path
 
-from experiment.trials import run_campaign, summarise
-from worlds.world_file import load_world
+# isort: off
+from duet_robot.blas import pin_blas_kernel
+
+pin_blas_kernel()  # as app.py does: one BLAS kernel on every x86-64 host
+from experiment.trials import run_campaign, summarise  # noqa: E402
+from worlds.world_file import load_world  # noqa: E402
+
+# isort: on
 
 DEFAULT = Path(__file__).resolve().parents[1] / "worlds" / "parcel_pick_place.yaml"
 

@@ -15,12 +15,18 @@ import argparse
 import sys
 from dataclasses import replace
 
-from experiment.episode import run_episode
-from experiment.hard import draw_hard, with_pushes
-from experiment.layout import draw_trial
-from worlds.actuators import ActuatorFaults
-from worlds.truth import PhysicalTruth
-from worlds.world_file import load_world
+# isort: off
+from duet_robot.blas import pin_blas_kernel
+
+pin_blas_kernel()  # as app.py does: one BLAS kernel on every x86-64 host
+from experiment.episode import run_episode  # noqa: E402
+from experiment.hard import draw_hard, with_pushes  # noqa: E402
+from experiment.layout import draw_trial  # noqa: E402
+from worlds.actuators import ActuatorFaults  # noqa: E402
+from worlds.truth import PhysicalTruth  # noqa: E402
+from worlds.world_file import load_world  # noqa: E402
+
+# isort: on
 
 
 def only(faults: ActuatorFaults, kind: str) -> ActuatorFaults | None:

@@ -24,6 +24,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
+from duet_robot.blas import CORETYPE_VARIABLE
 from experiment.hard import HardTrial, draw_hard, with_pushes
 from experiment.layout import RobotClearance, draw_trial
 from experiment.preflight import tree_task_problems
@@ -232,16 +233,19 @@ def _run_on_ray(
 
     from experiment.records import PROJECT
 
+    # The BLAS kernel this process pinned (duet_robot.blas), in every worker, here or on
+    # another host: a trial's record must not depend on the machine that ran it.
+    blas = {v: os.environ[v] for v in (CORETYPE_VARIABLE,) if os.environ.get(v)}
     started = not ray.is_initialized()
     if started:
         if address:
-            ray.init(address=address, log_to_driver=False)
+            ray.init(address=address, log_to_driver=False, runtime_env={"env_vars": blas})
         else:
             ray.init(
                 num_cpus=workers,
                 include_dashboard=False,
                 log_to_driver=False,
-                runtime_env={"env_vars": {"PYTHONPATH": str(PROJECT)}},
+                runtime_env={"env_vars": {"PYTHONPATH": str(PROJECT), **blas}},
             )
     task = ray.remote(num_cpus=1, max_retries=RAY_RETRIES)(run_trial)
     pending = [task.remote(job) for job in jobs]
