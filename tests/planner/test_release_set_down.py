@@ -4,14 +4,14 @@ slip in the air must not drop the object onto what stands below (default world, 
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 import py_trees
 import pytest
 from py_trees.common import Status
 
-from planner.leaves import Grasp, Release, SelectSkills, Transport
-from planner.leaves.approach import Approach
+from planner.leaves import Release, Transport
 from planner.leaves.set_down import lowered, palm_load_n, supported_below_n
 from planner.leaves.transport import SET_DOWN_DEPTH_M
 from planner.testing.fixtures import CONTROL_DT
@@ -19,6 +19,7 @@ from planner.testing.harness import TickLog
 from skills import quaternion as quat
 from skills.composer import grasped_state
 from skills.vocabulary import ARMS
+from tests.planner.test_leaves_sim import grasp
 from worlds.sim_world import SimWorld
 
 Tick = Callable[..., TickLog]
@@ -52,12 +53,18 @@ def held_in_the_air(tick_leaf: Tick, below_m: float) -> tuple[object, float]:
     return world, world.table_height + 0.075
 
 
+def release(world: Any, tick_leaf: Tick, **ports: Any) -> TickLog:
+    """Tick a Release of the parcel from the blackboard's state to its end."""
+    leaf = Release("release")
+    return tick_leaf(
+        leaf, world, object="parcel", from_state="{state}", to_state="{state}", **ports
+    )
+
+
 def test_a_carried_object_is_set_down_on_the_surface_below_then_let_go(tick_leaf: Tick) -> None:
     world, resting = held_in_the_air(tick_leaf, 0.04)
     t0 = world.time()
-    log = tick_leaf(
-        Release("release"), world, object="parcel", from_state="{state}", to_state="{state}"
-    )
+    log = release(world, tick_leaf)
     assert log.final == Status.SUCCESS, log.feedback
     assert world.object_pose("parcel").position[2] == pytest.approx(resting, abs=1.5e-3)
     assert max(world.contact_force(arm, "parcel") for arm in ARMS) < 0.5
@@ -68,14 +75,7 @@ def test_a_carried_object_is_set_down_on_the_surface_below_then_let_go(tick_leaf
 def test_no_surface_within_the_search_depth_fails_and_keeps_holding(tick_leaf: Tick) -> None:
     world, _ = held_in_the_air(tick_leaf, 0.04)
     z0 = world.object_pose("parcel").position[2]
-    log = tick_leaf(
-        Release("release"),
-        world,
-        object="parcel",
-        from_state="{state}",
-        to_state="{state}",
-        set_down_m=0.02,
-    )
+    log = release(world, tick_leaf, set_down_m=0.02)
     assert log.final == Status.FAILURE
     assert "no surface took the object within 20 mm below where it was held" in log.feedback
     assert "not letting go" in log.feedback
@@ -87,14 +87,7 @@ def test_no_surface_within_the_search_depth_fails_and_keeps_holding(tick_leaf: T
 def test_set_down_m_zero_opens_where_it_is(tick_leaf: Tick) -> None:
     world, _ = held_in_the_air(tick_leaf, 0.04)
     t0 = world.time()
-    log = tick_leaf(
-        Release("release"),
-        world,
-        object="parcel",
-        from_state="{state}",
-        to_state="{state}",
-        set_down_m=0.0,
-    )
+    log = release(world, tick_leaf, set_down_m=0.0)
     assert log.final == Status.SUCCESS, log.feedback
     # The fake drops what nothing holds onto the table at once: the time says no lowering.
     assert log.sim_time - t0 < 0.04 / 0.05
@@ -102,12 +95,7 @@ def test_set_down_m_zero_opens_where_it_is(tick_leaf: Tick) -> None:
 
 def lift_in_physics(sim_world: SimWorld, tick_leaf: Tick) -> float:
     """Grasp the parcel and halt its first carry once it is 4 cm up; returns its rest z."""
-    assert tick_leaf(SelectSkills("select"), sim_world, object="parcel", plan="{plan}").final == (
-        Status.SUCCESS
-    )
-    assert tick_leaf(Approach("approach"), sim_world, object="parcel").final == Status.SUCCESS
-    log = tick_leaf(Grasp("grasp"), sim_world, object="parcel", plan="{plan}", state="{state}")
-    assert log.final == Status.SUCCESS, log.feedback
+    grasp(sim_world, tick_leaf)
     rest_z = float(sim_world.object_pose("parcel").position[2])
     carry = Transport("carry")
     tick_leaf(
@@ -136,9 +124,7 @@ def test_in_physics_a_release_in_the_air_sets_the_parcel_down_instead_of_droppin
     sim_world: SimWorld, tick_leaf: Tick
 ) -> None:
     rest_z = lift_in_physics(sim_world, tick_leaf)
-    log = tick_leaf(
-        Release("release"), sim_world, object="parcel", from_state="{state}", to_state="{state}"
-    )
+    log = release(sim_world, tick_leaf)
     assert log.final == Status.SUCCESS, log.feedback
     assert not sim_world.safety.dropped
     assert sim_world.object_pose("parcel").position[2] == pytest.approx(rest_z, abs=3e-3)
@@ -151,14 +137,7 @@ def test_in_physics_opening_in_the_air_drops_the_parcel(
 ) -> None:
     # What the set-down prevents: the same release told not to search drops the parcel.
     lift_in_physics(sim_world, tick_leaf)
-    tick_leaf(
-        Release("release"),
-        sim_world,
-        object="parcel",
-        from_state="{state}",
-        to_state="{state}",
-        set_down_m=0.0,
-    )
+    release(sim_world, tick_leaf, set_down_m=0.0)
     for _ in range(30):
         sim_world.advance(CONTROL_DT)
     assert sim_world.safety.dropped
