@@ -7,6 +7,7 @@ failure reasons, and each trial's closest approach to an obstacle.
 
 from __future__ import annotations
 
+import math
 from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
@@ -15,6 +16,9 @@ from typing import Any
 from experiment.records import group_of
 from experiment.results import ResultsFileError, read_results
 from experiment.summary import reason_of, summarise
+
+#: The closest-approach histogram's series: outcome, colour, label.
+_OUTCOMES = ((True, "0.6", "success"), (False, "red", "failed"))
 
 
 @dataclass(frozen=True)
@@ -88,6 +92,7 @@ def report_figure(campaigns: list[Campaign], path: Path) -> None:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    import numpy as np
 
     records = [r for c in campaigns for r in c.records]
     fig, (where, why, near) = plt.subplots(1, 3, figsize=(15, 4.5))
@@ -137,12 +142,21 @@ def report_figure(campaigns: list[Campaign], path: Path) -> None:
         (1000.0 * float(r["min_obstacle_distance_m"]), bool(r.get("success")))
         for r in records
         if isinstance(r.get("min_obstacle_distance_m"), int | float)
+        and math.isfinite(r["min_obstacle_distance_m"])
     ]
     if dist:
-        for ok, colour, label in ((True, "0.6", "success"), (False, "red", "failed")):
-            values = [d for d, s in dist if s == ok]
-            if values:
-                near.hist(values, bins=30, color=colour, alpha=0.8, label=label)
+        # One set of bins for both, stacked: binned alone, a few failures a fraction of a
+        # millimetre apart drew bars too thin to see.
+        edges = np.histogram_bin_edges([d for d, _ in dist], bins=30)
+        series = [([d for d, s in dist if s == ok], c, label) for ok, c, label in _OUTCOMES]
+        shown = [(v, c, label) for v, c, label in series if v]
+        near.hist(
+            [v for v, _, _ in shown],
+            bins=edges,
+            stacked=True,
+            color=[c for _, c, _ in shown],
+            label=[label for _, _, label in shown],
+        )
         near.axvline(0.0, color="k", lw=0.8)
         near.legend(fontsize=7)
     else:

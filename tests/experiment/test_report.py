@@ -8,6 +8,7 @@ import shutil
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -102,3 +103,36 @@ def test_two_worlds_in_one_folder_never_take_each_others_records(tmp_path: Path)
         "icub_parcel_pick_place",
     ]
     assert outcome(records[0]).keys() >= {"trial", "world", "success"}
+
+
+def test_failures_a_fraction_of_a_millimetre_apart_still_show_in_the_histogram(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.colors import to_rgb
+
+    from experiment.report import Campaign, report_figure
+
+    records: list[dict[str, Any]] = [
+        {"success": True, "failure": "", "min_obstacle_distance_m": d / 1000.0}
+        for d in range(1, 81)
+    ]
+    records += [
+        {
+            "success": False,
+            "failure": "obstacle contact: parcel ~ ball_1",
+            "min_obstacle_distance_m": -d / 10000.0,
+        }
+        for d in (4, 5)
+    ]
+    figures: list[Any] = []
+    monkeypatch.setattr(plt, "close", figures.append)
+    report_figure([Campaign("test", records)], tmp_path / "report.png")
+    near = figures[0].axes[2]
+    red = [p for p in near.patches if p.get_facecolor()[:3] == to_rgb("red")]
+    assert sum(p.get_height() for p in red) == 2
+    # As wide as a bin of the whole range (30 bins over -0.5..80 mm), not of the failures'.
+    assert max(p.get_width() for p in red) > 80.0 / 40
