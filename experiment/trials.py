@@ -235,7 +235,8 @@ def _run_on_ray(
 
     # The BLAS kernel this process pinned (duet_robot.blas), in every worker, here or on
     # another host: a trial's record must not depend on the machine that ran it.
-    blas = {v: os.environ[v] for v in (CORETYPE_VARIABLE,) if os.environ.get(v)}
+    kernel = os.environ.get(CORETYPE_VARIABLE)
+    blas = {CORETYPE_VARIABLE: kernel} if kernel else {}
     started = not ray.is_initialized()
     if started:
         if address:

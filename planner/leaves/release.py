@@ -9,6 +9,7 @@ from py_trees.common import Status
 from py_trees.ports import PortInformation
 
 from planner.composition import (
+    measured_dual_state,
     on_measured_object,
     opening_terms,
     static_composition,
@@ -17,9 +18,9 @@ from planner.leaves.base import MotionLeaf
 from planner.leaves.palm_motion import ViaPointLeaf, measured_state
 from planner.leaves.palm_routes import PalmRoute, margin_port, take_clear_route
 from planner.leaves.set_down import lowered, palm_load_n, supported_below_n
-from planner.port import Clock, ObjectSensing, ObstacleScene, PalmControl, Pose, WorldPort
+from planner.port import Clock, ObjectSensing, ObstacleScene, PalmControl, Pose
 from skills import quaternion as quat
-from skills.composer import DualArmComposer, DualArmState, commands_for, relative_from_world
+from skills.composer import DualArmComposer, DualArmState, commands_for
 from skills.dual_arm import GraspGeometry
 from skills.state import PoseState
 from skills.vocabulary import ARMS, Arm
@@ -54,28 +55,12 @@ def held_at_rest(state: DualArmState) -> DualArmState:
     )
 
 
-def palms_as_measured(world: WorldPort, name: str) -> DualArmState:
-    """The object as measured, each palm where it is (not where it is commanded), all at rest.
-
-    Opening from here lets the squeeze off at once, by both palms together: opening from the
-    commanded references, pressed into the faces, a palm that leaves first lets the other's
-    squeeze push the object over (a slipped parcel squeezed at 100 N toppled so).
-    """
-    obj = world.object_pose(name)
-    palms = []
-    for arm in ARMS:
-        palm = world.palm_pose(arm)
-        palms.append(
-            PoseState.at_rest(
-                *relative_from_world(obj.position, obj.orientation, palm.position, palm.orientation)
-            )
-        )
-    return DualArmState(PoseState.at_rest(obj.position, obj.orientation), *palms)
-
-
 class Release(MotionLeaf):
     """Move each palm ``opening_m`` out along its contact normal (a relative skill), from where
-    the palms and the object are as measured (:func:`palms_as_measured`).
+    the palms and the object are as measured
+    (:func:`~planner.composition.measured_dual_state`): both let the squeeze off together.
+    Opening from the commanded references, pressed into the faces, a palm that leaves first lets
+    the other's squeeze push the object over (a slipped parcel squeezed at 100 N toppled so).
 
     An object the palms still carry (their upward force above
     :func:`~planner.leaves.set_down.supported_below_n`: no surface under it, as after a carry
@@ -124,7 +109,7 @@ class Release(MotionLeaf):
         if self.connected() is not None:
             return
         world = self.world
-        name = self.get_input("object")
+        self.object_name = name = self.get_input("object")
         self.reopenings = 0
         state = self.get_input("from_state")
         self.supported_below_n = supported_below_n(world, name)
@@ -141,7 +126,7 @@ class Release(MotionLeaf):
             self.held = held_at_rest(on_measured_object(world, name, state))
             self.lowering_from = world.time()
             return
-        self._open_from(palms_as_measured(world, name))
+        self._open_from(measured_dual_state(world, name))
 
     def _open_from(self, state: DualArmState) -> None:
         relative = opening_terms(palms_facing(state), float(self.get_input("opening_m")))
@@ -150,13 +135,13 @@ class Release(MotionLeaf):
 
     def _set_down(self) -> Status:
         """Lower the held object a control step; open once a surface carries it."""
-        world, name = self.world, self.get_input("object")
+        world, name = self.world, self.object_name
         assert self.lowering_from is not None
         depth = self.set_down_speed * (world.time() - self.lowering_from)
         load = palm_load_n(world, name)
         if load <= self.supported_below_n:
             self.lowering_from = None
-            self._open_from(palms_as_measured(world, name))
+            self._open_from(measured_dual_state(world, name))
             return self.running(f"set down {depth * 1000:.0f} mm lower; opening")
         if depth > self.set_down_m:
             return self.fail(
