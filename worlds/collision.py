@@ -567,26 +567,37 @@ class CollisionWorld:
         positions: FloatArray,
         margins: FloatArray,
         collides: NDArray[np.bool_],
+        avoided: Sequence[int] = (),
+        avoid_margin: float = 0.0,
     ) -> None:
         """Mark in ``collides`` (N,) the waypoints where element ``row``, posed at ``rotations``
         (N, 3, 3) and ``positions`` (N, 3), comes within ``margins`` (N,) of an active
-        obstacle, or nearer than it starts (:func:`_start_allowance`); bounding spheres screen
-        before FCL. Needs :meth:`_place` done."""
+        obstacle, or nearer than it starts (:func:`_start_allowance`), or within
+        ``avoid_margin`` of an object in ``avoided`` (rows) that it does not touch at the
+        start (:func:`_object_allowance`); bounding spheres screen before FCL. Needs
+        :meth:`_place` done."""
         element = self._elements[row]
-        o_centre = self._centres[self._active]
-        o_radius = self._radii[self._active]
+        against = [*self._active, *avoided]
+        o_centre = self._centres[against]
+        o_radius = self._radii[against]
+        limits = np.empty((len(margins), len(against)))
+        limits[:, : len(self._active)] = margins[:, None]
+        limits[:, len(self._active) :] = avoid_margin
         centres = np.einsum("nij,j->ni", rotations, element.centre_local) + positions
         gaps = np.linalg.norm(centres[:, None] - o_centre, axis=-1) - element.radius - o_radius
         probe = fcl.CollisionObject(element.geometry, fcl.Transform())
-        allowed: dict[int, float] = {}
-        for w, o in np.argwhere(gaps <= margins[:, None]):
+        allowed: dict[int, float | None] = {}
+        for w, o in np.argwhere(gaps <= limits):
             if collides[w]:
                 continue
-            obstacle = self._fcl(self._active[o])
+            other = self._fcl(against[o])
             if o not in allowed:
-                allowed[o] = _start_allowance(probe, rotations[0], positions[0], obstacle)
-            asked = min(float(margins[w]), allowed[o])
-            collides[w] = _hit(probe, rotations[w], positions[w], obstacle, asked)
+                start = _start_allowance(probe, rotations[0], positions[0], other)
+                allowed[o] = _object_allowance(start) if o >= len(self._active) else start
+            asked = allowed[o]
+            if asked is None:
+                continue
+            collides[w] = _hit(probe, rotations[w], positions[w], other, min(limits[w, o], asked))
 
     def _track(self, arm: Arm) -> _LinkTrack:
         """``arm``'s link track (they are built left, then right)."""
@@ -608,6 +619,8 @@ class CollisionWorld:
         frame_positions: ArrayLike,
         frame_quaternions: ArrayLike,
         margin: float | ArrayLike = 0.0,
+        avoid: Sequence[str] = (),
+        avoid_margin: float = 0.0,
     ) -> NDArray[np.bool_]:
         """Check ``arm``'s elements on ``links`` posed by predicted link frames.
 
@@ -622,18 +635,22 @@ class CollisionWorld:
             (N, L, 4) scalar-last.
         margin : float or array_like
             Clearance below which a waypoint counts as colliding, m: one, or (N,).
+        avoid : sequence of str
+            Objects to keep ``avoid_margin`` m clear of too, where they lie.
 
         Returns
         -------
         ndarray
             (N,) True where an element is within ``margin`` of an active obstacle, or, for
-            one that starts nearer, nearer than it starts (:func:`_start_allowance`).
+            one that starts nearer, nearer than it starts (:func:`_start_allowance`); or of
+            an avoided object (:func:`_object_allowance`).
         """
         p = np.asarray(frame_positions, dtype=float)
         r = quat.to_matrix(np.asarray(frame_quaternions, dtype=float))  # (N, L, 3, 3)
         n = p.shape[0]
         collides = np.zeros(n, dtype=bool)
-        if not self._active or n == 0:
+        avoided = self.avoided_rows(avoid)
+        if not (self._active or avoided) or n == 0:
             return collides
         margins = np.broadcast_to(np.asarray(margin, dtype=float), (n,))
         self._place()
@@ -645,8 +662,17 @@ class CollisionWorld:
                 continue
             rot = r[:, k] @ local_r[i]
             pos = np.einsum("nij,j->ni", r[:, k], local_p[i]) + p[:, k]
-            self._check_posed(row, rot, pos, margins, collides)
+            self._check_posed(row, rot, pos, margins, collides, avoided, avoid_margin)
         return collides
+
+    def avoided_rows(self, names: Sequence[str]) -> list[int]:
+        """Rows of the task objects named (path checks keep clear of them where they lie)."""
+        unknown = sorted(set(names) - set(self._objects))
+        if unknown:
+            raise ValueError(
+                f"CollisionWorld: expected objects in {sorted(self._objects)}, got {unknown}"
+            )
+        return [self._objects[name] for name in names]
 
     def welded_spheres(
         self, arm: Arm, palm_position: ArrayLike, palm_quaternion: ArrayLike
@@ -941,8 +967,10 @@ class CollisionWorld:
         object_positions: ArrayLike | None = None,
         object_quaternions: ArrayLike | None = None,
         margin: float = 0.0,
+        avoid: Sequence[str] = (),
     ) -> TrajectoryCheck:
-        """Check predicted palm (and held-object) poses against the active obstacles.
+        """Check predicted palm (and held-object) poses against the active obstacles, and
+        against the task objects in ``avoid`` where they lie now.
 
         A numpy bounding-sphere test drops every (waypoint, body, obstacle) triple that cannot be
         within ``margin``; FCL checks the rest.
@@ -961,6 +989,11 @@ class CollisionWorld:
             (N, 4) held object orientations, scalar-last.
         margin : float
             Clearance below which a waypoint counts as colliding, m.
+        avoid : sequence of str
+            Objects that rest where they are (not the held one): a palm or the held object
+            that does not touch one at the first waypoint must keep ``margin`` from it, or
+            as much as it starts with (:func:`_object_allowance`); one touching it at the
+            start (palms that have just let it go) is free of it.
 
         Returns
         -------
@@ -1001,11 +1034,13 @@ class CollisionWorld:
             body_p.append(op)
             body_q.append(oq)
         collides = np.zeros(n, dtype=bool)
-        if self._active and n:
+        avoided = self.avoided_rows([a for a in avoid if a != object_name])
+        against = [*self._active, *avoided]
+        if against and n:
             self._place()
-            obstacles = [self._fcl(r) for r in self._active]
-            o_centre = self._centres[self._active]
-            o_radius = self._radii[self._active]
+            obstacles = [self._fcl(r) for r in against]
+            o_centre = self._centres[against]
+            o_radius = self._radii[against]
             p_all = np.stack(body_p, axis=1)  # (N, B, 3)
             r_all = quat.to_matrix(np.stack(body_q, axis=1))  # (N, B, 3, 3)
             local = np.array([self._elements[r].centre_local for r in rows])
@@ -1018,10 +1053,20 @@ class CollisionWorld:
             probes = [
                 fcl.CollisionObject(self._elements[r].geometry, fcl.Transform()) for r in rows
             ]
+            allowed: dict[tuple[int, int], float | None] = {}
             for w, b, o in candidates:
                 if collides[w]:
                     continue
-                collides[w] = _hit(probes[b], r_all[w, b], p_all[w, b], obstacles[o], margin)
+                asked = margin
+                if o >= len(self._active):
+                    if (b, o) not in allowed:
+                        start = _start_allowance(probes[b], r_all[0, b], p_all[0, b], obstacles[o])
+                        allowed[b, o] = _object_allowance(start)
+                    free = allowed[b, o]
+                    if free is None:
+                        continue
+                    asked = min(free, margin)
+                collides[w] = _hit(probes[b], r_all[w, b], p_all[w, b], obstacles[o], asked)
         hits = np.flatnonzero(collides)
         return TrajectoryCheck(collides, int(hits[0]) if len(hits) else -1)
 
@@ -1055,6 +1100,16 @@ def _start_allowance(
     probe.setTransform(fcl.Transform(rotation, position))
     start = float(fcl.distance(probe, obstacle, fcl.DistanceRequest()))
     return max(start - START_SLACK_M, 0.0)
+
+
+def _object_allowance(start: float) -> float | None:
+    """The most clearance a path can ask of an element from a resting object, given its
+    :func:`_start_allowance` there: None, free of it, when the element starts touching it
+    (palms that have just let it go); else that start clearance, so that an element that
+    starts nearer than the margin may keep or widen its gap, never narrow it."""
+    if start <= 0.0:
+        return None
+    return start
 
 
 def _hit(

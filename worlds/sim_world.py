@@ -604,7 +604,7 @@ class SimWorld:
     ) -> PathCheck:
         """FCL check of predicted palm and held-object poses, and of the arm links posed by
         inverse kinematics of the palms' path (:mod:`worlds.arm_prediction`), against the
-        active obstacles."""
+        active obstacles and the other objects where they rest (:meth:`resting_objects`)."""
         return self._check_path(
             palm_positions,
             palm_orientations,
@@ -619,8 +619,24 @@ class SimWorld:
         margin_m: float = 0.0,
     ) -> PathCheck:
         """FCL check of predicted poses of empty palms and of the arm links that follow them,
-        against the active obstacles (as :meth:`check_trajectory`, without a held object)."""
+        against the active obstacles and the objects where they rest (as
+        :meth:`check_trajectory`, without a held object)."""
         return self._check_path(palm_positions, palm_orientations, margin_m, None)
+
+    def resting_objects(self, held: str | None) -> tuple[str, ...]:
+        """The objects a path keeps clear of where they lie, beside the obstacles: every
+        object but ``held`` and what rides on it (a tray's loose balls move with it).
+
+        A palm that touches one at the path's start (it has just let it go, or is about to
+        close on it) is free of that one (:meth:`worlds.collision.CollisionWorld.check_trajectory`).
+        """
+        objects = self.scene.spec.objects
+        carried = (
+            set()
+            if held is None
+            else {held, *(o.name for o in riders(objects, held, self.watched))}
+        )
+        return tuple(o.name for o in objects if o.name not in carried)
 
     def _check_path(
         self,
@@ -630,6 +646,7 @@ class SimWorld:
         held: tuple[str, Array, Array] | None,
     ) -> PathCheck:
         name, object_positions, object_orientations = held if held else (None, None, None)
+        avoid = self.resting_objects(name)
         check = self.collision.check_trajectory(
             palm_positions,
             palm_orientations,
@@ -637,13 +654,18 @@ class SimWorld:
             object_positions,
             object_orientations,
             margin_m,
+            avoid,
         )
         # The arms' links are solved for along the palms' path (_predicted_links_collide):
         # carried rigidly with the palms instead, a forearm misses the elbow's swing (and a
         # torso's), centimetres over a carry. The solution is the controller's posture, not
         # the controller's motion: the links get extra clearance the further the palms go.
         doubt = forearm_doubt(palm_positions, palm_orientations)
-        arms = self._predicted_links_collide(palm_positions, palm_orientations, margin_m + doubt)
+        # Resting objects are kept from the links by the margin alone: the palms' way in
+        # to a grasp must come near, and the doubt is for the obstacles, which they need not.
+        arms = self._predicted_links_collide(
+            palm_positions, palm_orientations, margin_m + doubt, avoid, margin_m
+        )
         pts = np.asarray(palm_positions).reshape(-1, 3)
         if object_positions is not None:
             pts = np.concatenate((object_positions, pts))
@@ -660,16 +682,23 @@ class SimWorld:
         return PathCheck(first is None, float(d.min()) if d.size else math.inf, first, what)
 
     def _predicted_links_collide(
-        self, palm_positions: Array, palm_orientations: Array, margins: Array
+        self,
+        palm_positions: Array,
+        palm_orientations: Array,
+        margins: Array,
+        avoid: Sequence[str] = (),
+        avoid_margin: float = 0.0,
     ) -> NDArray[np.bool_]:
         """(N,) True where an arm link, posed by inverse kinematics of the palm path on a copy
         of the robot (:class:`worlds.arm_prediction.ArmPredictor`), comes within ``margins``
-        (N,) of an active obstacle. Waypoints are solved every :data:`PREDICTION_STRIDE`
-        (and the last); one between two solved ones is judged by the nearer of them."""
+        (N,) of an active obstacle or within ``avoid_margin`` of an object in ``avoid`` where
+        it rests. Waypoints are
+        solved every :data:`PREDICTION_STRIDE` (and the last); one between two solved ones is
+        judged by the nearer of them."""
         p = np.asarray(palm_positions, dtype=float)
         q = np.asarray(palm_orientations, dtype=float)
         n = p.shape[0]
-        if n == 0 or not self.scene.active_obstacles:
+        if n == 0 or not (self.scene.active_obstacles or avoid):
             return np.zeros(n, dtype=bool)
         if self._arm_predictor is None:
             self._arm_predictor = ArmPredictor(self.scene)
@@ -680,7 +709,13 @@ class SimWorld:
         for arm in ARMS:
             f = frames[arm]
             hits |= self.collision.check_link_frames(
-                arm, f.links, f.positions, f.quaternions, np.asarray(margins)[solved]
+                arm,
+                f.links,
+                f.positions,
+                f.quaternions,
+                np.asarray(margins)[solved],
+                avoid,
+                avoid_margin,
             )
         nearest = np.clip(
             np.searchsorted(solved, np.arange(n) - PREDICTION_STRIDE // 2), 0, solved.size - 1
