@@ -200,12 +200,17 @@ class PathCheck:
         Index of the first waypoint in collision.
     detail : str
         What came closest to what, in words.
+    doubtful : bool
+        Refused only for the arms' links predicted near an obstacle, where the prediction is
+        asked extra clearance the further the palms go (no palm, held object or link is
+        predicted within the margin of anything else).
     """
 
     clear: bool
     min_distance_m: float
     first_collision: int | None = None
     detail: str = ""
+    doubtful: bool = False
 
 
 @runtime_checkable
@@ -334,6 +339,12 @@ class ObstacleScene(Protocol):
 
     def obstacles(self) -> tuple[ObstacleInfo, ...]:
         """The obstacles present now."""
+        ...
+
+    def other_objects(self, name: str) -> tuple[ObstacleInfo, ...]:
+        """The objects other than ``name`` where they lie now, each as its bounding sphere: an
+        empty palms' path keeps clear of them as of the obstacles (:meth:`check_palm_path`),
+        and a way in to ``name`` may go around them."""
         ...
 
     def check_trajectory(

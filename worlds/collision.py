@@ -569,20 +569,22 @@ class CollisionWorld:
         collides: NDArray[np.bool_],
         avoided: Sequence[int] = (),
         avoid_margin: float = 0.0,
+        obstacles: bool = True,
     ) -> None:
         """Mark in ``collides`` (N,) the waypoints where element ``row``, posed at ``rotations``
         (N, 3, 3) and ``positions`` (N, 3), comes within ``margins`` (N,) of an active
-        obstacle, or nearer than it starts (:func:`_start_allowance`), or within
-        ``avoid_margin`` of an object in ``avoided`` (rows) that it does not touch at the
-        start (:func:`_object_allowance`); bounding spheres screen before FCL. Needs
-        :meth:`_place` done."""
+        obstacle (unless not ``obstacles``), or nearer than it starts
+        (:func:`_start_allowance`), or within ``avoid_margin`` of an object in ``avoided``
+        (rows) that it does not touch at the start (:func:`_object_allowance`); bounding
+        spheres screen before FCL. Needs :meth:`_place` done."""
         element = self._elements[row]
-        against = [*self._active, *avoided]
+        active = self._active if obstacles else []
+        against = [*active, *avoided]
         o_centre = self._centres[against]
         o_radius = self._radii[against]
         limits = np.empty((len(margins), len(against)))
-        limits[:, : len(self._active)] = margins[:, None]
-        limits[:, len(self._active) :] = avoid_margin
+        limits[:, : len(active)] = margins[:, None]
+        limits[:, len(active) :] = avoid_margin
         centres = np.einsum("nij,j->ni", rotations, element.centre_local) + positions
         gaps = np.linalg.norm(centres[:, None] - o_centre, axis=-1) - element.radius - o_radius
         probe = fcl.CollisionObject(element.geometry, fcl.Transform())
@@ -593,7 +595,7 @@ class CollisionWorld:
             other = self._fcl(against[o])
             if o not in allowed:
                 start = _start_allowance(probe, rotations[0], positions[0], other)
-                allowed[o] = _object_allowance(start) if o >= len(self._active) else start
+                allowed[o] = _object_allowance(start) if o >= len(active) else start
             asked = allowed[o]
             if asked is None:
                 continue
@@ -621,6 +623,7 @@ class CollisionWorld:
         margin: float | ArrayLike = 0.0,
         avoid: Sequence[str] = (),
         avoid_margin: float = 0.0,
+        obstacles: bool = True,
     ) -> NDArray[np.bool_]:
         """Check ``arm``'s elements on ``links`` posed by predicted link frames.
 
@@ -637,6 +640,8 @@ class CollisionWorld:
             Clearance below which a waypoint counts as colliding, m: one, or (N,).
         avoid : sequence of str
             Objects to keep ``avoid_margin`` m clear of too, where they lie.
+        obstacles : bool
+            Check against the active obstacles (else against ``avoid`` alone).
 
         Returns
         -------
@@ -650,7 +655,7 @@ class CollisionWorld:
         n = p.shape[0]
         collides = np.zeros(n, dtype=bool)
         avoided = self.avoided_rows(avoid)
-        if not (self._active or avoided) or n == 0:
+        if not ((obstacles and self._active) or avoided) or n == 0:
             return collides
         margins = np.broadcast_to(np.asarray(margin, dtype=float), (n,))
         self._place()
@@ -662,7 +667,7 @@ class CollisionWorld:
                 continue
             rot = r[:, k] @ local_r[i]
             pos = np.einsum("nij,j->ni", r[:, k], local_p[i]) + p[:, k]
-            self._check_posed(row, rot, pos, margins, collides, avoided, avoid_margin)
+            self._check_posed(row, rot, pos, margins, collides, avoided, avoid_margin, obstacles)
         return collides
 
     def avoided_rows(self, names: Sequence[str]) -> list[int]:
@@ -968,6 +973,7 @@ class CollisionWorld:
         object_quaternions: ArrayLike | None = None,
         margin: float = 0.0,
         avoid: Sequence[str] = (),
+        avoid_margin: float = 0.0,
     ) -> TrajectoryCheck:
         """Check predicted palm (and held-object) poses against the active obstacles, and
         against the task objects in ``avoid`` where they lie now.
@@ -991,9 +997,11 @@ class CollisionWorld:
             Clearance below which a waypoint counts as colliding, m.
         avoid : sequence of str
             Objects that rest where they are (not the held one): a palm or the held object
-            that does not touch one at the first waypoint must keep ``margin`` from it, or
-            as much as it starts with (:func:`_object_allowance`); one touching it at the
+            that does not touch one at the first waypoint must keep ``avoid_margin`` from it,
+            or as much as it starts with (:func:`_object_allowance`); one touching it at the
             start (palms that have just let it go) is free of it.
+        avoid_margin : float
+            Clearance from those objects, m (0: not touching them).
 
         Returns
         -------
@@ -1049,7 +1057,8 @@ class CollisionWorld:
             gaps = (
                 np.linalg.norm(centres[:, :, None] - o_centre, axis=-1) - radius[:, None] - o_radius
             )
-            candidates = np.argwhere(gaps <= margin)  # (K, 3): waypoint, body, obstacle
+            limits = np.array([margin] * len(self._active) + [avoid_margin] * len(avoided))
+            candidates = np.argwhere(gaps <= limits)  # (K, 3): waypoint, body, obstacle
             probes = [
                 fcl.CollisionObject(self._elements[r].geometry, fcl.Transform()) for r in rows
             ]
@@ -1065,7 +1074,7 @@ class CollisionWorld:
                     free = allowed[b, o]
                     if free is None:
                         continue
-                    asked = min(free, margin)
+                    asked = min(free, avoid_margin)
                 collides[w] = _hit(probes[b], r_all[w, b], p_all[w, b], obstacles[o], asked)
         hits = np.flatnonzero(collides)
         return TrajectoryCheck(collides, int(hits[0]) if len(hits) else -1)

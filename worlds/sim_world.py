@@ -54,6 +54,11 @@ FOREARM_LEVER_M = 0.3
 #: Waypoints between two solved for the arms' prediction (4 control steps at 60 Hz: the palms
 #: move at most a centimetre or two in between).
 PREDICTION_STRIDE = 4
+#: Clearance an empty palms' path keeps from the objects where they rest, m: none beyond not
+#: touching them. A way in to a grasp must come near its object (its wrist passes a few
+#: millimetres above the top edge, coming in from above), and the forearms' doubt is for the
+#: obstacles: a link or palm predicted to touch a resting object is a sure sweep through it.
+OBJECT_CLEARANCE_M = 0.0
 #: Highest an object's centre may be carried above the table top, m.
 MAX_LIFT_M = 0.30
 #: Contact force each palm must press an object with, N, for the grasp to locate it: from the
@@ -593,6 +598,18 @@ class SimWorld:
         """The active obstacles."""
         return tuple(self._obstacle_info[n] for n in sorted(self.scene.active_obstacles))
 
+    def other_objects(self, name: str) -> tuple[ObstacleInfo, ...]:
+        """Bounding spheres of the objects other than ``name`` where they are sensed now."""
+        return tuple(
+            ObstacleInfo(
+                o.name,
+                self.object_pose(o.name).position,
+                float(np.linalg.norm(self._extents[o.name]) / 2.0),
+            )
+            for o in self.scene.spec.objects
+            if o.name != name
+        )
+
     def check_trajectory(
         self,
         name: str,
@@ -604,7 +621,10 @@ class SimWorld:
     ) -> PathCheck:
         """FCL check of predicted palm and held-object poses, and of the arm links posed by
         inverse kinematics of the palms' path (:mod:`worlds.arm_prediction`), against the
-        active obstacles and the other objects where they rest (:meth:`resting_objects`)."""
+        active obstacles. The other objects are not checked against: a carry refused for
+        touching one would fall back to the careful carry, which steers around the obstacles
+        alone and shoves the object harder (``bench/worlds/two_parcels_turned.yaml``, move 0:
+        10 cm against 6 mm)."""
         return self._check_path(
             palm_positions,
             palm_orientations,
@@ -620,23 +640,13 @@ class SimWorld:
     ) -> PathCheck:
         """FCL check of predicted poses of empty palms and of the arm links that follow them,
         against the active obstacles and the objects where they rest (as
-        :meth:`check_trajectory`, without a held object)."""
+        :meth:`check_trajectory`, without a held object).
+
+        A palm or link that touches an object at the path's start (it has just let it go) is
+        free of that one (:meth:`worlds.collision.CollisionWorld.check_trajectory`); the
+        others keep ``margin_m`` from it: a way in to a grasp sweeping a hand through the
+        object knocked it off the table (iCub, Hard trial 114)."""
         return self._check_path(palm_positions, palm_orientations, margin_m, None)
-
-    def resting_objects(self, held: str | None) -> tuple[str, ...]:
-        """The objects a path keeps clear of where they lie, beside the obstacles: every
-        object but ``held`` and what rides on it (a tray's loose balls move with it).
-
-        A palm that touches one at the path's start (it has just let it go, or is about to
-        close on it) is free of that one (:meth:`worlds.collision.CollisionWorld.check_trajectory`).
-        """
-        objects = self.scene.spec.objects
-        carried = (
-            set()
-            if held is None
-            else {held, *(o.name for o in riders(objects, held, self.watched))}
-        )
-        return tuple(o.name for o in objects if o.name not in carried)
 
     def _check_path(
         self,
@@ -646,7 +656,7 @@ class SimWorld:
         held: tuple[str, Array, Array] | None,
     ) -> PathCheck:
         name, object_positions, object_orientations = held if held else (None, None, None)
-        avoid = self.resting_objects(name)
+        avoid = () if held else tuple(o.name for o in self.scene.spec.objects)
         check = self.collision.check_trajectory(
             palm_positions,
             palm_orientations,
@@ -655,31 +665,41 @@ class SimWorld:
             object_orientations,
             margin_m,
             avoid,
+            OBJECT_CLEARANCE_M,
         )
         # The arms' links are solved for along the palms' path (_predicted_links_collide):
         # carried rigidly with the palms instead, a forearm misses the elbow's swing (and a
         # torso's), centimetres over a carry. The solution is the controller's posture, not
         # the controller's motion: the links get extra clearance the further the palms go.
         doubt = forearm_doubt(palm_positions, palm_orientations)
-        # Resting objects are kept from the links by the margin alone: the palms' way in
-        # to a grasp must come near, and the doubt is for the obstacles, which they need not.
-        arms = self._predicted_links_collide(
-            palm_positions, palm_orientations, margin_m + doubt, avoid, margin_m
+        arms, arms_on_objects = self._predicted_links_collide(
+            palm_positions, palm_orientations, margin_m + doubt, avoid, OBJECT_CLEARANCE_M
         )
         pts = np.asarray(palm_positions).reshape(-1, 3)
         if object_positions is not None:
             pts = np.concatenate((object_positions, pts))
         d, _ = self.collision.query(pts)
-        hits = np.flatnonzero(check.collides | arms)
+        sure = check.collides | arms_on_objects
+        hits = np.flatnonzero(sure | arms)
         first = int(hits[0]) if hits.size else None
         what = "clear"
         if first is not None:
-            if arms[first] and not check.collides[first]:
-                what = f"an arm link within {margin_m + doubt[first]:.3f} m"
+            if check.collides[first]:
+                what = f"{'palm or object' if held else 'a palm'} within {margin_m:g} m" + (
+                    "" if held else " of an obstacle, or on an object"
+                )
+            elif arms_on_objects[first]:
+                what = "an arm link on an object"
             else:
-                what = f"{'palm or object' if held else 'a palm'} within {margin_m:g} m"
+                what = f"an arm link within {margin_m + doubt[first]:.3f} m"
             what += f" at step {first}"
-        return PathCheck(first is None, float(d.min()) if d.size else math.inf, first, what)
+        return PathCheck(
+            first is None,
+            float(d.min()) if d.size else math.inf,
+            first,
+            what,
+            doubtful=first is not None and not sure.any(),
+        )
 
     def _predicted_links_collide(
         self,
@@ -688,39 +708,36 @@ class SimWorld:
         margins: Array,
         avoid: Sequence[str] = (),
         avoid_margin: float = 0.0,
-    ) -> NDArray[np.bool_]:
-        """(N,) True where an arm link, posed by inverse kinematics of the palm path on a copy
-        of the robot (:class:`worlds.arm_prediction.ArmPredictor`), comes within ``margins``
-        (N,) of an active obstacle or within ``avoid_margin`` of an object in ``avoid`` where
-        it rests. Waypoints are
-        solved every :data:`PREDICTION_STRIDE` (and the last); one between two solved ones is
-        judged by the nearer of them."""
+    ) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
+        """Where an arm link, posed by inverse kinematics of the palm path on a copy of the
+        robot (:class:`worlds.arm_prediction.ArmPredictor`), comes within ``margins`` (N,) of
+        an active obstacle, and where within ``avoid_margin`` of an object in ``avoid`` where
+        it rests: two (N,) masks. Waypoints are solved every :data:`PREDICTION_STRIDE` (and
+        the last); one between two solved ones is judged by the nearer of them."""
         p = np.asarray(palm_positions, dtype=float)
         q = np.asarray(palm_orientations, dtype=float)
         n = p.shape[0]
         if n == 0 or not (self.scene.active_obstacles or avoid):
-            return np.zeros(n, dtype=bool)
+            return np.zeros(n, dtype=bool), np.zeros(n, dtype=bool)
         if self._arm_predictor is None:
             self._arm_predictor = ArmPredictor(self.scene)
         solved = np.unique(np.append(np.arange(0, n, PREDICTION_STRIDE), n - 1))
         links = {arm: self.collision.arm_moving_links(arm) for arm in ARMS}
         frames = self._arm_predictor.link_frames(p[solved], q[solved], links)
-        hits = np.zeros(solved.size, dtype=bool)
+        on_obstacles = np.zeros(solved.size, dtype=bool)
+        on_objects = np.zeros(solved.size, dtype=bool)
         for arm in ARMS:
             f = frames[arm]
-            hits |= self.collision.check_link_frames(
-                arm,
-                f.links,
-                f.positions,
-                f.quaternions,
-                np.asarray(margins)[solved],
-                avoid,
-                avoid_margin,
-            )
+            at = (arm, f.links, f.positions, f.quaternions)
+            on_obstacles |= self.collision.check_link_frames(*at, np.asarray(margins)[solved])
+            if avoid:
+                on_objects |= self.collision.check_link_frames(
+                    *at, avoid_margin, avoid, avoid_margin, obstacles=False
+                )
         nearest = np.clip(
             np.searchsorted(solved, np.arange(n) - PREDICTION_STRIDE // 2), 0, solved.size - 1
         )
-        return hits[nearest]
+        return on_obstacles[nearest], on_objects[nearest]
 
     def link_points(self) -> Array:
         """For each arm link, its point closest to an active obstacle, (M, 3) (none if none)."""

@@ -99,7 +99,8 @@ class Approach(ViaPointLeaf):
     Before moving, the path is predicted and checked against the obstacles
     (:mod:`planner.leaves.palm_routes`); if it is not clear by ``margin_m``, the first clear of:
     the other way in (from above the object's top instead of from the side, or the reverse), or
-    the usual way around the obstacle nearest its path.
+    the usual way around the obstacle, or other object, nearest its path (the check keeps the
+    palms clear of the other objects where they lie as of the obstacles).
     """
 
     WORLD_ROLES: ClassVar[tuple[type, ...]] = (ObjectSensing, PalmControl, ObstacleScene)
@@ -178,4 +179,5 @@ class Approach(ViaPointLeaf):
             float(self.get_input("segment_s")),
             float(self.get_input("margin_m")),
             detour_of=0,
+            around=world.other_objects(name),
         )

@@ -159,10 +159,13 @@ def detour(route: PalmRoute, path: PalmPath, obstacles: Sequence[ObstacleInfo]) 
             out[arm] = waypoints
             continue
         if across < 1e-6:
-            # Straight above or below the centre: out sideways, to the arm's own side.
-            away = np.array([0.0, 1.0 if arm is Arm.LEFT else -1.0, 0.0])
-            across = 1.0
-        via = p[step] + (reach - across) * away / across
+            # Straight above or below the centre: out sideways, to the arm's own side (the
+            # whole reach: before, a unit sideways vector was taken as 1 m across already).
+            unit = np.array([0.0, 1.0 if arm is Arm.LEFT else -1.0, 0.0])
+            across = 0.0
+        else:
+            unit = away / across
+        via = p[step] + (reach - across) * unit
         heading = int(min(path.segments[step, a], len(waypoints) - 1))
         waypoints.insert(heading, Pose(via, waypoints[heading].orientation))
         out[arm] = waypoints
@@ -178,13 +181,14 @@ def choose_route(
     margin_m: float,
     detour_of: int | None = 0,
     detour_at: int | None = None,
+    around: Sequence[ObstacleInfo] = (),
 ) -> RouteChoice:
     """The first of ``routes`` whose predicted path is clear by ``margin_m``.
 
     The routes are tried in order, with (if ``detour_of`` names one) that route taken around
-    the obstacle its path comes nearest (:func:`detour`) tried at ``detour_at``. When none is
-    clear, the one clear of contact with the largest predicted distance; when none is even
-    that, the usual one.
+    the obstacle, or object of ``around``, its path comes nearest (:func:`detour`) tried at
+    ``detour_at``. When none is clear, the one clear of contact with the largest predicted
+    distance; when none is even that, the usual one.
 
     Parameters
     ----------
@@ -202,12 +206,14 @@ def choose_route(
         Index of the route to also try around the nearest obstacle.
     detour_at : int, optional
         Where in the order to try that detour (after ``detour_of``); default last.
+    around : sequence of ObstacleInfo
+        Other objects, where they lie, that the detour may go around too.
     """
     if not routes:
         raise ValueError("choose_route: expected at least one route, got none")
     tried: list[tuple[PalmRoute, PalmPath, PathCheck]] = []
     candidates = list(routes)
-    obstacles = scene.obstacles()
+    obstacles = (*scene.obstacles(), *around)
     k = 0
     while k < len(candidates):
         route = candidates[k]
@@ -220,14 +226,17 @@ def choose_route(
             at = len(routes) if detour_at is None else max(detour_at, k + 1)
             candidates.insert(at, detour(route, path, obstacles))
         k += 1
-    contact = [scene.check_palm_path(p.positions, p.orientations, 0.0).clear for _, p, _ in tried]
-    if not any(contact):
+    contact = [scene.check_palm_path(p.positions, p.orientations, 0.0) for _, p, _ in tried]
+    if not any(c.clear for c in contact):
         # The prediction carries the forearms rigidly and asks them for extra clearance the
         # further the palms go: over a long way it doubts every route alike, and then it is
-        # no ground for leaving the usual one.
-        route, _, check = tried[0]
+        # no ground for leaving the usual one, unless the usual one is sure to touch (a palm,
+        # or a link on an object that rests) and another only doubted.
+        doubted = [i for i, c in enumerate(contact) if c.doubtful]
+        i = 0 if contact[0].doubtful or not doubted else doubted[0]
+        route, _, check = tried[i]
         return RouteChoice(route, check, False, False, _refusals(tried))
-    best = max(range(len(tried)), key=lambda i: (contact[i], tried[i][2].min_distance_m))
+    best = max(range(len(tried)), key=lambda i: (contact[i].clear, tried[i][2].min_distance_m))
     route, _, check = tried[best]
     return RouteChoice(route, check, False, True, _refusals(tried))
 
@@ -245,11 +254,12 @@ def take_clear_route(
     margin_m: float,
     detour_of: int | None = 0,
     detour_at: int | None = None,
+    around: Sequence[ObstacleInfo] = (),
 ) -> None:
     """Plan ``leaf``'s motion along the route :func:`choose_route` picks; the leaf's feedback
     says which and why when it is not the usual one, or when no route is clear."""
     choice = choose_route(
-        scene, starts, routes, segment_tau, leaf.control_dt, margin_m, detour_of, detour_at
+        scene, starts, routes, segment_tau, leaf.control_dt, margin_m, detour_of, detour_at, around
     )
     leaf.route_note = ""
     leaf.motion = ViaPointMotion(starts, choice.route.waypoints, segment_tau)

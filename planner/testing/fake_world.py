@@ -406,6 +406,14 @@ class FakeWorld:
         s = np.linspace(0.25, 1.0, per_arm)[None, :, None]
         return shoulders[:, None, :] + s * (palms - shoulders)[:, None, :]
 
+    def other_objects(self, name: str) -> tuple[ObstacleInfo, ...]:
+        """Bounding spheres of the objects other than ``name`` where they are now."""
+        return tuple(
+            ObstacleInfo(n, o.pose.position.copy(), float(np.linalg.norm(o.extents) / 2.0))
+            for n, o in self._objects.items()
+            if n != name
+        )
+
     def link_points(self) -> Array:
         """Four points on each arm's shoulder-palm segment, (8, 3)."""
         palms = np.array([self._palms[Arm.LEFT].position, self._palms[Arm.RIGHT].position])

@@ -10,8 +10,8 @@ from py_trees.common import Status
 
 from planner.leaves import Approach, Retreat
 from planner.leaves.palm_motion import measured_state
-from planner.leaves.palm_routes import predict_palm_path
-from planner.port import ObstacleInfo, Pose
+from planner.leaves.palm_routes import PalmRoute, choose_route, predict_palm_path
+from planner.port import ObstacleInfo, PathCheck, Pose
 from planner.testing import FakeWorld
 from planner.testing.fake_world import FakeObject
 from planner.testing.harness import TickLog
@@ -136,3 +136,96 @@ def test_approach_refuses_an_object_fallen_off_the_table_saying_where(tick_leaf:
     log = tick_leaf(Approach("approach"), FakeWorld(objects=[beyond]), object="parcel")
     assert log.final == Status.FAILURE
     assert "beyond the table's edge" in log.feedback
+
+
+class _Refusing:
+    """A scene that refuses every route: those ending at ``sure_ends`` for a sure contact (a
+    palm, or a link on a resting object), the others only within the forearms' doubt; a route
+    ending at ``clear_end`` is clear."""
+
+    def __init__(self, sure_ends: list[np.ndarray], clear_end: np.ndarray | None = None) -> None:
+        self.sure_ends = sure_ends
+        self.clear_end = clear_end
+
+    def obstacles(self) -> tuple[ObstacleInfo, ...]:
+        return ()
+
+    def check_palm_path(self, positions: np.ndarray, orientations: np.ndarray, margin_m: float):
+        end = positions[-1, 0]
+        if self.clear_end is not None and np.allclose(end, self.clear_end, atol=1e-3):
+            return PathCheck(True, 0.1)
+        sure = any(np.allclose(end, e, atol=1e-3) for e in self.sure_ends)
+        return PathCheck(False, 0.1, 3, "refused", doubtful=not sure)
+
+
+def _two_routes(world: FakeWorld) -> tuple[list[PalmRoute], dict[Arm, object]]:
+    starts = {a: measured_state(world.palm_pose(a), world.palm_twist(a)) for a in ARMS}
+    routes = []
+    for name, dz in (("usual", 0.10), ("other", 0.20)):
+        routes.append(
+            PalmRoute(
+                name,
+                {
+                    a: [
+                        Pose(
+                            world.palm_pose(a).position + [0.0, 0.0, dz],
+                            world.palm_pose(a).orientation,
+                        )
+                    ]
+                    for a in ARMS
+                },
+            )
+        )
+    return routes, starts
+
+
+def test_with_no_way_clear_a_route_only_doubted_beats_a_usual_one_sure_to_touch() -> None:
+    world = palms_beside_box([])
+    routes, starts = _two_routes(world)
+    ends = [r.waypoints[Arm.LEFT][-1].position for r in routes]
+    # The usual way sweeps a palm through a resting object; the other is doubted only.
+    chosen = choose_route(_Refusing([ends[0]]), starts, routes, 1.0, DT, 0.01, detour_of=None)
+    assert chosen.route.name == "other" and not chosen.clear and not chosen.contact_free
+    # Both only doubted, or both sure to touch: the usual way, as before.
+    for sure in ([], ends):
+        chosen = choose_route(_Refusing(sure), starts, routes, 1.0, DT, 0.01, detour_of=None)
+        assert chosen.route.name == "usual"
+
+
+class _ObjectInTheWay:
+    """A scene with no obstacle where a palm passing within ``radius`` of ``centre`` (another
+    object, resting there) is sure to touch it."""
+
+    def __init__(self, centre: np.ndarray, radius: float) -> None:
+        self.centre, self.radius = centre, radius
+
+    def obstacles(self) -> tuple[ObstacleInfo, ...]:
+        return ()
+
+    def check_palm_path(self, positions: np.ndarray, orientations: np.ndarray, margin_m: float):
+        near = np.linalg.norm(positions - self.centre, axis=-1).min(axis=-1) < self.radius
+        if not near.any():
+            return PathCheck(True, 0.1)
+        return PathCheck(False, 0.1, int(np.argmax(near)), "on an object")
+
+
+def test_a_way_in_goes_round_another_object_in_its_way() -> None:
+    world = palms_beside_box([])
+    starts = {a: measured_state(world.palm_pose(a), world.palm_twist(a)) for a in ARMS}
+    ahead = {
+        a: [Pose(world.palm_pose(a).position + [0.3, 0.0, 0.0], world.palm_pose(a).orientation)]
+        for a in ARMS
+    }
+    routes = [PalmRoute("usual", ahead)]
+    usual = predict_palm_path(starts, ahead, 1.0, DT)
+    # Another object on the left palm's way, halfway along, a centimetre aside: without it
+    # among those to go around (``around``), no detour is tried, as there is no obstacle.
+    left = usual.positions[:, 0]
+    halfway = left[np.argmin(np.abs(left[:, 0] - left[0, 0] - 0.15))]
+    box = ObstacleInfo("box", halfway + [0.0, -0.01, 0.0], 0.05)
+    scene = _ObjectInTheWay(box.position, box.radius)
+    plain = choose_route(scene, starts, routes, 1.0, DT, 0.01, detour_of=0)
+    assert plain.route.name == "usual" and not plain.clear
+    detoured = choose_route(scene, starts, routes, 1.0, DT, 0.01, detour_of=0, around=[box])
+    assert detoured.route.name == "usual, around the nearest obstacle", detoured.note
+    assert detoured.clear

@@ -160,6 +160,85 @@ def test_trajectory_check_ignores_inactive_obstacles(world: CollisionWorld) -> N
         world.sync()
 
 
+@contextmanager
+def _no_obstacles(world: CollisionWorld) -> Iterator[None]:
+    """The parcel alone on the table: what a path check sees is the parcel where it rests."""
+    world.scene.set_active_obstacles([])
+    world.sync()
+    try:
+        yield
+    finally:
+        world.scene.set_active_obstacles(["ball", "block", "post"])
+        world.sync()
+
+
+def _left_palm_along_y(n: int, y0: float, y1: float) -> tuple[np.ndarray, np.ndarray]:
+    """The left palm carried from y0 to y1 at the parcel's centre height, in front of its
+    x = 0.6 centre line; the right palm stands far off (y = -0.6)."""
+    y = np.linspace(y0, y1, n)
+    palms = np.stack(
+        [np.stack([np.full(n, 0.6), y, np.full(n, 0.675)], 1), np.tile([0.6, -0.6, 0.675], (n, 1))],
+        axis=1,
+    )
+    quaternions = np.broadcast_to(
+        np.array([LATERAL_PALM_QUATERNIONS[Arm.LEFT], LATERAL_PALM_QUATERNIONS[Arm.RIGHT]]),
+        (n, 2, 4),
+    )
+    return palms, quaternions
+
+
+def test_a_path_keeps_clear_of_a_resting_object_it_is_asked_to_avoid(
+    world: CollisionWorld,
+) -> None:
+    # The parcel's +y face is at y = 0.15: a palm swept from y = 0.45 to 0 goes through it.
+    palms, quaternions = _left_palm_along_y(301, 0.45, 0.0)
+    with _no_obstacles(world):
+        assert world.check_trajectory(palms, quaternions).collision_free
+        through = world.check_trajectory(palms, quaternions, avoid=["parcel"], avoid_margin=0.01)
+        assert not through.collision_free
+        # The palm's face (half its 2 cm thickness from its centre) comes within 1 cm of the
+        # face at y = 0.15 + 0.01 + 0.01: step (0.45 - 0.17) / 0.0015, give or take its corners.
+        first = through.first_collision
+        assert 170 <= first <= 190, first
+        assert not through.collides[:first].any()
+        # Asked only not to touch it: 1 cm later, 6 or 7 steps on.
+        touching = world.check_trajectory(palms, quaternions, avoid=["parcel"])
+        assert 5 <= touching.first_collision - first <= 8, (touching.first_collision, first)
+        # The obstacles' margin is not the objects'.
+        assert (
+            world.check_trajectory(
+                palms, quaternions, margin=0.05, avoid=["parcel"]
+            ).first_collision
+            == touching.first_collision
+        )
+        # The held object is never its own obstacle.
+        centre = np.tile([0.6, 0.0, 0.675], (len(palms), 1))
+        upright = np.tile([0.0, 0.0, 0.0, 1.0], (len(palms), 1))
+        held = world.check_trajectory(
+            palms, quaternions, "parcel", centre, upright, 0.01, ["parcel"], 0.01
+        )
+        assert held.collides.sum() < through.collides.sum()
+
+
+def test_a_palm_that_starts_on_the_resting_object_is_free_of_it(world: CollisionWorld) -> None:
+    with _no_obstacles(world):
+        # Just let go, against the +y face: backing away is clear, as is staying.
+        leaving, q = _left_palm_along_y(50, 0.16, 0.30)
+        avoid = {"avoid": ["parcel"], "avoid_margin": 0.01}
+        assert world.check_trajectory(leaving, q, **avoid).collision_free
+        # Starting 5 mm off the face, it may keep or widen the gap, never narrow it.
+        near, q = _left_palm_along_y(50, 0.175, 0.30)
+        assert world.check_trajectory(near, q, **avoid).collision_free
+        closing, q = _left_palm_along_y(50, 0.175, 0.168)
+        assert not world.check_trajectory(closing, q, **avoid).collision_free
+
+
+def test_only_objects_can_be_avoided(world: CollisionWorld) -> None:
+    palms, quaternions = _left_palm_along_y(5, 0.45, 0.4)
+    with pytest.raises(ValueError, match=r"expected objects in \['parcel'\], got \['ball'\]"):
+        world.check_trajectory(palms, quaternions, avoid=["ball"])
+
+
 def test_trajectory_check_validates_shapes(world: CollisionWorld) -> None:
     with pytest.raises(ValueError, match=r"expected palm_positions of shape \(N, 2, 3\)"):
         world.check_trajectory(np.zeros((5, 3)), np.zeros((5, 2, 4)))

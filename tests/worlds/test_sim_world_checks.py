@@ -90,3 +90,37 @@ def test_one_contact_query_per_obstacle_counts_as_one_per_pair() -> None:
         assert sim.safety.obstacle_contacts == expected
         assert expected.get("parcel ~ ball_left", 0) > 0
         assert expected.get("left_arm ~ ball_right", 0) > 0
+
+
+@pytest.mark.sim
+def test_empty_palms_keep_off_the_objects_where_they_rest_a_carry_does_not_ask_it() -> None:
+    from worlds.sim_world import SimWorld
+    from worlds.testing import DEFAULT_WORLD
+    from worlds.world_file import load_world
+
+    with SimWorld(load_world(DEFAULT_WORLD)) as sim:
+        parcel = sim.object_pose("parcel")
+        start = np.stack([sim.palm_pose(a).position for a in (Arm.LEFT, Arm.RIGHT)])
+        q = np.stack([sim.palm_pose(a).orientation for a in (Arm.LEFT, Arm.RIGHT)])
+        n = 60
+        # The left palm from where it rests to the parcel's centre and on through it.
+        path = np.repeat(start[None], n, axis=0)
+        path[:, 0] = start[0] + np.linspace(0.0, 1.2, n)[:, None] * (parcel.position - start[0])
+        quaternions = np.repeat(q[None], n, axis=0)
+        check = sim.check_palm_path(path, quaternions, 0.01)
+        assert not check.clear and not check.doubtful
+        assert "on an object" in check.detail
+        # Stopping short of it, with no obstacle about, is clear.
+        short = path.copy()
+        short[:, 0] = start[0] + np.linspace(0.0, 0.3, n)[:, None] * (parcel.position - start[0])
+        assert sim.check_palm_path(short, quaternions, 0.01).clear
+        # Held, the parcel is not its own obstacle, nor are the palms kept off it.
+        held = sim.check_trajectory(
+            "parcel",
+            np.repeat(parcel.position[None], n, axis=0),
+            np.repeat(parcel.orientation[None], n, axis=0),
+            path,
+            quaternions,
+            0.01,
+        )
+        assert held.clear, held.detail
