@@ -38,6 +38,7 @@ from planner.render import render_tree
 from planner.runlog import RunLog
 from planner.runner import run_tree
 from planner.tree_dataflow import RUN_WRITES, TASK_OBJECT_KEY
+from skills import quaternion as quat
 from skills.default_library import default_library
 from skills.library import SkillLibrary
 from worlds.sim_world import SimWorld, task_moves
@@ -189,6 +190,8 @@ class _Track:
     skill: str | None = None
     #: The move's latest success the errors were taken from.
     placed: MoveResult | None = None
+    #: The object's pose (position, quaternion) when that success was seen.
+    placed_pose: tuple[np.ndarray, np.ndarray] | None = None
 
 
 class _Recorder:
@@ -257,6 +260,7 @@ class _Recorder:
             assert placed.placement_error_rad is not None
             track.placed = placed
             pose = poses[key[0]]
+            track.placed_pose = (pose.position.copy(), pose.orientation.copy())
             track.error_m = self._true_error_m(key, pose.position, placed.placement_error_m)
             track.error_deg = float(np.degrees(placed.placement_error_rad))
             track.composition = {
@@ -290,6 +294,24 @@ class _Recorder:
             dz,
         )
         return float(np.linalg.norm(position - true_goal))
+
+    def moved_since_placed(self) -> list[tuple[str, float, float]]:
+        """Per object whose last move was placed: how far (m) and how much (deg) it lies now
+        from where that placement left it (the robot may knock a placed object as it goes on
+        to the next, or as it retreats)."""
+        last: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+        for name, index in self.finals:
+            placed = self.tracks[name, index].placed_pose
+            if placed is not None:
+                last[name] = placed
+            else:
+                last.pop(name, None)
+        out = []
+        for name, (position, orientation) in last.items():
+            pose = self.sim.object_pose(name)
+            turn = float(np.degrees(quat.angle_between(pose.orientation, orientation)))
+            out.append((name, float(np.linalg.norm(pose.position - position)), turn))
+        return out
 
     def column(self, what: str) -> list[Any]:
         """One attribute of every judged move's track (its last step's), in task order."""
@@ -484,7 +506,9 @@ def run_episode(
                 publisher.close()
         objects = [name for name, _ in recorder.finals]
         errors_m, errors_deg = recorder.column("error_m"), recorder.column("error_deg")
-        ok, failure = judge(result, sim, objects, errors_m, errors_deg)
+        ok, failure = judge(
+            result, sim, objects, errors_m, errors_deg, recorder.moved_since_placed()
+        )
         trays = tray_verdicts(sim.scene.spec.objects, sim.watched, recorder.grip)
         tray_failure = next((v.failure for v in trays if not v.ok), "")
         if ok and tray_failure:

@@ -1,13 +1,16 @@
 """The verdict of one run: the paper's criteria, in their order, on what the physics measured.
 
 A run succeeds only if every move of the task is placed within :data:`PLACE_TOLERANCE_M` and
-:data:`PLACE_TOLERANCE_DEG` of its goal (the object's measured pose), nothing touched an
+:data:`PLACE_TOLERANCE_DEG` of its goal (the object's measured pose), each object still lies
+within the same of where its last move left it when the run ends, nothing touched an
 obstacle (PyBullet contacts every physics step, FCL clearance every control step), the arms
 never touched, and the tree succeeded. A dropped object fails the run unless the tree picked
 it up again and placed it.
 """
 
 from __future__ import annotations
+
+from collections.abc import Sequence
 
 from planner.runner import RunResult
 from worlds.sim_world import SafetyRecord, SimWorld
@@ -32,6 +35,7 @@ def judge(
     objects: list[str],
     errors_m: list[float | None],
     errors_deg: list[float | None],
+    moved: Sequence[tuple[str, float, float]] = (),
 ) -> tuple[bool, str]:
     """Success and the first failure reason, in the order the paper's criteria are listed.
 
@@ -40,6 +44,8 @@ def judge(
     tree said. A drop fails the run only if the task then went wrong in any way (it is the
     reason given, being the cause); a dropped object that the tree picked up again and placed,
     with nothing touched, is a recovery: the run succeeds and its record says ``dropped``.
+    ``moved`` holds, per object, how far (m) and how much (deg) it lies at the end from where
+    its last move placed it: a placed object knocked away afterwards fails the run.
     """
     s = sim.safety
     if s.spawned_inside:
@@ -47,6 +53,10 @@ def judge(
         where = "; ".join(f"{o} inside {', '.join(b)}" for o, b in sorted(s.spawned_inside.items()))
         return False, f"obstacle spawned inside a body: {where}"
     ok, failure = _task_outcome(result, s, objects, errors_m, errors_deg)
+    for name, metres, degrees in moved:
+        if ok and (metres > PLACE_TOLERANCE_M or degrees > PLACE_TOLERANCE_DEG):
+            ok = False
+            failure = f"{name} moved {metres * 100:.1f} cm, {degrees:.1f} deg after it was placed"
     if not ok and s.dropped:
         return False, f"dropped {s.dropped_object}" if s.dropped_object else "dropped"
     return ok, failure

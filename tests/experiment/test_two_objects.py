@@ -49,10 +49,50 @@ def test_a_move_without_a_placement_fails_the_run_whatever_the_tree_said() -> No
     assert (ok, failure) == (True, "")
 
 
+def test_a_placed_object_knocked_away_afterwards_fails_the_run() -> None:
+    tree_ok = RunResult(Status.SUCCESS, 10.0, 1.0, 600, "")
+    sim: Any = SimpleNamespace(safety=SafetyRecord())
+    placed = [0.001] * 4, [0.1] * 4
+    # Where the last moves left them, give or take what the retreats nudge: a success.
+    still = [("parcel_left", 0.004, 1.0), ("parcel_right", 0.0, 0.0)]
+    assert judge(tree_ok, sim, PLACED, *placed, still) == (True, "")
+    # The way in to the second parcel swept the first 12 cm off its goal.
+    knocked = [("parcel_left", 0.12, 3.0), ("parcel_right", 0.0, 0.0)]
+    assert judge(tree_ok, sim, PLACED, *placed, knocked) == (
+        False,
+        "parcel_left moved 12.0 cm, 3.0 deg after it was placed",
+    )
+    turned = [("parcel_left", 0.0, 0.0), ("parcel_right", 0.01, 25.0)]
+    assert judge(tree_ok, sim, PLACED, *placed, turned)[1].startswith("parcel_right moved")
+    # Knocked off the table, the safety record says dropped: that is the reason given.
+    sim.safety.dropped = True
+    sim.safety.dropped_object = "parcel_left"
+    assert judge(tree_ok, sim, PLACED, *placed, knocked) == (False, "dropped parcel_left")
+
+
+@pytest.fixture(scope="module")
+def two_parcels_run(tmp_path_factory: pytest.TempPathFactory) -> tuple[Any, Path]:
+    out = tmp_path_factory.mktemp("two_parcels")
+    return run_episode(load_world(TWO_PARCELS), out=out, animation=False), out
+
+
 @pytest.mark.sim
-def test_two_parcels_are_each_placed_twice_and_every_placement_is_judged(tmp_path: Path) -> None:
-    report = run_episode(load_world(TWO_PARCELS), out=tmp_path, animation=False)
+@pytest.mark.xfail(
+    strict=True,
+    reason="known: carrying parcel_right, the left forearm crosses the placed parcel_left and "
+    "knocks it about 4 cm; carries keep clear of the obstacles, not of resting objects",
+)
+def test_two_parcels_end_where_they_were_placed(two_parcels_run: tuple[Any, Path]) -> None:
+    report, _ = two_parcels_run
     assert report.success, report.failure
+
+
+@pytest.mark.sim
+def test_two_parcels_are_each_placed_twice_and_every_placement_is_judged(
+    two_parcels_run: tuple[Any, Path],
+) -> None:
+    report, tmp_path = two_parcels_run
+    assert report.tree_status == "SUCCESS"
     assert report.placement_objects == PLACED
     assert len(report.placement_error_m) == len(report.placement_error_deg) == 4
     assert all(e is not None and e < 0.02 for e in report.placement_error_m)
