@@ -379,7 +379,8 @@ class FakeWorld:
         palm_orientations: Array,
         margin_m: float = 0.0,
     ) -> PathCheck:
-        """Segments of the arms, out to the palms, vs spheres."""
+        """Segments of the arms, out to the palms, vs spheres (the obstacles only: unlike the
+        simulator's, this check does not keep off the objects)."""
         n = np.asarray(palm_positions).shape[0]
         return self._check_path(
             np.full(n, np.inf), np.asarray(palm_positions, dtype=float), margin_m
