@@ -54,11 +54,6 @@ FOREARM_LEVER_M = 0.3
 #: Waypoints between two solved for the arms' prediction (4 control steps at 60 Hz: the palms
 #: move at most a centimetre or two in between).
 PREDICTION_STRIDE = 4
-#: Clearance an empty palms' path keeps from the objects where they rest, m: none beyond not
-#: touching them. A way in to a grasp must come near its object (its wrist passes a few
-#: millimetres above the top edge, coming in from above), and the forearms' doubt is for the
-#: obstacles: a link or palm predicted to touch a resting object is a sure sweep through it.
-OBJECT_CLEARANCE_M = 0.0
 #: Highest an object's centre may be carried above the table top, m.
 MAX_LIFT_M = 0.30
 #: Contact force each palm must press an object with, N, for the grasp to locate it: from the
@@ -642,10 +637,13 @@ class SimWorld:
         against the active obstacles and the objects where they rest (as
         :meth:`check_trajectory`, without a held object).
 
-        A palm or link that touches an object at the path's start (it has just let it go) is
-        free of that one (:meth:`worlds.collision.CollisionWorld.check_trajectory`); the
-        others keep ``margin_m`` from it: a way in to a grasp sweeping a hand through the
-        object knocked it off the table (iCub, Hard trial 114)."""
+        The palms and links keep ``margin_m`` from the objects too (the forearms' doubt is for
+        the obstacles): a way in to a grasp sweeping a hand through the object knocked it off
+        the table (iCub, Hard trial 114), and a way back passing 3 mm over a corner of the
+        object just placed, followed by a palm slowed by Hard mode's actuator lag, slid it
+        2.7 cm (iiwas, Hard trial 10). One touching an object at the path's start (it has
+        just let it go) is free of it, and one starting nearer than the margin may keep that
+        gap (:meth:`worlds.collision.CollisionWorld.check_trajectory`)."""
         return self._check_path(palm_positions, palm_orientations, margin_m, None)
 
     def _check_path(
@@ -665,7 +663,7 @@ class SimWorld:
             object_orientations,
             margin_m,
             avoid,
-            OBJECT_CLEARANCE_M,
+            margin_m,
         )
         # The arms' links are solved for along the palms' path (_predicted_links_collide):
         # carried rigidly with the palms instead, a forearm misses the elbow's swing (and a
@@ -673,7 +671,7 @@ class SimWorld:
         # the controller's motion: the links get extra clearance the further the palms go.
         doubt = forearm_doubt(palm_positions, palm_orientations)
         arms, arms_on_objects = self._predicted_links_collide(
-            palm_positions, palm_orientations, margin_m + doubt, avoid, OBJECT_CLEARANCE_M
+            palm_positions, palm_orientations, margin_m + doubt, avoid, margin_m
         )
         pts = np.asarray(palm_positions).reshape(-1, 3)
         if object_positions is not None:

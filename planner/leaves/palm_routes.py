@@ -29,13 +29,14 @@ DETOUR_CLEARANCE_M = 0.15
 
 
 def margin_port() -> PortInformation:
-    """The clearance an empty palms' route must keep from the obstacles, m."""
+    """The clearance an empty palms' route must keep from the obstacles and the resting
+    objects, m."""
     return PortInformation(
         float,
         required=False,
         default_value=0.01,
-        description="clearance from the obstacles the palms' predicted path must keep, m "
-        "(else another way is taken)",
+        description="clearance from the obstacles and the resting objects the palms' "
+        "predicted path must keep, m (else another way is taken)",
     )
 
 
