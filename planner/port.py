@@ -158,6 +158,25 @@ class ObstacleInfo:
 
 
 @dataclass(frozen=True)
+class ObstacleGap:
+    """How near an object is, as measured now, to the nearest present obstacle.
+
+    Attributes
+    ----------
+    distance_m : float
+        The gap between their surfaces, m (0 or less: touching).
+    away : ndarray, shape (3,)
+        Unit vector, world frame, along which moving the object widens the gap.
+    obstacle : str
+        The obstacle's name.
+    """
+
+    distance_m: float
+    away: Array
+    obstacle: str
+
+
+@dataclass(frozen=True)
 class FixtureInfo:
     """An open fixture on the table an object is inserted into: four walls around a slot.
 
@@ -345,6 +364,11 @@ class ObstacleScene(Protocol):
         """The objects other than ``name`` where they lie now, each as its bounding sphere: an
         empty palms' path keeps clear of them as of the obstacles (:meth:`check_palm_path`),
         and a way in to ``name`` may go around them."""
+        ...
+
+    def obstacle_gap(self, name: str, within_m: float) -> ObstacleGap | None:
+        """Object ``name``'s measured gap to the nearest present obstacle when it is under
+        ``within_m`` m, else None (and None with no obstacle present)."""
         ...
 
     def check_trajectory(

@@ -834,6 +834,14 @@ class CollisionWorld:
             )
         return self._rows_closer_than(rows_a, rows_b, ceiling)
 
+    def object_closer_than(self, name: str, ceiling: float) -> Proximity | None:
+        """Task object ``name``'s closest active obstacle, if nearer than ``ceiling`` m
+        (:meth:`closer_than`); None too with no obstacle active."""
+        if not self._active:
+            return None
+        rows = self.avoided_rows([name])
+        return self._rows_closer_than(rows, list(self._active), ceiling)
+
     def _rows_closer_than(
         self, rows_a: list[int], rows_b: list[int], ceiling: float
     ) -> Proximity | None:

@@ -91,7 +91,8 @@ class Disturbances:
     physics_hz : int
         Physics rate, Hz.
     held : callable (name) -> bool, optional
-        Whether both palms hold the named object now; asked once, when a ``while_held``
+        Whether both palms carry the named object now (hold it off its support,
+        :meth:`worlds.scene.Scene.is_carried`); asked once, when a ``while_held``
         push's window opens (without it, such a push is never applied).
 
     Raises

@@ -59,7 +59,7 @@ PARKING_OFFSET = (0.0, 0.0, -100.0)
 
 
 #: Least contact force of each palm for an object to count as held, N (the planner's IsHeld
-#: default): a ``while_held`` disturbance pushes only an object held so.
+#: default): a ``while_held`` disturbance pushes only an object held so, off its support.
 HELD_FORCE_N = 2.0
 
 
@@ -217,7 +217,7 @@ class Scene:
         #: The fixtures' bodies, by name (always present: :mod:`worlds.fixtures`).
         self.fixture_ids = {f.name: create_fixture(c, f) for f in self.physical.fixtures}
         self.disturbances = Disturbances(
-            c, self.spec.disturbances, self.object_ids, self.spec.physics_hz, self.is_held
+            c, self.spec.disturbances, self.object_ids, self.spec.physics_hz, self.is_carried
         )
 
         self.controller = DualArmImpedanceController(
@@ -481,6 +481,16 @@ class Scene:
     def is_held(self, name: str, min_force_n: float = HELD_FORCE_N) -> bool:
         """Both palms press on object ``name`` with at least ``min_force_n`` N each."""
         return all(self.palm_contact_force(arm, name) >= min_force_n for arm in Arm)
+
+    def is_carried(self, name: str, min_force_n: float = HELD_FORCE_N) -> bool:
+        """Object ``name`` is held (:meth:`is_held`) and off its support: it touches nothing
+        but the robot and other objects (no table, obstacle or fixture). A box the palms have
+        just set down and are letting go of is held, not carried."""
+        if not self.is_held(name, min_force_n):
+            return False
+        ours = {*self.robot_ids, *self.object_ids.values()}
+        contacts = pb.getContactPoints(bodyA=self._object(name), physicsClientId=self.client)
+        return all(c[2] in ours for c in contacts)
 
     def palm_contact_force(self, arm: Arm, name: str) -> float:
         """Sum of contact normal forces between ``arm``'s palm and object ``name``, N.

@@ -25,7 +25,15 @@ from numpy.typing import NDArray
 
 from affordances import ObjectContext, RobotCapabilities, SceneQuery
 from affordances.scene import GeometricSceneQuery
-from planner.port import FixtureInfo, Move, ObstacleInfo, PathCheck, Pose, stepped_moves
+from planner.port import (
+    FixtureInfo,
+    Move,
+    ObstacleGap,
+    ObstacleInfo,
+    PathCheck,
+    Pose,
+    stepped_moves,
+)
 from skills import quaternion as quat
 from skills.level_carry import LooseBall
 from skills.types import Array
@@ -759,6 +767,20 @@ class SimWorld:
         """Bounding spheres of the links welded to ``arm``'s palm, palm frame (constant)."""
         centres, radii = self._welded[arm]
         return centres.copy(), radii.copy()
+
+    def obstacle_gap(self, name: str, within_m: float) -> ObstacleGap | None:
+        """Object ``name``'s FCL gap to the nearest active obstacle, where the collision world
+        last synced it (every control step), when under ``within_m`` m."""
+        prox = self.collision.object_closer_than(name, within_m)
+        if prox is None:
+            return None
+        away = prox.point_a - prox.point_b
+        norm = float(np.linalg.norm(away))
+        if prox.distance <= 0.0 or norm < 1e-6:
+            # Touching or inside: FCL's witness points say little; from the obstacle's centre.
+            away = self.object_pose(name).position - self._obstacle_info[prox.element_b].position
+            norm = float(np.linalg.norm(away))
+        return ObstacleGap(prox.distance, away / max(norm, 1e-12), prox.element_b)
 
     def distance_query(self, points: Array) -> tuple[Array, Array]:
         """Distance (N,) from points (N, 3) to the nearest active obstacle, closest points."""

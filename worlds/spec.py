@@ -340,8 +340,9 @@ class DisturbanceSpec:
     torque_nm : tuple of float
         (3,) torque, world frame, N m.
     while_held : bool
-        Push only if both palms hold the object when the window opens (a push during a
-        carry); otherwise the whole window is skipped.
+        Push only if both palms hold the object, off its support (touching no table,
+        obstacle or fixture), when the window opens: a push during a carry, not while the
+        palms set it down or let it go. Otherwise the whole window is skipped.
     """
 
     object: str

@@ -32,7 +32,15 @@ from affordances import (
 )
 from affordances.context import PAPER_ROBOT
 from affordances.scene import GeometricSceneQuery
-from planner.port import FixtureInfo, Move, ObstacleInfo, PathCheck, Pose, stepped_moves
+from planner.port import (
+    FixtureInfo,
+    Move,
+    ObstacleGap,
+    ObstacleInfo,
+    PathCheck,
+    Pose,
+    stepped_moves,
+)
 from skills import quaternion as quat
 from skills.dual_arm import GraspGeometry
 from skills.level_carry import LooseBall
@@ -423,6 +431,22 @@ class FakeWorld:
     def welded_spheres(self, arm: Arm) -> tuple[Array, Array]:
         """None: the fake arms are segments ending at their palms."""
         return np.zeros((0, 3)), np.zeros(0)
+
+    def obstacle_gap(self, name: str, within_m: float) -> ObstacleGap | None:
+        """The object box's exact gap to the nearest present obstacle sphere."""
+        o = self._objects[name]
+        best: ObstacleGap | None = None
+        for b in self.obstacles():
+            # The sphere's centre in the box frame, and the box's point nearest it.
+            local = quat.rotate(quat.conjugate(o.pose.orientation), b.position - o.pose.position)
+            nearest = np.clip(local, -o.extents / 2.0, o.extents / 2.0)
+            out = quat.rotate(o.pose.orientation, nearest - local)
+            gap = float(np.linalg.norm(out)) - b.radius
+            if float(np.linalg.norm(out)) < 1e-9:  # the centre inside the box
+                out = o.pose.position - b.position
+            if gap < within_m and (best is None or gap < best.distance_m):
+                best = ObstacleGap(gap, out / max(float(np.linalg.norm(out)), 1e-12), b.name)
+        return best
 
     def distance_query(self, points: Array) -> tuple[Array, Array]:
         """Distance to the nearest present obstacle surface and the closest point on it."""
