@@ -20,6 +20,7 @@ from planner.leaves.set_down import (
 from planner.move_result import MoveResult, publish_move_result
 from planner.port import Clock, Move, ObjectSensing, ObstacleScene, PalmControl, Pose
 from skills.composer import DualArmComposer, DualArmState
+from skills.types import Array
 from skills.vocabulary import ARMS
 
 #: How far below the goal the palms search for a surface before the move fails, m.
@@ -121,7 +122,7 @@ class Transport(MotionLeaf):
         self.composer: DualArmComposer | None = None
         self.problem: str | None = None
         #: The palms' targets' present shift away from a near obstacle, m (see _reflex).
-        self.reflex_offset = np.zeros(3)
+        self.reflex_offset: Array = np.zeros(3)
         inputs = self.object_and_move()
         if isinstance(inputs, str):
             self.problem = inputs
@@ -250,17 +251,17 @@ class Transport(MotionLeaf):
                 )
         return self.running(f"move {self.move_index}: {elapsed:.1f} of {tau:.1f} s")
 
-    def _reflex(self, name: str) -> np.ndarray:
+    def _reflex(self, name: str) -> Array:
         """The shift of both palms' targets, (3,) m, that pushes the object, as measured, out
         of :data:`REFLEX_BAND_M` of the nearest obstacle: :data:`REFLEX_GAIN` times its depth
         in the band, along the way out, at most :data:`REFLEX_MAX_M`, followed with
         :data:`REFLEX_TAU_S` (and back to none once clear). The composition itself runs on:
         its state, and the state handed over, are the commanded ones."""
         gap = self.world.obstacle_gap(name, REFLEX_BAND_M)
-        want = np.zeros(3)
+        want: Array = np.zeros(3)
         if gap is not None:
             depth = REFLEX_BAND_M - gap.distance_m
-            want = gap.away * min(REFLEX_GAIN * depth, REFLEX_MAX_M)
+            want = np.asarray(gap.away, dtype=float) * min(REFLEX_GAIN * depth, REFLEX_MAX_M)
         rate = min(1.0, self.control_dt / REFLEX_TAU_S)
         self.reflex_offset = self.reflex_offset + rate * (want - self.reflex_offset)
         return self.reflex_offset

@@ -155,3 +155,38 @@ def test_a_push_while_held_acts_on_a_parcel_the_palms_hold() -> None:
     (entry,) = report.disturbances
     assert (entry["steps"], entry["skipped"]) == (24, False)
     assert report.success, report.failure
+
+
+@pytest.mark.sim
+def test_a_push_while_held_skips_a_parcel_held_on_the_table(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    from experiment.episode import run_episode
+    from worlds.scene import HELD_FORCE_N, Scene
+
+    # Closing on the default world's parcel, before the first carry lifts it: both palms press
+    # it, but the table carries it, and a push during a carry is not one during a grasp (or a
+    # set-down, or a release).
+    asked: list[bool] = []
+    is_held = Scene.is_held
+
+    def held(self: Scene, name: str, min_force_n: float = HELD_FORCE_N) -> bool:
+        answer = is_held(self, name, min_force_n)
+        if min_force_n == HELD_FORCE_N:  # asked for the push (not where the grasp locates it)
+            asked.append(answer)
+        return answer
+
+    monkeypatch.setattr(Scene, "is_held", held)
+    push = {
+        "at_s": 2.45,
+        "object": "parcel",
+        "force_n": [0.0, 10.0, 0.0],
+        "duration_s": 0.05,
+        "while_held": True,
+    }
+    report = run_episode(_world([push]), None, out=None, animation=False)
+    (entry,) = report.disturbances
+    assert entry["skipped"] is True and entry["steps"] == 0
+    # The palms held it then (2 N each or more): it was skipped for resting on the table.
+    assert asked[:1] == [True]
+    assert report.success, report.failure

@@ -124,3 +124,34 @@ def test_empty_palms_keep_off_the_objects_where_they_rest_a_carry_does_not_ask_i
             0.01,
         )
         assert held.clear, held.detail
+
+
+@pytest.mark.sim
+def test_the_gap_from_an_object_to_an_obstacle_is_measured_with_the_way_out() -> None:
+    from worlds.sim_world import SimWorld
+    from worlds.testing import DEFAULT_WORLD
+    from worlds.world_file import load_world
+
+    with SimWorld(load_world(DEFAULT_WORLD)) as sim:
+        ball = next(o for o in sim.scene.spec.obstacles if o.name == "ball_left")
+        centre = np.asarray(ball.position, dtype=float)
+        # No obstacle present: no gap, however near.
+        assert sim.obstacle_gap("parcel", 1.0) is None
+        sim.set_active_obstacles(["ball_left"])
+        # The parcel (0.2 m along x) put with its +x face 6 mm short of the ball, level.
+        for gap in (0.006, 0.03):
+            at = centre - np.array([0.1 + ball.shape.radius + gap, 0.0, 0.0])
+            pb.resetBasePositionAndOrientation(
+                sim.scene.object_ids["parcel"],
+                at.tolist(),
+                [0, 0, 0, 1],
+                physicsClientId=sim.scene.client,
+            )
+            sim.collision.sync()
+            found = sim.obstacle_gap("parcel", 0.01)
+            if gap > 0.01:
+                assert found is None
+                continue
+            assert found is not None and found.obstacle == "ball_left"
+            assert found.distance_m == pytest.approx(gap, abs=1e-4)
+            assert_allclose(found.away, [-1.0, 0.0, 0.0], atol=1e-3)

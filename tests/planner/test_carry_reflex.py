@@ -1,0 +1,116 @@
+"""Transport's reflex: a carried object that strays within REFLEX_BAND_M of an obstacle, as
+measured, is pushed out of it by shifting both palms' targets; the composition runs on."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+from py_trees.common import Status
+
+from planner.leaves import Transport
+from planner.leaves.transport import REFLEX_BAND_M, REFLEX_GAIN, REFLEX_MAX_M, REFLEX_TAU_S
+from planner.port import Move, ObstacleGap, ObstacleInfo, Pose
+from planner.testing import FakeWorld
+from planner.testing.fake_world import FakeObject
+from planner.wiring import wire
+from skills.library import SkillLibrary
+from tests.planner.test_leaves_fake import DT, approach_and_grasp, ready, select
+
+
+class _Gaps:
+    """A world whose only answer is the gap it is told to give."""
+
+    def __init__(self) -> None:
+        self.gap: ObstacleGap | None = None
+
+    def obstacle_gap(self, name: str, within_m: float) -> ObstacleGap | None:
+        if self.gap is None or self.gap.distance_m >= within_m:
+            return None
+        return self.gap
+
+
+def _reflex_leaf(world: _Gaps) -> Transport:
+    leaf = Transport("carry")
+    wire(leaf, object="parcel", move=0, plan="{plan}", from_state="{state}")
+    leaf.setup(world=world, control_dt=DT)
+    leaf.reflex_offset = np.zeros(3)
+    return leaf
+
+
+def test_the_shift_follows_the_depth_in_the_band_with_its_lag_and_cap() -> None:
+    world = _Gaps()
+    leaf = _reflex_leaf(world)
+    away = np.array([0.0, -1.0, 0.0])
+    # Clear of the band: no shift.
+    assert_allclose(leaf._reflex("parcel"), 0.0)
+    world.gap = ObstacleGap(REFLEX_BAND_M + 1e-3, away, "ball")
+    assert_allclose(leaf._reflex("parcel"), 0.0)
+    # 4 mm from the obstacle: 6 mm into the band, a want of GAIN x 6 mm, reached at the rate
+    # dt / tau a tick (first order), the whole of it after a few tau.
+    world.gap = ObstacleGap(0.004, away, "ball")
+    want = REFLEX_GAIN * (REFLEX_BAND_M - 0.004) * away
+    rate = DT / REFLEX_TAU_S
+    assert_allclose(leaf._reflex("parcel"), rate * want, atol=1e-12)
+    for _ in range(int(10 * REFLEX_TAU_S / DT)):
+        shift = leaf._reflex("parcel")
+    assert_allclose(shift, want, atol=1e-4)
+    # Touching or inside: at most REFLEX_MAX_M.
+    world.gap = ObstacleGap(-0.05, away, "ball")
+    for _ in range(int(10 * REFLEX_TAU_S / DT)):
+        shift = leaf._reflex("parcel")
+    assert_allclose(shift, REFLEX_MAX_M * away, atol=1e-4)
+    # Clear again: it fades back to none.
+    world.gap = None
+    for _ in range(int(20 * REFLEX_TAU_S / DT)):
+        shift = leaf._reflex("parcel")
+    assert np.linalg.norm(shift) < 1e-6
+
+
+def _carry_towards_a_ball(gap_at_goal: float) -> tuple[FakeWorld, float]:
+    """The first move's goal put with its +x face ``gap_at_goal`` m short of a ball."""
+    goal = np.array([0.65, 0.0, 0.675])
+    radius = 0.04
+    ball = ObstacleInfo("ball", goal + [0.10 + radius + gap_at_goal, 0.0, 0.0], radius)
+    world = FakeWorld(
+        objects=[FakeObject("parcel", np.array([0.20, 0.30, 0.15]))],
+        obstacles=[ball],
+        moves={"parcel": (Move(Pose.of(goal), ("ball",)),)},
+    )
+    return world, radius
+
+
+@pytest.mark.usefixtures("clean_blackboard")
+def test_a_carry_that_ends_too_near_an_obstacle_is_held_out_of_the_band(
+    library: SkillLibrary,
+) -> None:
+    # The goal itself lies 3 mm from the ball: the composition (no avoidance) runs to it, the
+    # measured parcel is pushed back to where the shift balances the depth in the band.
+    world, _ = _carry_towards_a_ball(0.003)
+    select(world, library)
+    approach_and_grasp(world, library)
+    leaf = ready(
+        Transport("carry"),
+        world,
+        library,
+        object="parcel",
+        move=0,
+        plan="{plan}",
+        from_state="{state}",
+        to_state="{state}",
+        avoid_gain=0.0,
+    )
+    closest = np.inf
+    for _ in range(1500):
+        leaf.tick_once()
+        gap = world.obstacle_gap("parcel", 1.0)
+        assert gap is not None
+        closest = min(closest, gap.distance_m)
+        if leaf.status != Status.RUNNING:
+            break
+        world.advance(DT)
+    assert leaf.status == Status.SUCCESS, leaf.feedback_message
+    # Balance: shift s = GAIN (band - (0.003 + s)), so s = GAIN (band - 0.003) / (1 + GAIN).
+    shift = REFLEX_GAIN * (REFLEX_BAND_M - 0.003) / (1.0 + REFLEX_GAIN)
+    assert closest > 0.003 + 0.8 * shift, closest
+    assert world.object_pose("parcel").position[0] == pytest.approx(0.65 - shift, abs=1e-3)
