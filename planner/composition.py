@@ -672,6 +672,7 @@ def compose_move(
     transport_weight: float = 1.0,
     skill: str | None = None,
     above_fixture: bool = False,
+    table_dz: float = 0.0,
 ) -> MovePlan:
     """Activate move ``index``'s obstacles and compose it from ``state``.
 
@@ -679,9 +680,12 @@ def compose_move(
     the obstacles present, so they must be the move's before it is built. Arguments as
     :func:`transport_composition`'s; ``index`` must be one of ``world.task_moves(name)``.
     ``above_fixture``: a move into a fixture is composed to its hover goal
-    (:func:`planner.fixture_moves.hover_goal`); no other move changes.
+    (:func:`planner.fixture_moves.hover_goal`); no other move changes. ``table_dz``: the
+    table found that much higher than the world states it
+    (:func:`planner.leaves.set_down.table_found_dz`): a goal resting the object on the stated
+    table is raised with it (:func:`on_found_table`).
     """
-    move = world.task_moves(name)[index]
+    move = on_found_table(world, name, world.task_moves(name)[index], table_dz)
     if above_fixture:
         move = hover_move(world, move)
     world.set_active_obstacles(move.obstacles)
@@ -710,6 +714,24 @@ def compose_move(
         carried_skill(reweight(plan, avoid_gain, transport_weight), library, skill or move.skill),
         above_fixture,
     )
+
+
+def on_found_table(world: ObjectSensing, name: str, move: Move, table_dz: float) -> Move:
+    """``move`` with its goal ``table_dz`` m higher when the goal rests ``name`` on the table
+    top as the world states it (its lowest point within 1 mm of it) and the table was found
+    that much off (a carry composed to the stated height presses a low carry into a higher
+    table, or ends in the air over a lower one); any other move as it is."""
+    if not table_dz or move.fixture is not None:
+        return move
+    goal = move.goal
+    extents = world.object_extents(name)
+    lower, _ = world.workspace_bounds(name)
+    stated_top = float(lower[2]) - float(extents[2]) / 2.0
+    bottom = float(goal.position[2] - vertical_half_extent(extents, goal.orientation))
+    if abs(bottom - stated_top) > 1e-3:
+        return move
+    raised = Pose(goal.position + np.array([0.0, 0.0, table_dz]), goal.orientation)
+    return replace(move, goal=raised)
 
 
 def box_points(extents: np.ndarray) -> np.ndarray:

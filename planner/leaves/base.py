@@ -12,6 +12,7 @@ from py_trees.ports import BehaviourWithPorts, NoDataAvailable, PortInformation
 
 from affordances import SemanticAction
 from planner.composition import MovePlan, compose_move, squeeze_force
+from planner.leaves.set_down import table_found_dz
 from planner.port import WorldPort
 from skills.library import SkillLibrary
 
@@ -227,6 +228,7 @@ def composed_move(leaf: WorldLeaf, name: str, index: int) -> MovePlan:
         transport_weight=float(leaf.get_input("transport_weight")),
         skill=leaf.optional_input("skill"),
         above_fixture=bool(leaf.get_input("above_fixture")),
+        table_dz=table_found_dz(leaf.world, name),
     )
 
 

@@ -303,6 +303,16 @@ class Transport(MotionLeaf):
         resting_z = float(self.world.object_pose(name).position[2])
         return Pose(np.array([*goal.position[:2], resting_z]), goal.orientation)
 
+    def _rested_z(self, name: str) -> float | None:
+        """The height the object was placed at when it is not the task's goal's (a set-down
+        felt the surface elsewhere, or the goal was raised with a table found off its stated
+        height), for AtGoal; else None (and for a carry that ends above a fixture)."""
+        if self.hovering:
+            return None
+        placed_z = float(self._placed_goal(name).position[2])
+        stated_z = float(self.world.task_moves(name)[self.move_index].goal.position[2])
+        return placed_z if abs(placed_z - stated_z) > 1e-9 else None
+
     def _handed_over(self) -> DualArmState:
         """The composition's full state, shifted by the set-down."""
         assert self.composer is not None
@@ -343,9 +353,7 @@ class Transport(MotionLeaf):
                 err_m,
                 err_rad,
                 self.skill,
-                float(self._placed_goal(name).position[2])
-                if status == Status.SUCCESS and self.lift_offset
-                else None,
+                self._rested_z(name) if status == Status.SUCCESS else None,
             ),
             self.name,
         )
