@@ -57,13 +57,13 @@ def test_an_object_the_palms_carry_finds_no_table(library: SkillLibrary) -> None
     assert table_found_dz(world, "parcel") == 0.0
 
 
-def test_a_goal_on_the_stated_table_is_raised_with_the_table_found() -> None:
+def test_a_goal_on_the_stated_table_goes_down_with_a_table_found_lower() -> None:
     world = _resting(0.0)
     on_table = Move(Pose.of([0.6, 0.1, TABLE + BOX[2] / 2.0]), ("ball",))
-    raised = on_found_table(world, "parcel", on_table, 0.025)
-    assert raised.goal.position == pytest.approx(on_table.goal.position + [0.0, 0.0, 0.025])
-    assert raised.goal.orientation == pytest.approx(on_table.goal.orientation)
-    assert raised.obstacles == on_table.obstacles
+    lowered = on_found_table(world, "parcel", on_table, -0.025)
+    assert lowered.goal.position == pytest.approx(on_table.goal.position - [0.0, 0.0, 0.025])
+    assert lowered.goal.orientation == pytest.approx(on_table.goal.orientation)
+    assert lowered.obstacles == on_table.obstacles
     # On its side: on the table when its centre is half its y extent over the top.
     side = Move(Pose(np.array([0.6, 0.1, TABLE + BOX[1] / 2.0]), ON_ITS_SIDE))
     assert on_found_table(world, "parcel", side, -0.02).goal.position[2] == pytest.approx(
@@ -71,11 +71,16 @@ def test_a_goal_on_the_stated_table_is_raised_with_the_table_found() -> None:
     )
 
 
+def test_a_table_found_higher_is_left_to_the_set_down_by_feel() -> None:
+    world = _resting(0.0)
+    on_table = Move(Pose.of([0.6, 0.1, TABLE + BOX[2] / 2.0]))
+    assert on_found_table(world, "parcel", on_table, 0.02) is on_table
+    assert on_found_table(world, "parcel", on_table, 0.0) is on_table
+
+
 def test_goals_off_the_stated_table_and_fixture_moves_stay_as_stated() -> None:
     world = _resting(0.0)
     held_up = Move(Pose.of([0.6, 0.1, TABLE + BOX[2] / 2.0 + 0.05]))
-    assert on_found_table(world, "parcel", held_up, 0.02) is held_up
+    assert on_found_table(world, "parcel", held_up, -0.02) is held_up
     slot = Move(Pose.of([0.6, 0.1, TABLE + BOX[2] / 2.0]), fixture="slot")
-    assert on_found_table(world, "parcel", slot, 0.02) is slot
-    on_table = Move(Pose.of([0.6, 0.1, TABLE + BOX[2] / 2.0]))
-    assert on_found_table(world, "parcel", on_table, 0.0) is on_table
+    assert on_found_table(world, "parcel", slot, -0.02) is slot
