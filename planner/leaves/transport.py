@@ -256,19 +256,12 @@ class Transport(MotionLeaf):
         of :data:`REFLEX_BAND_M` of the nearest obstacle: :data:`REFLEX_GAIN` times its depth
         in the band, along the way out, at most :data:`REFLEX_MAX_M`, followed with
         :data:`REFLEX_TAU_S` (and back to none once clear). The composition itself runs on:
-        its state, and the state handed over, are the commanded ones.
-
-        An object a surface carries (the palms bear less than
-        :func:`~planner.leaves.set_down.supported_below_n`) is not pushed down: the surface
-        stops it, and palms driven below its centre only slide on it and tip it up into what
-        is above (a sphere hanging 4 mm over a parcel on a table higher than stated)."""
+        its state, and the state handed over, are the commanded ones."""
         gap = self.world.obstacle_gap(name, REFLEX_BAND_M)
         want: Array = np.zeros(3)
         if gap is not None:
             depth = REFLEX_BAND_M - gap.distance_m
             want = np.asarray(gap.away, dtype=float) * min(REFLEX_GAIN * depth, REFLEX_MAX_M)
-            if want[2] < 0.0 and palm_load_n(self.world, name) <= self.supported_below_n:
-                want[2] = 0.0
         rate = min(1.0, self.control_dt / REFLEX_TAU_S)
         self.reflex_offset = self.reflex_offset + rate * (want - self.reflex_offset)
         return self.reflex_offset

@@ -23,11 +23,6 @@ class _Gaps:
 
     def __init__(self) -> None:
         self.gap: ObstacleGap | None = None
-        #: The palms' summed upward force on the object, N.
-        self.load_n = 0.0
-
-    def palm_load(self, arm: object, name: str) -> float:
-        return self.load_n / 2.0
 
     def obstacle_gap(self, name: str, within_m: float) -> ObstacleGap | None:
         if self.gap is None or self.gap.distance_m >= within_m:
@@ -70,26 +65,6 @@ def test_the_shift_follows_the_depth_in_the_band_with_its_lag_and_cap() -> None:
     for _ in range(int(20 * REFLEX_TAU_S / DT)):
         shift = leaf._reflex("parcel")
     assert np.linalg.norm(shift) < 1e-6
-
-
-def test_an_object_a_surface_carries_is_not_pushed_down_into_it() -> None:
-    # A sphere over the object: the way out is down. Carried (the palms bear its weight), the
-    # shift goes down; resting on a surface (the palms bear less than supported_below_n), the
-    # surface stops it, so only the shift's other parts act.
-    world = _Gaps()
-    leaf = _reflex_leaf(world)
-    leaf.supported_below_n = 4.0
-    away = np.array([0.6, 0.0, -0.8])
-    world.gap = ObstacleGap(0.004, away, "ball")
-    want = REFLEX_GAIN * (REFLEX_BAND_M - 0.004) * away
-    world.load_n = 10.0
-    for _ in range(int(10 * REFLEX_TAU_S / DT)):
-        shift = leaf._reflex("parcel")
-    assert_allclose(shift, want, atol=1e-4)
-    world.load_n = 3.0
-    for _ in range(int(20 * REFLEX_TAU_S / DT)):
-        shift = leaf._reflex("parcel")
-    assert_allclose(shift, [want[0], 0.0, 0.0], atol=1e-5)
 
 
 def _carry_towards_a_ball(gap_at_goal: float) -> tuple[FakeWorld, float]:
