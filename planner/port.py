@@ -392,9 +392,12 @@ class ObstacleScene(Protocol):
         palm_positions: Array,
         palm_orientations: Array,
         margin_m: float = 0.0,
+        object_margin_m: float | None = None,
     ) -> PathCheck:
         """Check a predicted path of both palms holding nothing (an approach, a retreat), and
-        the arm links carried with them, against the present obstacles.
+        the arm links carried with them, against the present obstacles (by ``margin_m``) and,
+        where the world checks them, the objects where they rest (by ``object_margin_m``, the
+        same as ``margin_m`` when None).
 
         Shapes: palms (N, 2, 3), (N, 2, 4), left then right.
         """

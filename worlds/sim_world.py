@@ -640,19 +640,22 @@ class SimWorld:
         palm_positions: Array,
         palm_orientations: Array,
         margin_m: float = 0.0,
+        object_margin_m: float | None = None,
     ) -> PathCheck:
         """FCL check of predicted poses of empty palms and of the arm links that follow them,
         against the active obstacles and the objects where they rest (as
         :meth:`check_trajectory`, without a held object).
 
-        The palms and links keep ``margin_m`` from the objects too (the forearms' doubt is for
-        the obstacles): a way in to a grasp sweeping a hand through the object knocked it off
-        the table (iCub, Hard trial 114), and a way back passing 3 mm over a corner of the
-        object just placed, followed by a palm slowed by Hard mode's actuator lag, slid it
-        2.7 cm (iiwas, Hard trial 10). One touching an object at the path's start (it has
-        just let it go) is free of it, and one starting nearer than the margin may keep that
-        gap (:meth:`worlds.collision.CollisionWorld.check_trajectory`)."""
-        return self._check_path(palm_positions, palm_orientations, margin_m, None)
+        The palms and links keep ``object_margin_m`` (``margin_m`` when None) from the objects
+        too (the forearms' doubt is for the obstacles): a way back passing 3 mm over a corner
+        of the object just placed, followed by a palm slowed by Hard mode's actuator lag, slid
+        it 2.7 cm (iiwas, Hard trial 10); a way in to a grasp, which must come near its object,
+        asks only that they do not touch it (0): one sweeping a hand through the object
+        knocked it off the table (iCub, Hard trial 114). One touching an object at the path's
+        start (it has just let it go) is free of it, and one starting nearer than the margin
+        may keep that gap (:meth:`worlds.collision.CollisionWorld.check_trajectory`)."""
+        objects_m = margin_m if object_margin_m is None else object_margin_m
+        return self._check_path(palm_positions, palm_orientations, margin_m, None, objects_m)
 
     def _check_path(
         self,
@@ -660,6 +663,7 @@ class SimWorld:
         palm_orientations: Array,
         margin_m: float,
         held: tuple[str, Array, Array] | None,
+        object_margin_m: float = 0.0,
     ) -> PathCheck:
         name, object_positions, object_orientations = held if held else (None, None, None)
         avoid = () if held else tuple(o.name for o in self.scene.spec.objects)
@@ -671,7 +675,7 @@ class SimWorld:
             object_orientations,
             margin_m,
             avoid,
-            margin_m,
+            object_margin_m,
         )
         # The arms' links are solved for along the palms' path (_predicted_links_collide):
         # carried rigidly with the palms instead, a forearm misses the elbow's swing (and a
@@ -679,7 +683,7 @@ class SimWorld:
         # the controller's motion: the links get extra clearance the further the palms go.
         doubt = forearm_doubt(palm_positions, palm_orientations)
         arms, arms_on_objects = self._predicted_links_collide(
-            palm_positions, palm_orientations, margin_m + doubt, avoid, margin_m
+            palm_positions, palm_orientations, margin_m + doubt, avoid, object_margin_m
         )
         pts = np.asarray(palm_positions).reshape(-1, 3)
         if object_positions is not None:
@@ -692,10 +696,10 @@ class SimWorld:
         if first is not None:
             if check.collides[first]:
                 what = f"{'palm or object' if held else 'a palm'} within {margin_m:g} m" + (
-                    "" if held else " of an obstacle, or on an object"
+                    "" if held else f" of an obstacle, or {object_margin_m:g} m of an object"
                 )
             elif arms_on_objects[first]:
-                what = "an arm link on an object"
+                what = f"an arm link within {object_margin_m:g} m of an object"
             else:
                 what = f"an arm link within {margin_m + doubt[first]:.3f} m"
             what += f" at step {first}"

@@ -183,6 +183,7 @@ def choose_route(
     detour_of: int | None = 0,
     detour_at: int | None = None,
     around: Sequence[ObstacleInfo] = (),
+    object_margin_m: float | None = None,
 ) -> RouteChoice:
     """The first of ``routes`` whose predicted path is clear by ``margin_m``.
 
@@ -209,6 +210,8 @@ def choose_route(
         Where in the order to try that detour (after ``detour_of``); default last.
     around : sequence of ObstacleInfo
         Other objects, where they lie, that the detour may go around too.
+    object_margin_m : float, optional
+        Clearance asked from the objects where they rest, m; ``margin_m`` when None.
     """
     if not routes:
         raise ValueError("choose_route: expected at least one route, got none")
@@ -219,7 +222,9 @@ def choose_route(
     while k < len(candidates):
         route = candidates[k]
         path = predict_palm_path(starts, route.waypoints, segment_tau, dt)
-        check = scene.check_palm_path(path.positions, path.orientations, margin_m)
+        check = scene.check_palm_path(
+            path.positions, path.orientations, margin_m, object_margin_m=object_margin_m
+        )
         if check.clear:
             return RouteChoice(route, check, True, True, _refusals(tried))
         tried.append((route, path, check))
@@ -256,11 +261,21 @@ def take_clear_route(
     detour_of: int | None = 0,
     detour_at: int | None = None,
     around: Sequence[ObstacleInfo] = (),
+    object_margin_m: float | None = None,
 ) -> None:
     """Plan ``leaf``'s motion along the route :func:`choose_route` picks; the leaf's feedback
     says which and why when it is not the usual one, or when no route is clear."""
     choice = choose_route(
-        scene, starts, routes, segment_tau, leaf.control_dt, margin_m, detour_of, detour_at, around
+        scene,
+        starts,
+        routes,
+        segment_tau,
+        leaf.control_dt,
+        margin_m,
+        detour_of,
+        detour_at,
+        around,
+        object_margin_m,
     )
     leaf.route_note = ""
     leaf.motion = ViaPointMotion(starts, choice.route.waypoints, segment_tau)

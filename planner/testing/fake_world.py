@@ -386,6 +386,7 @@ class FakeWorld:
         palm_positions: Array,
         palm_orientations: Array,
         margin_m: float = 0.0,
+        object_margin_m: float | None = None,
     ) -> PathCheck:
         """Segments of the arms, out to the palms, vs spheres (the obstacles only: unlike the
         simulator's, this check does not keep off the objects)."""

@@ -9,6 +9,7 @@ from numpy.testing import assert_allclose
 from py_trees.common import Status
 
 from planner.leaves import Approach, Retreat
+from planner.leaves.approach import RISE_FIRST_M, rising_first
 from planner.leaves.palm_motion import measured_state
 from planner.leaves.palm_routes import PalmRoute, choose_route, predict_palm_path
 from planner.port import ObstacleInfo, PathCheck, Pose
@@ -150,7 +151,13 @@ class _Refusing:
     def obstacles(self) -> tuple[ObstacleInfo, ...]:
         return ()
 
-    def check_palm_path(self, positions: np.ndarray, orientations: np.ndarray, margin_m: float):
+    def check_palm_path(
+        self,
+        positions: np.ndarray,
+        orientations: np.ndarray,
+        margin_m: float,
+        object_margin_m: float | None = None,
+    ):
         end = positions[-1, 0]
         if self.clear_end is not None and np.allclose(end, self.clear_end, atol=1e-3):
             return PathCheck(True, 0.1)
@@ -202,7 +209,13 @@ class _ObjectInTheWay:
     def obstacles(self) -> tuple[ObstacleInfo, ...]:
         return ()
 
-    def check_palm_path(self, positions: np.ndarray, orientations: np.ndarray, margin_m: float):
+    def check_palm_path(
+        self,
+        positions: np.ndarray,
+        orientations: np.ndarray,
+        margin_m: float,
+        object_margin_m: float | None = None,
+    ):
         near = np.linalg.norm(positions - self.centre, axis=-1).min(axis=-1) < self.radius
         if not near.any():
             return PathCheck(True, 0.1)
@@ -229,3 +242,81 @@ def test_a_way_in_goes_round_another_object_in_its_way() -> None:
     detoured = choose_route(scene, starts, routes, 1.0, DT, 0.01, detour_of=0, around=[box])
     assert detoured.route.name == "usual, around the nearest obstacle", detoured.note
     assert detoured.clear
+
+
+class _BoxScene:
+    """A scene whose only thing is a box resting at ``centre`` with half extents ``half``: a
+    palm path entering it is refused."""
+
+    def __init__(self, centre: np.ndarray, half: np.ndarray) -> None:
+        self.centre, self.half = centre, half
+
+    def obstacles(self) -> tuple[ObstacleInfo, ...]:
+        return ()
+
+    def check_palm_path(
+        self,
+        positions: np.ndarray,
+        orientations: np.ndarray,
+        margin_m: float,
+        object_margin_m: float | None = None,
+    ) -> PathCheck:
+        inside = np.all(np.abs(positions - self.centre) < self.half, axis=-1).any(axis=1)
+        hits = np.flatnonzero(inside)
+        if hits.size:
+            return PathCheck(False, 0.0, int(hits[0]), "through the box")
+        return PathCheck(True, 0.1)
+
+
+def test_palms_low_beside_the_box_rise_before_heading_over_it() -> None:
+    # Both palms 4 cm out from the box's +x face, at its centre's height (stepped back after
+    # letting it go); the way in heads for set-points 8 cm above the box's -y and +y faces.
+    centre, half = np.array([0.55, 0.0, 0.675]), np.array([0.10, 0.15, 0.075])
+    world = FakeWorld(objects=[FakeObject("parcel", 2.0 * half)])
+    starts = {}
+    for arm, side in ((Arm.LEFT, 1.0), (Arm.RIGHT, -1.0)):
+        p = np.array([centre[0] + half[0] + 0.04, side * 0.05, centre[2]])
+        starts[arm] = measured_state(Pose.of(p, world.rest_palm_pose(arm).orientation), np.zeros(6))
+    q = world.rest_palm_pose(Arm.LEFT).orientation
+    top = centre[2] + half[2] + 0.08
+    waypoints = {
+        arm: [
+            Pose.of([centre[0], side * (half[1] + 0.08), top], q),
+            Pose.of([centre[0], side * (half[1] + 0.04), centre[2]], q),
+        ]
+        for arm, side in ((Arm.LEFT, 1.0), (Arm.RIGHT, -1.0))
+    }
+    usual = PalmRoute("coming in from above", waypoints)
+    scene = _BoxScene(centre, half)
+    straight = predict_palm_path(starts, waypoints, 1.0, DT)
+    assert not scene.check_palm_path(straight.positions, straight.orientations, 0.01).clear
+
+    extra = rising_first([usual], starts)
+    assert [r.name for r in extra] == ["rising first, then coming in from above"]
+    for arm in ARMS:
+        first = extra[0].waypoints[arm][0]
+        assert_allclose(first.position[:2], starts[arm].position[:2])
+        assert first.position[2] == top
+        assert list(extra[0].waypoints[arm][1:]) == waypoints[arm]
+    chosen = choose_route(scene, starts, [usual, *extra], 1.0, DT, 0.01, detour_of=None)
+    assert chosen.clear and chosen.route is extra[0]
+    path = predict_palm_path(starts, chosen.route.waypoints, 1.0, DT)
+    assert_allclose(path.positions[-1], [w[-1].position for w in waypoints.values()], atol=2e-3)
+
+
+def test_palms_already_high_take_no_rising_first_route() -> None:
+    world = FakeWorld(objects=[FakeObject("parcel", BOX)])
+    starts = {a: measured_state(world.palm_pose(a), np.zeros(6)) for a in ARMS}
+    route = PalmRoute(
+        "usual",
+        {
+            a: [
+                Pose(
+                    world.palm_pose(a).position + [0.0, 0.0, RISE_FIRST_M / 2.0],
+                    world.palm_pose(a).orientation,
+                )
+            ]
+            for a in ARMS
+        },
+    )
+    assert rising_first([route], starts) == []

@@ -109,11 +109,32 @@ def test_empty_palms_keep_off_the_objects_where_they_rest_a_carry_does_not_ask_i
         quaternions = np.repeat(q[None], n, axis=0)
         check = sim.check_palm_path(path, quaternions, 0.01)
         assert not check.clear and not check.doubtful
-        assert "on an object" in check.detail
+        assert "0.01 m of an object" in check.detail
         # Stopping short of it, with no obstacle about, is clear.
         short = path.copy()
         short[:, 0] = start[0] + np.linspace(0.0, 0.3, n)[:, None] * (parcel.position - start[0])
         assert sim.check_palm_path(short, quaternions, 0.01).clear
+
+        def ending_at(fraction: float) -> np.ndarray:
+            out = path.copy()
+            out[:, 0] = start[0] + np.linspace(0.0, fraction, n)[:, None] * (
+                parcel.position - start[0]
+            )
+            return out
+
+        # Where the palm first touches it, by bisection on how far along it stops.
+        clear, touching = 0.3, 1.2
+        for _ in range(20):
+            mid = (clear + touching) / 2.0
+            if sim.check_palm_path(ending_at(mid), quaternions, 0.01, 0.0).clear:
+                clear = mid
+            else:
+                touching = mid
+        # Stopping 3 mm (along the way) short of touching: clear of contact, within 1 cm.
+        near = ending_at(touching - 0.003 / float(np.linalg.norm(parcel.position - start[0])))
+        assert sim.check_palm_path(near, quaternions, 0.01, 0.0).clear
+        refused = sim.check_palm_path(near, quaternions, 0.01)
+        assert not refused.clear and "0.01 m of an object" in refused.detail
         # Held, the parcel is not its own obstacle, nor are the palms kept off it.
         held = sim.check_trajectory(
             "parcel",
