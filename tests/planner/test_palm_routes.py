@@ -209,14 +209,18 @@ class _ObjectInTheWay:
     def obstacles(self) -> tuple[ObstacleInfo, ...]:
         return ()
 
+    def near(self, positions: np.ndarray) -> np.ndarray:
+        """(N,) whether a palm at each step (N, 2, 3) touches the object."""
+        return np.linalg.norm(positions - self.centre, axis=-1).min(axis=-1) < self.radius
+
     def check_palm_path(
         self,
         positions: np.ndarray,
         orientations: np.ndarray,
         margin_m: float,
         object_margin_m: float | None = None,
-    ):
-        near = np.linalg.norm(positions - self.centre, axis=-1).min(axis=-1) < self.radius
+    ) -> PathCheck:
+        near = self.near(positions)
         if not near.any():
             return PathCheck(True, 0.1)
         return PathCheck(False, 0.1, int(np.argmax(near)), "on an object")
@@ -244,28 +248,15 @@ def test_a_way_in_goes_round_another_object_in_its_way() -> None:
     assert detoured.clear
 
 
-class _BoxScene:
+class _BoxScene(_ObjectInTheWay):
     """A scene whose only thing is a box resting at ``centre`` with half extents ``half``: a
     palm path entering it is refused."""
 
     def __init__(self, centre: np.ndarray, half: np.ndarray) -> None:
         self.centre, self.half = centre, half
 
-    def obstacles(self) -> tuple[ObstacleInfo, ...]:
-        return ()
-
-    def check_palm_path(
-        self,
-        positions: np.ndarray,
-        orientations: np.ndarray,
-        margin_m: float,
-        object_margin_m: float | None = None,
-    ) -> PathCheck:
-        inside = np.all(np.abs(positions - self.centre) < self.half, axis=-1).any(axis=1)
-        hits = np.flatnonzero(inside)
-        if hits.size:
-            return PathCheck(False, 0.0, int(hits[0]), "through the box")
-        return PathCheck(True, 0.1)
+    def near(self, positions: np.ndarray) -> np.ndarray:
+        return np.all(np.abs(positions - self.centre) < self.half, axis=-1).any(axis=1)
 
 
 def test_palms_low_beside_the_box_rise_before_heading_over_it() -> None:
