@@ -311,3 +311,33 @@ def test_palms_already_high_take_no_rising_first_route() -> None:
         },
     )
     assert rising_first([route], starts) == []
+
+
+class _Recording(FakeWorld):
+    """A fake world that records the clearances each palm-path check was asked for."""
+
+    def __init__(self, *args: object, **kwargs: object) -> None:
+        super().__init__(*args, **kwargs)  # type: ignore[arg-type]
+        self.asked: list[tuple[float, float | None]] = []
+
+    def check_palm_path(
+        self,
+        palm_positions: np.ndarray,
+        palm_orientations: np.ndarray,
+        margin_m: float = 0.0,
+        object_margin_m: float | None = None,
+    ) -> PathCheck:
+        self.asked.append((margin_m, object_margin_m))
+        return super().check_palm_path(palm_positions, palm_orientations, margin_m)
+
+
+def test_a_way_in_asks_only_not_touching_objects_a_way_out_the_margin(tick_leaf: Tick) -> None:
+    world = _Recording(objects=[FakeObject("parcel", BOX)])
+    assert tick_leaf(Approach("approach"), world, object="parcel").final == Status.SUCCESS
+    assert world.asked == [(0.01, 0.0)]
+    world = _Recording(objects=[FakeObject("parcel", BOX)])
+    tick_leaf(Approach("approach"), world, object="parcel", object_margin_m=0.02)
+    assert world.asked == [(0.01, 0.02)]
+    world = _Recording(objects=[FakeObject("parcel", BOX)])
+    assert tick_leaf(Retreat("retreat"), world, back_m=0.04).final == Status.SUCCESS
+    assert world.asked == [(0.01, None)]
