@@ -19,10 +19,12 @@ import pybullet as pb
 from numpy.typing import NDArray
 
 from skills import quaternion as quat
+from skills.kernel import kernel, quaternion_at, rotation_error_q
 
 FloatArray = NDArray[np.float64]
 
 
+@kernel
 def dls_step(
     jacobian: FloatArray,
     error: FloatArray,
@@ -57,11 +59,11 @@ def dls_step(
     """
     inverse_cost = 1.0 / cost
     jw = jacobian * inverse_cost  # J W^-1
-    gram = jw @ jacobian.T + damping**2 * np.eye(jacobian.shape[0])
-    pinv = jw.T @ np.linalg.inv(gram)  # W^-1 J^T (J W^-1 J^T + l^2 I)^-1
+    gram = jw @ np.ascontiguousarray(jacobian.T) + damping**2 * np.eye(jacobian.shape[0])
+    pinv = np.ascontiguousarray(jw.T) @ np.linalg.inv(gram)  # W^-1 J^T (J W^-1 J^T + l^2 I)^-1
     dq = pinv @ error
     dq += (np.eye(q.size) - pinv @ jacobian) @ (posture_gain * (rest - q))
-    largest = float(np.max(np.abs(dq)))
+    largest = np.max(np.abs(dq))
     if largest > max_step:
         dq *= max_step / largest
     return dq
@@ -106,31 +108,91 @@ def solve_palms(
         Stop once every error component is below this (m, rad).
     """
     _, base_q = pb.getBasePositionAndOrientation(body, physicsClientId=client)
-    base2world = quat.to_matrix(base_q)
+    base2world = np.asarray(quat.to_matrix(base_q), dtype=np.float64)
     n = len(joints)
     zeros = [0.0] * n
+    still = [[0.0]] * n
+    target_positions = np.array([p for p, _ in palm2world], dtype=float).reshape(-1, 3)
+    target_quaternions = np.array([r for _, r in palm2world], dtype=float).reshape(-1, 4)
     q = np.clip(np.asarray(q0, dtype=float), lower, upper)
     for _ in range(iterations):
-        for joint, value in zip(joints, q, strict=True):
-            pb.resetJointState(body, joint, float(value), 0.0, physicsClientId=client)
-        errors = []
-        rows = []
-        for link, (position, quaternion) in zip(palm_links, palm2world, strict=True):
-            state = pb.getLinkState(body, link, computeForwardKinematics=1, physicsClientId=client)
-            errors.append(np.asarray(position, dtype=float) - state[4])
-            errors.append(quat.rotation_error(np.asarray(quaternion, dtype=float), state[5]))
-            linear, angular = pb.calculateJacobian(
-                body, link, [0.0, 0.0, 0.0], q.tolist(), zeros, zeros, physicsClientId=client
-            )
-            rows.append(base2world @ np.asarray(linear))
-            rows.append(base2world @ np.asarray(angular))
-        error = np.concatenate(errors)
-        if np.max(np.abs(error)) < tolerance:
+        pb.resetJointStatesMultiDof(
+            body, joints, [[v] for v in q.tolist()], still, physicsClientId=client
+        )
+        states = [
+            pb.getLinkState(body, link, computeForwardKinematics=1, physicsClientId=client)
+            for link in palm_links
+        ]
+        q_list = q.tolist()
+        jacobian = np.array(
+            [
+                pb.calculateJacobian(
+                    body, link, [0.0, 0.0, 0.0], q_list, zeros, zeros, physicsClientId=client
+                )
+                for link in palm_links
+            ]
+        ).reshape(-1, n)
+        done, q_next = _iterate(
+            target_positions,
+            target_quaternions,
+            np.array([s[4] for s in states]),
+            np.array([s[5] for s in states]),
+            jacobian,
+            base2world,
+            q,
+            rest,
+            cost,
+            lower,
+            upper,
+            tolerance,
+        )
+        if done:
             break
-        q = np.clip(q + dls_step(np.vstack(rows), error, q, rest, cost), lower, upper)
-    for joint, value in zip(joints, q, strict=True):
-        pb.resetJointState(body, joint, float(value), 0.0, physicsClientId=client)
+        q = q_next
+    pb.resetJointStatesMultiDof(
+        body, joints, [[v] for v in q.tolist()], still, physicsClientId=client
+    )
     return q
+
+
+@kernel
+def _iterate(
+    target_positions: FloatArray,
+    target_quaternions: FloatArray,
+    positions: FloatArray,
+    quaternions: FloatArray,
+    jacobian: FloatArray,
+    base2world: FloatArray,
+    q: FloatArray,
+    rest: FloatArray,
+    cost: FloatArray,
+    lower: FloatArray,
+    upper: FloatArray,
+    tolerance: float,
+) -> tuple[bool, FloatArray]:
+    """One step of :func:`solve_palms`, compiled: the palms' stacked pose errors (position,
+    then rotation vector, per palm) at the pose read, and, unless every component is below
+    ``tolerance`` (then ``(True, q)``), ``(False, q + dls_step(...))`` within the limits.
+    ``jacobian`` (6t, n) is PyBullet's, in the base frame; it is turned into the world's."""
+    t = target_positions.shape[0]
+    error = np.empty(6 * t)
+    for k in range(t):
+        for a in range(3):
+            error[6 * k + a] = target_positions[k, a] - positions[k, a]
+        goal = quaternion_at(target_quaternions[k], 0)
+        now = quaternion_at(quaternions[k], 0)
+        rx, ry, rz = rotation_error_q(goal, now)
+        error[6 * k + 3] = rx
+        error[6 * k + 4] = ry
+        error[6 * k + 5] = rz
+    if np.max(np.abs(error)) < tolerance:
+        return True, q
+    world = np.empty_like(jacobian)
+    for block in range(2 * t):
+        rows = slice(3 * block, 3 * block + 3)
+        world[rows] = base2world @ jacobian[rows]
+    step = dls_step(world, error, q, rest, cost)
+    return False, np.minimum(np.maximum(q + step, lower), upper)
 
 
 __all__ = ["dls_step", "solve_palms"]
