@@ -76,6 +76,15 @@ def _torques(
     return tau
 
 
+@kernel
+def _strays(q: FloatArray, q_lin: FloatArray, tolerance: float) -> bool:
+    """Whether a joint of ``q`` is more than ``tolerance`` from where the law was linearised."""
+    for i in range(q.size):
+        if abs(q[i] - q_lin[i]) > tolerance:
+            return True
+    return False
+
+
 # ---------------------------------------------------------------------------------------------
 # Stateful controller
 
@@ -373,9 +382,11 @@ class DualArmImpedanceController:
         for body, joints, rows in zip(
             self._bodies, self._body_joints, self._body_rows, strict=True
         ):
-            states = pb.getJointStates(body, joints, physicsClientId=self.client)
-            self._q[rows] = [s[0] for s in states]
-            self._qd[rows] = [s[1] for s in states]
+            positions, velocities, _, _ = zip(
+                *pb.getJointStates(body, joints, physicsClientId=self.client), strict=True
+            )
+            self._q[rows] = positions
+            self._qd[rows] = velocities
 
     def _palm_pose(self, i: int) -> tuple[FloatArray, FloatArray]:
         link = pb.getLinkState(
@@ -489,7 +500,7 @@ class DualArmImpedanceController:
         q = self._q
         if self._steps_since_refresh >= self.refresh_every or (
             self.relinearise_tolerance > 0.0
-            and np.abs(q - self._q_lin).max() > self.relinearise_tolerance
+            and _strays(q, self._q_lin, self.relinearise_tolerance)
         ):
             self._relinearise()
         elif self._targets_changed:
