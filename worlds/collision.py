@@ -30,7 +30,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from skills import file_cache
 from skills import quaternion as quat
-from skills.kernel import kernel
+from skills.kernel import kernel, matrix_q, quaternion_at
 from skills.types import Array
 from skills.vocabulary import Arm
 from worlds.fixture_spec import WALL_NAMES
@@ -291,6 +291,45 @@ class _Element:
 _LinkTrack = tuple[int, list[int], list[int], list[int], FloatArray, Array]
 
 
+@kernel
+def _link_poses(
+    frame_p: FloatArray,
+    frame_q: FloatArray,
+    local_p: FloatArray,
+    local_r: FloatArray,
+    centre_local: FloatArray,
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Link elements' world poses from their links' frames, read: positions (K, 3),
+    rotations (K, 3, 3) and bounding-sphere centres (K, 3), for frames at ``frame_p`` (K, 3)
+    turned by ``frame_q`` (K, 4) and shapes at ``local_p`` (K, 3), ``local_r`` (K, 3, 3) in
+    them, sphere centres at ``centre_local`` (K, 3) in the shapes."""
+    k = frame_p.shape[0]
+    positions = np.empty((k, 3))
+    rotations = np.empty((k, 3, 3))
+    centres = np.empty((k, 3))
+    for e in range(k):
+        m = matrix_q(quaternion_at(frame_q[e], 0))
+        for i in range(3):
+            positions[e, i] = (
+                m[3 * i] * local_p[e, 0]
+                + m[3 * i + 1] * local_p[e, 1]
+                + m[3 * i + 2] * local_p[e, 2]
+            ) + frame_p[e, i]
+            for j in range(3):
+                rotations[e, i, j] = (
+                    m[3 * i] * local_r[e, 0, j]
+                    + m[3 * i + 1] * local_r[e, 1, j]
+                    + m[3 * i + 2] * local_r[e, 2, j]
+                )
+        for i in range(3):
+            centres[e, i] = (
+                rotations[e, i, 0] * centre_local[e, 0]
+                + rotations[e, i, 1] * centre_local[e, 1]
+                + rotations[e, i, 2] * centre_local[e, 2]
+            ) + positions[e, i]
+    return positions, rotations, centres
+
+
 class CollisionWorld:
     """FCL mirror of a scene's collision geometry.
 
@@ -308,8 +347,9 @@ class CollisionWorld:
         # Robot links, per body (_LinkTrack).
         self._link_tracks: list[_LinkTrack] = []
         # What the last sync read from PyBullet, made into element poses at the first query.
-        self._read: tuple[list[tuple[Any, Any]], list[tuple[int, FloatArray, FloatArray]]] | None
-        self._read = None
+        # (frame positions, frame quaternions) as flat lists: per link track, its moving links'
+        # then its base's, then each task object's (see _moving and _moving_rows).
+        self._read: tuple[list[Any], list[Any]] | None = None
         for arm in (Arm.LEFT, Arm.RIGHT):
             spec = scene.robot.arms[arm]
             body = scene.robot_ids[spec.body]
@@ -392,6 +432,31 @@ class CollisionWorld:
             self._reach[rows] += np.linalg.norm(centres_in_link, axis=-1)
         for row in self._objects.values():
             self._reach[row] += float(np.linalg.norm(self._centres_local[row]))
+        # The elements a sync moves (links, then objects): their rows, their frames' places in
+        # a sync's flat read, and their shapes' poses in their frames.
+        pick: list[int] = []
+        moving_rows: list[int] = []
+        in_frame_p: list[FloatArray] = []
+        in_frame_r: list[Array] = []
+        read = 0
+        for _, links, moving, rows, track_p, track_r in self._link_tracks:
+            ordinal = iter(range(read, read + len(moving)))
+            pick += [next(ordinal) if link >= 0 else read + len(moving) for link in links]
+            moving_rows += rows
+            in_frame_p += list(track_p)
+            in_frame_r += list(track_r)
+            read += len(moving) + 1
+        for row in self._objects.values():
+            pick.append(read)
+            moving_rows.append(row)
+            in_frame_p.append(np.zeros(3))
+            in_frame_r.append(np.eye(3))
+            read += 1
+        self._pick = np.array(pick, dtype=np.intp)
+        self._moving_rows = np.array(moving_rows, dtype=np.intp)
+        self._moving_in_frame_p = np.array(in_frame_p).reshape(-1, 3)
+        self._moving_in_frame_r = np.array(in_frame_r, dtype=np.float64).reshape(-1, 3, 3)
+        self._moving_centres = self._centres_local[self._moving_rows]
         self._centres = self._centres_local.copy()
         self._rotations = np.tile(np.eye(3), (count, 1, 1))
         self._positions = np.zeros((count, 3))
@@ -455,23 +520,20 @@ class CollisionWorld:
         """Pose the elements as the last :meth:`sync` read them (once, at the first query)."""
         if self._read is None:
             return
-        links_read, objects_read = self._read
+        positions_read, quaternions_read = self._read
         self._read = None
-        for (_, links, moving, rows, local_p, local_r), (states, base) in zip(
-            self._link_tracks, links_read, strict=True
-        ):
-            by_link = {link: (s[0], s[1]) for link, s in zip(moving, states, strict=True)}
-            frame_p = np.array([by_link[link][0] if link >= 0 else base[0] for link in links])
-            frame_q = np.array([by_link[link][1] if link >= 0 else base[1] for link in links])
-            frame_r = quat.to_matrix(frame_q)
-            positions = np.einsum("nij,nj->ni", frame_r, local_p) + frame_p
-            self._set_poses(np.asarray(rows), positions, frame_r @ local_r)
-        if objects_read:
-            rows_o = np.array([row for row, _, _ in objects_read])
-            positions_o = np.array([p for _, p, _ in objects_read])
-            self._set_poses(
-                rows_o, positions_o, quat.to_matrix(np.array([q for _, _, q in objects_read]))
-            )
+        rows = self._moving_rows
+        positions, rotations, centres = _link_poses(
+            np.array(positions_read)[self._pick],
+            np.array(quaternions_read)[self._pick],
+            self._moving_in_frame_p,
+            self._moving_in_frame_r,
+            self._moving_centres,
+        )
+        self._rotations[rows] = rotations
+        self._positions[rows] = positions
+        self._stale[rows] = True
+        self._centres[rows] = centres
 
     def _origins(self) -> FloatArray:
         """Per element, (E, 3): its frame's origin as the last sync read it (links, objects)
@@ -480,15 +542,8 @@ class CollisionWorld:
         assert self._read is not None
         if self._origins_read is self._read:
             return self._origins_cache  # the watcher asks for several groups per sync
-        links_read, objects_read = self._read
         origins = self._centres.copy()  # static elements' are right already
-        for (_, links, moving, rows, _, _), (states, base) in zip(
-            self._link_tracks, links_read, strict=True
-        ):
-            by_link = {link: s[0] for link, s in zip(moving, states, strict=True)}
-            origins[rows] = [by_link[link] if link >= 0 else base[0] for link in links]
-        for row, position, _ in objects_read:
-            origins[row] = position
+        origins[self._moving_rows] = np.array(self._read[0])[self._pick]
         self._origins_read, self._origins_cache = self._read, origins
         return origins
 
@@ -712,15 +767,24 @@ class CollisionWorld:
         same arithmetic: a sync that no query follows costs the reads alone.
         """
         c = self.scene.client
-        links_read = [
-            (
-                pb.getLinkStates(body, moving, computeForwardKinematics=1, physicsClientId=c),
-                pb.getBasePositionAndOrientation(body, physicsClientId=c),
+        positions: list[Any] = []
+        quaternions: list[Any] = []
+        for body, _, moving, _, _, _ in self._link_tracks:
+            for state in pb.getLinkStates(
+                body, moving, computeForwardKinematics=1, physicsClientId=c
+            ):
+                positions.append(state[0])
+                quaternions.append(state[1])
+            position, quaternion = pb.getBasePositionAndOrientation(body, physicsClientId=c)
+            positions.append(position)
+            quaternions.append(quaternion)
+        for name in self._objects:
+            position, quaternion = pb.getBasePositionAndOrientation(
+                self.scene.object_ids[name], physicsClientId=c
             )
-            for body, _, moving, _, _, _ in self._link_tracks
-        ]
-        objects_read = [(row, *self.scene.object_pose(name)) for name, row in self._objects.items()]
-        self._read = (links_read, objects_read)
+            positions.append(position)
+            quaternions.append(quaternion)
+        self._read = (positions, quaternions)
         self._active = [self._obstacles[name] for name in sorted(self.scene.active_obstacles)]
 
     # -- queries -----------------------------------------------------------------------------
