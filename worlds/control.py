@@ -499,8 +499,7 @@ class DualArmImpedanceController:
         self._read_joints()
         q = self._q
         if self._steps_since_refresh >= self.refresh_every or (
-            self.relinearise_tolerance > 0.0
-            and _strays(q, self._q_lin, self.relinearise_tolerance)
+            self.relinearise_tolerance > 0.0 and _strays(q, self._q_lin, self.relinearise_tolerance)
         ):
             self._relinearise()
         elif self._targets_changed:
