@@ -388,3 +388,48 @@ def test_link_frames_posed_as_the_rigid_carry_give_its_answer() -> None:
                 np.testing.assert_array_equal(posed, rigid)
                 verdicts.append(bool(rigid.any()))
         assert any(verdicts) and not all(verdicts)  # both answers were asked for
+
+
+def test_elements_are_posed_as_their_frames_composed_with_their_shapes() -> None:
+    """The compiled pose pass is the rigid composition ``frame * shape`` (and the sphere centre
+    carried along), element by element, to rounding."""
+    from worlds.collision import _link_poses
+
+    rng = np.random.default_rng(7)
+    k = 9
+    frame_p = rng.normal(size=(k, 3))
+    frame_q = quat.canonical(rng.normal(size=(k, 4)))
+    frame_q /= np.linalg.norm(frame_q, axis=1, keepdims=True)
+    shape_p = rng.normal(size=(k, 3))
+    shape_q = rng.normal(size=(k, 4))
+    shape_r = quat.to_matrix(shape_q / np.linalg.norm(shape_q, axis=1, keepdims=True))
+    centre = rng.normal(size=(k, 3))
+    positions, rotations, centres = _link_poses(frame_p, frame_q, shape_p, shape_r, centre)
+    frame_r = quat.to_matrix(frame_q)
+    np.testing.assert_allclose(
+        positions, np.einsum("nij,nj->ni", frame_r, shape_p) + frame_p, atol=1e-14
+    )
+    np.testing.assert_allclose(rotations, frame_r @ shape_r, atol=1e-14)
+    np.testing.assert_allclose(
+        centres, np.einsum("nij,nj->ni", frame_r @ shape_r, centre) + positions, atol=1e-14
+    )
+
+
+def test_a_sync_poses_each_link_element_on_its_link(world: CollisionWorld) -> None:
+    """After a sync, every link element's position is its PyBullet link frame composed with
+    the collision shape's offset in it: whatever the joints, base included."""
+    scene = world.scene
+    _set_random_configuration(scene, np.random.default_rng(3))
+    world.sync()
+    world._place()
+    for body, links, _, rows, local_p, _ in world._link_tracks:
+        for link, row, offset in zip(links, rows, local_p, strict=True):
+            if link < 0:
+                p, q = pb.getBasePositionAndOrientation(body, physicsClientId=scene.client)
+            else:
+                state = pb.getLinkState(
+                    body, link, computeForwardKinematics=1, physicsClientId=scene.client
+                )
+                p, q = state[0], state[1]
+            expected = np.asarray(p) + quat.to_matrix(np.asarray(q)) @ offset
+            np.testing.assert_allclose(world._positions[row], expected, atol=1e-12)
