@@ -81,6 +81,62 @@ def test_select_skills_chooses_the_papers_lateral_grasp(
     assert {Action.TRANSPORT, Action.HOLD_LATERAL} <= set(plan.actions)
 
 
+def test_select_skills_weights_replace_the_reasoners_and_keep_the_rest(
+    fake_world: FakeWorld, library: SkillLibrary
+) -> None:
+    reasoned = select(fake_world, library)
+    log = tick_until(
+        ready(
+            SelectSkills("select"),
+            fake_world,
+            library,
+            object="parcel",
+            plan="{plan}",
+            weights="hold_lateral=0; avoid_links = 0.5",
+        ),
+        fake_world,
+        DT,
+    )
+    assert log.final == Status.SUCCESS, log.feedback
+    plan = blackboard_value("/plan")
+    assert isinstance(plan, SemanticAction)
+    weights = {s.action: s.weight for s in plan.skills}
+    assert weights[Action.HOLD_LATERAL] == 0.0
+    assert weights[Action.AVOID_LINKS] == 0.5
+    for sel in reasoned.skills:
+        if sel.action not in (Action.HOLD_LATERAL, Action.AVOID_LINKS):
+            assert weights[sel.action] == sel.weight
+    assert plan.skill(Action.HOLD_LATERAL).params == reasoned.skill(Action.HOLD_LATERAL).params
+
+
+@pytest.mark.parametrize(
+    ("weights", "expected"),
+    [
+        ("hold=0", "'hold=0': expected ACTION=NUMBER with ACTION one of approach"),
+        ("hold_lateral", "'hold_lateral': expected a finite number after '='"),
+        ("hold_lateral=nan", "'hold_lateral=nan': expected a finite number"),
+        ("insert=1", "weights: insert not in the plan for parcel"),
+    ],
+)
+def test_select_skills_refuses_weights_it_cannot_apply(
+    fake_world: FakeWorld, library: SkillLibrary, weights: str, expected: str
+) -> None:
+    log = tick_until(
+        ready(
+            SelectSkills("select"),
+            fake_world,
+            library,
+            object="parcel",
+            plan="{plan}",
+            weights=weights,
+        ),
+        fake_world,
+        DT,
+    )
+    assert log.final == Status.FAILURE
+    assert expected in log.feedback
+
+
 def test_select_skills_fails_with_an_explanation_without_a_world(library: SkillLibrary) -> None:
     leaf = SelectSkills("select")
     wire(leaf, object="parcel", plan="{plan}")
