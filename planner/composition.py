@@ -419,8 +419,10 @@ def hold_terms(
     library: SkillLibrary,
     geometry: GraspGeometry,
     squeeze_depth: float,
+    gain: float = 1.0,
 ) -> dict[Arm, list[tuple[CouplingTerm, float]]]:
-    """Grasp-maintenance terms per palm: track the grasp geometry, ``squeeze_depth`` inside."""
+    """Grasp-maintenance terms per palm: track the grasp geometry, ``squeeze_depth`` inside;
+    their weight the plan's ``hold_lateral`` one (1 without) times ``gain``."""
     weight = 1.0
     stiffness, rot_stiffness = 400.0, 200.0
     if plan is not None:
@@ -442,7 +444,7 @@ def hold_terms(
                     rotational_stiffness=rot_stiffness,
                     inward_normal_object=geometry.normal(arm),
                 ),
-                weight,
+                weight * gain,
             )
         ]
         for arm in ARMS
@@ -543,13 +545,16 @@ def transport_composition(
     avoid_gain: float = 1.0,
     transport_weight: float = 1.0,
     skill: str | None = None,
+    hold_gain: float = 1.0,
 ) -> DualArmComposer:
     """The simultaneous composition of one move, starting from the handed-over state.
 
     ``squeeze_force_n`` is the grip's force per palm, N, which bounds what avoidance may ask.
     ``avoid_gain`` multiplies the weights of obstacle steering and link-level avoidance;
     ``transport_weight`` multiplies the learnt pick-and-place's (a lower carry). A tree tries
-    such variants when a predicted path is not clear. ``skill`` names the learnt motion to
+    such variants when a predicted path is not clear. ``hold_gain`` multiplies grasp
+    maintenance's (0 carries without it: the palms' relative references stay as handed over,
+    for an ablation). ``skill`` names the learnt motion to
     carry the object with (a port's choice), else the move's ``skill``, else the plan's
     transport skill (:func:`transport_skill`; SkillChoiceError if the library has none so
     called).
@@ -583,7 +588,7 @@ def transport_composition(
     )
     absolute = saturate_avoidance(terms, grip_acceleration_limit(world, name, squeeze_force_n))
     # The handed-over palm poses are the squeezed grip already: hold them as they are.
-    relative = hold_terms(plan, library, geometry, 0.0)
+    relative = hold_terms(plan, library, geometry, 0.0, hold_gain)
     return DualArmComposer.start(
         state,
         move.goal.position,
@@ -610,6 +615,8 @@ class MovePlan:
         The grip's force per palm the composition was bounded by, N.
     avoid_gain, transport_weight : float
         The variant of the plan composed (see :func:`transport_composition`).
+    hold_gain : float
+        The grasp maintenance's gain it was composed with (see :func:`transport_composition`).
     from_state : DualArmState
         The handed-over state it was composed from.
     composer : DualArmComposer
@@ -636,6 +643,7 @@ class MovePlan:
     requested_skill: str | None = None
     skill: str | None = None
     above_fixture: bool = False
+    hold_gain: float = 1.0
     start: DualArmState = field(init=False)
 
     def __post_init__(self) -> None:
@@ -673,6 +681,7 @@ def compose_move(
     skill: str | None = None,
     above_fixture: bool = False,
     table_dz: float = 0.0,
+    hold_gain: float = 1.0,
 ) -> MovePlan:
     """Activate move ``index``'s obstacles and compose it from ``state``.
 
@@ -700,6 +709,7 @@ def compose_move(
         avoid_gain=avoid_gain,
         transport_weight=transport_weight,
         skill=skill,
+        hold_gain=hold_gain,
     )
     return MovePlan(
         name,
@@ -713,6 +723,7 @@ def compose_move(
         skill,
         carried_skill(reweight(plan, avoid_gain, transport_weight), library, skill or move.skill),
         above_fixture,
+        hold_gain,
     )
 
 

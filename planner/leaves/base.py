@@ -191,6 +191,12 @@ def composition_ports() -> dict[str, PortInformation]:
             default_value=1.0,
             description="multiplies the pick-and-place skill's weight (a lower carry)",
         ),
+        "hold_gain": PortInformation(
+            float,
+            required=False,
+            default_value=1.0,
+            description="multiplies the grasp-maintenance skill's weight (0: carried without it)",
+        ),
         "skill": PortInformation(
             str,
             required=False,
@@ -226,6 +232,7 @@ def composed_move(leaf: WorldLeaf, name: str, index: int) -> MovePlan:
         leaf.palm_squeeze_force(plan),
         avoid_gain=float(leaf.get_input("avoid_gain")),
         transport_weight=float(leaf.get_input("transport_weight")),
+        hold_gain=float(leaf.get_input("hold_gain")),
         skill=leaf.optional_input("skill"),
         above_fixture=bool(leaf.get_input("above_fixture")),
         table_dz=table_found_dz(leaf.world, name),

@@ -134,6 +134,7 @@ class Transport(MotionLeaf):
         state: DualArmState = self.get_input("from_state")
         avoid_gain = float(self.get_input("avoid_gain"))
         transport_weight = float(self.get_input("transport_weight"))
+        hold_gain = float(self.get_input("hold_gain"))
         skill: str | None = self.optional_input("skill")
         checked: MovePlan | None = self.optional_input("composition")
         above_fixture = bool(self.get_input("above_fixture"))
@@ -150,6 +151,7 @@ class Transport(MotionLeaf):
                 "force_n": force,
                 "avoid_gain": avoid_gain,
                 "transport_weight": transport_weight,
+                "hold_gain": hold_gain,
                 "skill": skill,
                 "above_fixture": above_fixture,
             }
@@ -159,6 +161,7 @@ class Transport(MotionLeaf):
                 checked.squeeze_force_n,
                 checked.avoid_gain,
                 checked.transport_weight,
+                checked.hold_gain,
                 checked.requested_skill,
                 checked.above_fixture,
             )

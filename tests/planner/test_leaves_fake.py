@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import re
 
 import numpy as np
@@ -10,7 +11,7 @@ import pytest
 from py_trees.common import Status
 
 from affordances import SemanticAction, SkillSelection
-from planner.composition import MovePlan, lateral_geometry, squeeze_force
+from planner.composition import MovePlan, compose_move, lateral_geometry, squeeze_force
 from planner.leaves import (
     Approach,
     AtGoal,
@@ -31,6 +32,7 @@ from planner.testing.fake_world import FakeObject
 from planner.testing.fixtures import paper_moves
 from planner.wiring import wire
 from skills import quaternion as quat
+from skills.composer import DualArmState
 from skills.library import SkillLibrary
 from skills.vocabulary import ARMS, Action, Arm, GraspType, Space
 
@@ -106,7 +108,9 @@ def test_select_skills_weights_replace_the_reasoners_and_keep_the_rest(
     for sel in reasoned.skills:
         if sel.action not in (Action.HOLD_LATERAL, Action.AVOID_LINKS):
             assert weights[sel.action] == sel.weight
-    assert plan.skill(Action.HOLD_LATERAL).params == reasoned.skill(Action.HOLD_LATERAL).params
+    held, reasoned_held = plan.skill(Action.HOLD_LATERAL), reasoned.skill(Action.HOLD_LATERAL)
+    assert held is not None and reasoned_held is not None
+    assert held.params == reasoned_held.params
 
 
 @pytest.mark.parametrize(
@@ -634,6 +638,60 @@ def test_transport_refuses_a_composition_checked_for_another_variant(
     assert "not the composition of this move: avoid_gain 2.0, checked with 1.0" in (
         carry.feedback_message
     )
+
+
+def test_a_carry_without_grasp_maintenance_leaves_a_knocked_palm_reference_coasting(
+    fake_world: FakeWorld, library: SkillLibrary
+) -> None:
+    """hold_gain 0 composes the hold terms at weight 0 (and PathClear's check must be of the
+    same gain): a palm's reference knocked into motion in {O} coasts on without them and is
+    held near the grasp with them."""
+    plan = select(fake_world, library)
+    approach_and_grasp(fake_world, library)
+    py_trees.blackboard.Blackboard.set("/bare", _plan_without_avoidance(plan))
+    ports = {"object": "parcel", "move": 0, "plan": "{bare}", "from_state": "{state}"}
+    clear = ready(
+        PathClear("clear"), fake_world, library, composition="{checked}", hold_gain=0.0, **ports
+    )
+    clear.tick_once()
+    assert clear.status == Status.SUCCESS, clear.feedback_message
+    checked = blackboard_value("/checked")
+    assert isinstance(checked, MovePlan) and checked.hold_gain == 0.0
+    assert all(w.weight == 0.0 for arm in ARMS for w in checked.composer.relative[arm])
+    carry = ready(Transport("carry"), fake_world, library, composition="{checked}", **ports)
+    carry.tick_once()
+    assert carry.status == Status.FAILURE
+    assert "hold_gain 1.0, checked with 0.0" in carry.feedback_message
+    state = blackboard_value("/state")
+    assert isinstance(state, DualArmState)
+    # The left palm's reference moving off the grasp at 2 cm/s (a knock), nothing else moving.
+    left = state.left._replace(
+        velocity=np.array([0.0, 0.0, 0.02]),
+        acceleration=np.zeros(3),
+        angular_velocity=np.zeros(3),
+        angular_acceleration=np.zeros(3),
+    )
+    shifted = dataclasses.replace(state, left=left)
+    drift = {}
+    for gain in (0.0, 1.0):
+        move = compose_move(
+            _plan_without_avoidance(plan),
+            library,
+            fake_world,
+            "parcel",
+            0,
+            shifted,
+            25.0,
+            hold_gain=gain,
+        )
+        composer = move.fresh()
+        for _ in range(30):
+            composer.step(DT)
+        start = move.start.relative(Arm.LEFT).position
+        drift[gain] = float(np.linalg.norm(composer.state.relative(Arm.LEFT).position - start))
+    # Unheld, the reference coasts on (0.5 s at 2 cm/s); held, the spring-damper stops it.
+    assert drift[0.0] == pytest.approx(0.01, rel=0.05)
+    assert drift[1.0] < 0.5 * drift[0.0]
 
 
 def test_squeeze_force_is_the_plans_or_the_default_never_above_the_robots_rating() -> None:
