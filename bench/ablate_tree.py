@@ -13,11 +13,13 @@ Move subtree's ``regrasp`` branch; re-grasps that a turn needs stay)::
     # a copy of the world whose ``tree:`` is /tmp/no_regrasp.xml (and another name)
     python app.py trials /tmp/no_regrasp_world.yaml --hard --n 100 --seed 0
 
-and without grasp maintenance (the relative space's hold term composed with weight 0 in every
-carry: SelectSkills' ``weights`` port)::
+and without grasp maintenance in the carries (their hold terms composed at weight 0; the
+grasp still closes with them; the world that runs it is
+``bench/worlds/parcel_pick_place_no_hold.yaml``)::
 
     python bench/ablate_tree.py planner/trees/pick_and_place.xml \
-        --set select_skills weights=hold_lateral=0 --out /tmp/no_hold.xml
+        --set path_clear hold_gain=0 --set transport hold_gain=0 \
+        --set careful_transport hold_gain=0 --out bench/worlds/pick_and_place_no_hold.xml
 
 The copy goes in a world's ``tree`` field, not ``--tree``: a world's tree is made into each
 trial's task (a turned goal the grip cannot make in one move is several moves), while a tree

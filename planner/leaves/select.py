@@ -64,7 +64,7 @@ class SelectSkills(WorldLeaf):
             default_value="",
             description=(
                 "composition weights that replace the reasoner's, ACTION=NUMBER separated by "
-                "';' (hold_lateral=0 composes the carries without grasp maintenance)"
+                "';' (avoid_links=0.5: half the link-level avoidance in every composition)"
             ),
         ),
     }
