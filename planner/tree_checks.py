@@ -207,6 +207,9 @@ class _Checker:
                 )
             elif key in inputs and not is_key:
                 bad = literal_problem(value, inputs[key].data_type, key)
+                own = getattr(cls, "port_literal_problem", None)
+                if not bad and callable(own):  # a leaf's own check of what a literal says
+                    bad = own(key, value)
                 if bad:
                     self.add(elem, f"port '{key}': {bad}")
         for port, info in inputs.items():

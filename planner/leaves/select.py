@@ -72,6 +72,17 @@ class SelectSkills(WorldLeaf):
         "plan": PortInformation(SemanticAction, description="chosen grasp and weighted skills"),
     }
 
+    @staticmethod
+    def port_literal_problem(port: str, value: str) -> str | None:
+        """What is wrong with a literal ``weights`` (checked when the tree is read), or None."""
+        if port != "weights":
+            return None
+        try:
+            parse_weights(value)
+        except ValueError as err:
+            return str(err)
+        return None
+
     def update(self) -> Status:
         """Reason once: SUCCESS with the plan, FAILURE when no action fits the tree's grasp."""
         if (why := self.connected()) is not None:

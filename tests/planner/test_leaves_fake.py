@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import re
+from pathlib import Path
 
 import numpy as np
 import py_trees
@@ -713,3 +714,21 @@ def test_squeeze_force_is_the_plans_or_the_default_never_above_the_robots_rating
     assert squeeze_force(_Plan(32.0), 25.0, rated=40.0) == 32.0  # type: ignore[arg-type]
     assert squeeze_force(_Plan(10.0), 25.0, rated=40.0) == 25.0  # type: ignore[arg-type]
     assert squeeze_force(_Plan(32.0), 25.0, rated=30.0) == 30.0  # type: ignore[arg-type]
+
+
+def test_a_tree_with_weights_that_cannot_apply_is_refused_when_read(tmp_path: Path) -> None:
+    from planner.loader import TreeFileError, load_tree
+    from planner.tree_dataflow import RUN_WRITES
+
+    shipped = Path(__file__).resolve().parents[2] / "planner" / "trees" / "pick_and_place.xml"
+    text = shipped.read_text(encoding="utf-8").replace(
+        'plan="{plan}"/>', 'plan="{plan}" weights="avoid_links=0.5; hold=0"/>', 1
+    )
+    assert 'weights="avoid_links' in text
+    bad = tmp_path / "bad_weights.xml"
+    bad.write_text(text, encoding="utf-8")
+    with pytest.raises(TreeFileError) as err:
+        load_tree(bad, run_keys=RUN_WRITES)
+    message = str(err.value)
+    assert "bad_weights.xml:" in message and "port 'weights'" in message
+    assert "'hold=0': expected ACTION=NUMBER" in message
