@@ -292,14 +292,14 @@ _LinkTrack = tuple[int, list[int], list[int], list[int], FloatArray, Array]
 
 
 @kernel
-def _link_poses(
+def _moving_poses(
     frame_p: FloatArray,
     frame_q: FloatArray,
     local_p: FloatArray,
     local_r: FloatArray,
     centre_local: FloatArray,
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """Link elements' world poses from their links' frames, read: positions (K, 3),
+    """Moving elements' world poses (links, objects) from their frames, read: positions (K, 3),
     rotations (K, 3, 3) and bounding-sphere centres (K, 3), for frames at ``frame_p`` (K, 3)
     turned by ``frame_q`` (K, 4) and shapes at ``local_p`` (K, 3), ``local_r`` (K, 3, 3) in
     them, sphere centres at ``centre_local`` (K, 3) in the shapes."""
@@ -348,7 +348,7 @@ class CollisionWorld:
         self._link_tracks: list[_LinkTrack] = []
         # What the last sync read from PyBullet, made into element poses at the first query.
         # (frame positions, frame quaternions) as flat lists: per link track, its moving links'
-        # then its base's, then each task object's (see _moving and _moving_rows).
+        # then its base's, then each task object's (see _pick and _moving_rows).
         self._read: tuple[list[Any], list[Any]] | None = None
         for arm in (Arm.LEFT, Arm.RIGHT):
             spec = scene.robot.arms[arm]
@@ -497,16 +497,23 @@ class CollisionWorld:
         except KeyError:
             raise ValueError(f"CollisionWorld: expected an element named {name!r}") from None
 
-    def _set_poses(self, rows: IntArray, positions: FloatArray, rotations: Array) -> None:
-        """Pose elements ``rows`` (K,): positions (K, 3) and rotations (K, 3, 3), world frame."""
+    def _set_poses(
+        self,
+        rows: IntArray,
+        positions: FloatArray,
+        rotations: Array,
+        centres: FloatArray | None = None,
+    ) -> None:
+        """Pose elements ``rows`` (K,): positions (K, 3) and rotations (K, 3, 3), world frame;
+        their bounding spheres' centres (K, 3) computed here unless given."""
         # The FCL transforms wait for the first query of each element (see _fcl): most syncs
         # are followed by a few pair queries, or none, not by one of every element.
         self._rotations[rows] = rotations
         self._positions[rows] = positions
         self._stale[rows] = True
-        self._centres[rows] = (rotations @ self._centres_local[rows][:, :, None])[
-            :, :, 0
-        ] + positions
+        if centres is None:
+            centres = (rotations @ self._centres_local[rows][:, :, None])[:, :, 0] + positions
+        self._centres[rows] = centres
 
     def _fcl(self, row: int) -> fcl.CollisionObject:
         """The FCL object of element ``row``, at its pose of the last sync."""
@@ -522,18 +529,14 @@ class CollisionWorld:
             return
         positions_read, quaternions_read = self._read
         self._read = None
-        rows = self._moving_rows
-        positions, rotations, centres = _link_poses(
+        poses = _moving_poses(
             np.array(positions_read)[self._pick],
             np.array(quaternions_read)[self._pick],
             self._moving_in_frame_p,
             self._moving_in_frame_r,
             self._moving_centres,
         )
-        self._rotations[rows] = rotations
-        self._positions[rows] = positions
-        self._stale[rows] = True
-        self._centres[rows] = centres
+        self._set_poses(self._moving_rows, *poses)
 
     def _origins(self) -> FloatArray:
         """Per element, (E, 3): its frame's origin as the last sync read it (links, objects)

@@ -116,14 +116,14 @@ def solve_palms(
     target_quaternions = np.array([r for _, r in palm2world], dtype=float).reshape(-1, 4)
     q = np.clip(np.asarray(q0, dtype=float), lower, upper)
     for _ in range(iterations):
+        q_list = q.tolist()
         pb.resetJointStatesMultiDof(
-            body, joints, [[v] for v in q.tolist()], still, physicsClientId=client
+            body, joints, [[v] for v in q_list], still, physicsClientId=client
         )
         states = [
             pb.getLinkState(body, link, computeForwardKinematics=1, physicsClientId=client)
             for link in palm_links
         ]
-        q_list = q.tolist()
         jacobian = np.array(
             [
                 pb.calculateJacobian(

@@ -31,6 +31,7 @@ from planner.port import Pose
 from planner.testing import FakeWorld, tick_until
 from planner.testing.fake_world import FakeObject
 from planner.testing.fixtures import paper_moves
+from planner.testing.harness import TickLog
 from planner.wiring import wire
 from skills import quaternion as quat
 from skills.composer import DualArmState
@@ -63,6 +64,14 @@ def select(world: FakeWorld, library: SkillLibrary) -> SemanticAction:
     return plan
 
 
+def select_weighted(world: FakeWorld, library: SkillLibrary, weights: str) -> TickLog:
+    """SelectSkills ticked with its ``weights`` port set."""
+    leaf = ready(
+        SelectSkills("select"), world, library, object="parcel", plan="{plan}", weights=weights
+    )
+    return tick_until(leaf, world, DT)
+
+
 def approach_and_grasp(world: FakeWorld, library: SkillLibrary) -> None:
     assert (
         tick_until(ready(Approach("approach"), world, library, object="parcel"), world, DT).final
@@ -88,18 +97,7 @@ def test_select_skills_weights_replace_the_reasoners_and_keep_the_rest(
     fake_world: FakeWorld, library: SkillLibrary
 ) -> None:
     reasoned = select(fake_world, library)
-    log = tick_until(
-        ready(
-            SelectSkills("select"),
-            fake_world,
-            library,
-            object="parcel",
-            plan="{plan}",
-            weights="hold_lateral=0; avoid_links = 0.5",
-        ),
-        fake_world,
-        DT,
-    )
+    log = select_weighted(fake_world, library, "hold_lateral=0; avoid_links = 0.5")
     assert log.final == Status.SUCCESS, log.feedback
     plan = blackboard_value("/plan")
     assert isinstance(plan, SemanticAction)
@@ -126,18 +124,7 @@ def test_select_skills_weights_replace_the_reasoners_and_keep_the_rest(
 def test_select_skills_refuses_weights_it_cannot_apply(
     fake_world: FakeWorld, library: SkillLibrary, weights: str, expected: str
 ) -> None:
-    log = tick_until(
-        ready(
-            SelectSkills("select"),
-            fake_world,
-            library,
-            object="parcel",
-            plan="{plan}",
-            weights=weights,
-        ),
-        fake_world,
-        DT,
-    )
+    log = select_weighted(fake_world, library, weights)
     assert log.final == Status.FAILURE
     assert expected in log.feedback
 

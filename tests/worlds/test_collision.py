@@ -393,7 +393,7 @@ def test_link_frames_posed_as_the_rigid_carry_give_its_answer() -> None:
 def test_elements_are_posed_as_their_frames_composed_with_their_shapes() -> None:
     """The compiled pose pass is the rigid composition ``frame * shape`` (and the sphere centre
     carried along), element by element, to rounding."""
-    from worlds.collision import _link_poses
+    from worlds.collision import _moving_poses
 
     rng = np.random.default_rng(7)
     k = 9
@@ -404,7 +404,7 @@ def test_elements_are_posed_as_their_frames_composed_with_their_shapes() -> None
     shape_q = rng.normal(size=(k, 4))
     shape_r = quat.to_matrix(shape_q / np.linalg.norm(shape_q, axis=1, keepdims=True))
     centre = rng.normal(size=(k, 3))
-    positions, rotations, centres = _link_poses(frame_p, frame_q, shape_p, shape_r, centre)
+    positions, rotations, centres = _moving_poses(frame_p, frame_q, shape_p, shape_r, centre)
     frame_r = quat.to_matrix(frame_q)
     np.testing.assert_allclose(
         positions, np.einsum("nij,nj->ni", frame_r, shape_p) + frame_p, atol=1e-14
