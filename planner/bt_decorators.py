@@ -73,10 +73,25 @@ class RunOnce(StringPorts, py_trees.decorators.Decorator, register=False):
 
 
 def skipped_status(node: Behaviour) -> Status:
-    """The py_trees stand-in for BT.CPP's SKIPPED: what lets ``node``'s parent carry on."""
+    """The py_trees stand-in for BT.CPP's SKIPPED: what lets ``node``'s parent carry on.
+
+    ``node`` is marked skipped (:func:`was_skipped`) until :func:`mark_ticked`: a skipped child
+    did not decide its parent's status, and a failure is not explained by it
+    (:func:`planner.runner.status_chain`)."""
+    node.bt_skipped = True  # type: ignore[attr-defined]
     if isinstance(node.parent, py_trees.composites.Selector):
         return Status.FAILURE
     return Status.SUCCESS
+
+
+def mark_ticked(node: Behaviour) -> None:
+    """``node`` ran this tick: it is no longer skipped (:func:`skipped_status`)."""
+    node.bt_skipped = False  # type: ignore[attr-defined]
+
+
+def was_skipped(node: Behaviour) -> bool:
+    """Whether ``node``'s last status was SKIPPED's stand-in (:func:`skipped_status`)."""
+    return bool(getattr(node, "bt_skipped", False))
 
 
 class Delay(StringPorts, py_trees.decorators.Decorator, register=False):

@@ -25,7 +25,7 @@ from py_trees.blackboard import Blackboard
 from py_trees.common import Status
 from py_trees.ports import PortInformation
 
-from planner.bt_decorators import skipped_status
+from planner.bt_decorators import mark_ticked, skipped_status
 from planner.bt_leaves import StringPorts
 from planner.bt_script import Script, ScriptRuntimeError, parse_script, truthy
 from planner.script_enums import script_enum
@@ -234,7 +234,9 @@ def install_conditions(
 
     def post(status: Status) -> None:
         attrs = {Status.SUCCESS: "_onSuccess", Status.FAILURE: "_onFailure"}
-        for attr in (attrs.get(status), "_post"):
+        if status not in attrs:
+            return  # RUNNING: not yet done
+        for attr in (attrs[status], "_post"):
             if attr in conditions:
                 _, error = run(attr)
                 if error:
@@ -242,9 +244,15 @@ def install_conditions(
 
     def tick() -> Iterator[Behaviour]:
         outcome, error = pre()
+        if outcome != _SKIP:
+            mark_ticked(node)
         if outcome is None:
-            yield from original_tick()
-            post(node.status)
+            # Run before the node hands back its own status: a parent stops iterating at it
+            # (a Fallback moves on to its next child, which may read what _onFailure wrote).
+            for ticked in original_tick():
+                if ticked is node:
+                    post(node.status)
+                yield ticked
             return
         if outcome == _SKIP:
             node.status = skipped_status(node)

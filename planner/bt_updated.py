@@ -24,7 +24,7 @@ import py_trees
 from py_trees.common import Status
 from py_trees.ports import PortInformation, PortsMixin
 
-from planner.bt_decorators import skipped_status
+from planner.bt_decorators import mark_ticked, skipped_status
 from planner.bt_entry_stamps import install, write_stamp
 
 __all__ = ["BUILTIN_UPDATED", "SkipUnlessUpdated", "WaitValueUpdate", "WasEntryUpdated"]
@@ -98,6 +98,7 @@ class SkipUnlessUpdated(_Watcher, py_trees.decorators.Decorator, register=False)
             self.status = self.not_updated()
             yield self
             return
+        mark_ticked(self)
         yield from super().tick()
         self.child_running = self.decorated.status == Status.RUNNING
 

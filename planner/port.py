@@ -379,11 +379,15 @@ class ObstacleScene(Protocol):
         palm_positions: Array,
         palm_orientations: Array,
         margin_m: float = 0.0,
+        link_doubt: bool = True,
     ) -> PathCheck:
         """Check a predicted trajectory of the held object and both palms (and the arms that
         reach them) against the present obstacles.
 
         Shapes: object (N, 3), (N, 4); palms (N, 2, 3), (N, 2, 4), left then right.
+        ``link_doubt``: where the world predicts the arms' links less surely than the palms,
+        it may ask them more than ``margin_m`` (the simulator's grows with the palms' travel,
+        :func:`worlds.sim_world.forearm_doubt`); False asks them ``margin_m`` alone.
         """
         ...
 

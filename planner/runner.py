@@ -15,6 +15,7 @@ from typing import Any
 import py_trees
 from py_trees.common import Status
 
+from planner.bt_decorators import was_skipped
 from planner.port import WorldPort
 from skills.library import SkillLibrary
 
@@ -69,10 +70,16 @@ def status_chain(root: py_trees.behaviour.Behaviour) -> list[py_trees.behaviour.
     node = root
     while node.children:
         current = getattr(node, "current_child", None)
-        if current is not None and current in node.children and current.status == node.status:
+        if (
+            current is not None
+            and current in node.children
+            and current.status == node.status
+            and not was_skipped(current)
+        ):
             node = current
         else:
-            same = [c for c in node.children if c.status == node.status]
+            # A skipped child (BT.CPP's SKIPPED) gave its parent nothing: not the reason.
+            same = [c for c in node.children if c.status == node.status and not was_skipped(c)]
             if not same:
                 break
             node = same[-1]

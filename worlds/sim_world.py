@@ -621,10 +621,12 @@ class SimWorld:
         palm_positions: Array,
         palm_orientations: Array,
         margin_m: float = 0.0,
+        link_doubt: bool = True,
     ) -> PathCheck:
         """FCL check of predicted palm and held-object poses, and of the arm links posed by
         inverse kinematics of the palms' path (:mod:`worlds.arm_prediction`), against the
-        active obstacles. The other objects are not checked against: a carry refused for
+        active obstacles; the links are asked :func:`forearm_doubt` beyond ``margin_m`` unless
+        ``link_doubt`` is False. The other objects are not checked against: a carry refused for
         touching one would fall back to the careful carry, which steers around the obstacles
         alone and shoves the object harder (``bench/worlds/two_parcels_turned.yaml``, move 0:
         10 cm against 6 mm)."""
@@ -633,6 +635,7 @@ class SimWorld:
             palm_orientations,
             margin_m,
             (name, np.asarray(object_positions), np.asarray(object_orientations)),
+            link_doubt=link_doubt,
         )
 
     def check_palm_path(
@@ -664,6 +667,7 @@ class SimWorld:
         margin_m: float,
         held: tuple[str, Array, Array] | None,
         object_margin_m: float = 0.0,
+        link_doubt: bool = True,
     ) -> PathCheck:
         name, object_positions, object_orientations = held if held else (None, None, None)
         avoid = () if held else tuple(o.name for o in self.scene.spec.objects)
@@ -681,7 +685,11 @@ class SimWorld:
         # carried rigidly with the palms instead, a forearm misses the elbow's swing (and a
         # torso's), centimetres over a carry. The solution is the controller's posture, not
         # the controller's motion: the links get extra clearance the further the palms go.
-        doubt = forearm_doubt(palm_positions, palm_orientations)
+        doubt = (
+            forearm_doubt(palm_positions, palm_orientations)
+            if link_doubt
+            else np.zeros(len(palm_positions))
+        )
         arms, arms_on_objects = self._predicted_links_collide(
             palm_positions, palm_orientations, margin_m + doubt, avoid, object_margin_m
         )
@@ -708,7 +716,7 @@ class SimWorld:
             float(d.min()) if d.size else math.inf,
             first,
             what,
-            doubtful=first is not None and not sure.any(),
+            doubtful=link_doubt and first is not None and not sure.any(),
         )
 
     def _predicted_links_collide(

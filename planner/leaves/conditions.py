@@ -149,6 +149,14 @@ class PathClear(WorldLeaf):
         "margin_m": PortInformation(
             float, required=False, default_value=0.0, description="clearance required, m"
         ),
+        "link_doubt": PortInformation(
+            bool,
+            required=False,
+            default_value=True,
+            description="ask the arms' predicted links the extra clearance the world's doubt "
+            "of their prediction adds (growing with the palms' travel); false: margin_m alone, "
+            "refusing only a path whose predicted links touch (a last resort's check)",
+        ),
     }
     OUTPUT_PORTS = {
         "composition": PortInformation(
@@ -177,6 +185,7 @@ class PathClear(WorldLeaf):
             path.palm_positions,
             path.palm_orientations,
             float(self.get_input("margin_m")),
+            link_doubt=bool(self.get_input("link_doubt")),
         )
         if check.clear:
             self._set_output("composition", checked)

@@ -375,11 +375,35 @@ class FakeWorld:
         palm_positions: Array,
         palm_orientations: Array,
         margin_m: float = 0.0,
+        link_doubt: bool = True,
     ) -> PathCheck:
-        """Bounding spheres of the object and palms, and segments of the arms, vs spheres."""
-        r_obj = float(np.linalg.norm(self._objects[name].extents) / 2.0)
-        d_obj, _ = self._sphere_distance(np.asarray(object_positions, dtype=float), r_obj)
+        """The object as the box it is, the palms' bounding spheres and segments of the arms,
+        vs the spheres (the arms' segments are known as surely as the palms: ``link_doubt``
+        changes nothing)."""
+        d_obj = self._box_distance(
+            np.asarray(object_positions, dtype=float),
+            np.asarray(object_orientations, dtype=float),
+            self._objects[name].extents / 2.0,
+        )
         return self._check_path(d_obj, np.asarray(palm_positions, dtype=float), margin_m)
+
+    def _box_distance(self, positions: Array, orientations: Array, half: Array) -> Array:
+        """(N,) least distance of a box of half extents ``half`` posed at each waypoint from
+        the present obstacles' spheres, m (negative: a sphere's centre inside the box, or
+        the sphere overlapping it)."""
+        n = positions.shape[0]
+        obs = self.obstacles()
+        if not obs or n == 0:
+            return np.full(n, np.inf)
+        centres = np.array([o.position for o in obs])  # (K, 3)
+        radii = np.array([o.radius for o in obs])
+        rotation = quat.to_matrix(orientations).reshape(n, 3, 3)
+        # Each sphere's centre in each waypoint's box frame: R^T (c - p), (N, K, 3).
+        local = np.einsum("nji,nkj->nki", rotation, centres[None] - positions[:, None])
+        outside = np.linalg.norm(np.maximum(np.abs(local) - half, 0.0), axis=-1)
+        depth = np.min(half - np.abs(local), axis=-1)  # > 0 for a centre inside the box
+        gap = np.where(outside > 0.0, outside, -depth) - radii[None]
+        return np.asarray(gap.min(axis=1))
 
     def check_palm_path(
         self,

@@ -79,3 +79,27 @@ def test_a_running_tree_is_explained_by_its_tip() -> None:
     root = run('<Sequence name="s"><StubCounter name="count" ticks="1000"/></Sequence>', ticks=3)
     assert root.status == Status.RUNNING
     assert explain(root) == "s.count: tick 3"
+
+
+def test_a_skipped_branch_is_not_the_reason_the_branch_that_ran_is() -> None:
+    # BT.CPP's SKIPPED reads as FAILURE to a Fallback: the skipped last branch decided nothing.
+    root = run(
+        '<Fallback name="choose"><StubCheck name="check" value="false"/>'
+        '<Sequence name="second" _skipIf="true"><StubCounter name="c" ticks="1"/></Sequence>'
+        "</Fallback>"
+    )
+    assert root.status == Status.FAILURE
+    assert [n.name for n in status_chain(root)] == ["choose", "choose.check"]
+
+
+def test_a_branch_skipped_once_and_run_later_is_a_reason_again() -> None:
+    root = run(
+        '<Sequence name="s"><Fallback name="first">'
+        '<Sequence name="a" _skipIf="true"><StubCheck name="c1" value="false"/></Sequence>'
+        '<StubCounter name="ok" ticks="1"/></Fallback>'
+        '<Script name="w" code="go := true"/>'
+        '<Fallback name="second"><Sequence name="b" _skipIf="go != true">'
+        '<StubCheck name="c2" value="false"/></Sequence></Fallback></Sequence>'
+    )
+    assert root.status == Status.FAILURE
+    assert [n.name for n in status_chain(root)][-1] == "s.second.b.c2"

@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 import re
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import py_trees
@@ -719,3 +720,36 @@ def test_a_tree_with_weights_that_cannot_apply_is_refused_when_read(tmp_path: Pa
     message = str(err.value)
     assert "bad_weights.xml:" in message and "port 'weights'" in message
     assert "'hold=0': expected ACTION=NUMBER" in message
+
+
+@pytest.mark.parametrize("port, expected", [(None, True), ("false", False), ("true", True)])
+def test_path_clear_asks_the_world_for_link_doubt_as_its_port_says(
+    fake_world: FakeWorld,
+    library: SkillLibrary,
+    monkeypatch: pytest.MonkeyPatch,
+    port: str | None,
+    expected: bool,
+) -> None:
+    plan = select(fake_world, library)
+    approach_and_grasp(fake_world, library)
+    py_trees.blackboard.Blackboard.set("/bare", _plan_without_avoidance(plan))
+    asked: list[bool] = []
+    check = fake_world.check_trajectory
+
+    def recording(*args: Any, link_doubt: bool = True, **kwargs: Any) -> Any:
+        asked.append(link_doubt)
+        return check(*args, link_doubt=link_doubt, **kwargs)
+
+    monkeypatch.setattr(fake_world, "check_trajectory", recording)
+    ports: dict[str, Any] = {
+        "object": "parcel",
+        "move": 0,
+        "plan": "{bare}",
+        "from_state": "{state}",
+    }
+    if port is not None:
+        ports["link_doubt"] = port
+    clear = ready(PathClear("clear"), fake_world, library, composition="{checked}", **ports)
+    clear.tick_once()
+    assert clear.status == Status.SUCCESS, clear.feedback_message
+    assert asked == [expected]

@@ -176,3 +176,42 @@ def test_the_gap_from_an_object_to_an_obstacle_is_measured_with_the_way_out() ->
             assert found is not None and found.obstacle == "ball_left"
             assert found.distance_m == pytest.approx(gap, abs=1e-4)
             assert_allclose(found.away, [-1.0, 0.0, 0.0], atol=1e-3)
+
+
+@pytest.mark.sim
+def test_a_check_without_link_doubt_asks_the_links_the_margin_alone(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    from worlds.sim_world import SimWorld
+    from worlds.testing import DEFAULT_WORLD
+    from worlds.world_file import load_world
+
+    with SimWorld(load_world(DEFAULT_WORLD)) as sim:
+        parcel = sim.object_pose("parcel")
+        start = np.stack([sim.palm_pose(a).position for a in (Arm.LEFT, Arm.RIGHT)])
+        q = np.stack([sim.palm_pose(a).orientation for a in (Arm.LEFT, Arm.RIGHT)])
+        n = 40
+        travel = np.linspace(0.0, 0.3, n)[:, None, None] * np.array([0.0, 1.0, 0.0])
+        palms = start[None] + travel
+        quaternions = np.repeat(q[None], n, axis=0)
+        asked: list[np.ndarray] = []
+
+        def record(p: np.ndarray, qq: np.ndarray, margins: np.ndarray, *rest: object) -> tuple:
+            asked.append(np.asarray(margins, dtype=float).copy())
+            return np.zeros(n, dtype=bool), np.zeros(n, dtype=bool)
+
+        monkeypatch.setattr(sim, "_predicted_links_collide", record)
+        for doubt in (True, False):
+            sim.check_trajectory(
+                "parcel",
+                parcel.position + travel[:, 0],
+                np.repeat(parcel.orientation[None], n, axis=0),
+                palms,
+                quaternions,
+                0.01,
+                link_doubt=doubt,
+            )
+    with_doubt, without = asked
+    assert_allclose(with_doubt, 0.01 + forearm_doubt(palms, quaternions))
+    assert with_doubt[-1] > 0.01 + 1e-3  # 0.3 m of travel is doubted
+    assert_allclose(without, np.full(n, 0.01))

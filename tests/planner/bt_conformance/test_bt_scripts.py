@@ -160,3 +160,26 @@ def test_registered_enum_names_read_as_integers_and_win_over_a_key() -> None:
     t2 = Ticker('<Script name="a" code="c := RED"/>')
     t2.run(("a",), [(F,)])
     assert "variable 'RED' not found on the blackboard" in t2.nodes["a"].feedback_message
+
+
+def test_on_failure_runs_before_the_fallback_ticks_its_next_child() -> None:
+    # The next branch reads what the failed one's _onFailure wrote, in the same tick, also
+    # when the failed leaf sits in a Sequence (which stops at it and never resumes it).
+    t = Ticker(
+        '<Fallback name="f"><Sequence name="s">'
+        + leaf("a", "F", '_onFailure="refused := true"')
+        + '</Sequence><ScriptCondition name="b" code="refused == true"/></Fallback>'
+    )
+    t.run(("f", "s", "a", "b"), [(S, F, F, S)])
+
+
+def test_on_success_runs_before_the_sequence_ticks_its_next_child_and_not_while_running() -> None:
+    t = Ticker(
+        '<Sequence name="s"><Sequence name="inner">'
+        + leaf("a", "R,S", '_onSuccess="n := 1" _post="m := 2"')
+        + '</Sequence><ScriptCondition name="b" code="n + m == 3"/></Sequence>'
+    )
+    t.run(("s", "a"), [(R, R)])
+    assert not py_trees.blackboard.Blackboard.exists("/n")
+    assert not py_trees.blackboard.Blackboard.exists("/m")
+    t.run(("s", "a", "b"), [(S, S, S)])
