@@ -12,6 +12,8 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
+from py_trees.common import Status
+
 from planner.runner import RunResult
 from worlds.sim_world import SafetyRecord, SimWorld
 
@@ -79,6 +81,8 @@ def _task_outcome(
         return False, f"obstacle penetration: {s.closest} overlap by {depth:.1f} mm (FCL)"
     if s.arm_contacts:
         return False, "arms touched"
+    if result.status is Status.INVALID:  # halted by the run's time or wall-clock limit
+        return False, f"stopped: {result.reason}"
     if not result.success:
         return False, f"tree {result.status.value.lower()}: {result.reason}"
     labels = move_labels(objects)

@@ -46,6 +46,8 @@ def reason_of(failure: str) -> str:
         touching = failure.split(": ", 1)[1] if ": " in failure else ""
         parts = {p.split(" ~ ")[0] for p in touching.split(", ") if p}
         return "obstacle contact: " + "/".join(sorted(parts))
+    if failure.endswith("after it was placed"):  # "<object> moved 4.0 cm, 16.9 deg after ..."
+        return failure.split(" moved ")[0] + " moved after it was placed"
     head = failure.split(":")[0]
     # "parcel move 1 placed 2.3 cm, ..." is its move's; "not placed: ..." stays itself.
     return head if head == "not placed" else head.split(" placed")[0]

@@ -51,6 +51,15 @@ def test_a_drop_the_tree_recovered_from_is_recorded_not_failed() -> None:
     assert judge(done, sim_touched, ["parcel"], [0.004], [0.5]) == (False, "dropped parcel")
 
 
+def test_a_run_stopped_at_its_time_limit_says_so_not_that_the_tree_was_invalid() -> None:
+    sim: Any = SimpleNamespace(safety=SafetyRecord())
+    stopped = RunResult(Status.INVALID, 120.0, 9.0, 7200, "time limit 120 s reached; task.x")
+    assert judge(stopped, sim, ["parcel"], [None], [None]) == (
+        False,
+        "stopped: time limit 120 s reached; task.x",
+    )
+
+
 def test_a_negative_fcl_clearance_fails_the_run_when_nothing_spawned_inside() -> None:
     safety = SafetyRecord(min_obstacle_distance_m=-0.04, closest="left_arm/base ~ ball_right")
     sim: Any = SimpleNamespace(safety=safety)

@@ -162,6 +162,11 @@ def test_results_resume_and_summarise(tmp_path: Path) -> None:
     }
     assert reason_of("move 2 placed 3.1 cm, 1.0 deg from its goal") == "move 2"
     assert reason_of("not placed: parcel move 2, parcel move 3") == "not placed"
+    # The figures of a knock are its own, not a category of their own.
+    for knock in ("4.0 cm, 16.9 deg", "5.3 cm, 20.0 deg"):
+        failure = f"parcel moved {knock} after it was placed"
+        assert reason_of(failure) == "parcel moved after it was placed"
+    assert reason_of("stopped: time limit 120 s reached; task.move: 0.2 of 6.6 s") == "stopped"
 
 
 def test_a_campaign_owns_the_records_of_its_world_seed_and_tree(tmp_path: Path) -> None:
