@@ -22,6 +22,7 @@ def test_a_sphere_over_every_carry_from_this_grip_is_passed_from_a_new_grip(
     assert report.success, report.failure
     assert not report.obstacle_contacts and report.arm_contacts == 0
     events = [json.loads(line) for line in (tmp_path / "run.jsonl").read_text().splitlines()]
+
     def moves_where(branch: str, status: str) -> set[str]:
         return {
             e["node"].split(".")[3]  # task.<object>.pick_and_place.<move>...
