@@ -19,7 +19,8 @@ grasp still closes with them; the world that runs it is
 
     python bench/ablate_tree.py planner/trees/pick_and_place.xml \
         --set path_clear hold_gain=0 --set transport hold_gain=0 \
-        --set careful_transport hold_gain=0 --out bench/worlds/pick_and_place_no_hold.xml
+        --set careful_transport hold_gain=0 --set careful_path_clear hold_gain=0 \
+        --out bench/worlds/pick_and_place_no_hold.xml
 
 The copy goes in a world's ``tree`` field, not ``--tree``: a world's tree is made into each
 trial's task (a turned goal the grip cannot make in one move is several moves), while a tree

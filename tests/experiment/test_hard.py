@@ -261,3 +261,16 @@ def test_only_the_papers_experiment_is_compared_with_its_16_of_20(
     app.main(["trials", str(path), "--n", "1", "--workers", "1", "--out", out])
     text = capsys.readouterr().out
     assert "0 of 1 trials succeeded; results in" in text and "the paper" not in text
+
+
+def test_the_no_hold_ablation_checks_each_carry_with_the_gain_it_runs() -> None:
+    # Transport refuses a composition PathClear checked with another hold gain: an ablated
+    # tree that zeroed one and not the other would never carry at all.
+    import xml.etree.ElementTree as ET
+
+    tree = ET.parse(REPO / "bench" / "worlds" / "pick_and_place_no_hold.xml")
+    leaves = [e for e in tree.iter() if e.tag in ("PathClear", "Transport") and e.get("name")]
+    assert {e.tag for e in leaves} == {"PathClear", "Transport"}
+    assert all(e.get("hold_gain") == "0" for e in leaves), [
+        (e.tag, e.get("name"), e.get("hold_gain")) for e in leaves if e.get("hold_gain") != "0"
+    ]
