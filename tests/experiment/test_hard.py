@@ -7,6 +7,7 @@ import json
 import math
 from pathlib import Path
 from typing import Any
+from xml.etree import ElementTree
 
 import numpy as np
 import pytest
@@ -266,9 +267,7 @@ def test_only_the_papers_experiment_is_compared_with_its_16_of_20(
 def test_the_no_hold_ablation_checks_each_carry_with_the_gain_it_runs() -> None:
     # Transport refuses a composition PathClear checked with another hold gain: an ablated
     # tree that zeroed one and not the other would never carry at all.
-    import xml.etree.ElementTree as ET
-
-    tree = ET.parse(REPO / "bench" / "worlds" / "pick_and_place_no_hold.xml")
+    tree = ElementTree.parse(REPO / "bench" / "worlds" / "pick_and_place_no_hold.xml")
     leaves = [e for e in tree.iter() if e.tag in ("PathClear", "Transport") and e.get("name")]
     assert {e.tag for e in leaves} == {"PathClear", "Transport"}
     assert all(e.get("hold_gain") == "0" for e in leaves), [

@@ -8,6 +8,7 @@ import pytest
 from planner.port import ObstacleInfo, Pose
 from planner.testing import FakeWorld
 from planner.testing.fake_world import FakeObject
+from skills import quaternion as quat
 from skills.vocabulary import ARMS
 
 BOX = np.array([0.20, 0.30, 0.15])  # half extents 0.10, 0.15, 0.075
@@ -16,7 +17,7 @@ FAR_PALMS = np.array([[0.35, 0.45, 0.85], [0.35, -0.45, 0.85]])
 
 
 def yaw(angle: float) -> np.ndarray:
-    return np.array([0.0, 0.0, np.sin(angle / 2.0), np.cos(angle / 2.0)])
+    return quat.from_axis_angle([0.0, 0.0, 1.0], angle)
 
 
 def world_with(sphere_at: np.ndarray, radius: float = 0.05) -> FakeWorld:
