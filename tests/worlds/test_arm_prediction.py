@@ -109,3 +109,32 @@ def test_the_forearms_are_predicted_along_a_sideways_carry(world: World) -> None
             assert ik_miss < 0.02, f"{arm}: IK prediction off by {ik_miss * 1000:.1f} mm"
             assert ik_miss < rigid_miss, (arm, ik_miss, rigid_miss)
             print(arm, f"ik {ik_miss * 1000:.1f} mm, rigid {rigid_miss * 1000:.1f} mm")
+
+
+def test_predictors_of_one_robot_share_its_copy_and_answer_alike(world: World) -> None:
+    """The process keeps one kinematic copy per robot: a second predictor loads nothing, and
+    what it predicts does not depend on a prediction made before it (each solve resets the
+    joints it moves), bit for bit."""
+    centre, half_span, thickness = start(world)
+    with empty_scene(world) as scene:
+        scene.place_palms(lateral_grasp_palm_poses(centre, half_span, thickness, gap=0.02))
+        scene.step(60)
+        links = {a: _forearm_links(scene, a) for a in ARMS}
+        palms = [scene.palm_state(a) for a in ARMS]
+        still_p = np.tile(np.array([p.position for p in palms]), (3, 1, 1))
+        still_q = np.tile(np.array([p.quaternion for p in palms]), (3, 1, 1))
+        first = ArmPredictor(scene)
+        alone = first.link_frames(still_p, still_q, links)
+        # Another path first, far from this one: the copy's joints end elsewhere.
+        aside = still_p + np.array([0.0, -0.12, 0.05])
+        first.link_frames(aside, still_q, links)
+        client = first._client
+        first.close()
+        assert pb.isConnected(physicsClientId=client)  # closing lets go, it does not unload
+        second = ArmPredictor(scene)
+        assert second._client == client
+        after = second.link_frames(still_p, still_q, links)
+        second.close()
+        for arm in ARMS:
+            np.testing.assert_array_equal(after[arm].positions, alone[arm].positions)
+            np.testing.assert_array_equal(after[arm].quaternions, alone[arm].quaternions)
