@@ -504,6 +504,8 @@ def _run_command(args: argparse.Namespace) -> int:
             f"  forearms: {sum(s['forearm_contacts'].values())} physics steps touching an "
             f"obstacle; closest approach {'n/a' if forearm is None else f'{forearm * 1000:.1f} mm'}"
         )
+    for key, steps in s.get("table_contacts", {}).items():
+        print(f"  {printable(key)}: {steps} physics steps (a link other than the hand)")
     if "disturbances" in s:
         pushes = s["disturbances"]
         print(f"  disturbances applied: {pushes['applied']} of {len(pushes['entries'])}")

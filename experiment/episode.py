@@ -93,6 +93,9 @@ class EpisodeReport:
     forearm_contacts: dict[str, int] = field(default_factory=dict)
     #: Smallest FCL distance from a forearm to an active obstacle, m (inf: none measured).
     min_forearm_distance_m: float = math.inf
+    #: Physics steps with an arm's link other than its hand touching the table, by
+    #: ``"<arm>_arm ~ table"`` (:attr:`worlds.sim_world.SafetyRecord.table_contacts`).
+    table_contacts: dict[str, int] = field(default_factory=dict)
     #: Per carried tray and ball loose on it, its peak tilt and the ball's path relative to
     #: the tray (:meth:`experiment.tray.TrayVerdict.summary`); empty without trays.
     tray: list[dict[str, Any]] = field(default_factory=list)
@@ -129,6 +132,7 @@ class EpisodeReport:
             "arm_contacts": self.arm_contacts,
             "forearm_contacts": self.forearm_contacts,
             "min_forearm_distance_m": None if math.isinf(forearm) else round(forearm, 5),
+            "table_contacts": self.table_contacts,
             "dropped": self.dropped,
             **self.grip.summary(),
             "sim_time_s": round(self.sim_time_s, 3),
@@ -539,6 +543,7 @@ def run_episode(
         report.grip = recorder.grip.metrics(HELD_FORCE_N)
         report.forearm_contacts = dict(sim.safety.forearm_contacts)
         report.min_forearm_distance_m = sim.safety.min_forearm_distance_m
+        report.table_contacts = dict(sim.safety.table_contacts)
         report.tray = [v.summary() for v in trays]
         if inserted is not None:
             report.insertion = inserted.figures

@@ -155,6 +155,12 @@ def summarise(records: Iterable[dict[str, Any]]) -> dict[str, Any]:
         # The forearms apart (their contacts count among the arms' above too).
         "forearm_contacts": sum(1 for r in recs if r.get("forearm_contacts")),
         "min_forearm_distance_m": min(forearm) if forearm else None,
+        # An arm's wrist or forearm on the table (records made before it was watched: none).
+        "table_contacts": (
+            sum(1 for r in recs if r.get("table_contacts"))
+            if any("table_contacts" in r for r in recs)
+            else None
+        ),
         "metrics": metric_summary(recs),
         "sim_time_s": round(sim, 2),
         "wall_time_s": round(wall, 2),
@@ -208,6 +214,11 @@ def contact_lines(summary: dict[str, Any]) -> list[str]:
         lines.append(
             f"  of which by a forearm: {summary['forearm_contacts']}; forearms' closest approach "
             f"{'n/a' if forearm is None else f'{forearm * 1000:.1f} mm'}"
+        )
+    if summary.get("table_contacts") is not None:
+        lines.append(
+            f"  trials with an arm's link other than its hand on the table: "
+            f"{summary['table_contacts']}"
         )
     return lines
 

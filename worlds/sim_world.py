@@ -40,7 +40,7 @@ from skills.types import Array
 from skills.vocabulary import ARMS, Arm
 from worlds.adapters import object_contexts, robot_capabilities
 from worlds.arm_prediction import ArmPredictor
-from worlds.collision import FIXTURES, CollisionWorld, arm_group
+from worlds.collision import FIXTURES, CollisionWorld, arm_group, welded_links
 from worlds.control import ImpedanceGains, PalmCommand
 from worlds.fixtures import FixtureLog, wall_forces
 from worlds.scene import LATERAL_PALM_QUATERNIONS, Scene
@@ -149,6 +149,10 @@ class SafetyRecord:
         Smallest FCL distance from a forearm link to an active obstacle, m.
     forearm_closest : str
         Which forearm link came closest to which obstacle.
+    table_contacts : dict
+        ``"<arm>_arm ~ table"`` -> physics steps with a link of the arm other than its hand
+        (the palm and the links welded to it) touching the table: a wrist or forearm dragged
+        over it, or pinned on it. A report, not a success criterion.
     """
 
     obstacle_contacts: dict[str, int] = field(default_factory=dict)
@@ -162,6 +166,7 @@ class SafetyRecord:
     forearm_contacts: dict[str, int] = field(default_factory=dict)
     min_forearm_distance_m: float = math.inf
     forearm_closest: str = ""
+    table_contacts: dict[str, int] = field(default_factory=dict)
 
 
 def task_moves(spec: WorldSpec, name: str) -> tuple[Move, ...]:
@@ -276,6 +281,18 @@ class SimWorld:
                 for e in self.collision.arm_links(a)
                 if e.split("/", 1)[1].split("#", 1)[0] in names
             )
+        #: Per arm, its body and the links watched against the table: the arm's links but its
+        #: hand (a palm may rest on the table beside a low object; a wrist may not).
+        self._table_links: dict[str, tuple[int, frozenset[int]]] = {}
+        client = self.scene.client
+        for a in ARMS:
+            arm = robot.arms[a]
+            body = self.scene.robot_ids[arm.body]
+            arm_links = self.scene.arm_links[a]
+            if arm_links is None:
+                arm_links = frozenset(range(pb.getNumJoints(body, physicsClientId=client)))
+            hand = welded_links(body, arm.palm_link, client)
+            self._table_links[f"{a.value}_arm"] = (body, frozenset(arm_links - hand - {-1}))
         #: The fixtures' walls' forces and the robot's touches, every physics step.
         self.fixture_log = FixtureLog(self.scene.physics_dt)
         self._fixture_info = tuple(
@@ -374,6 +391,12 @@ class SimWorld:
                     key = f"{label} ~ {name}"
                     forearm = self.safety.forearm_contacts
                     forearm[key] = forearm.get(key, 0) + 1
+        table = self.scene.table_id
+        for label, (body, links) in self._table_links.items():
+            points = pb.getContactPoints(bodyA=table, bodyB=body, physicsClientId=c)
+            if points and touching(_points_on(points, body, links)):
+                key = f"{label} ~ table"
+                self.safety.table_contacts[key] = self.safety.table_contacts.get(key, 0) + 1
         (left, left_links), (right, right_links) = bodies["left_arm"], bodies["right_arm"]
         if left != right:
             if touching(pb.getContactPoints(bodyA=left, bodyB=right, physicsClientId=c)):
