@@ -8,7 +8,13 @@ import pytest
 from numpy.testing import assert_allclose
 
 from experiment.progress import Progress
-from experiment.summary import conditions, summarise, summary_lines, wilson_interval
+from experiment.summary import (
+    conditions,
+    contact_lines,
+    summarise,
+    summary_lines,
+    wilson_interval,
+)
 
 
 def test_wilson_interval_matches_the_issue_and_the_paper() -> None:
@@ -110,3 +116,21 @@ def test_grip_metrics_summarise_as_median_and_worst_and_old_records_count_as_mis
     old = summarise([{"trial": 0, "success": True}])
     assert all(m["trials"] == 0 for m in old["metrics"].values())
     assert "median" not in "\n".join(summary_lines(old))
+
+
+def test_trials_with_an_arm_on_the_table_are_counted_and_old_records_say_nothing() -> None:
+    base = {"seed": 0, "success": True, "obstacles": ["none"] * 3}
+    records = [
+        {**base, "trial": 0, "table_contacts": {}},
+        {**base, "trial": 1, "table_contacts": {"left_arm ~ table": 8722}},
+        {**base, "trial": 2, "table_contacts": {"right_arm ~ table": 23}},
+    ]
+    summary = summarise(records)
+    assert summary["table_contacts"] == 2
+    assert "  trials with an arm's link other than its hand on the table: 2" in contact_lines(
+        summary
+    )
+    # Records made before the table was watched: no figure, and no line claiming none.
+    old = summarise([{**base, "trial": 0}])
+    assert old["table_contacts"] is None
+    assert not any("on the table" in line for line in contact_lines(old))

@@ -215,3 +215,56 @@ def test_a_check_without_link_doubt_asks_the_links_the_margin_alone(
     assert_allclose(with_doubt, 0.01 + forearm_doubt(palms, quaternions))
     assert with_doubt[-1] > 0.01 + 1e-3  # 0.3 m of travel is doubted
     assert_allclose(without, np.full(n, 0.01))
+
+
+@pytest.mark.sim
+def test_the_table_is_watched_against_the_arms_links_but_their_hands() -> None:
+    """An arm's wrist or forearm on the table counts, every physics step; the hand (the palm
+    and the links welded to it) may rest on it beside a low object and does not."""
+    from worlds.collision import welded_links
+    from worlds.sim_world import SimWorld
+    from worlds.testing import DEFAULT_WORLD
+    from worlds.world_file import load_world
+
+    world = load_world(DEFAULT_WORLD)
+    with SimWorld(world) as sim:
+        scene, c = sim.scene, sim.scene.client
+        for arm in (Arm.LEFT, Arm.RIGHT):
+            body, links = sim._table_links[f"{arm.value}_arm"]
+            palm = scene.robot.arms[arm].palm_link
+            hand = welded_links(body, palm, c)
+            assert palm in hand and len(hand) >= 2  # the iiwa's flange is welded to its palm
+            assert not links & hand
+            forearm = sim._forearm_links[f"{arm.value}_forearm"][1]
+            assert forearm - hand and forearm - hand <= links  # the wrist and the forearm
+        body, watched = sim._table_links["left_arm"]
+        hand = welded_links(body, scene.robot.arms[Arm.LEFT].palm_link, c)
+        half_height = world.table.size[2] / 2.0
+
+        def table_top_at(z: float) -> None:
+            centre = [world.table.position[0], world.table.position[1], z - half_height]
+            pb.resetBasePositionAndOrientation(
+                scene.table_id, centre, [0, 0, 0, 1], physicsClientId=c
+            )
+            pb.performCollisionDetection(physicsClientId=c)  # contacts, without a step
+
+        # The gaps from the table, raised to just under the arm's bounding boxes, to each link.
+        reference = min(pb.getAABB(body, j, physicsClientId=c)[0][2] for j in watched) - 0.001
+        table_top_at(reference)
+        gap: dict[int, float] = {}
+        for point in pb.getClosestPoints(scene.table_id, body, 0.2, physicsClientId=c):
+            gap[point[4]] = min(gap.get(point[4], np.inf), point[8])
+        hand_gap = min(d for j, d in gap.items() if j in hand)
+        arm_gap = min(d for j, d in gap.items() if j in watched)
+        assert hand_gap + 0.004 < arm_gap - 0.004  # the palm hangs lowest, at rest
+        # Raised 4 mm into the palm: the hand touches the table, and that does not count.
+        table_top_at(reference + hand_gap + 0.004)
+        sim._watch_contacts()
+        touched = pb.getContactPoints(bodyA=scene.table_id, bodyB=body, physicsClientId=c)
+        assert touching(touched) and {p[4] for p in touched} <= hand
+        assert "left_arm ~ table" not in sim.safety.table_contacts
+        # Raised 4 mm into the lowest link of the wrist or forearm: it counts, once a step.
+        table_top_at(reference + arm_gap + 0.004)
+        for _ in range(3):
+            sim._watch_contacts()
+        assert sim.safety.table_contacts["left_arm ~ table"] == 3
