@@ -391,9 +391,9 @@ class SimWorld:
                     key = f"{label} ~ {name}"
                     forearm = self.safety.forearm_contacts
                     forearm[key] = forearm.get(key, 0) + 1
-        table = self.scene.table_id
+        # One query for the table too, sorted by arm (the iCub's two arms share one body).
+        points = pb.getContactPoints(bodyA=self.scene.table_id, physicsClientId=c)
         for label, (body, links) in self._table_links.items():
-            points = pb.getContactPoints(bodyA=table, bodyB=body, physicsClientId=c)
             if points and touching(_points_on(points, body, links)):
                 key = f"{label} ~ table"
                 self.safety.table_contacts[key] = self.safety.table_contacts.get(key, 0) + 1
