@@ -223,6 +223,13 @@ class PathCheck:
         Refused only for the arms' links predicted near an obstacle, where the prediction is
         asked extra clearance the further the palms go (no palm, held object or link is
         predicted within the margin of anything else).
+    end_clear : bool
+        The path's last pose keeps the margin: its palms, held object and the arms' links
+        posed there, without the extra clearance a long way asks of the links. False: every
+        way to that pose ends within the margin of something, however it goes.
+    end_objects : tuple of str
+        The objects, where they rest, that an arm's link comes within the objects' margin of
+        at the path's last pose (none for a check that does not keep off the objects).
     """
 
     clear: bool
@@ -230,6 +237,8 @@ class PathCheck:
     first_collision: int | None = None
     detail: str = ""
     doubtful: bool = False
+    end_clear: bool = True
+    end_objects: tuple[str, ...] = ()
 
 
 @runtime_checkable

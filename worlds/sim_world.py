@@ -17,7 +17,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field, replace
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 import pybullet as pb
@@ -167,6 +167,25 @@ class SafetyRecord:
     min_forearm_distance_m: float = math.inf
     forearm_closest: str = ""
     table_contacts: dict[str, int] = field(default_factory=dict)
+
+
+class LinkHits(NamedTuple):
+    """Where the arms' predicted links come too near (:meth:`SimWorld._predicted_links_collide`).
+
+    Attributes
+    ----------
+    on_obstacles, on_objects : ndarray
+        (N,) bool: within the margins of an active obstacle; of an object where it rests.
+    end_on_obstacle : bool
+        At the last waypoint, within the end's margin of an active obstacle.
+    end_objects : tuple of str
+        The objects a link comes within the objects' margin of at the last waypoint.
+    """
+
+    on_obstacles: NDArray[np.bool_]
+    on_objects: NDArray[np.bool_]
+    end_on_obstacle: bool = False
+    end_objects: tuple[str, ...] = ()
 
 
 def task_moves(spec: WorldSpec, name: str) -> tuple[Move, ...]:
@@ -713,16 +732,17 @@ class SimWorld:
             if link_doubt
             else np.zeros(len(palm_positions))
         )
-        arms, arms_on_objects = self._predicted_links_collide(
-            palm_positions, palm_orientations, margin_m + doubt, avoid, object_margin_m
+        hits = self._predicted_links_collide(
+            palm_positions, palm_orientations, margin_m + doubt, avoid, object_margin_m, margin_m
         )
+        arms, arms_on_objects = hits.on_obstacles, hits.on_objects
         pts = np.asarray(palm_positions).reshape(-1, 3)
         if object_positions is not None:
             pts = np.concatenate((object_positions, pts))
         d, _ = self.collision.query(pts)
         sure = check.collides | arms_on_objects
-        hits = np.flatnonzero(sure | arms)
-        first = int(hits[0]) if hits.size else None
+        hit = np.flatnonzero(sure | arms)
+        first = int(hit[0]) if hit.size else None
         what = "clear"
         if first is not None:
             if check.collides[first]:
@@ -734,12 +754,28 @@ class SimWorld:
             else:
                 what = f"an arm link within {margin_m + doubt[first]:.3f} m"
             what += f" at step {first}"
+        # The last pose alone, against the obstacles (the objects are the palms' to touch),
+        # its links asked the margin without the doubt: a way that ends within the margin of
+        # an obstacle cannot be made clear by another way to the same end.
+        end_clear = not hits.end_on_obstacle
+        if end_clear and len(palm_positions):
+            end = self.collision.check_trajectory(
+                np.asarray(palm_positions)[-1:],
+                np.asarray(palm_orientations)[-1:],
+                name,
+                None if object_positions is None else object_positions[-1:],
+                None if object_orientations is None else object_orientations[-1:],
+                margin_m,
+            )
+            end_clear = not end.collides[0]
         return PathCheck(
             first is None,
             float(d.min()) if d.size else math.inf,
             first,
             what,
             doubtful=link_doubt and first is not None and not sure.any(),
+            end_clear=bool(end_clear),
+            end_objects=hits.end_objects,
         )
 
     def _predicted_links_collide(
@@ -749,17 +785,20 @@ class SimWorld:
         margins: Array,
         avoid: Sequence[str] = (),
         avoid_margin: float = 0.0,
-    ) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
+        end_margin: float | None = None,
+    ) -> LinkHits:
         """Where an arm link, posed by inverse kinematics of the palm path on a copy of the
         robot (:class:`worlds.arm_prediction.ArmPredictor`), comes within ``margins`` (N,) of
         an active obstacle, and where within ``avoid_margin`` of an object in ``avoid`` where
-        it rests: two (N,) masks. Waypoints are solved every :data:`PREDICTION_STRIDE` (and
-        the last); one between two solved ones is judged by the nearer of them."""
+        it rests; and at the last waypoint, whether a link comes within ``end_margin`` of an
+        obstacle (None: unasked) and which objects of ``avoid`` a link comes within
+        ``avoid_margin`` of. Waypoints are solved every :data:`PREDICTION_STRIDE` (and the
+        last); one between two solved ones is judged by the nearer of them."""
         p = np.asarray(palm_positions, dtype=float)
         q = np.asarray(palm_orientations, dtype=float)
         n = p.shape[0]
         if n == 0 or not (self.scene.active_obstacles or avoid):
-            return np.zeros(n, dtype=bool), np.zeros(n, dtype=bool)
+            return LinkHits(np.zeros(n, dtype=bool), np.zeros(n, dtype=bool))
         if self._arm_predictor is None:
             self._arm_predictor = ArmPredictor(self.scene)
         solved = np.unique(np.append(np.arange(0, n, PREDICTION_STRIDE), n - 1))
@@ -767,6 +806,7 @@ class SimWorld:
         frames = self._arm_predictor.link_frames(p[solved], q[solved], links)
         on_obstacles = np.zeros(solved.size, dtype=bool)
         on_objects = np.zeros(solved.size, dtype=bool)
+        at_end = False
         for arm in ARMS:
             f = frames[arm]
             at = (arm, f.links, f.positions, f.quaternions)
@@ -775,10 +815,34 @@ class SimWorld:
                 on_objects |= self.collision.check_link_frames(
                     *at, avoid_margin, avoid, avoid_margin, obstacles=False
                 )
+            if end_margin is not None and self.scene.active_obstacles:
+                last = (arm, f.links, f.positions[-1:], f.quaternions[-1:])
+                at_end |= bool(self.collision.check_link_frames(*last, end_margin)[0])
+        end_objects: tuple[str, ...] = ()
+        if on_objects[-1]:
+            # Which of them, each checked over the whole way (a link that touched one where
+            # the way starts is free of it there: it has just let it go).
+            end_objects = tuple(
+                o
+                for o in avoid
+                if any(
+                    self.collision.check_link_frames(
+                        arm,
+                        f.links,
+                        f.positions,
+                        f.quaternions,
+                        avoid_margin,
+                        [o],
+                        avoid_margin,
+                        obstacles=False,
+                    )[-1]
+                    for arm, f in frames.items()
+                )
+            )
         nearest = np.clip(
             np.searchsorted(solved, np.arange(n) - PREDICTION_STRIDE // 2), 0, solved.size - 1
         )
-        return on_obstacles[nearest], on_objects[nearest]
+        return LinkHits(on_obstacles[nearest], on_objects[nearest], at_end, end_objects)
 
     def link_points(self) -> Array:
         """For each arm link, its point closest to an active obstacle, (M, 3) (none if none)."""

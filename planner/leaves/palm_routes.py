@@ -90,6 +90,11 @@ class RouteChoice:
         Clear at least of contact (always, when ``clear``).
     note : str
         Empty for the first route taken clear; else which routes were refused and why.
+    ends_in_contact : str
+        When no route is clear of contact and the one taken ends touching an obstacle (its
+        last pose's palms or arm links, :attr:`planner.port.PathCheck.end_clear`), or an arm
+        link on one of the other objects (``around``, :attr:`planner.port.PathCheck.end_objects`):
+        which, in words; no way to that end is free of contact. Empty otherwise.
     """
 
     route: PalmRoute
@@ -97,6 +102,7 @@ class RouteChoice:
     clear: bool
     contact_free: bool
     note: str
+    ends_in_contact: str = ""
 
 
 def predict_palm_path(
@@ -190,7 +196,8 @@ def choose_route(
     The routes are tried in order, with (if ``detour_of`` names one) that route taken around
     the obstacle, or object of ``around``, its path comes nearest (:func:`detour`) tried at
     ``detour_at``. When none is clear, the one clear of contact with the largest predicted
-    distance; when none is even that, the usual one.
+    distance; when none is even that, the usual one, unless its end itself touches an
+    obstacle or puts an arm link on an object of ``around`` (``RouteChoice.ends_in_contact``).
 
     Parameters
     ----------
@@ -209,7 +216,8 @@ def choose_route(
     detour_at : int, optional
         Where in the order to try that detour (after ``detour_of``); default last.
     around : sequence of ObstacleInfo
-        Other objects, where they lie, that the detour may go around too.
+        Other objects, where they lie, that the detour may go around too, and that the end
+        may not put an arm link on.
     object_margin_m : float, optional
         Clearance asked from the objects where they rest, m; ``margin_m`` when None.
     """
@@ -241,7 +249,16 @@ def choose_route(
         doubted = [i for i, c in enumerate(contact) if c.doubtful]
         i = 0 if contact[0].doubtful or not doubted else doubted[0]
         route, _, check = tried[i]
-        return RouteChoice(route, check, False, False, _refusals(tried))
+        others = {o.name for o in around}
+        on = [o for o in contact[i].end_objects if o in others]
+        end = (
+            "every way ends with a palm or an arm link on an obstacle"
+            if not contact[i].end_clear
+            else f"every way ends with an arm link on {', '.join(on)}"
+            if on
+            else ""
+        )
+        return RouteChoice(route, check, False, False, _refusals(tried), end)
     best = max(range(len(tried)), key=lambda i: (contact[i].clear, tried[i][2].min_distance_m))
     route, _, check = tried[best]
     return RouteChoice(route, check, False, True, _refusals(tried))
@@ -264,7 +281,11 @@ def take_clear_route(
     object_margin_m: float | None = None,
 ) -> None:
     """Plan ``leaf``'s motion along the route :func:`choose_route` picks; the leaf's feedback
-    says which and why when it is not the usual one, or when no route is clear."""
+    says which and why when it is not the usual one, or when no route is clear.
+
+    A route that is not even clear of contact is still taken when only its way is doubted;
+    one whose end itself touches (:attr:`RouteChoice.ends_in_contact`) is refused: the leaf
+    gets no motion and fails with the reason (``leaf.refusal``), its palms where they are."""
     choice = choose_route(
         scene,
         starts,
@@ -278,6 +299,11 @@ def take_clear_route(
         object_margin_m,
     )
     leaf.route_note = ""
+    leaf.refusal = None
+    if choice.ends_in_contact:
+        leaf.motion = None
+        leaf.refusal = f"no way clear of contact: {choice.ends_in_contact}; refused {choice.note}"
+        return
     leaf.motion = ViaPointMotion(starts, choice.route.waypoints, segment_tau)
     if choice.clear:
         if choice.note:

@@ -433,6 +433,7 @@ class FakeWorld:
             float(d.min()) if n else float("inf"),
             int(hits[0]) if hits.size else None,
             f"{what} closest at waypoint {worst}: {d[worst] if n else np.inf:.3f} m",
+            end_clear=bool(d[-1] >= margin_m) if n else True,
         )
 
     def _arm_points(self, palms: Array, arm_index: Array, per_arm: int = 4) -> Array:

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 
 import numpy as np
 from numpy.testing import assert_allclose
@@ -127,6 +127,43 @@ def test_a_leaf_boxed_in_keeps_the_usual_way_and_says_so(tick_leaf: Tick) -> Non
     assert_allclose(path, expected.positions[1 : len(path) + 1], rtol=0.0, atol=0.0)
 
 
+def test_an_approach_whose_every_way_ends_in_an_obstacle_refuses_to_move(
+    tick_leaf: Tick,
+) -> None:
+    plain = FakeWorld(objects=[FakeObject("parcel", BOX)])
+    assert tick_leaf(Approach("approach"), plain, object="parcel").final == Status.SUCCESS
+    end = commanded_path(plain)[-1, 1]
+    # A sphere where the right palm's way in ends: every route to the faces ends in it.
+    sphere = ObstacleInfo("ball", end + np.array([0.0, 0.0, 0.03]), 0.03)
+    world = FakeWorld(objects=[FakeObject("parcel", BOX)], obstacles=[sphere])
+    world.set_active_obstacles(["ball"])
+    log = tick_leaf(Approach("approach"), world, object="parcel")
+    assert log.final == Status.FAILURE
+    assert log.feedback.startswith(
+        "no way clear of contact: every way ends with a palm or an arm link on an obstacle"
+    )
+    assert "refused coming in from" in log.feedback
+    assert not world.commands  # the palms stay where they are
+
+
+def test_with_no_way_clear_of_contact_the_choice_says_when_its_end_touches_too() -> None:
+    world = palms_beside_box([])
+    routes, starts = _two_routes(world)
+    ends = [r.waypoints[Arm.LEFT][-1].position for r in routes]
+    doubted = choose_route(_Refusing([]), starts, routes, 1.0, DT, 0.01, detour_of=None)
+    assert not doubted.contact_free and doubted.ends_in_contact == ""
+    touching = _Refusing([], touching_ends=[ends[0]])
+    chosen = choose_route(touching, starts, routes, 1.0, DT, 0.01, detour_of=None)
+    assert chosen.route.name == "usual" and "on an obstacle" in chosen.ends_in_contact
+    # Ending with a link on another object, one of those it goes around, is refused too;
+    # on the object it goes to, or on one not among the others, it is not.
+    box = ObstacleInfo("box", np.zeros(3), 0.1)
+    on_box = _Refusing([], on_objects={"box"})
+    chosen = choose_route(on_box, starts, routes, 1.0, DT, 0.01, detour_of=None, around=[box])
+    assert chosen.ends_in_contact == "every way ends with an arm link on box"
+    assert choose_route(on_box, starts, routes, 1.0, DT, 0.01, None).ends_in_contact == ""
+
+
 def test_approach_refuses_an_object_fallen_off_the_table_saying_where(tick_leaf: Tick) -> None:
     fallen = FakeObject("parcel", BOX, pose=Pose.of([0.9, -0.3, 0.05]))
     log = tick_leaf(Approach("approach"), FakeWorld(objects=[fallen]), object="parcel")
@@ -142,11 +179,20 @@ def test_approach_refuses_an_object_fallen_off_the_table_saying_where(tick_leaf:
 class _Refusing:
     """A scene that refuses every route: those ending at ``sure_ends`` for a sure contact (a
     palm, or a link on a resting object), the others only within the forearms' doubt; a route
-    ending at ``clear_end`` is clear."""
+    ending at ``clear_end`` is clear; one ending at ``touching_ends`` ends touching; every one
+    ends with a link on the objects named in ``on_objects``."""
 
-    def __init__(self, sure_ends: list[np.ndarray], clear_end: np.ndarray | None = None) -> None:
+    def __init__(
+        self,
+        sure_ends: list[np.ndarray],
+        clear_end: np.ndarray | None = None,
+        touching_ends: Sequence[np.ndarray] = (),
+        on_objects: set[str] | None = None,
+    ) -> None:
         self.sure_ends = sure_ends
         self.clear_end = clear_end
+        self.touching_ends = list(touching_ends)
+        self.on_objects = tuple(sorted(on_objects or ()))
 
     def obstacles(self) -> tuple[ObstacleInfo, ...]:
         return ()
@@ -162,7 +208,16 @@ class _Refusing:
         if self.clear_end is not None and np.allclose(end, self.clear_end, atol=1e-3):
             return PathCheck(True, 0.1)
         sure = any(np.allclose(end, e, atol=1e-3) for e in self.sure_ends)
-        return PathCheck(False, 0.1, 3, "refused", doubtful=not sure)
+        touches = any(np.allclose(end, e, atol=1e-3) for e in self.touching_ends)
+        return PathCheck(
+            False,
+            0.1,
+            3,
+            "refused",
+            doubtful=not sure,
+            end_clear=not touches,
+            end_objects=self.on_objects,
+        )
 
 
 def _two_routes(world: FakeWorld) -> tuple[list[PalmRoute], dict[Arm, object]]:

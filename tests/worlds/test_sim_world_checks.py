@@ -12,6 +12,7 @@ from worlds.sim_world import (
     FOREARM_DOUBT_PER_M,
     FOREARM_LEVER_M,
     FOREARM_MARGIN_M,
+    LinkHits,
     forearm_doubt,
     touching,
 )
@@ -198,7 +199,7 @@ def test_a_check_without_link_doubt_asks_the_links_the_margin_alone(
 
         def record(p: np.ndarray, qq: np.ndarray, margins: np.ndarray, *rest: object) -> tuple:
             asked.append(np.asarray(margins, dtype=float).copy())
-            return np.zeros(n, dtype=bool), np.zeros(n, dtype=bool)
+            return LinkHits(np.zeros(n, dtype=bool), np.zeros(n, dtype=bool))
 
         monkeypatch.setattr(sim, "_predicted_links_collide", record)
         for doubt in (True, False):
@@ -268,3 +269,46 @@ def test_the_table_is_watched_against_the_arms_links_but_their_hands() -> None:
         for _ in range(3):
             sim._watch_contacts()
         assert sim.safety.table_contacts["left_arm ~ table"] == 3
+
+
+@pytest.mark.sim
+def test_a_path_says_whether_its_end_keeps_clear_of_the_obstacles_whatever_its_way() -> None:
+    from worlds.sim_world import SimWorld
+    from worlds.testing import DEFAULT_WORLD
+    from worlds.world_file import load_world
+
+    with SimWorld(load_world(DEFAULT_WORLD)) as sim:
+        sim.set_active_obstacles(["ball_left"])
+        ball = next(o for o in sim.obstacles() if o.name == "ball_left")
+        start = np.stack([sim.palm_pose(a).position for a in (Arm.LEFT, Arm.RIGHT)])
+        q = np.repeat(
+            np.stack([sim.palm_pose(a).orientation for a in (Arm.LEFT, Arm.RIGHT)])[None], 40, 0
+        )
+
+        def left_palm_to(end: np.ndarray, via: np.ndarray | None = None) -> np.ndarray:
+            path = np.repeat(start[None], 40, axis=0)
+            if via is None:
+                path[:, 0] = start[0] + np.linspace(0.0, 1.0, 40)[:, None] * (end - start[0])
+            else:  # to ``via`` in the first half, then on to ``end``
+                half = np.linspace(0.0, 1.0, 20)[:, None]
+                path[:20, 0] = start[0] + half * (via - start[0])
+                path[20:, 0] = via + half * (end - via)
+            return path
+
+        # Ending in the sphere: no way to that end can be clear.
+        into = sim.check_palm_path(left_palm_to(ball.position), q, 0.0)
+        assert not into.clear and not into.end_clear
+        # Through it and out the far side, 15 cm beyond its surface: the way touches, the end
+        # does not.
+        beyond = ball.position + np.array([0.0, ball.radius + 0.15, 0.0])
+        through = sim.check_palm_path(left_palm_to(beyond, via=ball.position), q, 0.0)
+        assert not through.clear and through.end_clear
+        # An end on the parcel (an object, not an obstacle) is the palms' to reach.
+        parcel = sim.object_pose("parcel").position
+        onto = sim.check_palm_path(left_palm_to(parcel), q, 0.0)
+        assert not onto.clear and onto.end_clear
+        # It says which object its end is on; the others end on none.
+        assert onto.end_objects == ("parcel",)
+        assert into.end_objects == () and through.end_objects == ()
+        # A path with nothing near ends clear as it goes.
+        assert sim.check_palm_path(left_palm_to(start[0]), q, 0.0).end_clear
