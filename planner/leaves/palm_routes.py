@@ -91,10 +91,10 @@ class RouteChoice:
     note : str
         Empty for the first route taken clear; else which routes were refused and why.
     ends_in_contact : str
-        When no route is clear of contact and the one taken ends touching an obstacle (its
-        last pose's palms or arm links, :attr:`planner.port.PathCheck.end_clear`), or an arm
+        When no route is clear of contact and every one ends touching an obstacle (its last
+        pose's palms or arm links, :attr:`planner.port.PathCheck.end_clear`), or with an arm
         link on one of the other objects (``around``, :attr:`planner.port.PathCheck.end_objects`):
-        which, in words; no way to that end is free of contact. Empty otherwise.
+        which, in words. Empty otherwise.
     """
 
     route: PalmRoute
@@ -196,8 +196,8 @@ def choose_route(
     The routes are tried in order, with (if ``detour_of`` names one) that route taken around
     the obstacle, or object of ``around``, its path comes nearest (:func:`detour`) tried at
     ``detour_at``. When none is clear, the one clear of contact with the largest predicted
-    distance; when none is even that, the usual one, unless its end itself touches an
-    obstacle or puts an arm link on an object of ``around`` (``RouteChoice.ends_in_contact``).
+    distance; when none is even that, the usual one, unless every route ends touching an
+    obstacle or with an arm link on an object of ``around`` (``RouteChoice.ends_in_contact``).
 
     Parameters
     ----------
@@ -249,12 +249,12 @@ def choose_route(
         doubted = [i for i, c in enumerate(contact) if c.doubtful]
         i = 0 if contact[0].doubtful or not doubted else doubted[0]
         route, _, check = tried[i]
-        others = {o.name for o in around}
-        on = [o for o in contact[i].end_objects if o in others]
+        # Each way ends touching (a leaf's routes share their end): no other way helps.
+        on = set.intersection(*({o.name for o in around} & set(c.end_objects) for c in contact))
         end = (
             "every way ends with a palm or an arm link on an obstacle"
-            if not contact[i].end_clear
-            else f"every way ends with an arm link on {', '.join(on)}"
+            if not any(c.end_clear for c in contact)
+            else f"every way ends with an arm link on {', '.join(sorted(on))}"
             if on
             else ""
         )

@@ -146,13 +146,16 @@ def test_an_approach_whose_every_way_ends_in_an_obstacle_refuses_to_move(
     assert not world.commands  # the palms stay where they are
 
 
-def test_with_no_way_clear_of_contact_the_choice_says_when_its_end_touches_too() -> None:
+def test_with_no_way_clear_of_contact_the_choice_says_when_every_way_ends_touching() -> None:
     world = palms_beside_box([])
     routes, starts = _two_routes(world)
     ends = [r.waypoints[Arm.LEFT][-1].position for r in routes]
     doubted = choose_route(_Refusing([]), starts, routes, 1.0, DT, 0.01, detour_of=None)
     assert not doubted.contact_free and doubted.ends_in_contact == ""
-    touching = _Refusing([], touching_ends=[ends[0]])
+    # Only the usual way ending touching: another way ends elsewhere, so it is no refusal.
+    one = choose_route(_Refusing([], touching_ends=[ends[0]]), starts, routes, 1.0, DT, 0.01, None)
+    assert one.ends_in_contact == ""
+    touching = _Refusing([], touching_ends=ends)
     chosen = choose_route(touching, starts, routes, 1.0, DT, 0.01, detour_of=None)
     assert chosen.route.name == "usual" and "on an obstacle" in chosen.ends_in_contact
     # Ending with a link on another object, one of those it goes around, is refused too;
