@@ -18,14 +18,17 @@ from planner.composition import (
     static_composition,
 )
 from planner.leaves.base import SQUEEZE_FORCE_N, MotionLeaf, grasp_move_port
-from planner.port import Clock, ObjectSensing, PalmControl, Pose
+from planner.leaves.reflex import reflex_shift
+from planner.port import Clock, ObjectSensing, ObstacleScene, PalmControl, Pose
 from skills.composer import DualArmComposer, DualArmState, relative_from_world
 from skills.pose_dmp import PoseState
+from skills.types import Array
 from skills.vocabulary import ARMS
 
 
-def anchored(composer: DualArmComposer, measured: Pose) -> DualArmState:
-    """The grasp's state with {O} moved onto the measured object, palm references unchanged.
+def anchored(composer: DualArmComposer, measured: Pose, shift: Array | None = None) -> DualArmState:
+    """The grasp's state with {O} moved onto the measured object, palm references unchanged
+    but for ``shift`` (3,) m, the obstacle reflex's on both palms' commands (none: zero).
 
     Closing can nudge the object; from here on the object's frame must be where it really
     is, so that transports put the object (not an idealised grip) on the goal. The palms'
@@ -35,15 +38,18 @@ def anchored(composer: DualArmComposer, measured: Pose) -> DualArmState:
     centre (a palm that met its face first pushed it, and the table's friction holds it there)
     slides to where the two squeezes balance as soon as it is lifted, and that is where the
     transports must carry it from. Its height and orientation are the measured ones.
+
+    With a ``shift`` the palms were sent that far from the composition's references (the
+    obstacle reflex, :mod:`planner.leaves.reflex`): the state handed on holds them where they
+    were sent, so the next skill does not pull the object back towards the obstacle.
     """
     cmd = composer.commands()
+    palms = [np.asarray(p, dtype=float) + (0.0 if shift is None else shift) for p in cmd.positions]
     centre = np.asarray(measured.position, dtype=float).copy()
-    centre[:2] = 0.5 * (cmd.positions[0][:2] + cmd.positions[1][:2])
+    centre[:2] = 0.5 * (palms[0][:2] + palms[1][:2])
     measured = Pose(centre, measured.orientation)
     rel = [
-        relative_from_world(
-            measured.position, measured.orientation, cmd.positions[i], cmd.orientations[i]
-        )
+        relative_from_world(measured.position, measured.orientation, palms[i], cmd.orientations[i])
         for i in range(2)
     ]
     return DualArmState(
@@ -55,9 +61,17 @@ def anchored(composer: DualArmComposer, measured: Pose) -> DualArmState:
 
 class Grasp(MotionLeaf):
     """Lateral contact, then squeeze: grasp maintenance pulls the palms onto the faces (the
-    pair that suits move ``move``'s turn, as :class:`~planner.leaves.Approach` chose it)."""
+    pair that suits move ``move``'s turn, as :class:`~planner.leaves.Approach` chose it).
 
-    WORLD_ROLES: ClassVar[tuple[type, ...]] = (Clock, ObjectSensing, PalmControl)
+    Closing can push the object: a palm that meets its face first (the object sensed off its
+    true pose, or an actuator biased) shoves it until the other palm arrives. Near an
+    obstacle, that shove ends in it; so, as Transport does, the leaf shifts both palms'
+    targets away from an obstacle the object comes near
+    (:func:`~planner.leaves.reflex.reflex_shift`), and hands the state on where the palms
+    were sent.
+    """
+
+    WORLD_ROLES: ClassVar[tuple[type, ...]] = (Clock, ObjectSensing, PalmControl, ObstacleScene)
 
     INPUT_PORTS = {
         "object": PortInformation(str, description="object to grasp"),
@@ -99,6 +113,8 @@ class Grasp(MotionLeaf):
             float(self.get_input("close_s")),
         )
         self.started = world.time()
+        #: Both palms' targets' present shift away from a near obstacle, m.
+        self.reflex_offset: Array = np.zeros(3)
 
     def update(self) -> Status:
         """RUNNING while closing; SUCCESS once both palms press with the force."""
@@ -108,11 +124,14 @@ class Grasp(MotionLeaf):
         world = self.world
         name = self.get_input("object")
         cmd = self.composer.step(self.control_dt)
+        self.reflex_offset = reflex_shift(world, name, self.reflex_offset, self.control_dt)
         for i, arm in enumerate(ARMS):
-            world.command_palm(arm, Pose(cmd.positions[i], cmd.orientations[i]), cmd.twists[i])
+            position = cmd.positions[i] + self.reflex_offset
+            world.command_palm(arm, Pose(position, cmd.orientations[i]), cmd.twists[i])
         forces = [world.contact_force(arm, name) for arm in ARMS]
         settled = world.time() - self.started > 0.5
         if settled and min(forces) >= 0.8 * self.force:
-            self._set_output("state", anchored(self.composer, world.object_pose(name)))
+            state = anchored(self.composer, world.object_pose(name), self.reflex_offset)
+            self._set_output("state", state)
             return self.succeed(f"squeezing {forces[0]:.1f} N and {forces[1]:.1f} N")
         return self.running(f"closing: {forces[0]:.1f} N, {forces[1]:.1f} N of {self.force:.1f}")

@@ -11,6 +11,7 @@ from py_trees.ports import PortInformation
 from affordances import SemanticAction
 from planner.composition import MovePlan, SkillChoiceError, goal_error
 from planner.leaves.base import MotionLeaf, composed_move, composition_ports
+from planner.leaves.reflex import reflex_shift
 from planner.leaves.set_down import (
     SET_DOWN_SPEED_M_S,
     lowered,
@@ -28,19 +29,6 @@ SET_DOWN_DEPTH_M = 0.05
 #: A supported object resting this far above where the composition holds it has met its
 #: surface above the goal: the palms' targets rise to it instead of pressing it down, m.
 RAISED_SUPPORT_M = 0.01
-#: Measured gap to an obstacle under which the carried object is pushed away from it, m: the
-#: clearance the shipped trees' PathClear asks of the predicted path. The carry is open loop
-#: (the composition is checked, then run), and the palms trail their targets by 1 to 2 cm
-#: as a carry starts and stops (more under Hard mode's actuator faults): a path checked clear
-#: by 1 cm grazed a ball in 7 of 300 Hard trials. Only a carry that strays into the band
-#: feels it.
-REFLEX_BAND_M = 0.01
-#: Shift of both palms' targets away from the obstacle per metre inside the band.
-REFLEX_GAIN = 3.0
-#: Largest such shift, m (40 N more on each palm at the default 1000 N/m).
-REFLEX_MAX_M = 0.04
-#: Time constant the shift follows its want with, s: no jump in the palms' targets.
-REFLEX_TAU_S = 0.05
 
 
 class Transport(MotionLeaf):
@@ -255,18 +243,10 @@ class Transport(MotionLeaf):
         return self.running(f"move {self.move_index}: {elapsed:.1f} of {tau:.1f} s")
 
     def _reflex(self, name: str) -> Array:
-        """The shift of both palms' targets, (3,) m, that pushes the object, as measured, out
-        of :data:`REFLEX_BAND_M` of the nearest obstacle: :data:`REFLEX_GAIN` times its depth
-        in the band, along the way out, at most :data:`REFLEX_MAX_M`, followed with
-        :data:`REFLEX_TAU_S` (and back to none once clear). The composition itself runs on:
-        its state, and the state handed over, are the commanded ones."""
-        gap = self.world.obstacle_gap(name, REFLEX_BAND_M)
-        want: Array = np.zeros(3)
-        if gap is not None:
-            depth = REFLEX_BAND_M - gap.distance_m
-            want = np.asarray(gap.away, dtype=float) * min(REFLEX_GAIN * depth, REFLEX_MAX_M)
-        rate = min(1.0, self.control_dt / REFLEX_TAU_S)
-        self.reflex_offset = self.reflex_offset + rate * (want - self.reflex_offset)
+        """The shift of both palms' targets, (3,) m, away from a near obstacle
+        (:func:`planner.leaves.reflex.reflex_shift`). The composition itself runs on: its
+        state, and the state handed over, are the commanded ones."""
+        self.reflex_offset = reflex_shift(self.world, name, self.reflex_offset, self.control_dt)
         return self.reflex_offset
 
     def _set_down(self, name: str, commanded_z: float) -> Status | None:

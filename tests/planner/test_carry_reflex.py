@@ -1,20 +1,25 @@
-"""Transport's reflex: a carried object that strays within REFLEX_BAND_M of an obstacle, as
-measured, is pushed out of it by shifting both palms' targets; the composition runs on."""
+"""The obstacle reflex: a carried or squeezed object that strays within REFLEX_BAND_M of an
+obstacle, as measured, is pushed out of it by shifting both palms' targets (Transport and
+Grasp); the composition runs on."""
 
 from __future__ import annotations
 
 import numpy as np
+import py_trees
 import pytest
 from numpy.testing import assert_allclose
 from py_trees.common import Status
 
-from planner.leaves import Transport
-from planner.leaves.transport import REFLEX_BAND_M, REFLEX_GAIN, REFLEX_MAX_M, REFLEX_TAU_S
+from planner.leaves import Approach, Grasp, Transport
+from planner.leaves.reflex import REFLEX_BAND_M, REFLEX_GAIN, REFLEX_MAX_M, REFLEX_TAU_S
 from planner.port import Move, ObstacleGap, ObstacleInfo, Pose
 from planner.testing import FakeWorld
 from planner.testing.fake_world import FakeObject
+from planner.testing.harness import tick_until
 from planner.wiring import wire
+from skills.composer import commands_for
 from skills.library import SkillLibrary
+from skills.vocabulary import ARMS
 from tests.planner.test_leaves_fake import DT, approach_and_grasp, ready, select
 
 
@@ -114,3 +119,38 @@ def test_a_carry_that_ends_too_near_an_obstacle_is_held_out_of_the_band(
     shift = REFLEX_GAIN * (REFLEX_BAND_M - 0.003) / (1.0 + REFLEX_GAIN)
     assert closest > 0.003 + 0.8 * shift, closest
     assert world.object_pose("parcel").position[0] == pytest.approx(0.65 - shift, abs=1e-3)
+
+
+@pytest.mark.usefixtures("clean_blackboard")
+def test_a_grasp_closing_near_an_obstacle_shifts_its_palms_away_and_hands_them_on_so(
+    library: SkillLibrary,
+) -> None:
+    # The parcel rests with its +x face 3 mm from a ball: inside the band from the start.
+    radius = 0.04
+    start = np.array([0.55, 0.0, 0.675])
+    ball = ObstacleInfo("ball", start + [0.10 + radius + 0.003, 0.0, 0.0], radius)
+    world = FakeWorld(
+        objects=[FakeObject("parcel", np.array([0.20, 0.30, 0.15]))],
+        obstacles=[ball],
+        moves={"parcel": (Move(Pose.of([0.65, 0.0, 0.675]), ("ball",)),)},
+    )
+    world.set_active_obstacles(["ball"])
+    select(world, library)
+    assert (
+        tick_until(ready(Approach("approach"), world, library, object="parcel"), world, DT).final
+        == Status.SUCCESS
+    )
+    world.commands.clear()
+    grasp = ready(Grasp("grasp"), world, library, object="parcel", plan="{plan}", state="{state}")
+    log = tick_until(grasp, world, DT)
+    assert log.final == Status.SUCCESS, log.feedback
+    shift = grasp.reflex_offset
+    # Away from the ball (-x), by up to the gain times the depth in the band.
+    assert shift[0] < -1e-3 and abs(shift[1]) < 1e-9 and abs(shift[2]) < 1e-9
+    assert -shift[0] <= REFLEX_GAIN * (REFLEX_BAND_M - 0.003) + 1e-9
+    # The state handed on puts the palms where they were last sent, shift included.
+    state = py_trees.blackboard.Blackboard.get("/state")
+    handed = commands_for(state)
+    for i, arm in enumerate(ARMS):
+        sent = [c.pose.position for c in world.commands if c.arm is arm][-1]
+        assert_allclose(handed.positions[i], sent, atol=1e-9)
