@@ -758,7 +758,9 @@ class SimWorld:
         # its links asked the margin without the doubt: a way that ends within the margin of
         # an obstacle cannot be made clear by another way to the same end.
         end_clear = not hits.end_on_obstacle
-        if end_clear and len(palm_positions):
+        # Asked again only when the whole way's check found the last pose within the margin
+        # (of an obstacle or, with no allowance, an object): the obstacles asked alone.
+        if end_clear and check.collides.size and check.collides[-1]:
             end = self.collision.check_trajectory(
                 np.asarray(palm_positions)[-1:],
                 np.asarray(palm_orientations)[-1:],
@@ -810,12 +812,15 @@ class SimWorld:
         for arm in ARMS:
             f = frames[arm]
             at = (arm, f.links, f.positions, f.quaternions)
-            on_obstacles |= self.collision.check_link_frames(*at, np.asarray(margins)[solved])
+            hit = self.collision.check_link_frames(*at, np.asarray(margins)[solved])
+            on_obstacles |= hit
             if avoid:
                 on_objects |= self.collision.check_link_frames(
                     *at, avoid_margin, avoid, avoid_margin, obstacles=False
                 )
-            if end_margin is not None and self.scene.active_obstacles:
+            # The last pose alone touches only where the whole way, asked at least as much
+            # from where it starts, already reached it.
+            if end_margin is not None and hit[-1]:
                 last = (arm, f.links, f.positions[-1:], f.quaternions[-1:])
                 at_end |= bool(self.collision.check_link_frames(*last, end_margin)[0])
         end_objects: tuple[str, ...] = ()
