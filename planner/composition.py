@@ -509,13 +509,28 @@ def opening_terms(
 
 def measured_dual_state(world: WorldPort, name: str) -> DualArmState:
     """The closed chain as measured: object pose, each palm's pose in {O}, all at rest."""
-    obj = world.object_pose(name)
-    rel = {}
-    for arm in ARMS:
-        palm = world.palm_pose(arm)
-        rel[arm] = relative_from_world(
-            obj.position, obj.orientation, palm.position, palm.orientation
+    return _dual_state_at(world.object_pose(name), {arm: world.palm_pose(arm) for arm in ARMS})
+
+
+def sent_dual_state(world: WorldPort, name: str) -> DualArmState:
+    """The object as measured, each palm where its controller was last sent
+    (:meth:`~planner.port.PalmControl.palm_target`) in {O}, all at rest.
+
+    A skill started from it changes no palm's force at its first step: a palm held off its
+    target (pressing a face, or by a biased actuator) keeps the same error. Started from the
+    measured palms instead, the reference would jump onto the palm and the bias would push it
+    that much further.
+    """
+    return _dual_state_at(world.object_pose(name), {arm: world.palm_target(arm) for arm in ARMS})
+
+
+def _dual_state_at(obj: Pose, palms: Mapping[Arm, Pose]) -> DualArmState:
+    rel = {
+        arm: relative_from_world(
+            obj.position, obj.orientation, palms[arm].position, palms[arm].orientation
         )
+        for arm in ARMS
+    }
     return DualArmState(
         PoseState.at_rest(obj.position, obj.orientation),
         PoseState.at_rest(*rel[Arm.LEFT]),

@@ -321,6 +321,13 @@ class PalmControl(Protocol):
         """Measured twist of a palm frame, (6,)."""
         ...
 
+    def palm_target(self, arm: Arm) -> Pose:
+        """The pose a palm's controller tracks now: the last :meth:`command_palm`'s (the rest
+        pose before any). It differs from :meth:`palm_pose` by what holds the palm off it (a
+        face it presses, a biased actuator); a skill that starts from it does not change the
+        force the palm exerts."""
+        ...
+
     def rest_palm_pose(self, arm: Arm) -> Pose:
         """Where a palm waits when it holds nothing."""
         ...

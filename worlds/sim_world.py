@@ -595,6 +595,10 @@ class SimWorld:
         into ``force_n`` N of squeeze, m."""
         return force_n / float(self.gains.stiffness_linear)
 
+    def palm_target(self, arm: Arm) -> Pose:
+        """The pose the palm's impedance controller tracks (the last command)."""
+        return self._commands[arm]
+
     def command_palm(self, arm: Arm, pose: Pose, twist: Array | None = None) -> None:
         """Track ``pose`` with feed-forward ``twist`` (impedance control)."""
         tw = np.zeros(6) if twist is None else np.asarray(twist, dtype=float)

@@ -13,8 +13,8 @@ from planner.composition import (
     grasp_quarter_turns,
     hold_terms,
     lateral_geometry,
-    measured_dual_state,
     move_turn,
+    sent_dual_state,
     static_composition,
 )
 from planner.leaves.base import SQUEEZE_FORCE_N, MotionLeaf, grasp_move_port
@@ -69,6 +69,11 @@ class Grasp(MotionLeaf):
     targets away from an obstacle the object comes near
     (:func:`~planner.leaves.reflex.reflex_shift`), and hands the state on where the palms
     were sent.
+
+    Closing starts from where the palms were sent, not where they are
+    (:func:`~planner.composition.sent_dual_state`): at the pre-grasp poses a biased actuator
+    holds a palm centimetres off its target, and a reference moved onto the palm would let the
+    bias push it that much further, into the face, at once.
     """
 
     WORLD_ROLES: ClassVar[tuple[type, ...]] = (Clock, ObjectSensing, PalmControl, ObstacleScene)
@@ -96,7 +101,7 @@ class Grasp(MotionLeaf):
     }
 
     def initialise(self) -> None:
-        """Start the relative composition from the palms' measured poses."""
+        """Start the relative composition from where the palms were sent, the object as measured."""
         self.composer: DualArmComposer | None = None
         if self.connected() is not None:
             return
@@ -108,7 +113,7 @@ class Grasp(MotionLeaf):
         geometry = lateral_geometry(world, name, grasp_quarter_turns(world, name, turn))
         relative = hold_terms(self.optional_input("plan"), self.library, geometry, depth)
         self.composer = static_composition(
-            measured_dual_state(world, name),
+            sent_dual_state(world, name),
             relative,
             float(self.get_input("close_s")),
         )

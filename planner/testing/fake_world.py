@@ -22,6 +22,7 @@ from collections.abc import Iterable
 from dataclasses import dataclass, field
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from affordances import (
     ObjectContext,
@@ -123,6 +124,8 @@ class FakeWorld:
         self._palm_twists = {arm: np.zeros(6) for arm in ARMS}
         self._targets = dict(self._rest)
         self._target_twists = {arm: np.zeros(6) for arm in ARMS}
+        #: Where each palm settles from its target, m: none but under :meth:`bias_palm`.
+        self._bias: dict[Arm, Array | None] = {arm: None for arm in ARMS}
         self._held: dict[str, Array | None] = {name: None for name in self._objects}  # (2, 7)
         self._dropped: set[str] = set()
         self.commands: list[Recorded] = []
@@ -136,6 +139,11 @@ class FakeWorld:
     def restore_grip(self, name: str = "parcel") -> None:
         """Undo :meth:`drop`."""
         self._dropped.discard(name)
+
+    def bias_palm(self, arm: Arm, offset: ArrayLike) -> None:
+        """From the next advance on, the palm settles ``offset`` (3,) m off its target, as a
+        biased actuator holds it (Hard mode's torque bias, :mod:`worlds.actuators`)."""
+        self._bias[arm] = np.asarray(offset, dtype=float)
 
     def place_palms(self, poses: dict[Arm, Pose]) -> None:
         """Put the palms somewhere directly (test set-up)."""
@@ -151,7 +159,10 @@ class FakeWorld:
         """Move palms to their targets; carry, hold or drop objects."""
         before = dict(self._palms)
         for arm in ARMS:
-            self._palms[arm] = self._targets[arm]
+            target, bias = self._targets[arm], self._bias[arm]
+            self._palms[arm] = (
+                target if bias is None else Pose(target.position + bias, target.orientation)
+            )
             self._palm_twists[arm] = self._target_twists[arm]
         for name, obj in self._objects.items():
             grip = self._held[name]
@@ -290,6 +301,10 @@ class FakeWorld:
     def palm_twist(self, arm: Arm) -> Array:
         """The palm's twist, (6,)."""
         return self._palm_twists[arm].copy()
+
+    def palm_target(self, arm: Arm) -> Pose:
+        """The last commanded pose (reached at the next advance)."""
+        return self._targets[arm]
 
     def rest_palm_pose(self, arm: Arm) -> Pose:
         """Parking pose."""

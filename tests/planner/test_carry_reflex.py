@@ -1,6 +1,6 @@
 """The obstacle reflex: a carried or squeezed object that strays within REFLEX_BAND_M of an
-obstacle, as measured, is pushed out of it by shifting both palms' targets (Transport and
-Grasp); the composition runs on."""
+obstacle, as measured, or would within REFLEX_HORIZON_S at its measured closing speed, is
+pushed out by shifting both palms' targets (Transport and Grasp); the composition runs on."""
 
 from __future__ import annotations
 
@@ -11,7 +11,13 @@ from numpy.testing import assert_allclose
 from py_trees.common import Status
 
 from planner.leaves import Approach, Grasp, Transport
-from planner.leaves.reflex import REFLEX_BAND_M, REFLEX_GAIN, REFLEX_MAX_M, REFLEX_TAU_S
+from planner.leaves.reflex import (
+    REFLEX_BAND_M,
+    REFLEX_GAIN,
+    REFLEX_HORIZON_S,
+    REFLEX_MAX_M,
+    REFLEX_TAU_S,
+)
 from planner.port import Move, ObstacleGap, ObstacleInfo, Pose
 from planner.testing import FakeWorld
 from planner.testing.fake_world import FakeObject
@@ -24,15 +30,19 @@ from tests.planner.test_leaves_fake import DT, approach_and_grasp, ready, select
 
 
 class _Gaps:
-    """A world whose only answer is the gap it is told to give."""
+    """A world whose only answers are the gap and the object's velocity it is told to give."""
 
     def __init__(self) -> None:
         self.gap: ObstacleGap | None = None
+        self.velocity = np.zeros(3)
 
     def obstacle_gap(self, name: str, within_m: float) -> ObstacleGap | None:
         if self.gap is None or self.gap.distance_m >= within_m:
             return None
         return self.gap
+
+    def object_twist(self, name: str) -> np.ndarray:
+        return np.concatenate([self.velocity, np.zeros(3)])
 
 
 def _reflex_leaf(world: _Gaps) -> Transport:
@@ -70,6 +80,26 @@ def test_the_shift_follows_the_depth_in_the_band_with_its_lag_and_cap() -> None:
     for _ in range(int(20 * REFLEX_TAU_S / DT)):
         shift = leaf._reflex("parcel")
     assert np.linalg.norm(shift) < 1e-6
+
+
+def test_an_object_closing_fast_is_pushed_as_if_the_horizon_had_passed() -> None:
+    world = _Gaps()
+    leaf = _reflex_leaf(world)
+    away = np.array([0.0, -1.0, 0.0])
+    rate = DT / REFLEX_TAU_S
+    # 25 mm from the ball, beyond the band: nothing while still or moving along it.
+    world.gap = ObstacleGap(0.025, away, "ball")
+    world.velocity = np.array([0.3, 0.0, 0.0])
+    assert_allclose(leaf._reflex("parcel"), 0.0)
+    # Closing at 0.4 m/s: in REFLEX_HORIZON_S it would be 20 mm nearer, 5 mm from the ball.
+    world.velocity = np.array([0.3, 0.4, 0.0])
+    ahead = 0.025 - REFLEX_HORIZON_S * 0.4
+    want = REFLEX_GAIN * (REFLEX_BAND_M - ahead) * away
+    assert_allclose(leaf._reflex("parcel"), rate * want, atol=1e-12)
+    # Moving away as fast: the gap as measured, beyond the band, so the shift fades.
+    world.velocity = np.array([0.0, -0.4, 0.0])
+    before = leaf.reflex_offset.copy()
+    assert_allclose(leaf._reflex("parcel"), (1.0 - rate) * before, atol=1e-12)
 
 
 def _carry_towards_a_ball(gap_at_goal: float) -> tuple[FakeWorld, float]:
