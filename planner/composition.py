@@ -512,16 +512,23 @@ def measured_dual_state(world: WorldPort, name: str) -> DualArmState:
     return _dual_state_at(world.object_pose(name), {arm: world.palm_pose(arm) for arm in ARMS})
 
 
-def sent_dual_state(world: WorldPort, name: str) -> DualArmState:
-    """The object as measured, each palm where its controller was last sent
-    (:meth:`~planner.port.PalmControl.palm_target`) in {O}, all at rest.
+def closing_dual_state(world: WorldPort, name: str) -> DualArmState:
+    """The closed chain a grasp closes from: the object as measured, a palm that already
+    presses it where it was sent (:meth:`~planner.port.PalmControl.palm_target`), any other
+    palm as measured; all in {O}, at rest.
 
-    A skill started from it changes no palm's force at its first step: a palm held off its
-    target (pressing a face, or by a biased actuator) keeps the same error. Started from the
-    measured palms instead, the reference would jump onto the palm and the bias would push it
-    that much further.
+    A palm pressing the object is held off its target by the face, and by a biased actuator
+    pushing it into the face: moved onto the palm, its reference would let that push go that
+    much further at once. Kept where it was sent, the palm's force does not change at the
+    first step. A palm not touching the object starts where it is, as every other skill does.
     """
-    return _dual_state_at(world.object_pose(name), {arm: world.palm_target(arm) for arm in ARMS})
+    palms = {
+        arm: world.palm_target(arm)
+        if world.contact_force(arm, name) > 0.0
+        else world.palm_pose(arm)
+        for arm in ARMS
+    }
+    return _dual_state_at(world.object_pose(name), palms)
 
 
 def _dual_state_at(obj: Pose, palms: Mapping[Arm, Pose]) -> DualArmState:

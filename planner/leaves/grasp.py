@@ -10,11 +10,11 @@ from py_trees.ports import PortInformation
 
 from affordances import SemanticAction
 from planner.composition import (
+    closing_dual_state,
     grasp_quarter_turns,
     hold_terms,
     lateral_geometry,
     move_turn,
-    sent_dual_state,
     static_composition,
 )
 from planner.leaves.base import SQUEEZE_FORCE_N, MotionLeaf, grasp_move_port
@@ -70,10 +70,11 @@ class Grasp(MotionLeaf):
     (:func:`~planner.leaves.reflex.reflex_shift`), and hands the state on where the palms
     were sent.
 
-    Closing starts from where the palms were sent, not where they are
-    (:func:`~planner.composition.sent_dual_state`): at the pre-grasp poses a biased actuator
-    holds a palm centimetres off its target, and a reference moved onto the palm would let the
-    bias push it that much further, into the face, at once.
+    A palm that already presses the object when closing starts (at the pre-grasp pose a
+    biased actuator can hold it centimetres off its target, into the face) closes from where
+    it was sent, not from where it is (:func:`~planner.composition.closing_dual_state`): a
+    reference moved onto it would let the bias push it that much further into the face at
+    once.
     """
 
     WORLD_ROLES: ClassVar[tuple[type, ...]] = (Clock, ObjectSensing, PalmControl, ObstacleScene)
@@ -101,7 +102,7 @@ class Grasp(MotionLeaf):
     }
 
     def initialise(self) -> None:
-        """Start the relative composition from where the palms were sent, the object as measured."""
+        """Start the relative composition from the palms (a pressing one where it was sent)."""
         self.composer: DualArmComposer | None = None
         if self.connected() is not None:
             return
@@ -113,7 +114,7 @@ class Grasp(MotionLeaf):
         geometry = lateral_geometry(world, name, grasp_quarter_turns(world, name, turn))
         relative = hold_terms(self.optional_input("plan"), self.library, geometry, depth)
         self.composer = static_composition(
-            sent_dual_state(world, name),
+            closing_dual_state(world, name),
             relative,
             float(self.get_input("close_s")),
         )
