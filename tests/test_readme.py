@@ -61,7 +61,7 @@ def test_the_readme_leaf_tests_pass_outside_the_project(tmp_path: Path) -> None:
         tmp_path,
     )
     assert run.returncode == 0, run.stdout + run.stderr
-    assert "3 passed" in run.stdout
+    assert "4 passed" in run.stdout
     # The documented commands on the documented files.
     app = str(ROOT / "app.py")
     assert _run([app, "validate", "my_world.yaml"], tmp_path).returncode == 0

@@ -1,7 +1,23 @@
 """Test support: an in-memory world and helpers to tick one leaf (see also tests/planner)."""
 
 from planner.testing.fake_world import FakeObject, FakeWorld
-from planner.testing.harness import tick_until
+from planner.testing.harness import (
+    CONTROL_DT,
+    grasp_object,
+    select_skills,
+    set_up,
+    tick_until,
+)
 from planner.testing.roles import RoleView, role_methods
 
-__all__ = ["FakeObject", "FakeWorld", "RoleView", "role_methods", "tick_until"]
+__all__ = [
+    "CONTROL_DT",
+    "FakeObject",
+    "FakeWorld",
+    "RoleView",
+    "grasp_object",
+    "role_methods",
+    "select_skills",
+    "set_up",
+    "tick_until",
+]

@@ -21,13 +21,11 @@ import pytest
 
 from planner.port import Move, ObstacleInfo, Pose, WorldPort
 from planner.testing.fake_world import FakeObject, FakeWorld
-from planner.testing.harness import TickLog, tick_until
-from planner.wiring import wire
+from planner.testing.harness import CONTROL_DT, TickLog, set_up, tick_until
 from skills import quaternion as quat
 from skills.default_library import build_default_library
 from skills.library import SkillLibrary
 
-CONTROL_DT = 1.0 / 60.0
 #: The marker of tests that run PyBullet (``-m "not sim"`` skips them).
 SIM_MARKER = "sim: runs PyBullet in DIRECT mode (slower)"
 
@@ -89,8 +87,6 @@ def tick_leaf(library: SkillLibrary) -> Callable[..., TickLog]:
     """
 
     def tick(leaf: Any, world: WorldPort, max_ticks: int = 2000, **ports: Any) -> TickLog:
-        wire(leaf, **ports)
-        leaf.setup(world=world, library=library, control_dt=CONTROL_DT)
-        return tick_until(leaf, world, CONTROL_DT, max_ticks)
+        return tick_until(set_up(leaf, world, library, **ports), world, CONTROL_DT, max_ticks)
 
     return tick

@@ -28,7 +28,7 @@ from experiment.figures import (
 )
 from planner.leaves import Transport
 from planner.move_result import move_results
-from planner.testing import FakeWorld, tick_until
+from planner.testing import CONTROL_DT, FakeWorld, grasp_object, set_up, tick_until
 from skills import quaternion as quat
 from skills.default_library import build_default_library
 from skills.demonstration import Demonstration
@@ -36,7 +36,6 @@ from skills.library import SkillLibrary
 from skills.pose_model import fit_pose
 from skills.skill import Provenance, Skill, learnt_skill
 from skills.vocabulary import Action, Space
-from tests.planner.test_leaves_fake import DT, approach_and_grasp, ready, select
 from worlds.spec import ObstacleSpec, ShapeSpec
 
 PARCEL = ShapeSpec.box([0.20, 0.30, 0.15])
@@ -150,9 +149,8 @@ def test_the_demonstration_drawn_is_the_skill_the_move_ran() -> None:
 
 def test_a_move_records_the_taught_skill_its_transport_ran(fake_world: FakeWorld) -> None:
     library = SkillLibrary([wave_skill(), *build_default_library()])  # the first transport
-    select(fake_world, library)
-    approach_and_grasp(fake_world, library)
-    leaf = ready(
+    grasp_object(fake_world, library)
+    leaf = set_up(
         Transport("move0"),
         fake_world,
         library,
@@ -162,7 +160,7 @@ def test_a_move_records_the_taught_skill_its_transport_ran(fake_world: FakeWorld
         from_state="{state}",
         to_state="{state}",
     )
-    assert tick_until(leaf, fake_world, DT, max_ticks=3000).final == Status.SUCCESS
+    assert tick_until(leaf, fake_world, CONTROL_DT, max_ticks=3000).final == Status.SUCCESS
     assert move_results()[("parcel", 0)].skill == "wave"
 
 

@@ -19,14 +19,13 @@ from planner.leaves.reflex import (
     REFLEX_TAU_S,
 )
 from planner.port import Move, ObstacleGap, ObstacleInfo, Pose
-from planner.testing import FakeWorld
+from planner.testing import CONTROL_DT, FakeWorld, grasp_object, select_skills, set_up
 from planner.testing.fake_world import FakeObject
 from planner.testing.harness import tick_until
 from planner.wiring import wire
 from skills.composer import commands_for
 from skills.library import SkillLibrary
 from skills.vocabulary import ARMS
-from tests.planner.test_leaves_fake import DT, approach_and_grasp, ready, select
 
 
 class _Gaps:
@@ -48,7 +47,7 @@ class _Gaps:
 def _reflex_leaf(world: _Gaps) -> Transport:
     leaf = Transport("carry")
     wire(leaf, object="parcel", move=0, plan="{plan}", from_state="{state}")
-    leaf.setup(world=world, control_dt=DT)
+    leaf.setup(world=world, control_dt=CONTROL_DT)
     leaf.reflex_offset = np.zeros(3)
     return leaf
 
@@ -65,19 +64,19 @@ def test_the_shift_follows_the_depth_in_the_band_with_its_lag_and_cap() -> None:
     # dt / tau a tick (first order), the whole of it after a few tau.
     world.gap = ObstacleGap(0.004, away, "ball")
     want = REFLEX_GAIN * (REFLEX_BAND_M - 0.004) * away
-    rate = DT / REFLEX_TAU_S
+    rate = CONTROL_DT / REFLEX_TAU_S
     assert_allclose(leaf._reflex("parcel"), rate * want, atol=1e-12)
-    for _ in range(int(10 * REFLEX_TAU_S / DT)):
+    for _ in range(int(10 * REFLEX_TAU_S / CONTROL_DT)):
         shift = leaf._reflex("parcel")
     assert_allclose(shift, want, atol=1e-4)
     # Touching or inside: at most REFLEX_MAX_M.
     world.gap = ObstacleGap(-0.05, away, "ball")
-    for _ in range(int(10 * REFLEX_TAU_S / DT)):
+    for _ in range(int(10 * REFLEX_TAU_S / CONTROL_DT)):
         shift = leaf._reflex("parcel")
     assert_allclose(shift, REFLEX_MAX_M * away, atol=1e-4)
     # Clear again: it fades back to none.
     world.gap = None
-    for _ in range(int(20 * REFLEX_TAU_S / DT)):
+    for _ in range(int(20 * REFLEX_TAU_S / CONTROL_DT)):
         shift = leaf._reflex("parcel")
     assert np.linalg.norm(shift) < 1e-6
 
@@ -86,7 +85,7 @@ def test_an_object_closing_fast_is_pushed_as_if_the_horizon_had_passed() -> None
     world = _Gaps()
     leaf = _reflex_leaf(world)
     away = np.array([0.0, -1.0, 0.0])
-    rate = DT / REFLEX_TAU_S
+    rate = CONTROL_DT / REFLEX_TAU_S
     # 25 mm from the ball, beyond the band: nothing while still or moving along it.
     world.gap = ObstacleGap(0.025, away, "ball")
     world.velocity = np.array([0.3, 0.0, 0.0])
@@ -122,9 +121,8 @@ def test_a_carry_that_ends_too_near_an_obstacle_is_held_out_of_the_band(
     # The goal itself lies 3 mm from the ball: the composition (no avoidance) runs to it, the
     # measured parcel is pushed back to where the shift balances the depth in the band.
     world, _ = _carry_towards_a_ball(0.003)
-    select(world, library)
-    approach_and_grasp(world, library)
-    leaf = ready(
+    grasp_object(world, library)
+    leaf = set_up(
         Transport("carry"),
         world,
         library,
@@ -143,7 +141,7 @@ def test_a_carry_that_ends_too_near_an_obstacle_is_held_out_of_the_band(
         closest = min(closest, gap.distance_m)
         if leaf.status != Status.RUNNING:
             break
-        world.advance(DT)
+        world.advance(CONTROL_DT)
     assert leaf.status == Status.SUCCESS, leaf.feedback_message
     # Balance: shift s = GAIN (band - (0.003 + s)), so s = GAIN (band - 0.003) / (1 + GAIN).
     shift = REFLEX_GAIN * (REFLEX_BAND_M - 0.003) / (1.0 + REFLEX_GAIN)
@@ -165,14 +163,16 @@ def test_a_grasp_closing_near_an_obstacle_shifts_its_palms_away_and_hands_them_o
         moves={"parcel": (Move(Pose.of([0.65, 0.0, 0.675]), ("ball",)),)},
     )
     world.set_active_obstacles(["ball"])
-    select(world, library)
+    select_skills(world, library)
     assert (
-        tick_until(ready(Approach("approach"), world, library, object="parcel"), world, DT).final
+        tick_until(
+            set_up(Approach("approach"), world, library, object="parcel"), world, CONTROL_DT
+        ).final
         == Status.SUCCESS
     )
     world.commands.clear()
-    grasp = ready(Grasp("grasp"), world, library, object="parcel", plan="{plan}", state="{state}")
-    log = tick_until(grasp, world, DT)
+    grasp = set_up(Grasp("grasp"), world, library, object="parcel", plan="{plan}", state="{state}")
+    log = tick_until(grasp, world, CONTROL_DT)
     assert log.final == Status.SUCCESS, log.feedback
     shift = grasp.reflex_offset
     # Away from the ball (-x), by up to the gain times the depth in the band.

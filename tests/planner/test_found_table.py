@@ -10,11 +10,10 @@ import pytest
 from planner.composition import on_found_table
 from planner.leaves.set_down import TABLE_FOUND_FROM_M, TABLE_FOUND_WITHIN_M, table_found_dz
 from planner.port import Move, Pose
-from planner.testing import FakeWorld
+from planner.testing import FakeWorld, grasp_object
 from planner.testing.fake_world import FakeObject
 from skills import quaternion as quat
 from skills.library import SkillLibrary
-from tests.planner.test_leaves_fake import approach_and_grasp, select
 
 BOX = np.array([0.20, 0.30, 0.15])
 TABLE = 0.6  # the fake's stated (and only) table top, m
@@ -50,8 +49,7 @@ def test_settling_noise_and_other_supports_leave_the_stated_table(dz: float) -> 
 @pytest.mark.usefixtures("clean_blackboard")
 def test_an_object_the_palms_carry_finds_no_table(library: SkillLibrary) -> None:
     world = _resting(0.0)
-    select(world, library)
-    approach_and_grasp(world, library)
+    grasp_object(world, library)
     obj = world._objects["parcel"]
     obj.pose = Pose(obj.pose.position + [0.0, 0.0, 0.02], obj.pose.orientation)
     assert table_found_dz(world, "parcel") == 0.0

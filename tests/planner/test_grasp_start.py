@@ -12,11 +12,10 @@ from py_trees.common import Status
 
 from planner.leaves import Approach, Grasp
 from planner.port import Pose
-from planner.testing import FakeWorld
+from planner.testing import CONTROL_DT, FakeWorld, select_skills, set_up
 from planner.testing.harness import tick_until
 from skills.library import SkillLibrary
 from skills.vocabulary import ARMS, Arm
-from tests.planner.test_leaves_fake import DT, ready, select
 
 #: Where the biased left palm settles from its target, as Hard mode's torque bias holds a
 #: palm: 5 cm towards the parcel's face (-y; the pre-grasp pose stands 4 cm off it, so the
@@ -28,18 +27,18 @@ OFF_FACE = np.array([0.0, 0.02, 0.01])
 def _first_closing_commands(library: SkillLibrary, bias: np.ndarray | None) -> dict[Arm, Pose]:
     py_trees.blackboard.Blackboard.clear()
     world = FakeWorld()
-    select(world, library)
-    approach = ready(Approach("approach"), world, library, object="parcel")
-    assert tick_until(approach, world, DT).final == Status.SUCCESS
+    select_skills(world, library)
+    approach = set_up(Approach("approach"), world, library, object="parcel")
+    assert tick_until(approach, world, CONTROL_DT).final == Status.SUCCESS
     if bias is not None:
         world.bias_palm(Arm.LEFT, bias)
-        world.advance(DT)
+        world.advance(CONTROL_DT)
         measured = world.palm_pose(Arm.LEFT).position
         assert_allclose(measured, world.palm_target(Arm.LEFT).position + bias)
         pressing = world.contact_force(Arm.LEFT, "parcel") > 0.0
         assert pressing == (bias[1] < 0.0)
     world.commands.clear()
-    grasp = ready(Grasp("grasp"), world, library, object="parcel", plan="{plan}", state="{state}")
+    grasp = set_up(Grasp("grasp"), world, library, object="parcel", plan="{plan}", state="{state}")
     grasp.tick_once()
     assert grasp.status == Status.RUNNING, grasp.feedback_message
     return {c.arm: c.pose for c in world.commands}  # each arm's first command

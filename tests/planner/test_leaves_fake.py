@@ -17,7 +17,6 @@ from planner.composition import MovePlan, compose_move, lateral_geometry, squeez
 from planner.leaves import (
     Approach,
     AtGoal,
-    Grasp,
     IsHeld,
     PathClear,
     Release,
@@ -29,7 +28,14 @@ from planner.leaves.base import SQUEEZE_FORCE_N
 from planner.leaves.release import MAX_REOPENINGS
 from planner.move_result import MoveResult, move_results
 from planner.port import Pose
-from planner.testing import FakeWorld, tick_until
+from planner.testing import (
+    CONTROL_DT,
+    FakeWorld,
+    grasp_object,
+    select_skills,
+    set_up,
+    tick_until,
+)
 from planner.testing.fake_world import FakeObject
 from planner.testing.fixtures import paper_moves
 from planner.testing.harness import TickLog
@@ -39,57 +45,23 @@ from skills.composer import DualArmState
 from skills.library import SkillLibrary
 from skills.vocabulary import ARMS, Action, Arm, GraspType, Space
 
-DT = 1.0 / 60.0
-
-
-def ready(
-    leaf: py_trees.behaviour.Behaviour, world: FakeWorld, library: SkillLibrary, **ports: object
-) -> py_trees.behaviour.Behaviour:
-    """Wire ports, set the leaf up against ``world``."""
-    wire(leaf, **ports)  # type: ignore[arg-type]
-    leaf.setup(world=world, library=library, control_dt=DT)
-    return leaf
-
 
 def blackboard_value(key: str) -> object:
     return py_trees.blackboard.Blackboard.get(key)
 
 
-def select(world: FakeWorld, library: SkillLibrary) -> SemanticAction:
-    log = tick_until(
-        ready(SelectSkills("select"), world, library, object="parcel", plan="{plan}"), world, DT
-    )
-    assert log.final == Status.SUCCESS, log.feedback
-    plan = blackboard_value("/plan")
-    assert isinstance(plan, SemanticAction)
-    return plan
-
-
 def select_weighted(world: FakeWorld, library: SkillLibrary, weights: str) -> TickLog:
     """SelectSkills ticked with its ``weights`` port set."""
-    leaf = ready(
+    leaf = set_up(
         SelectSkills("select"), world, library, object="parcel", plan="{plan}", weights=weights
     )
-    return tick_until(leaf, world, DT)
-
-
-def approach_and_grasp(world: FakeWorld, library: SkillLibrary) -> None:
-    assert (
-        tick_until(ready(Approach("approach"), world, library, object="parcel"), world, DT).final
-        == Status.SUCCESS
-    )
-    log = tick_until(
-        ready(Grasp("grasp"), world, library, object="parcel", plan="{plan}", state="{state}"),
-        world,
-        DT,
-    )
-    assert log.final == Status.SUCCESS, log.feedback
+    return tick_until(leaf, world, CONTROL_DT)
 
 
 def test_select_skills_chooses_the_papers_lateral_grasp(
     fake_world: FakeWorld, library: SkillLibrary
 ) -> None:
-    plan = select(fake_world, library)
+    plan = select_skills(fake_world, library)
     assert plan.grasp is GraspType.TWO_PALM_LATERAL
     assert {Action.TRANSPORT, Action.HOLD_LATERAL} <= set(plan.actions)
 
@@ -97,7 +69,7 @@ def test_select_skills_chooses_the_papers_lateral_grasp(
 def test_select_skills_weights_replace_the_reasoners_and_keep_the_rest(
     fake_world: FakeWorld, library: SkillLibrary
 ) -> None:
-    reasoned = select(fake_world, library)
+    reasoned = select_skills(fake_world, library)
     log = select_weighted(fake_world, library, "hold_lateral=0; avoid_links = 0.5")
     assert log.final == Status.SUCCESS, log.feedback
     plan = blackboard_value("/plan")
@@ -140,9 +112,9 @@ def test_select_skills_fails_with_an_explanation_without_a_world(library: SkillL
 
 def test_approach_ends_beside_the_faces(fake_world: FakeWorld, library: SkillLibrary) -> None:
     log = tick_until(
-        ready(Approach("approach"), fake_world, library, object="parcel", standoff_m=0.04),
+        set_up(Approach("approach"), fake_world, library, object="parcel", standoff_m=0.04),
         fake_world,
-        DT,
+        CONTROL_DT,
     )
     assert log.final == Status.SUCCESS
     assert log.statuses[:-1] == (Status.RUNNING,) * (len(log.statuses) - 1)
@@ -159,8 +131,7 @@ def test_approach_ends_beside_the_faces(fake_world: FakeWorld, library: SkillLib
 def test_grasp_squeezes_to_the_force_and_hands_over_a_state(
     fake_world: FakeWorld, library: SkillLibrary
 ) -> None:
-    select(fake_world, library)
-    approach_and_grasp(fake_world, library)
+    grasp_object(fake_world, library)
     forces = [fake_world.contact_force(arm, "parcel") for arm in ARMS]
     assert min(forces) >= 0.8 * SQUEEZE_FORCE_N
     state = blackboard_value("/state")
@@ -170,10 +141,9 @@ def test_grasp_squeezes_to_the_force_and_hands_over_a_state(
 def test_transport_reaches_each_goal_and_hands_over(
     fake_world: FakeWorld, library: SkillLibrary
 ) -> None:
-    select(fake_world, library)
-    approach_and_grasp(fake_world, library)
+    grasp_object(fake_world, library)
     for move in range(3):
-        leaf = ready(
+        leaf = set_up(
             Transport(f"move{move}"),
             fake_world,
             library,
@@ -183,9 +153,9 @@ def test_transport_reaches_each_goal_and_hands_over(
             from_state="{state}",
             to_state="{state}",
         )
-        log = tick_until(leaf, fake_world, DT, max_ticks=3000)
+        log = tick_until(leaf, fake_world, CONTROL_DT, max_ticks=3000)
         assert log.final == Status.SUCCESS, log.feedback
-        at_goal = ready(
+        at_goal = set_up(
             AtGoal("at_goal"),
             fake_world,
             library,
@@ -201,9 +171,8 @@ def test_transport_reaches_each_goal_and_hands_over(
 def test_transport_publishes_its_moves_composition_and_placement(
     fake_world: FakeWorld, library: SkillLibrary
 ) -> None:
-    select(fake_world, library)
-    approach_and_grasp(fake_world, library)
-    leaf = ready(
+    grasp_object(fake_world, library)
+    leaf = set_up(
         Transport("move1"),
         fake_world,
         library,
@@ -219,7 +188,7 @@ def test_transport_publishes_its_moves_composition_and_placement(
     leaf.tick_once()
     running = move_results()[("parcel", 1)]
     assert running == MoveResult("parcel", 1, 0.25, 0.0, Status.RUNNING, skill="pick_and_place")
-    log = tick_until(leaf, fake_world, DT, max_ticks=3000)
+    log = tick_until(leaf, fake_world, CONTROL_DT, max_ticks=3000)
     assert log.final == Status.SUCCESS, log.feedback
     done = move_results()[("parcel", 1)]
     assert (done.status, done.transport_weight, done.avoid_gain) == (Status.SUCCESS, 0.25, 0.0)
@@ -255,9 +224,8 @@ def sagging_world() -> SaggingWorld:
 
 def carry_sagging(library: SkillLibrary, sag_m: float) -> tuple[Status, str, SaggingWorld]:
     world = sagging_world()
-    select(world, library)
-    approach_and_grasp(world, library)
-    leaf = ready(
+    grasp_object(world, library)
+    leaf = set_up(
         Transport("move0"),
         world,
         library,
@@ -271,7 +239,7 @@ def carry_sagging(library: SkillLibrary, sag_m: float) -> tuple[Status, str, Sag
     # was measured): the commanded path no longer says where the object is.
     leaf.tick_once()
     world.sag_m = sag_m
-    log = tick_until(leaf, world, DT, max_ticks=3000)
+    log = tick_until(leaf, world, CONTROL_DT, max_ticks=3000)
     return log.final, leaf.feedback_message, world
 
 
@@ -305,9 +273,8 @@ def test_transport_reports_the_measured_placement_within_tolerance(
 def test_transport_lifts_the_parcel_on_the_way(
     fake_world: FakeWorld, library: SkillLibrary
 ) -> None:
-    select(fake_world, library)
-    approach_and_grasp(fake_world, library)
-    leaf = ready(
+    grasp_object(fake_world, library)
+    leaf = set_up(
         Transport("move0"),
         fake_world,
         library,
@@ -320,7 +287,7 @@ def test_transport_lifts_the_parcel_on_the_way(
     heights = []
     for _ in range(600):
         leaf.tick_once()
-        fake_world.advance(DT)
+        fake_world.advance(CONTROL_DT)
         heights.append(fake_world.object_pose("parcel").position[2])
         if leaf.status != Status.RUNNING:
             break
@@ -330,9 +297,8 @@ def test_transport_lifts_the_parcel_on_the_way(
 def test_transport_fails_when_the_grip_is_lost(
     fake_world: FakeWorld, library: SkillLibrary
 ) -> None:
-    select(fake_world, library)
-    approach_and_grasp(fake_world, library)
-    leaf = ready(
+    grasp_object(fake_world, library)
+    leaf = set_up(
         Transport("move0"),
         fake_world,
         library,
@@ -344,9 +310,9 @@ def test_transport_fails_when_the_grip_is_lost(
     )
     for _ in range(30):
         leaf.tick_once()
-        fake_world.advance(DT)
+        fake_world.advance(CONTROL_DT)
     fake_world.drop("parcel")
-    log = tick_until(leaf, fake_world, DT)
+    log = tick_until(leaf, fake_world, CONTROL_DT)
     assert log.final == Status.FAILURE
     assert "grip lost" in log.feedback
     failed = move_results()[("parcel", 0)]
@@ -356,9 +322,8 @@ def test_transport_fails_when_the_grip_is_lost(
 def test_halting_a_running_transport_stops_the_arms(
     fake_world: FakeWorld, library: SkillLibrary
 ) -> None:
-    select(fake_world, library)
-    approach_and_grasp(fake_world, library)
-    leaf = ready(
+    grasp_object(fake_world, library)
+    leaf = set_up(
         Transport("move0"),
         fake_world,
         library,
@@ -370,7 +335,7 @@ def test_halting_a_running_transport_stops_the_arms(
     )
     for _ in range(40):
         leaf.tick_once()
-        fake_world.advance(DT)
+        fake_world.advance(CONTROL_DT)
     assert leaf.status == Status.RUNNING
     moving = fake_world.commands[-1].twist
     assert np.linalg.norm(moving) > 1e-3
@@ -385,12 +350,11 @@ def test_halting_a_running_transport_stops_the_arms(
 def test_is_held_reads_forces_and_fails_after_a_drop(
     fake_world: FakeWorld, library: SkillLibrary
 ) -> None:
-    held = ready(IsHeld("held"), fake_world, library, object="parcel")
+    held = set_up(IsHeld("held"), fake_world, library, object="parcel")
     held.tick_once()
     assert held.status == Status.FAILURE and "not held" in held.feedback_message
-    select(fake_world, library)
-    approach_and_grasp(fake_world, library)
-    fake_world.advance(DT)
+    grasp_object(fake_world, library)
+    fake_world.advance(CONTROL_DT)
     held.tick_once()
     assert held.status == Status.SUCCESS, held.feedback_message
     fake_world.drop("parcel")
@@ -401,10 +365,9 @@ def test_is_held_reads_forces_and_fails_after_a_drop(
 def test_is_held_with_the_grasps_state_fails_when_a_palm_slid_along_its_face(
     fake_world: FakeWorld, library: SkillLibrary
 ) -> None:
-    select(fake_world, library)
-    approach_and_grasp(fake_world, library)
-    fake_world.advance(DT)
-    held = ready(IsHeld("held"), fake_world, library, object="parcel", from_state="{state}")
+    grasp_object(fake_world, library)
+    fake_world.advance(CONTROL_DT)
+    held = set_up(IsHeld("held"), fake_world, library, object="parcel", from_state="{state}")
     held.tick_once()
     assert held.status == Status.SUCCESS, held.feedback_message
     palms = {arm: fake_world.palm_pose(arm) for arm in ARMS}
@@ -439,11 +402,11 @@ def test_is_held_with_the_grasps_state_fails_when_a_palm_slid_along_its_face(
 
 
 def test_at_goal_reports_the_errors(fake_world: FakeWorld, library: SkillLibrary) -> None:
-    leaf = ready(AtGoal("at_goal"), fake_world, library, object="parcel", move=0)
+    leaf = set_up(AtGoal("at_goal"), fake_world, library, object="parcel", move=0)
     leaf.tick_once()
     assert leaf.status == Status.FAILURE
     assert "100.0 mm" in leaf.feedback_message
-    bad = ready(AtGoal("bad"), fake_world, library, object="parcel", move=7)
+    bad = set_up(AtGoal("bad"), fake_world, library, object="parcel", move=7)
     bad.tick_once()
     assert "expected an index below 3" in bad.feedback_message
 
@@ -456,12 +419,11 @@ def _plan_without_avoidance(plan: SemanticAction) -> SemanticAction:
 def test_path_clear_sees_an_obstacle_on_the_straight_path(
     fake_world: FakeWorld, library: SkillLibrary
 ) -> None:
-    plan = select(fake_world, library)
-    approach_and_grasp(fake_world, library)
-    fake_world.advance(DT)
+    plan = grasp_object(fake_world, library)
+    fake_world.advance(CONTROL_DT)
     bare = _plan_without_avoidance(plan)
     py_trees.blackboard.Blackboard.set("/bare", bare)
-    clear = ready(
+    clear = set_up(
         PathClear("clear0"),
         fake_world,
         library,
@@ -472,7 +434,7 @@ def test_path_clear_sees_an_obstacle_on_the_straight_path(
     )
     clear.tick_once()
     assert clear.status == Status.SUCCESS, clear.feedback_message
-    blocked = ready(
+    blocked = set_up(
         PathClear("clear1"),
         fake_world,
         library,
@@ -487,10 +449,9 @@ def test_path_clear_sees_an_obstacle_on_the_straight_path(
 
 
 def test_release_then_retreat(fake_world: FakeWorld, library: SkillLibrary) -> None:
-    select(fake_world, library)
-    approach_and_grasp(fake_world, library)
+    grasp_object(fake_world, library)
     log = tick_until(
-        ready(
+        set_up(
             Release("release"),
             fake_world,
             library,
@@ -499,11 +460,11 @@ def test_release_then_retreat(fake_world: FakeWorld, library: SkillLibrary) -> N
             to_state="{state}",
         ),
         fake_world,
-        DT,
+        CONTROL_DT,
     )
     assert log.final == Status.SUCCESS, log.feedback
     assert max(fake_world.contact_force(a, "parcel") for a in ARMS) == 0.0
-    log = tick_until(ready(Retreat("retreat"), fake_world, library), fake_world, DT)
+    log = tick_until(set_up(Retreat("retreat"), fake_world, library), fake_world, CONTROL_DT)
     assert log.final == Status.SUCCESS, log.feedback
     for arm in ARMS:
         rest = fake_world.rest_palm_pose(arm)
@@ -533,10 +494,9 @@ def _release_on_leaning(
         objects=[FakeObject("parcel", np.array([0.20, 0.30, 0.15]))], moves=paper_moves()
     )
     world.lean_m = lean_m
-    select(world, library)
-    approach_and_grasp(world, library)
+    grasp_object(world, library)
     world.found = world.palm_pose(Arm.LEFT).position.copy()
-    leaf = ready(
+    leaf = set_up(
         Release("release"),
         world,
         library,
@@ -544,7 +504,7 @@ def _release_on_leaning(
         from_state="{state}",
         to_state="{state}",
     )
-    log = tick_until(leaf, world, DT, max_ticks=max_ticks)
+    log = tick_until(leaf, world, CONTROL_DT, max_ticks=max_ticks)
     assert isinstance(leaf, Release)
     return log.final, leaf, world
 
@@ -572,8 +532,7 @@ def test_selection_helpers_are_typed() -> None:
 def test_transport_runs_the_composition_path_clear_checked(
     fake_world: FakeWorld, library: SkillLibrary, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    plan = select(fake_world, library)
-    approach_and_grasp(fake_world, library)
+    plan = grasp_object(fake_world, library)
     py_trees.blackboard.Blackboard.set("/bare", _plan_without_avoidance(plan))
     activated: list[tuple[str, ...]] = []
     activate = fake_world.set_active_obstacles
@@ -583,12 +542,12 @@ def test_transport_runs_the_composition_path_clear_checked(
         lambda names: (activated.append(tuple(names)), activate(names)),
     )
     ports = {"object": "parcel", "move": 0, "plan": "{bare}", "from_state": "{state}"}
-    clear = ready(PathClear("clear"), fake_world, library, composition="{checked}", **ports)
+    clear = set_up(PathClear("clear"), fake_world, library, composition="{checked}", **ports)
     clear.tick_once()
     assert clear.status == Status.SUCCESS, clear.feedback_message
     checked = blackboard_value("/checked")
     assert isinstance(checked, MovePlan) and checked.index == 0
-    carry = ready(
+    carry = set_up(
         Transport("carry"),
         fake_world,
         library,
@@ -596,7 +555,7 @@ def test_transport_runs_the_composition_path_clear_checked(
         to_state="{state}",
         **ports,
     )
-    log = tick_until(carry, fake_world, DT, max_ticks=3000)
+    log = tick_until(carry, fake_world, CONTROL_DT, max_ticks=3000)
     assert log.final == Status.SUCCESS, log.feedback
     # Composed once: Transport ran the checked terms, and only PathClear switched obstacles on.
     assert carry.composer is not None and carry.composer.absolute is checked.composer.absolute
@@ -606,14 +565,13 @@ def test_transport_runs_the_composition_path_clear_checked(
 def test_transport_refuses_a_composition_checked_for_another_variant(
     fake_world: FakeWorld, library: SkillLibrary
 ) -> None:
-    plan = select(fake_world, library)
-    approach_and_grasp(fake_world, library)
+    plan = grasp_object(fake_world, library)
     py_trees.blackboard.Blackboard.set("/bare", _plan_without_avoidance(plan))
     ports = {"object": "parcel", "move": 0, "plan": "{bare}", "from_state": "{state}"}
-    clear = ready(PathClear("clear"), fake_world, library, composition="{checked}", **ports)
+    clear = set_up(PathClear("clear"), fake_world, library, composition="{checked}", **ports)
     clear.tick_once()
     assert clear.status == Status.SUCCESS, clear.feedback_message
-    carry = ready(
+    carry = set_up(
         Transport("carry"),
         fake_world,
         library,
@@ -635,11 +593,10 @@ def test_a_carry_without_grasp_maintenance_leaves_a_knocked_palm_reference_coast
     """hold_gain 0 composes the hold terms at weight 0 (and PathClear's check must be of the
     same gain): a palm's reference knocked into motion in {O} coasts on without them and is
     held near the grasp with them."""
-    plan = select(fake_world, library)
-    approach_and_grasp(fake_world, library)
+    plan = grasp_object(fake_world, library)
     py_trees.blackboard.Blackboard.set("/bare", _plan_without_avoidance(plan))
     ports = {"object": "parcel", "move": 0, "plan": "{bare}", "from_state": "{state}"}
-    clear = ready(
+    clear = set_up(
         PathClear("clear"), fake_world, library, composition="{checked}", hold_gain=0.0, **ports
     )
     clear.tick_once()
@@ -647,7 +604,7 @@ def test_a_carry_without_grasp_maintenance_leaves_a_knocked_palm_reference_coast
     checked = blackboard_value("/checked")
     assert isinstance(checked, MovePlan) and checked.hold_gain == 0.0
     assert all(w.weight == 0.0 for arm in ARMS for w in checked.composer.relative[arm])
-    carry = ready(Transport("carry"), fake_world, library, composition="{checked}", **ports)
+    carry = set_up(Transport("carry"), fake_world, library, composition="{checked}", **ports)
     carry.tick_once()
     assert carry.status == Status.FAILURE
     assert "hold_gain 1.0, checked with 0.0" in carry.feedback_message
@@ -675,7 +632,7 @@ def test_a_carry_without_grasp_maintenance_leaves_a_knocked_palm_reference_coast
         )
         composer = move.fresh()
         for _ in range(30):
-            composer.step(DT)
+            composer.step(CONTROL_DT)
         start = move.start.relative(Arm.LEFT).position
         drift[gain] = float(np.linalg.norm(composer.state.relative(Arm.LEFT).position - start))
     # Unheld, the reference coasts on (0.5 s at 2 cm/s); held, the spring-damper stops it.
@@ -730,8 +687,7 @@ def test_path_clear_asks_the_world_for_link_doubt_as_its_port_says(
     port: str | None,
     expected: bool,
 ) -> None:
-    plan = select(fake_world, library)
-    approach_and_grasp(fake_world, library)
+    plan = grasp_object(fake_world, library)
     py_trees.blackboard.Blackboard.set("/bare", _plan_without_avoidance(plan))
     asked: list[bool] = []
     check = fake_world.check_trajectory
@@ -749,7 +705,7 @@ def test_path_clear_asks_the_world_for_link_doubt_as_its_port_says(
     }
     if port is not None:
         ports["link_doubt"] = port
-    clear = ready(PathClear("clear"), fake_world, library, composition="{checked}", **ports)
+    clear = set_up(PathClear("clear"), fake_world, library, composition="{checked}", **ports)
     clear.tick_once()
     assert clear.status == Status.SUCCESS, clear.feedback_message
     assert asked == [expected]

@@ -9,17 +9,16 @@ import pytest
 from py_trees.common import Status
 
 from planner.leaves import (
-    Approach,
     AtGoal,
-    Grasp,
     IsHeld,
     PathClear,
     Release,
     Retreat,
-    SelectSkills,
     Transport,
 )
+from planner.testing import grasp_object
 from planner.testing.harness import TickLog
+from skills.library import SkillLibrary
 from skills.vocabulary import ARMS
 from worlds.sim_world import SimWorld
 
@@ -27,18 +26,10 @@ pytestmark = pytest.mark.sim
 Tick = Callable[..., TickLog]
 
 
-def grasp(sim_world: SimWorld, tick_leaf: Tick) -> None:
-    assert tick_leaf(SelectSkills("select"), sim_world, object="parcel", plan="{plan}").final == (
-        Status.SUCCESS
-    )
-    log = tick_leaf(Approach("approach"), sim_world, object="parcel")
-    assert log.final == Status.SUCCESS, log.feedback
-    log = tick_leaf(Grasp("grasp"), sim_world, object="parcel", plan="{plan}", state="{state}")
-    assert log.final == Status.SUCCESS, log.feedback
-
-
-def test_grasp_squeezes_by_contact_alone(sim_world: SimWorld, tick_leaf: Tick) -> None:
-    grasp(sim_world, tick_leaf)
+def test_grasp_squeezes_by_contact_alone(
+    sim_world: SimWorld, library: SkillLibrary, tick_leaf: Tick
+) -> None:
+    grasp_object(sim_world, library)
     forces = [sim_world.contact_force(arm, "parcel") for arm in ARMS]
     assert all(8.0 < f < 60.0 for f in forces), forces
     held = tick_leaf(IsHeld("held"), sim_world, object="parcel")
@@ -46,9 +37,9 @@ def test_grasp_squeezes_by_contact_alone(sim_world: SimWorld, tick_leaf: Tick) -
 
 
 def test_transport_without_obstacles_places_the_parcel(
-    sim_world: SimWorld, tick_leaf: Tick
+    sim_world: SimWorld, library: SkillLibrary, tick_leaf: Tick
 ) -> None:
-    grasp(sim_world, tick_leaf)
+    grasp_object(sim_world, library)
     log = tick_leaf(
         Transport("move0"),
         sim_world,
@@ -65,8 +56,10 @@ def test_transport_without_obstacles_places_the_parcel(
     assert not sim_world.safety.dropped
 
 
-def test_release_opens_the_palms(sim_world: SimWorld, tick_leaf: Tick) -> None:
-    grasp(sim_world, tick_leaf)
+def test_release_opens_the_palms(
+    sim_world: SimWorld, library: SkillLibrary, tick_leaf: Tick
+) -> None:
+    grasp_object(sim_world, library)
     log = tick_leaf(
         Release("release"), sim_world, object="parcel", from_state="{state}", to_state="{state}"
     )
@@ -74,8 +67,10 @@ def test_release_opens_the_palms(sim_world: SimWorld, tick_leaf: Tick) -> None:
     assert max(sim_world.contact_force(arm, "parcel") for arm in ARMS) < 0.5
 
 
-def test_retreat_returns_the_palms_to_rest(sim_world: SimWorld, tick_leaf: Tick) -> None:
-    grasp(sim_world, tick_leaf)
+def test_retreat_returns_the_palms_to_rest(
+    sim_world: SimWorld, library: SkillLibrary, tick_leaf: Tick
+) -> None:
+    grasp_object(sim_world, library)
     tick_leaf(
         Release("release"), sim_world, object="parcel", from_state="{state}", to_state="{state}"
     )
@@ -87,9 +82,9 @@ def test_retreat_returns_the_palms_to_rest(sim_world: SimWorld, tick_leaf: Tick)
 
 
 def test_path_clear_checks_the_predicted_carry_with_fcl(
-    sim_world: SimWorld, tick_leaf: Tick
+    sim_world: SimWorld, library: SkillLibrary, tick_leaf: Tick
 ) -> None:
-    grasp(sim_world, tick_leaf)
+    grasp_object(sim_world, library)
     # Move 2 of the default world has a sphere above its straight path: the learnt lift,
     # without avoidance, would hit it; the low carry passes under.
     lifted = tick_leaf(

@@ -14,12 +14,12 @@ from py_trees.common import Status
 from planner.leaves import Release, Transport
 from planner.leaves.set_down import lowered, palm_load_n, supported_below_n
 from planner.leaves.transport import SET_DOWN_DEPTH_M
-from planner.testing.fixtures import CONTROL_DT
+from planner.testing import CONTROL_DT, grasp_object
 from planner.testing.harness import TickLog
 from skills import quaternion as quat
 from skills.composer import grasped_state
+from skills.library import SkillLibrary
 from skills.vocabulary import ARMS
-from tests.planner.test_leaves_sim import grasp
 from worlds.sim_world import SimWorld
 
 Tick = Callable[..., TickLog]
@@ -93,9 +93,9 @@ def test_set_down_m_zero_opens_where_it_is(tick_leaf: Tick) -> None:
     assert log.sim_time - t0 < 0.04 / 0.05
 
 
-def lift_in_physics(sim_world: SimWorld, tick_leaf: Tick) -> float:
+def lift_in_physics(sim_world: SimWorld, library: SkillLibrary, tick_leaf: Tick) -> float:
     """Grasp the parcel and halt its first carry once it is 4 cm up; returns its rest z."""
-    grasp(sim_world, tick_leaf)
+    grasp_object(sim_world, library)
     rest_z = float(sim_world.object_pose("parcel").position[2])
     carry = Transport("carry")
     tick_leaf(
@@ -121,9 +121,9 @@ def lift_in_physics(sim_world: SimWorld, tick_leaf: Tick) -> float:
 
 @pytest.mark.sim
 def test_in_physics_a_release_in_the_air_sets_the_parcel_down_instead_of_dropping_it(
-    sim_world: SimWorld, tick_leaf: Tick
+    sim_world: SimWorld, library: SkillLibrary, tick_leaf: Tick
 ) -> None:
-    rest_z = lift_in_physics(sim_world, tick_leaf)
+    rest_z = lift_in_physics(sim_world, library, tick_leaf)
     log = release(sim_world, tick_leaf)
     assert log.final == Status.SUCCESS, log.feedback
     assert not sim_world.safety.dropped
@@ -133,10 +133,10 @@ def test_in_physics_a_release_in_the_air_sets_the_parcel_down_instead_of_droppin
 
 @pytest.mark.sim
 def test_in_physics_opening_in_the_air_drops_the_parcel(
-    sim_world: SimWorld, tick_leaf: Tick
+    sim_world: SimWorld, library: SkillLibrary, tick_leaf: Tick
 ) -> None:
     # What the set-down prevents: the same release told not to search drops the parcel.
-    lift_in_physics(sim_world, tick_leaf)
+    lift_in_physics(sim_world, library, tick_leaf)
     release(sim_world, tick_leaf, set_down_m=0.0)
     for _ in range(30):
         sim_world.advance(CONTROL_DT)

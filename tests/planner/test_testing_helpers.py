@@ -1,0 +1,41 @@
+"""The leaf-testing helpers users get from ``planner.testing``: they bring a world to the state
+the shipped tree would, and a step that fails says which leaf and why."""
+
+from __future__ import annotations
+
+import py_trees
+import pytest
+
+from affordances import SemanticAction
+from planner.testing import FakeWorld, grasp_object, select_skills
+from skills.composer import DualArmState
+from skills.library import SkillLibrary
+from skills.vocabulary import ARMS
+
+
+def test_grasp_object_leaves_the_object_squeezed_and_the_state_on_the_blackboard(
+    fake_world: FakeWorld, library: SkillLibrary
+) -> None:
+    plan = grasp_object(fake_world, library)
+    assert isinstance(plan, SemanticAction)
+    assert py_trees.blackboard.Blackboard.get("/plan") is plan
+    assert isinstance(py_trees.blackboard.Blackboard.get("/state"), DualArmState)
+    forces = [fake_world.contact_force(arm, "parcel") for arm in ARMS]
+    assert all(f > 0.0 for f in forces), forces
+
+
+def test_the_helpers_write_the_keys_they_are_given(
+    fake_world: FakeWorld, library: SkillLibrary
+) -> None:
+    grasp_object(fake_world, library, plan_key="mine", state_key="held")
+    assert isinstance(py_trees.blackboard.Blackboard.get("/mine"), SemanticAction)
+    assert isinstance(py_trees.blackboard.Blackboard.get("/held"), DualArmState)
+
+
+def test_a_failing_step_names_its_leaf_and_says_why(
+    fake_world: FakeWorld, library: SkillLibrary
+) -> None:
+    with pytest.raises(AssertionError, match=r"^select: .*crate"):
+        select_skills(fake_world, library, name="crate")
+    with pytest.raises(AssertionError, match=r"^select: .*crate"):
+        grasp_object(fake_world, library, name="crate")
