@@ -6,6 +6,7 @@ from planner.testing.harness import (
     grasp_object,
     select_skills,
     set_up,
+    set_up_carry,
     tick_until,
 )
 from planner.testing.roles import RoleView, role_methods
@@ -19,5 +20,6 @@ __all__ = [
     "role_methods",
     "select_skills",
     "set_up",
+    "set_up_carry",
     "tick_until",
 ]

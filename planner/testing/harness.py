@@ -8,7 +8,7 @@ import py_trees
 from py_trees.common import Status
 
 from affordances import SemanticAction
-from planner.leaves import Approach, Grasp, SelectSkills
+from planner.leaves import Approach, Grasp, SelectSkills, Transport
 from planner.leaves.base import DEFAULT_CONTROL_DT as CONTROL_DT
 from planner.port import WorldPort
 from planner.wiring import wire
@@ -109,3 +109,31 @@ def grasp_object(
         log = tick_until(leaf, world, dt)
         assert log.final == Status.SUCCESS, f"{leaf.name}: {log.feedback}"
     return plan
+
+
+def set_up_carry(
+    world: WorldPort,
+    library: SkillLibrary,
+    move: int = 0,
+    name: str = "parcel",
+    dt: float = CONTROL_DT,
+    plan_key: str = "plan",
+    state_key: str = "state",
+    leaf_name: str = "carry",
+    **ports: object,
+) -> Transport:
+    """A :class:`planner.leaves.Transport` of ``name``'s ``move``, wired as the shipped tree
+    wires it (the plan from ``plan_key``, the full state handed over from and back to
+    ``state_key``; ``ports`` add or replace ports) and set up against ``world``: after
+    :func:`grasp_object`, tick it to carry."""
+    wiring: dict[str, object] = {
+        "object": name,
+        "move": move,
+        "plan": f"{{{plan_key}}}",
+        "from_state": f"{{{state_key}}}",
+        "to_state": f"{{{state_key}}}",
+        **ports,
+    }
+    leaf = Transport(leaf_name)
+    set_up(leaf, world, library, dt, **wiring)
+    return leaf

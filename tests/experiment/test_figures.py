@@ -26,9 +26,8 @@ from experiment.figures import (
     top_view,
     trajectory_figure,
 )
-from planner.leaves import Transport
 from planner.move_result import move_results
-from planner.testing import CONTROL_DT, FakeWorld, grasp_object, set_up, tick_until
+from planner.testing import CONTROL_DT, FakeWorld, grasp_object, set_up_carry, tick_until
 from skills import quaternion as quat
 from skills.default_library import build_default_library
 from skills.demonstration import Demonstration
@@ -150,15 +149,10 @@ def test_the_demonstration_drawn_is_the_skill_the_move_ran() -> None:
 def test_a_move_records_the_taught_skill_its_transport_ran(fake_world: FakeWorld) -> None:
     library = SkillLibrary([wave_skill(), *build_default_library()])  # the first transport
     grasp_object(fake_world, library)
-    leaf = set_up(
-        Transport("move0"),
+    leaf = set_up_carry(
         fake_world,
         library,
-        object="parcel",
-        move=0,
-        plan="{plan}",
-        from_state="{state}",
-        to_state="{state}",
+        leaf_name="move0",
     )
     assert tick_until(leaf, fake_world, CONTROL_DT, max_ticks=3000).final == Status.SUCCESS
     assert move_results()[("parcel", 0)].skill == "wave"

@@ -19,7 +19,7 @@ from planner.leaves.reflex import (
     REFLEX_TAU_S,
 )
 from planner.port import Move, ObstacleGap, ObstacleInfo, Pose
-from planner.testing import CONTROL_DT, FakeWorld, grasp_object, select_skills, set_up
+from planner.testing import CONTROL_DT, FakeWorld, grasp_object, select_skills, set_up, set_up_carry
 from planner.testing.fake_world import FakeObject
 from planner.testing.harness import tick_until
 from planner.wiring import wire
@@ -122,15 +122,9 @@ def test_a_carry_that_ends_too_near_an_obstacle_is_held_out_of_the_band(
     # measured parcel is pushed back to where the shift balances the depth in the band.
     world, _ = _carry_towards_a_ball(0.003)
     grasp_object(world, library)
-    leaf = set_up(
-        Transport("carry"),
+    leaf = set_up_carry(
         world,
         library,
-        object="parcel",
-        move=0,
-        plan="{plan}",
-        from_state="{state}",
-        to_state="{state}",
         avoid_gain=0.0,
     )
     closest = np.inf

@@ -34,6 +34,7 @@ from planner.testing import (
     grasp_object,
     select_skills,
     set_up,
+    set_up_carry,
     tick_until,
 )
 from planner.testing.fake_world import FakeObject
@@ -172,15 +173,11 @@ def test_transport_publishes_its_moves_composition_and_placement(
     fake_world: FakeWorld, library: SkillLibrary
 ) -> None:
     grasp_object(fake_world, library)
-    leaf = set_up(
-        Transport("move1"),
+    leaf = set_up_carry(
         fake_world,
         library,
-        object="parcel",
         move=1,
-        plan="{plan}",
-        from_state="{state}",
-        to_state="{state}",
+        leaf_name="move1",
         transport_weight=0.25,
         avoid_gain=0.0,
     )
@@ -225,15 +222,10 @@ def sagging_world() -> SaggingWorld:
 def carry_sagging(library: SkillLibrary, sag_m: float) -> tuple[Status, str, SaggingWorld]:
     world = sagging_world()
     grasp_object(world, library)
-    leaf = set_up(
-        Transport("move0"),
+    leaf = set_up_carry(
         world,
         library,
-        object="parcel",
-        move=0,
-        plan="{plan}",
-        from_state="{state}",
-        to_state="{state}",
+        leaf_name="move0",
     )
     # The object starts to hang below the palms once the move is composed (from where it
     # was measured): the commanded path no longer says where the object is.
@@ -274,15 +266,10 @@ def test_transport_lifts_the_parcel_on_the_way(
     fake_world: FakeWorld, library: SkillLibrary
 ) -> None:
     grasp_object(fake_world, library)
-    leaf = set_up(
-        Transport("move0"),
+    leaf = set_up_carry(
         fake_world,
         library,
-        object="parcel",
-        move=0,
-        plan="{plan}",
-        from_state="{state}",
-        to_state="{state}",
+        leaf_name="move0",
     )
     heights = []
     for _ in range(600):
@@ -298,15 +285,10 @@ def test_transport_fails_when_the_grip_is_lost(
     fake_world: FakeWorld, library: SkillLibrary
 ) -> None:
     grasp_object(fake_world, library)
-    leaf = set_up(
-        Transport("move0"),
+    leaf = set_up_carry(
         fake_world,
         library,
-        object="parcel",
-        move=0,
-        plan="{plan}",
-        from_state="{state}",
-        to_state="{state}",
+        leaf_name="move0",
     )
     for _ in range(30):
         leaf.tick_once()
@@ -323,15 +305,10 @@ def test_halting_a_running_transport_stops_the_arms(
     fake_world: FakeWorld, library: SkillLibrary
 ) -> None:
     grasp_object(fake_world, library)
-    leaf = set_up(
-        Transport("move0"),
+    leaf = set_up_carry(
         fake_world,
         library,
-        object="parcel",
-        move=0,
-        plan="{plan}",
-        from_state="{state}",
-        to_state="{state}",
+        leaf_name="move0",
     )
     for _ in range(40):
         leaf.tick_once()

@@ -5,9 +5,11 @@ from __future__ import annotations
 
 import py_trees
 import pytest
+from numpy.testing import assert_allclose
+from py_trees.common import Status
 
 from affordances import SemanticAction
-from planner.testing import FakeWorld, grasp_object, select_skills
+from planner.testing import FakeWorld, grasp_object, select_skills, set_up_carry, tick_until
 from skills.composer import DualArmState
 from skills.library import SkillLibrary
 from skills.vocabulary import ARMS
@@ -39,3 +41,16 @@ def test_a_failing_step_names_its_leaf_and_says_why(
         select_skills(fake_world, library, name="crate")
     with pytest.raises(AssertionError, match=r"^select: .*crate"):
         grasp_object(fake_world, library, name="crate")
+
+
+def test_a_carry_set_up_as_the_tree_wires_it_places_the_object_and_hands_over(
+    fake_world: FakeWorld, library: SkillLibrary
+) -> None:
+    grasp_object(fake_world, library)
+    before = py_trees.blackboard.Blackboard.get("/state")
+    log = tick_until(set_up_carry(fake_world, library, move=0), fake_world, max_ticks=3000)
+    assert log.final == Status.SUCCESS, log.feedback
+    goal = fake_world.task_moves("parcel")[0].goal.position
+    assert_allclose(fake_world.object_pose("parcel").position, goal, atol=0.02)
+    after = py_trees.blackboard.Blackboard.get("/state")
+    assert isinstance(after, DualArmState) and after is not before
