@@ -17,7 +17,7 @@ Poses are (position (3,), quaternion (4,) scalar-last) pairs in the world frame;
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
 
@@ -91,15 +91,21 @@ class Move:
 
 
 def stepped_moves(
-    moves: Iterable[Move], start_yaw: float, max_turn: float, robot_yaw: float = 0.0
+    moves: Iterable[Move],
+    start_yaw: float,
+    max_turn: float,
+    robot_yaw: float = 0.0,
+    places: Sequence[ArrayLike | None] | None = None,
 ) -> tuple[Move, ...]:
     """A task's moves as a robot with a grip turn of ``max_turn`` rad makes them.
 
     Each move whose turn about z (from the previous goal's yaw, or ``start_yaw`` for the
-    first) needs more than one grasp (:func:`skills.turns.turn_steps`) becomes a carry to its
-    goal position turned part of the way, then turns in place at the goal, each a move of its
-    own with the move's obstacles; every returned move names its task move
-    (``Move.task_move``) and the last step of each is ``final``.
+    first) needs more than one grasp (:func:`skills.turns.turn_steps`) becomes several, each
+    a move of its own with the move's obstacles: its steps before the last put the object
+    down at its place (:mod:`planner.turn_places`; by default its goal position: a carry
+    there turned part of the way, then turns in place), the last carries it to its goal.
+    Every returned move names its task move (``Move.task_move``) and the last step of each
+    is ``final``.
 
     Parameters
     ----------
@@ -111,14 +117,29 @@ def stepped_moves(
         The robot's largest grip turn, rad (``RobotCapabilities.max_turn_rad``).
     robot_yaw : float
         The robot's heading, rad.
+    places : sequence, optional
+        Per task move, (3,) where its steps before the last stand, m, or None for its goal;
+        default: all at their goals.
+
+    Raises
+    ------
+    ValueError
+        If ``places`` does not give one place per move.
     """
+    moves = tuple(moves)
+    chosen = tuple(places) if places is not None else (None,) * len(moves)
+    if len(chosen) != len(moves):
+        raise ValueError(
+            f"stepped_moves: places: expected one per move ({len(moves)}), got {len(chosen)}"
+        )
     out: list[Move] = []
     yaw = float(start_yaw)
-    for index, move in enumerate(moves):
+    for index, (move, place) in enumerate(zip(moves, chosen, strict=True)):
         goal_yaw = turns.yaw_of(move.goal.orientation)
         steps = turns.turn_steps(yaw, goal_yaw, max_turn, robot_yaw)
         for i, step_yaw in enumerate(steps):
             last = i == len(steps) - 1
+            where = move.goal.position if last or place is None else place
             # The last step keeps the goal's own quaternion (a tilt included); the others
             # turn it back about z by what is still to come.
             back = quat.from_axis_angle(np.array([0.0, 0.0, 1.0]), step_yaw - steps[-1])
@@ -127,7 +148,7 @@ def stepped_moves(
             )
             out.append(
                 Move(
-                    Pose(move.goal.position, orientation),
+                    Pose(np.array(where, dtype=float), orientation),
                     move.obstacles,
                     skill=move.skill,
                     task_move=index,

@@ -89,6 +89,10 @@ class ArmPredictor:
     def __init__(self, scene: Scene) -> None:
         self._scene = scene
         self._client, self._ids = _kinematic_copy(scene.robot)
+        #: Per arm, how far (m) the last :meth:`link_frames` left its palm from the path's
+        #: last waypoint: over a few millimetres, the solve did not reach it (out of reach,
+        #: or too few iterations).
+        self.last_palm_errors: dict[Arm, float] = {}
 
     def close(self) -> None:
         """Let go of the copy (idempotent); it stays loaded for the next predictor."""
@@ -99,6 +103,8 @@ class ArmPredictor:
         palm_positions: FloatArray,
         palm_quaternions: FloatArray,
         links: dict[Arm, tuple[int, ...]],
+        iterations: int = WAYPOINT_ITERATIONS,
+        tolerance: float = WAYPOINT_TOLERANCE,
     ) -> dict[Arm, LinkFrames]:
         """Each arm's ``links`` along the palm path.
 
@@ -110,6 +116,10 @@ class ArmPredictor:
             (N, 2, 4) their orientations, scalar-last.
         links : dict of Arm to tuple of int
             Per arm, the link indices on its body to report.
+        iterations, tolerance : int, float
+            Each waypoint's solve: most steps, and the pose error it stops at (m, rad). The
+            defaults follow a path of nearby waypoints; a lone pose far from the measured
+            joints needs a solve run to convergence (a few hundred steps).
 
         Returns
         -------
@@ -151,8 +161,8 @@ class ArmPredictor:
                     upper,
                     rest,
                     cost,
-                    iterations=WAYPOINT_ITERATIONS,
-                    tolerance=WAYPOINT_TOLERANCE,
+                    iterations=iterations,
+                    tolerance=tolerance,
                 )
                 for a in arms:
                     if not links[a]:
@@ -167,7 +177,15 @@ class ArmPredictor:
                     frames[a][1][w] = [s[1] for s in read]
             for a in arms:
                 out[a] = LinkFrames(tuple(links[a]), frames[a][0], frames[a][1])
+            if n:  # the copy stands at the last waypoint's solution
+                for a, i, link in zip(arms, arm_index, palm_links, strict=True):
+                    at = pb.getLinkState(
+                        copy, link, computeForwardKinematics=1, physicsClientId=self._client
+                    )[4]
+                    self.last_palm_errors[a] = float(
+                        np.linalg.norm(np.subtract(at, positions[-1, i]))
+                    )
         return out
 
 
-__all__ = ["ArmPredictor", "LinkFrames"]
+__all__ = ["WAYPOINT_ITERATIONS", "WAYPOINT_TOLERANCE", "ArmPredictor", "LinkFrames"]

@@ -18,7 +18,8 @@ from __future__ import annotations
 
 import io
 import math
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -789,6 +790,34 @@ class CollisionWorld:
             quaternions.append(quaternion)
         self._read = (positions, quaternions)
         self._active = [self._obstacles[name] for name in sorted(self.scene.active_obstacles)]
+
+    @contextmanager
+    def obstacles_present(self, names: Iterable[str]) -> Iterator[None]:
+        """Within it, the queries see exactly the obstacles ``names`` (where the world file
+        stands them), whichever the physics has present: a move's obstacles asked about
+        before the move, with nothing moved in the physics. After it, those :meth:`sync` read.
+
+        Raises
+        ------
+        ValueError
+            If a name is not an obstacle of the scene.
+        """
+        wanted = sorted(set(names))
+        unknown = [n for n in wanted if n not in self._obstacles]
+        if unknown:
+            raise ValueError(
+                f"obstacles_present: expected names in {sorted(self._obstacles)}, got {unknown}"
+            )
+        saved = self._active
+        self._active = [self._obstacles[n] for n in wanted]
+        try:
+            yield
+        finally:
+            self._active = saved
+
+    def obstacles_active(self) -> bool:
+        """Whether the queries see any obstacle now."""
+        return bool(self._active)
 
     # -- queries -----------------------------------------------------------------------------
 

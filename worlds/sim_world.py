@@ -34,12 +34,13 @@ from planner.port import (
     Pose,
     stepped_moves,
 )
+from planner.turn_places import Hold
 from skills import quaternion as quat
 from skills.level_carry import LooseBall
 from skills.types import Array
 from skills.vocabulary import ARMS, Arm
 from worlds.adapters import object_contexts, robot_capabilities
-from worlds.arm_prediction import ArmPredictor
+from worlds.arm_prediction import WAYPOINT_ITERATIONS, WAYPOINT_TOLERANCE, ArmPredictor
 from worlds.collision import FIXTURES, CollisionWorld, arm_group, welded_links
 from worlds.control import ImpedanceGains, PalmCommand
 from worlds.fixtures import FixtureLog, wall_forces
@@ -47,6 +48,7 @@ from worlds.scene import LATERAL_PALM_QUATERNIONS, Scene
 from worlds.spec import Shape, ShapeSpec, WorldSpec
 from worlds.trays import TrayFrame, riders
 from worlds.truth import PhysicalTruth, sensed_pose
+from worlds.turn_choice import hold_poses, turn_places
 from worlds.world_file import World, as_world_spec
 
 #: Extra clearance asked of predicted arm-link poses (solved for the palms' path, not run
@@ -62,6 +64,16 @@ FOREARM_LEVER_M = 0.3
 #: Waypoints between two solved for the arms' prediction (4 control steps at 60 Hz: the palms
 #: move at most a centimetre or two in between).
 PREDICTION_STRIDE = 4
+#: Clearance from a move's obstacles asked of the robot holding the object where a turned
+#: move's steps would stand (:func:`worlds.turn_choice.turn_places`), m: the shipped tree's
+#: carries' margin.
+TURN_PLACE_MARGIN_M = 0.01
+#: Each such hold's arms solved to convergence (a lone pose, far from the measured joints):
+#: most steps and the pose error the solve stops at, m and rad.
+HOLD_SOLVE = (300, 1e-4)
+#: Farthest a palm of such a hold may be left from its pose by that solve, m: beyond it, the
+#: arm cannot reach the hold.
+HOLD_REACH_M = 0.005
 #: Highest an object's centre may be carried above the table top, m.
 MAX_LIFT_M = 0.30
 #: Contact force each palm must press an object with, N, for the grasp to locate it: from the
@@ -188,10 +200,13 @@ class LinkHits(NamedTuple):
     end_objects: tuple[str, ...] = ()
 
 
-def task_moves(spec: WorldSpec, name: str) -> tuple[Move, ...]:
+def task_moves(
+    spec: WorldSpec, name: str, places: Sequence[Array | None] | None = None
+) -> tuple[Move, ...]:
     """The world's moves for object ``name``, each turn split into the steps the robot's grip
     can make (:func:`planner.port.stepped_moves`; ``Move.task_move`` names the file's move of
-    each, and ``Move.final`` its last step)."""
+    each, and ``Move.final`` its last step), each move's turn made at its place in ``places``
+    (default: every one at its goal)."""
     obj = next(o for o in spec.scene.objects if o.name == name)
     return stepped_moves(
         (
@@ -206,6 +221,7 @@ def task_moves(spec: WorldSpec, name: str) -> tuple[Move, ...]:
         obj.yaw,
         robot_capabilities(spec).max_turn_rad,
         math.radians(spec.scene.robot.base_rpy_deg[2]),
+        places,
     )
 
 
@@ -252,6 +268,7 @@ class SimWorld:
         # Arms that share joints (a torso) are predicted by inverse kinematics on a copy of
         # the robot, built at the first path check (worlds.arm_prediction).
         self._arm_predictor: ArmPredictor | None = None
+        self._task_moves: dict[str, tuple[Move, ...]] = {}
         task_objects = tuple(dict.fromkeys(step.object for step in spec.task))
         self.watched: tuple[str, ...] = (
             (object_name,) if object_name else task_objects or (spec.scene.objects[0].name,)
@@ -546,8 +563,47 @@ class SimWorld:
         return robot_capabilities(self.spec)
 
     def task_moves(self, name: str) -> tuple[Move, ...]:
-        """The world file's moves for ``name`` as the robot makes them (:func:`task_moves`)."""
-        return task_moves(self.spec, name)
+        """The world file's moves for ``name`` as the robot makes them (:func:`task_moves`),
+        each turn made where the robot holding the object keeps clear of the move's obstacles
+        (:func:`worlds.turn_choice.turn_places`); chosen at the first call, kept after."""
+        moves = self._task_moves.get(name)
+        if moves is None:
+            places = turn_places(self.spec, name, self._holds_clear)
+            moves = self._task_moves[name] = task_moves(self.spec, name, places)
+        return moves
+
+    def _holds_clear(
+        self, name: str, obstacles: tuple[str, ...], holds: Sequence[Hold], reach: bool
+    ) -> bool:
+        """Whether the robot can hold object ``name`` in each of ``holds``: palms, object and
+        the arms' links (solved to convergence) :data:`TURN_PLACE_MARGIN_M` from
+        ``obstacles``, and, with ``reach``, its palms reached within :data:`HOLD_REACH_M`;
+        asked of the collision world and the kinematic copy alone: nothing moves in the
+        physics."""
+        robot_yaw = math.radians(self.spec.scene.robot.base_rpy_deg[2])
+        if self._arm_predictor is None:
+            self._arm_predictor = ArmPredictor(self.scene)
+        predictor = self._arm_predictor
+        with self.collision.obstacles_present(obstacles):
+            for hold in holds:
+                palms, palm_quats, object_quat = hold_poses(
+                    hold, self._extents[name], self.palm_thickness(), robot_yaw
+                )
+                no_links: dict[Arm, tuple[int, ...]] = {arm: () for arm in ARMS}
+                predictor.link_frames(palms[None], palm_quats[None], no_links, *HOLD_SOLVE)
+                if reach and max(predictor.last_palm_errors.values()) > HOLD_REACH_M:
+                    return False
+                check = self._check_path(
+                    palms[None],
+                    palm_quats[None],
+                    TURN_PLACE_MARGIN_M,
+                    (name, hold.position[None], object_quat[None]),
+                    link_doubt=False,
+                    solve=HOLD_SOLVE,
+                )
+                if not check.clear:
+                    return False
+        return True
 
     def gravity(self) -> float:
         """Magnitude of the scene's gravity, m/s^2."""
@@ -714,6 +770,7 @@ class SimWorld:
         held: tuple[str, Array, Array] | None,
         object_margin_m: float = 0.0,
         link_doubt: bool = True,
+        solve: tuple[int, float] = (WAYPOINT_ITERATIONS, WAYPOINT_TOLERANCE),
     ) -> PathCheck:
         name, object_positions, object_orientations = held if held else (None, None, None)
         avoid = () if held else tuple(o.name for o in self.scene.spec.objects)
@@ -737,7 +794,13 @@ class SimWorld:
             else np.zeros(len(palm_positions))
         )
         hits = self._predicted_links_collide(
-            palm_positions, palm_orientations, margin_m + doubt, avoid, object_margin_m, margin_m
+            palm_positions,
+            palm_orientations,
+            margin_m + doubt,
+            avoid,
+            object_margin_m,
+            margin_m,
+            solve,
         )
         arms, arms_on_objects = hits.on_obstacles, hits.on_objects
         pts = np.asarray(palm_positions).reshape(-1, 3)
@@ -792,6 +855,7 @@ class SimWorld:
         avoid: Sequence[str] = (),
         avoid_margin: float = 0.0,
         end_margin: float | None = None,
+        solve: tuple[int, float] = (WAYPOINT_ITERATIONS, WAYPOINT_TOLERANCE),
     ) -> LinkHits:
         """Where an arm link, posed by inverse kinematics of the palm path on a copy of the
         robot (:class:`worlds.arm_prediction.ArmPredictor`), comes within ``margins`` (N,) of
@@ -799,17 +863,18 @@ class SimWorld:
         it rests; and at the last waypoint, whether a link comes within ``end_margin`` of an
         obstacle (None: unasked) and which objects of ``avoid`` a link comes within
         ``avoid_margin`` of. Waypoints are solved every :data:`PREDICTION_STRIDE` (and the
-        last); one between two solved ones is judged by the nearer of them."""
+        last), each with ``solve`` (most steps, tolerance: :meth:`ArmPredictor.link_frames`);
+        one between two solved ones is judged by the nearer of them."""
         p = np.asarray(palm_positions, dtype=float)
         q = np.asarray(palm_orientations, dtype=float)
         n = p.shape[0]
-        if n == 0 or not (self.scene.active_obstacles or avoid):
+        if n == 0 or not (self.collision.obstacles_active() or avoid):
             return LinkHits(np.zeros(n, dtype=bool), np.zeros(n, dtype=bool))
         if self._arm_predictor is None:
             self._arm_predictor = ArmPredictor(self.scene)
         solved = np.unique(np.append(np.arange(0, n, PREDICTION_STRIDE), n - 1))
         links = {arm: self.collision.arm_moving_links(arm) for arm in ARMS}
-        frames = self._arm_predictor.link_frames(p[solved], q[solved], links)
+        frames = self._arm_predictor.link_frames(p[solved], q[solved], links, *solve)
         on_obstacles = np.zeros(solved.size, dtype=bool)
         on_objects = np.zeros(solved.size, dtype=bool)
         at_end = False

@@ -1,0 +1,116 @@
+"""Choosing where each turned move of a world makes its turn (:mod:`planner.turn_places`).
+
+A move's steps before its last stand at its goal unless the robot, holding the object there in
+one of those steps' grips, would come within the carries' margin of one of the move's
+obstacles: a 90 degree goal beside a sphere, whose half turn at the goal puts the forearm
+reaching round the far face into the sphere, turns elsewhere. (The goal is not refused for
+the reach the check's inverse kinematics finds: the arms' compliance reaches holds at the
+goal it does not, and the goal is where the move must end anyway.) The
+places tried after the goal are, in order, the move's start, the middle of its way, and each
+of the three drawn back towards the robot by :data:`DRAW_BACK_M` and twice that: the nearer
+the robot, the less an arm reaches round the object. A place must keep the object's footprint
+on the table and off where the other objects start. The first place whose holds are clear and
+reached is taken; a world where none is keeps the goal (its carries' checks then say why).
+The check asks a world (``SimWorld``) for each hold: palms, held object and the arms' links
+solved to convergence on its kinematic copy, against the move's obstacles.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Iterator, Sequence
+
+import numpy as np
+
+from planner.turn_places import Hold, move_holds
+from skills import quaternion as quat
+from skills.turns import yaw_of
+from skills.vocabulary import Arm
+from worlds.adapters import robot_capabilities
+from worlds.scene import lateral_grasp_palm_poses
+from worlds.spec import WorldSpec
+
+__all__ = ["DRAW_BACK_M", "HoldsClear", "candidate_places", "hold_poses", "turn_places"]
+
+#: ``clear(object, obstacles, holds, reach)``: whether the robot can hold ``object`` in each
+#: of ``holds`` clear of ``obstacles`` (and, with ``reach``, whether its arms reach them).
+HoldsClear = Callable[[str, tuple[str, ...], Sequence[Hold], bool], bool]
+
+#: How far each place tried is drawn back towards the robot, m (once, then twice).
+DRAW_BACK_M = 0.05
+
+_Z = np.array([0.0, 0.0, 1.0])
+
+
+def hold_poses(
+    hold: Hold, extents: np.ndarray, palm_thickness: float, robot_yaw: float = 0.0
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Palm positions (2, 3) and quaternions (2, 4), left then right, and the object's
+    quaternion (4,) of ``hold``: the palms on the held faces (:func:`lateral_grasp_palm_poses`),
+    the object upright at its yaw. ``extents`` (3,) is the box's size along its own axes, m."""
+    half_span = float(extents[1] if hold.quarter_turns % 2 == 0 else extents[0]) / 2.0
+    palms = lateral_grasp_palm_poses(
+        hold.position, half_span, palm_thickness, grip_yaw=hold.grip_yaw + robot_yaw
+    )
+    positions = np.array([palms[Arm.LEFT][0], palms[Arm.RIGHT][0]])
+    quaternions = np.array([palms[Arm.LEFT][1], palms[Arm.RIGHT][1]])
+    return positions, quaternions, quat.from_axis_angle(_Z, hold.object_yaw)
+
+
+def candidate_places(
+    spec: WorldSpec, name: str, start: np.ndarray, goal: np.ndarray
+) -> Iterator[np.ndarray]:
+    """The places other than the goal a move of ``name`` from ``start`` to ``goal`` may turn
+    at, in the order tried (module docstring), each (3,) m at the goal's height; those that
+    would put the object off the table or onto another object's start are left out."""
+    scene = spec.scene
+    obj = next(o for o in scene.objects if o.name == name)
+    reach = float(np.hypot(obj.shape.extents()[0], obj.shape.extents()[1])) / 2.0
+    table = np.asarray(scene.table.position, dtype=float)
+    half_table = np.asarray(scene.table.size[:2], dtype=float) / 2.0
+    base = np.asarray(scene.robot.base_position, dtype=float)
+    others = [
+        (np.asarray(o.position[:2], dtype=float), float(np.hypot(*o.shape.extents()[:2])) / 2.0)
+        for o in scene.objects
+        if o.name != name
+    ]
+    middle = (np.asarray(start, dtype=float) + np.asarray(goal, dtype=float)) / 2.0
+    for back in (0.0, DRAW_BACK_M, 2.0 * DRAW_BACK_M):
+        for at in (start, middle, goal) if back else (start, middle):
+            place = np.array([at[0], at[1], goal[2]], dtype=float)
+            towards = base[:2] - place[:2]
+            norm = float(np.linalg.norm(towards))
+            if back and norm > 0.0:
+                place[:2] += back * towards / norm
+            on_table = np.all(np.abs(place[:2] - table[:2]) <= half_table - reach)
+            free = all(np.linalg.norm(place[:2] - p) > reach + r for p, r in others)
+            if on_table and free:
+                yield place
+
+
+def turn_places(spec: WorldSpec, name: str, clear: HoldsClear) -> tuple[np.ndarray | None, ...]:
+    """Per move of object ``name`` in ``spec``'s task, where its steps before the last stand:
+    None for its goal (a move one grasp makes, or one whose holds at the goal are clear), else
+    the first of :func:`candidate_places` whose holds are clear and reached. The holds every
+    place shares (the first grasp where it is taken, the last where it lets go) are not
+    asked."""
+    obj = next(o for o in spec.scene.objects if o.name == name)
+    max_turn = robot_capabilities(spec).max_turn_rad
+    robot_yaw = math.radians(spec.scene.robot.base_rpy_deg[2])
+    position, yaw = np.asarray(obj.position, dtype=float), float(obj.yaw)
+    places: list[np.ndarray | None] = []
+    for move in spec.moves_of(name):
+        goal = np.asarray(move.goal_position, dtype=float)
+        goal_yaw = yaw_of(move.goal_quaternion)
+        obstacles = tuple(move.obstacles)
+        chosen: np.ndarray | None = None
+        at_goal = move_holds(position, yaw, goal, goal_yaw, max_turn, robot_yaw)
+        if len(at_goal) > 2 and not clear(name, obstacles, at_goal[1:-1], False):
+            for place in candidate_places(spec, name, position, goal):
+                holds = move_holds(position, yaw, goal, goal_yaw, max_turn, robot_yaw, place)
+                if clear(name, obstacles, holds[1:-1], True):
+                    chosen = place
+                    break
+        places.append(chosen)
+        position, yaw = goal, goal_yaw
+    return tuple(places)
