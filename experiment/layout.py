@@ -40,7 +40,7 @@ from experiment.summary import composition_label as composition_label
 from experiment.summary import reason_of as reason_of
 from experiment.summary import summarise as summarise
 from experiment.tray_draws import place_riders, tray_height, tray_layout_problem
-from skills.turns import grip_yaw, lateral_quarter_turns, turn_steps
+from skills.turns import move_holds
 from worlds.adapters import robot_capabilities
 from worlds.scene import Scene, lateral_grasp_palm_poses
 from worlds.trays import riders
@@ -121,19 +121,21 @@ def move_postures(
     """How the robot holds the object picking it up and putting it down on one move.
 
     A turn the grip cannot make in one grasp is made in steps at the goal
-    (:func:`planner.port.stepped_moves`): each step's grasp at its start and its end, on the
-    faces :func:`skills.turns.lateral_quarter_turns` chooses for it.
+    (:func:`planner.port.stepped_moves`): each step's grasp at its start and its end
+    (:func:`skills.turns.move_holds`), on the faces
+    :func:`skills.turns.lateral_quarter_turns` chooses for it. (A world whose goal has no
+    room makes them elsewhere, :mod:`worlds.turn_choice`; a drawn trial keeps its spheres
+    clear of these holds, so its goal always has.)
     """
-    out: list[Posture] = []
-    yaw = start_yaw
-    for i, step in enumerate(turn_steps(start_yaw, goal_yaw, max_turn, robot_yaw)):
-        k = lateral_quarter_turns(yaw, step - yaw, robot_yaw)
-        half = float(size[1] if k % 2 == 0 else size[0]) / 2.0
-        first = grip_yaw(yaw, k, robot_yaw)
-        out.append(Posture(start if i == 0 else goal, yaw, first, half))
-        out.append(Posture(goal, step, first + (step - yaw), half))
-        yaw = step
-    return out
+    return [
+        Posture(
+            h.position,
+            h.object_yaw,
+            h.grip_yaw,
+            float(size[1] if h.quarter_turns % 2 == 0 else size[0]) / 2.0,
+        )
+        for h in move_holds(start, start_yaw, goal, goal_yaw, max_turn, robot_yaw)
+    ]
 
 
 class RobotClearance:

@@ -102,7 +102,7 @@ def stepped_moves(
     Each move whose turn about z (from the previous goal's yaw, or ``start_yaw`` for the
     first) needs more than one grasp (:func:`skills.turns.turn_steps`) becomes several, each
     a move of its own with the move's obstacles: its steps before the last put the object
-    down at its place (:mod:`planner.turn_places`; by default its goal position: a carry
+    down at its place (:func:`skills.turns.move_holds`; by default its goal position: a carry
     there turned part of the way, then turns in place), the last carries it to its goal.
     Every returned move names its task move (``Move.task_move``) and the last step of each
     is ``final``.

@@ -34,9 +34,9 @@ from planner.port import (
     Pose,
     stepped_moves,
 )
-from planner.turn_places import Hold
 from skills import quaternion as quat
 from skills.level_carry import LooseBall
+from skills.turns import Hold
 from skills.types import Array
 from skills.vocabulary import ARMS, Arm
 from worlds.adapters import object_contexts, robot_capabilities

@@ -1,4 +1,4 @@
-"""Choosing where each turned move of a world makes its turn (:mod:`planner.turn_places`).
+"""Choosing where each turned move of a world makes its turn (:func:`skills.turns.move_holds`).
 
 A move's steps before its last stand at its goal unless the robot, holding the object there in
 one of those steps' grips, would come within the carries' margin of one of the move's
@@ -22,9 +22,8 @@ from collections.abc import Callable, Iterator, Sequence
 
 import numpy as np
 
-from planner.turn_places import Hold, move_holds
 from skills import quaternion as quat
-from skills.turns import yaw_of
+from skills.turns import Hold, move_holds, yaw_of
 from skills.vocabulary import Arm
 from worlds.adapters import robot_capabilities
 from worlds.scene import lateral_grasp_palm_poses

@@ -1,0 +1,122 @@
+"""Choosing where a world's turned moves turn (worlds.turn_choice), and a quarter turn beside a
+sphere made in physics."""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+
+from experiment.episode import run_episode
+from skills.turns import Hold
+from worlds.sim_world import SimWorld
+from worlds.spec import WorldSpec
+from worlds.turn_choice import candidate_places, turn_places
+from worlds.world_file import as_world_spec, load_world
+
+DATA = Path(__file__).resolve().parents[1] / "data" / "worlds"
+TURNED = DATA / "turned_90_beside_a_sphere.yaml"
+DEFAULT = Path(__file__).resolve().parents[2] / "worlds" / "parcel_pick_place.yaml"
+
+
+def _spec(path: Path) -> WorldSpec:
+    return as_world_spec(load_world(path))
+
+
+class _Clear:
+    """A stub check: refuses every hold standing at one of ``refused`` (x, y); records asks."""
+
+    def __init__(self, *refused: tuple[float, float]) -> None:
+        self.refused = [np.array(p) for p in refused]
+        self.asked: list[tuple[tuple[str, ...], tuple[Hold, ...], bool]] = []
+
+    def __call__(
+        self, name: str, obstacles: tuple[str, ...], holds: Sequence[Hold], reach: bool
+    ) -> bool:
+        self.asked.append((obstacles, tuple(holds), reach))
+        return not any(
+            np.allclose(h.position[:2], p, atol=1e-9) for h in holds for p in self.refused
+        )
+
+
+def test_a_clear_goal_keeps_every_turn_there_and_asks_only_the_turned_move() -> None:
+    clear = _Clear()
+    assert turn_places(_spec(TURNED), "parcel", clear) == (None, None, None)
+    # only the third move turns beyond one grasp: its two middle holds, at the goal
+    ((obstacles, holds, reach),) = clear.asked
+    assert obstacles == ("ball_left",) and len(holds) == 2 and not reach
+    for hold in holds:
+        assert_allclose(hold.position, [0.60, 0.15, 0.675])
+
+
+def test_a_refused_goal_turns_at_the_first_clear_place_start_first() -> None:
+    places = turn_places(_spec(TURNED), "parcel", _Clear((0.60, 0.15)))
+    assert places[:2] == (None, None)
+    assert_allclose(places[2], [0.60, -0.15, 0.675])  # the move's start: the last goal
+    # with the start refused too, the middle of the way
+    places = turn_places(_spec(TURNED), "parcel", _Clear((0.60, 0.15), (0.60, -0.15)))
+    assert_allclose(places[2], [0.60, 0.0, 0.675])
+
+
+def test_with_no_place_clear_the_goal_is_kept() -> None:
+    spec = _spec(TURNED)
+    everywhere = [(0.60, 0.15)] + [
+        (float(p[0]), float(p[1]))
+        for p in candidate_places(
+            spec, "parcel", np.array([0.6, -0.15, 0.675]), np.array([0.6, 0.15, 0.675])
+        )
+    ]
+    clear = _Clear(*everywhere)
+    assert turn_places(spec, "parcel", clear) == (None, None, None)
+    assert len(clear.asked) == len(everywhere)  # the goal, then every candidate once
+
+
+def test_candidate_places_stay_on_the_table_and_off_the_other_objects() -> None:
+    spec = _spec(TURNED)
+    start, goal = np.array([0.60, -0.15, 0.675]), np.array([0.60, 0.15, 0.675])
+    places = list(candidate_places(spec, "parcel", start, goal))
+    assert_allclose(places[0], start) and assert_allclose(places[1], [0.60, 0.0, 0.675])
+    # drawn back towards the robot's base, 5 cm, then 10
+    assert_allclose(np.linalg.norm(places[2][:2]), np.linalg.norm(start[:2]) - 0.05)
+    # a table whose near edge runs 2 cm behind the goals' row: none keeps the footprint on it
+    scene = spec.scene
+    table = dataclasses.replace(scene.table, position=(0.80, 0.0, 0.6))
+    assert list(candidate_places(_with(spec, table=table), "parcel", start, goal)) == []
+    # another object resting near the goal: the places whose footprints could reach it go
+    small = dataclasses.replace(scene.objects[0].shape, size=(0.06, 0.06, 0.06))
+    other = dataclasses.replace(
+        scene.objects[0], name="cube", position=(0.55, 0.36, 0.63), shape=small
+    )
+    crowded = _with(spec, objects=(*scene.objects, other))
+    kept = list(candidate_places(crowded, "parcel", start, goal))
+    apart = np.hypot(0.20, 0.30) / 2 + np.hypot(0.06, 0.06) / 2
+    far = [p for p in places if np.linalg.norm(p[:2] - [0.55, 0.36]) > apart]
+    assert 0 < len(kept) < len(places)
+    assert_allclose(np.array(kept), np.array(far))
+
+
+def _with(spec: WorldSpec, **scene_fields: object) -> WorldSpec:
+    return dataclasses.replace(spec, scene=dataclasses.replace(spec.scene, **scene_fields))
+
+
+@pytest.mark.sim
+def test_the_default_world_refuses_the_half_turn_beside_ball_left_and_turns_elsewhere() -> None:
+    with SimWorld(load_world(TURNED)) as sim:
+        steps = sim.task_moves("parcel")
+        assert [m.task_move for m in steps] == [0, 1, 2, 2]
+        assert not np.allclose(steps[2].goal.position, steps[3].goal.position)
+        assert sim.scene.active_obstacles == set()  # asked of the collision world alone
+    with SimWorld(load_world(DEFAULT)) as sim:  # nothing turned: the shipped moves as they were
+        assert [m.final for m in sim.task_moves("parcel")] == [True, True, True]
+
+
+@pytest.mark.sim
+def test_a_quarter_turn_beside_a_sphere_is_placed_in_physics() -> None:
+    report = run_episode(load_world(TURNED), None, out=None, animation=False)
+    assert report.success, report.failure
+    assert max(report.placement_error_m) < 0.02
+    assert not report.obstacle_contacts
