@@ -71,6 +71,9 @@ TURN_PLACE_MARGIN_M = 0.01
 #: Each such hold's arms solved to convergence (a lone pose, far from the measured joints):
 #: most steps and the pose error the solve stops at, m and rad.
 HOLD_SOLVE = (300, 1e-4)
+#: The clearance a place other than the goal must leave, m: the object is set down there
+#: within a few millimetres of where it was sent, then carried on from where it lies.
+OTHER_PLACE_MARGIN_M = 0.02
 #: Farthest a palm of such a hold may be left from its pose by that solve, m: beyond it, the
 #: arm cannot reach the hold.
 HOLD_REACH_M = 0.005
@@ -573,11 +576,12 @@ class SimWorld:
         return moves
 
     def _holds_clear(
-        self, name: str, obstacles: tuple[str, ...], holds: Sequence[Hold], reach: bool
+        self, name: str, obstacles: tuple[str, ...], holds: Sequence[Hold], elsewhere: bool
     ) -> bool:
         """Whether the robot can hold object ``name`` in each of ``holds``: palms, object and
         the arms' links (solved to convergence) :data:`TURN_PLACE_MARGIN_M` from
-        ``obstacles``, and, with ``reach``, its palms reached within :data:`HOLD_REACH_M`;
+        ``obstacles`` (with ``elsewhere``, :data:`OTHER_PLACE_MARGIN_M`, and its palms reached
+        within :data:`HOLD_REACH_M`: the test of a place other than the goal);
         asked of the collision world and the kinematic copy alone: nothing moves in the
         physics."""
         robot_yaw = math.radians(self.spec.scene.robot.base_rpy_deg[2])
@@ -589,14 +593,15 @@ class SimWorld:
                 palms, palm_quats, object_quat = hold_poses(
                     hold, self._extents[name], self.palm_thickness(), robot_yaw
                 )
-                no_links: dict[Arm, tuple[int, ...]] = {arm: () for arm in ARMS}
-                predictor.link_frames(palms[None], palm_quats[None], no_links, *HOLD_SOLVE)
-                if reach and max(predictor.last_palm_errors.values()) > HOLD_REACH_M:
-                    return False
+                if elsewhere:
+                    no_links: dict[Arm, tuple[int, ...]] = {arm: () for arm in ARMS}
+                    predictor.link_frames(palms[None], palm_quats[None], no_links, *HOLD_SOLVE)
+                    if max(predictor.last_palm_errors.values()) > HOLD_REACH_M:
+                        return False
                 check = self._check_path(
                     palms[None],
                     palm_quats[None],
-                    TURN_PLACE_MARGIN_M,
+                    OTHER_PLACE_MARGIN_M if elsewhere else TURN_PLACE_MARGIN_M,
                     (name, hold.position[None], object_quat[None]),
                     link_doubt=False,
                     solve=HOLD_SOLVE,

@@ -5,12 +5,12 @@ one of those steps' grips, would come within the carries' margin of one of the m
 obstacles: a 90 degree goal beside a sphere, whose half turn at the goal puts the forearm
 reaching round the far face into the sphere, turns elsewhere. (The goal is not refused for
 the reach the check's inverse kinematics finds: the arms' compliance reaches holds at the
-goal it does not, and the goal is where the move must end anyway.) The
-places tried after the goal are, in order, the move's start, the middle of its way, and each
-of the three drawn back towards the robot by :data:`DRAW_BACK_M` and twice that: the nearer
-the robot, the less an arm reaches round the object. A place must keep the object's footprint
-on the table and off where the other objects start. The first place whose holds are clear and
-reached is taken; a world where none is keeps the goal (its carries' checks then say why).
+goal it does not, and the goal is where the move must end anyway.) The places tried after the
+goal are the move's start and a grid around the way (:func:`candidate_places`), shortest
+detour first; a place must keep the object's footprint on the table and off where the other
+objects start, its holds must be reached, and they must keep a wider margin than the goal's,
+for the object set down there a few millimetres off. The first such place is taken; a world
+where none is keeps the goal (its carries' checks then say why).
 The check asks a world (``SimWorld``) for each hold: palms, held object and the arms' links
 solved to convergence on its kinematic copy, against the move's obstacles.
 """
@@ -29,14 +29,24 @@ from worlds.adapters import robot_capabilities
 from worlds.scene import lateral_grasp_palm_poses
 from worlds.spec import WorldSpec
 
-__all__ = ["DRAW_BACK_M", "HoldsClear", "candidate_places", "hold_poses", "turn_places"]
+__all__ = [
+    "PLACE_GRID_M",
+    "PLACE_REACH_M",
+    "HoldsClear",
+    "candidate_places",
+    "hold_poses",
+    "turn_places",
+]
 
-#: ``clear(object, obstacles, holds, reach)``: whether the robot can hold ``object`` in each
-#: of ``holds`` clear of ``obstacles`` (and, with ``reach``, whether its arms reach them).
+#: ``clear(object, obstacles, holds, elsewhere)``: whether the robot can hold ``object`` in
+#: each of ``holds`` clear of ``obstacles`` (``elsewhere``: at a place other than the goal,
+#: with its wider margin and its arms reaching each hold).
 HoldsClear = Callable[[str, tuple[str, ...], Sequence[Hold], bool], bool]
 
-#: How far each place tried is drawn back towards the robot, m (once, then twice).
-DRAW_BACK_M = 0.05
+#: Spacing of the places tried, m.
+PLACE_GRID_M = 0.05
+#: How far beyond the box spanned by a move's start and goal places are tried, m.
+PLACE_REACH_M = 0.10
 
 _Z = np.array([0.0, 0.0, 1.0])
 
@@ -60,31 +70,39 @@ def candidate_places(
     spec: WorldSpec, name: str, start: np.ndarray, goal: np.ndarray
 ) -> Iterator[np.ndarray]:
     """The places other than the goal a move of ``name`` from ``start`` to ``goal`` may turn
-    at, in the order tried (module docstring), each (3,) m at the goal's height; those that
-    would put the object off the table or onto another object's start are left out."""
+    at, in the order tried, each (3,) m at the goal's height: the points of a
+    :data:`PLACE_GRID_M` grid over the box spanned by start and goal widened by
+    :data:`PLACE_REACH_M` (the start among them), shortest detour first (start to place to
+    goal), and of equal detours the nearer the robot first (the less an arm reaches round
+    the object). Those that would put the object's footprint off the table or onto another
+    object's start are left out."""
     scene = spec.scene
     obj = next(o for o in scene.objects if o.name == name)
     reach = float(np.hypot(obj.shape.extents()[0], obj.shape.extents()[1])) / 2.0
     table = np.asarray(scene.table.position, dtype=float)
     half_table = np.asarray(scene.table.size[:2], dtype=float) / 2.0
-    base = np.asarray(scene.robot.base_position, dtype=float)
+    base = np.asarray(scene.robot.base_position, dtype=float)[:2]
     others = [
         (np.asarray(o.position[:2], dtype=float), float(np.hypot(*o.shape.extents()[:2])) / 2.0)
         for o in scene.objects
         if o.name != name
     ]
-    middle = (np.asarray(start, dtype=float) + np.asarray(goal, dtype=float)) / 2.0
-    for back in (0.0, DRAW_BACK_M, 2.0 * DRAW_BACK_M):
-        for at in (start, middle, goal) if back else (start, middle):
-            place = np.array([at[0], at[1], goal[2]], dtype=float)
-            towards = base[:2] - place[:2]
-            norm = float(np.linalg.norm(towards))
-            if back and norm > 0.0:
-                place[:2] += back * towards / norm
-            on_table = np.all(np.abs(place[:2] - table[:2]) <= half_table - reach)
-            free = all(np.linalg.norm(place[:2] - p) > reach + r for p, r in others)
-            if on_table and free:
-                yield place
+    a, b = np.asarray(start, dtype=float)[:2], np.asarray(goal, dtype=float)[:2]
+    low, high = np.minimum(a, b) - PLACE_REACH_M, np.maximum(a, b) + PLACE_REACH_M
+    xs = np.arange(low[0], high[0] + 1e-9, PLACE_GRID_M)
+    ys = np.arange(low[1], high[1] + 1e-9, PLACE_GRID_M)
+    points = [a] + [np.array([x, y]) for x in xs for y in ys]
+    keyed = []
+    for k, p in enumerate(points):
+        detour = float(np.linalg.norm(p - a) + np.linalg.norm(b - p) - np.linalg.norm(b - a))
+        keyed.append((round(detour, 3), round(float(np.linalg.norm(p - base)), 3), k, p))
+    for _, _, _, p in sorted(keyed, key=lambda item: item[:3]):
+        if np.linalg.norm(p - b) < 1e-9:
+            continue  # the goal itself
+        on_table = np.all(np.abs(p - table[:2]) <= half_table - reach)
+        free = all(np.linalg.norm(p - q) > reach + r for q, r in others)
+        if on_table and free:
+            yield np.array([p[0], p[1], goal[2]], dtype=float)
 
 
 def turn_places(spec: WorldSpec, name: str, clear: HoldsClear) -> tuple[np.ndarray | None, ...]:

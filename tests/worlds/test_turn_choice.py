@@ -35,9 +35,9 @@ class _Clear:
         self.asked: list[tuple[tuple[str, ...], tuple[Hold, ...], bool]] = []
 
     def __call__(
-        self, name: str, obstacles: tuple[str, ...], holds: Sequence[Hold], reach: bool
+        self, name: str, obstacles: tuple[str, ...], holds: Sequence[Hold], elsewhere: bool
     ) -> bool:
-        self.asked.append((obstacles, tuple(holds), reach))
+        self.asked.append((obstacles, tuple(holds), elsewhere))
         return not any(
             np.allclose(h.position[:2], p, atol=1e-9) for h in holds for p in self.refused
         )
@@ -47,19 +47,21 @@ def test_a_clear_goal_keeps_every_turn_there_and_asks_only_the_turned_move() -> 
     clear = _Clear()
     assert turn_places(_spec(TURNED), "parcel", clear) == (None, None, None)
     # only the third move turns beyond one grasp: its two middle holds, at the goal
-    ((obstacles, holds, reach),) = clear.asked
-    assert obstacles == ("ball_left",) and len(holds) == 2 and not reach
+    ((obstacles, holds, elsewhere),) = clear.asked
+    assert obstacles == ("ball_left",) and len(holds) == 2 and not elsewhere
     for hold in holds:
         assert_allclose(hold.position, [0.60, 0.15, 0.675])
 
 
-def test_a_refused_goal_turns_at_the_first_clear_place_start_first() -> None:
-    places = turn_places(_spec(TURNED), "parcel", _Clear((0.60, 0.15)))
+def test_a_refused_goal_turns_at_the_first_clear_place_on_the_list() -> None:
+    spec = _spec(TURNED)
+    start, goal = np.array([0.60, -0.15, 0.675]), np.array([0.60, 0.15, 0.675])
+    first, second = list(candidate_places(spec, "parcel", start, goal))[:2]
+    places = turn_places(spec, "parcel", _Clear((0.60, 0.15)))
     assert places[:2] == (None, None)
-    assert_allclose(places[2], [0.60, -0.15, 0.675])  # the move's start: the last goal
-    # with the start refused too, the middle of the way
-    places = turn_places(_spec(TURNED), "parcel", _Clear((0.60, 0.15), (0.60, -0.15)))
-    assert_allclose(places[2], [0.60, 0.0, 0.675])
+    assert_allclose(places[2], first)
+    places = turn_places(spec, "parcel", _Clear((0.60, 0.15), (float(first[0]), float(first[1]))))
+    assert_allclose(places[2], second)
 
 
 def test_with_no_place_clear_the_goal_is_kept() -> None:
@@ -79,12 +81,19 @@ def test_candidate_places_stay_on_the_table_and_off_the_other_objects() -> None:
     spec = _spec(TURNED)
     start, goal = np.array([0.60, -0.15, 0.675]), np.array([0.60, 0.15, 0.675])
     places = list(candidate_places(spec, "parcel", start, goal))
-    assert_allclose(places[0], start) and assert_allclose(places[1], [0.60, 0.0, 0.675])
-    # drawn back towards the robot's base, 5 cm, then 10
-    assert_allclose(np.linalg.norm(places[2][:2]), np.linalg.norm(start[:2]) - 0.05)
-    # a table whose near edge runs 2 cm behind the goals' row: none keeps the footprint on it
+    # no detour first, the nearest the robot of those: on the way, the point nearest the base
+    assert_allclose(places[0], [0.60, 0.0, 0.675], atol=1e-12)
+    assert any(np.allclose(p, start) for p in places)
+    detours = [np.linalg.norm(p[:2] - start[:2]) + np.linalg.norm(goal[:2] - p[:2]) for p in places]
+    assert np.all(np.diff(np.round(detours, 3)) >= 0)  # shortest detour first
+    assert not any(np.allclose(p, goal) for p in places)  # the goal was asked already
+    assert all(p[2] == goal[2] for p in places)
+    # every place keeps the footprint's reach inside the table's top
+    reach = np.hypot(0.20, 0.30) / 2
+    assert all(0.35 + reach - 1e-9 <= p[0] <= 0.95 - reach + 1e-9 for p in places)
+    # a table whose near edge runs 10 cm beyond the goals' row: none keeps the footprint on it
     scene = spec.scene
-    table = dataclasses.replace(scene.table, position=(0.80, 0.0, 0.6))
+    table = dataclasses.replace(scene.table, position=(1.00, 0.0, 0.6))
     assert list(candidate_places(_with(spec, table=table), "parcel", start, goal)) == []
     # another object resting near the goal: the places whose footprints could reach it go
     small = dataclasses.replace(scene.objects[0].shape, size=(0.06, 0.06, 0.06))
