@@ -89,10 +89,8 @@ class ArmPredictor:
     def __init__(self, scene: Scene) -> None:
         self._scene = scene
         self._client, self._ids = _kinematic_copy(scene.robot)
-        #: Per arm, how far (m) the last :meth:`link_frames` left its palm from the path's
-        #: last waypoint: over a few millimetres, the solve did not reach it (out of reach,
-        #: or too few iterations).
-        self.last_palm_errors: dict[Arm, float] = {}
+        # Per arm of the last link_frames: (copy body, palm link, the path's last palm target).
+        self._last_targets: list[tuple[Arm, int, int, FloatArray]] = []
 
     def close(self) -> None:
         """Let go of the copy (idempotent); it stays loaded for the next predictor."""
@@ -132,6 +130,7 @@ class ArmPredictor:
         driven = robot.driven_joints()
         rest_all = scene.controller.rest_posture()
         out: dict[Arm, LinkFrames] = {}
+        self._last_targets = []
         for index in dict.fromkeys(robot.arms[a].body for a in (Arm.LEFT, Arm.RIGHT)):
             arms = [a for a in (Arm.LEFT, Arm.RIGHT) if robot.arms[a].body == index]
             rows = [k for k, d in enumerate(driven) if d.body == index]
@@ -177,15 +176,24 @@ class ArmPredictor:
                     frames[a][1][w] = [s[1] for s in read]
             for a in arms:
                 out[a] = LinkFrames(tuple(links[a]), frames[a][0], frames[a][1])
-            if n:  # the copy stands at the last waypoint's solution
-                for a, i, link in zip(arms, arm_index, palm_links, strict=True):
-                    at = pb.getLinkState(
-                        copy, link, computeForwardKinematics=1, physicsClientId=self._client
-                    )[4]
-                    self.last_palm_errors[a] = float(
-                        np.linalg.norm(np.subtract(at, positions[-1, i]))
-                    )
+            if n:
+                self._last_targets += [
+                    (a, copy, link, positions[-1, i])
+                    for a, i, link in zip(arms, arm_index, palm_links, strict=True)
+                ]
         return out
+
+    def last_palm_errors(self) -> dict[Arm, float]:
+        """Per arm, how far (m) the last :meth:`link_frames` left its palm from the path's last
+        waypoint, read off the copy, which stands at that solution until the next solve: over
+        a few millimetres, the solve did not reach it (out of reach, or too few iterations)."""
+        errors = {}
+        for arm, body, link, target in self._last_targets:
+            at = pb.getLinkState(
+                body, link, computeForwardKinematics=1, physicsClientId=self._client
+            )
+            errors[arm] = float(np.linalg.norm(np.subtract(at[4], target)))
+        return errors
 
 
 __all__ = ["WAYPOINT_ITERATIONS", "WAYPOINT_TOLERANCE", "ArmPredictor", "LinkFrames"]

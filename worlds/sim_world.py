@@ -575,6 +575,12 @@ class SimWorld:
             moves = self._task_moves[name] = task_moves(self.spec, name, places)
         return moves
 
+    def _predictor(self) -> ArmPredictor:
+        """The arms' predictor on the robot's kinematic copy, made at its first use."""
+        if self._arm_predictor is None:
+            self._arm_predictor = ArmPredictor(self.scene)
+        return self._arm_predictor
+
     def _holds_clear(
         self, name: str, obstacles: tuple[str, ...], holds: Sequence[Hold], elsewhere: bool
     ) -> bool:
@@ -585,19 +591,11 @@ class SimWorld:
         asked of the collision world and the kinematic copy alone: nothing moves in the
         physics."""
         robot_yaw = math.radians(self.spec.scene.robot.base_rpy_deg[2])
-        if self._arm_predictor is None:
-            self._arm_predictor = ArmPredictor(self.scene)
-        predictor = self._arm_predictor
         with self.collision.obstacles_present(obstacles):
             for hold in holds:
                 palms, palm_quats, object_quat = hold_poses(
                     hold, self._extents[name], self.palm_thickness(), robot_yaw
                 )
-                if elsewhere:
-                    no_links: dict[Arm, tuple[int, ...]] = {arm: () for arm in ARMS}
-                    predictor.link_frames(palms[None], palm_quats[None], no_links, *HOLD_SOLVE)
-                    if max(predictor.last_palm_errors.values()) > HOLD_REACH_M:
-                        return False
                 check = self._check_path(
                     palms[None],
                     palm_quats[None],
@@ -608,6 +606,14 @@ class SimWorld:
                 )
                 if not check.clear:
                     return False
+                if elsewhere:
+                    if not obstacles:  # the check had nothing to solve the arms for
+                        no_links: dict[Arm, tuple[int, ...]] = {arm: () for arm in ARMS}
+                        self._predictor().link_frames(
+                            palms[None], palm_quats[None], no_links, *HOLD_SOLVE
+                        )
+                    if max(self._predictor().last_palm_errors().values()) > HOLD_REACH_M:
+                        return False
         return True
 
     def gravity(self) -> float:
@@ -875,11 +881,9 @@ class SimWorld:
         n = p.shape[0]
         if n == 0 or not (self.collision.obstacles_active() or avoid):
             return LinkHits(np.zeros(n, dtype=bool), np.zeros(n, dtype=bool))
-        if self._arm_predictor is None:
-            self._arm_predictor = ArmPredictor(self.scene)
         solved = np.unique(np.append(np.arange(0, n, PREDICTION_STRIDE), n - 1))
         links = {arm: self.collision.arm_moving_links(arm) for arm in ARMS}
-        frames = self._arm_predictor.link_frames(p[solved], q[solved], links, *solve)
+        frames = self._predictor().link_frames(p[solved], q[solved], links, *solve)
         on_obstacles = np.zeros(solved.size, dtype=bool)
         on_objects = np.zeros(solved.size, dtype=bool)
         at_end = False
