@@ -10,13 +10,13 @@ on the robot):
   with a yaw drawn within the move's range;
 - for every move but at most one (drawn at random, and kept free with probability 1/2) a new
   sphere, either *on the line*: above the straight path between the move's start and goal,
-  under the demonstrated lift, or *ahead*: in front (+x) of the carry at the lifted parcel's
-  height, of the kinds the move's region allows (a region without kinds gets no sphere).
-  Every sphere clears the parcel at its move's start
-  and goal (``clearance``), and the robot itself, posed grasping the parcel there, at rest
-  and lifted by ``lift`` (``robot_clearance``, measured by PyBullet on the robot's own
-  collision shapes), so only the carry can meet it: a sphere the robot would have to be in
-  to pick the parcel up or put it down is not a test of avoidance.
+  under the demonstrated lift, or *ahead*: in front of the carry (along the robot's forward
+  axis, +x for a robot facing +x) at the lifted parcel's height, of the kinds the move's
+  region allows (a region without kinds gets no sphere). Every sphere clears the parcel at
+  its move's start and goal (``clearance``), and the robot itself, posed grasping the parcel
+  there, at rest and lifted by ``lift`` (``robot_clearance``, measured by PyBullet on the
+  robot's own collision shapes), so only the carry can meet it: a sphere the robot would
+  have to be in to pick the parcel up or put it down is not a test of avoidance.
 
 :func:`check_trial_layout` tells, before a campaign starts, a world whose trials cannot be
 drawn. The campaign that runs them is :mod:`experiment.trials`.
@@ -161,6 +161,8 @@ class RobotClearance:
                 f"trials: expected a box object to grasp, got a {obj.shape.type} ({obj.name!r})"
             )
         self._thickness = float(world.robot.palm_size[2])
+        # The grips' yaws are the robot's (skills.turns): the palms turn with its heading.
+        self._robot_yaw = math.radians(world.robot.base.rpy_deg[2])
         self._posed_at: tuple[float, ...] | None = None
         # Each posture's joint positions, per robot body and joint, as first solved (from the
         # posture tried before it, as every solve was when each candidate re-solved): a layout
@@ -216,7 +218,7 @@ class RobotClearance:
                     posture.position,
                     posture.half_span,
                     self._thickness,
-                    grip_yaw=posture.grip_yaw,
+                    grip_yaw=posture.grip_yaw + self._robot_yaw,
                 )
             )
             solved = self._solved[key] = self._joint_positions()
@@ -366,6 +368,7 @@ def _draw_trial(
                     region.obstacles,
                     robot,
                     postures,
+                    robot_yaw,
                 )
                 break
             except RuntimeError:
@@ -434,19 +437,23 @@ def _draw_sphere(
     allowed: Sequence[ObstacleKind],
     robot: RobotClearance,
     postures: list[Posture],
+    robot_yaw: float = 0.0,
 ) -> Sphere:
     """A sphere of an ``allowed`` kind, on the line or ahead of the carry, clear of the box and
     of the robot holding it as it picks it up at the start and puts it down at the goal
-    (``postures``: turned, and at every step of a turn made in steps), at rest and lifted."""
+    (``postures``: turned, and at every step of a turn made in steps), at rest and lifted.
+    Ahead is along the robot's forward axis (heading ``robot_yaw`` rad: +x at 0)."""
     top = start[2] + half[2]
     lifted = np.array([0.0, 0.0, layout.lift])
     grasps = [
         replace(p, position=p.position + dz) for p in postures for dz in (0.0 * lifted, lifted)
     ]
-    # The box's reach along x, turned as it is at the start and the goal.
+    forward = np.array([math.cos(robot_yaw), math.sin(robot_yaw)])
+    side = np.array([-math.sin(robot_yaw), math.cos(robot_yaw)])
+    # The box's reach along the robot's forward axis, turned as it is at the start and goal.
     reach_x = max(
-        abs(math.cos(p.object_yaw)) * _half(p, half)[0]
-        + abs(math.sin(p.object_yaw)) * _half(p, half)[1]
+        abs(math.cos(p.object_yaw - robot_yaw)) * _half(p, half)[0]
+        + abs(math.sin(p.object_yaw - robot_yaw)) * _half(p, half)[1]
         for p in postures
     )
     for _ in range(SPHERE_ATTEMPTS):  # rejection sampling
@@ -461,14 +468,11 @@ def _draw_sphere(
             xy = start[:2] + t * (goal[:2] - start[:2])
             centre = np.array([*xy, top + _uniform(rng, layout.line_gap) + radius])
         else:
-            front = max(start[0], goal[0]) + reach_x
-            centre = np.array(
-                [
-                    front + radius + _uniform(rng, layout.ahead_gap),
-                    0.5 * (start[1] + goal[1]),
-                    top + _uniform(rng, layout.ahead_height),
-                ]
-            )
+            front = max(float(start[:2] @ forward), float(goal[:2] @ forward)) + reach_x
+            along = front + radius + _uniform(rng, layout.ahead_gap)
+            across = 0.5 * float((start[:2] + goal[:2]) @ side)
+            xy = along * forward + across * side
+            centre = np.array([xy[0], xy[1], top + _uniform(rng, layout.ahead_height)])
         box = min(_box_gap(p.position, _half(p, half), centre, p.object_yaw) for p in postures)
         if box - radius < layout.clearance:
             continue

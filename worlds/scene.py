@@ -15,6 +15,7 @@ built.
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Iterable, Mapping
 from dataclasses import replace
@@ -116,6 +117,39 @@ def lateral_grasp_palm_poses(
         )
         for arm, side in ((Arm.LEFT, 1.0), (Arm.RIGHT, -1.0))
     }
+
+
+def rest_palm_poses(
+    spec: SceneSpec, rest_palms: tuple[float, float, float]
+) -> dict[Arm, tuple[FloatArray, FloatArray]]:
+    """Where the palms wait, world frame: above the table's edge nearest the robot, facing
+    inwards, in the robot's frame (:attr:`worlds.robots.model.RobotModel.rest_palms`).
+
+    ``rest_palms`` is ``(inset, half_width, height)``: the palms stand ``inset`` m beyond the
+    table's near edge along the robot's forward axis, ``half_width`` m either side of the
+    robot's centre line, ``height`` m above the table top. The near edge is the table top's
+    footprint's nearest point along the robot's forward axis (the robot may face the table
+    from any side). Returns per arm (position (3,), quaternion (4,)); the palms' lateral
+    orientation turned with the robot's heading.
+    """
+    table = spec.table
+    yaw = math.radians(spec.robot.base_rpy_deg[2])
+    forward = np.array([math.cos(yaw), math.sin(yaw)])
+    left = np.array([-math.sin(yaw), math.cos(yaw)])
+    base = np.asarray(spec.robot.base_position, dtype=float)[:2]
+    centre = np.asarray(table.position, dtype=float)[:2]
+    half = np.asarray(table.size, dtype=float)[:2] / 2.0
+    corners = centre + half * np.array([[-1.0, -1.0], [-1.0, 1.0], [1.0, -1.0], [1.0, 1.0]])
+    near = float(np.min((corners - base) @ forward))
+    inset, half_width, height = rest_palms
+    turn = quat.from_axis_angle(np.array([0.0, 0.0, 1.0]), yaw)
+    z = float(table.position[2]) + height
+    poses: dict[Arm, tuple[FloatArray, FloatArray]] = {}
+    for arm, side in ((Arm.LEFT, 1.0), (Arm.RIGHT, -1.0)):
+        xy = base + (near + inset) * forward + side * half_width * left
+        orientation = quat.multiply(turn, np.array(LATERAL_PALM_QUATERNIONS[arm]))
+        poses[arm] = (np.array([xy[0], xy[1], z]), np.asarray(orientation, dtype=float))
+    return poses
 
 
 class Scene:
@@ -598,4 +632,5 @@ __all__ = [
     "NoDisplayError",
     "Scene",
     "lateral_grasp_palm_poses",
+    "rest_palm_poses",
 ]

@@ -44,7 +44,7 @@ from worlds.arm_prediction import WAYPOINT_ITERATIONS, WAYPOINT_TOLERANCE, ArmPr
 from worlds.collision import FIXTURES, CollisionWorld, arm_group, welded_links
 from worlds.control import ImpedanceGains, PalmCommand
 from worlds.fixtures import FixtureLog, wall_forces
-from worlds.scene import LATERAL_PALM_QUATERNIONS, Scene
+from worlds.scene import Scene, rest_palm_poses
 from worlds.spec import Shape, ShapeSpec, WorldSpec
 from worlds.trays import TrayFrame, riders
 from worlds.truth import PhysicalTruth, sensed_pose
@@ -361,15 +361,10 @@ class SimWorld:
         return replace(context, position=(x, y, z), yaw=context.yaw + truth.sensed_yaw_offset_rad)
 
     def _rest_poses(self) -> dict[Arm, Pose]:
-        """Palms waiting above the table's near edge, outside the objects, facing inwards."""
-        table = self.spec.scene.table
-        near_x = table.position[0] - table.size[0] / 2.0
-        inset, half_width, height = self.scene.robot.rest_palms
-        z = table.position[2] + height
-        return {
-            arm: Pose.of([near_x + inset, side * half_width, z], LATERAL_PALM_QUATERNIONS[arm])
-            for arm, side in ((Arm.LEFT, 1.0), (Arm.RIGHT, -1.0))
-        }
+        """Palms waiting above the table's near edge, outside the objects, facing inwards
+        (:func:`worlds.scene.rest_palm_poses`, in the robot's frame)."""
+        poses = rest_palm_poses(self.spec.scene, self.scene.robot.rest_palms)
+        return {arm: Pose.of(position, q) for arm, (position, q) in poses.items()}
 
     def close(self) -> None:
         """Disconnect PyBullet (and the arms' kinematic copy, if one was built)."""

@@ -6,7 +6,8 @@ was expected and what was received. The core never reads these models: it reads 
 dataclasses of :mod:`worlds.spec`, made once by :func:`worlds.world_file.world_spec`.
 
 Conventions: SI units; angles in the file are degrees (``rpy_deg``); world frame z up; the
-robot faces +x and its left arm is at +y. Relative paths (mesh files, skill library) are
+robot faces its frame's +x with its left arm at +y (its base pose places that frame in the
+world: a robot may face the table from any side). Relative paths (mesh files, skill library) are
 resolved against the folder of the world file.
 """
 
@@ -511,7 +512,8 @@ class GoalRegion(Region):
     obstacles: tuple[ObstacleKind, ...] = Field(
         default=OBSTACLE_KINDS,
         description="kinds of sphere this move's obstacle is drawn as (line: over the "
-        "straight path, under the lift; ahead: in front (+x) of the carry); [] for none",
+        "straight path, under the lift; ahead: in front of the carry, along the robot's forward "
+        "axis, +x for a robot facing +x); [] for none",
     )
 
     pitch_deg: tuple[_Finite, ...] = Field(
@@ -720,7 +722,8 @@ class TrialSettings(_FileModel):
     )
     ahead_gap: Range = Field(
         default=(0.0, 0.04),
-        description="a sphere ahead: its surface in front (+x) of the object's front face, m",
+        description="a sphere ahead: its surface in front of the object's front face (along the "
+        "robot's forward axis), m",
     )
     ahead_height: Range = Field(
         default=(-0.02, 0.06),

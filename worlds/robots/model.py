@@ -180,8 +180,9 @@ class RobotModel:
         name); ``"base"`` names a body's base link. A robot split into several bodies (iCub)
         uses this to keep PyBullet's no-self-collision default across the split.
     rest_palms : tuple of float
-        Where the palms wait: (inset from the table's near edge along x, distance from the
-        robot's midplane along y, height above the table top), m.
+        Where the palms wait: (inset from the table's near edge along the robot's forward
+        axis, distance from the robot's midplane, height above the table top), m
+        (:func:`worlds.scene.rest_palm_poses`).
     gain_overrides : Mapping[str, float]
         :class:`worlds.control.ImpedanceGains` fields that differ from the defaults for this
         robot (a light arm wants less damping), applied when no gains are given.
