@@ -1,7 +1,8 @@
 """What the reasoner knows about an object, its surroundings and the robot.
 
-Positions are in the world frame {W} (the robot's base frame: +x forward, +y to the robot's
-left, +z up), in metres. Yaw is the object's rotation about world z, in radians.
+Positions are in the world frame {W} (+z up), in metres; the robot's own frame in it (+x
+forward, +y to its left) is :attr:`RobotCapabilities.base_pose`, the origin's unless the robot
+stands elsewhere or turned. Yaw is the object's rotation about world z, in radians.
 Vectors are stored as tuples of floats so the values stay frozen, hashable and comparable.
 """
 
@@ -377,6 +378,10 @@ class RobotCapabilities:
         Largest turn of the palms about the vertical from their natural pose that the arms can
         hold an object at, radians, in [pi/4, pi/2) (:mod:`skills.turns`: a larger turn of the
         object is made in steps, re-grasping between them).
+    base_pose : tuple of float, shape (3,)
+        The robot's frame in {W}: ``(x, y, heading)``, metres and radians (its +x forward,
+        its +y to its left). The hard constraints are reasoned in that frame (which arm is on
+        the object's side, which faces the palms come to); ``(0, 0, 0)``: {W} itself.
     """
 
     payload_per_arm_kg: float
@@ -387,6 +392,7 @@ class RobotCapabilities:
     palm_friction: float
     end_effectors: frozenset[EndEffector]
     max_turn_rad: float = math.pi / 4.0
+    base_pose: Vector3 = (0.0, 0.0, 0.0)
 
     def __post_init__(self) -> None:
         owner = "RobotCapabilities"
@@ -420,6 +426,7 @@ class RobotCapabilities:
                 f"{owner}.max_turn_rad: expected an angle in [pi/4, pi/2) rad, got {turn!r}"
             )
         put(self, "max_turn_rad", turn)
+        put(self, "base_pose", check_vector3(self.base_pose, owner, "base_pose"))
 
     def describe_end_effectors(self) -> str:
         """The end-effectors in words, e.g. ``flat palms``."""

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from enum import StrEnum
 from types import MappingProxyType
 
@@ -558,6 +558,35 @@ def _end_effector_refusals(robot: RobotCapabilities) -> dict[GraspType, str]:
     }
 
 
+def in_robot_frame(context: ObjectContext, base_pose: Vector3) -> ObjectContext:
+    """``context`` seen from a robot whose frame stands at ``base_pose`` ``(x, y, heading)``
+    in {W}: positions (the object's, its goals', the obstacles') and yaws in the robot's
+    frame (:attr:`RobotCapabilities.base_pose`)."""
+    x0, y0, heading = base_pose
+    c, s = math.cos(heading), math.sin(heading)
+
+    def local(p: Vector3) -> Vector3:
+        dx, dy = p[0] - x0, p[1] - y0
+        return (c * dx + s * dy, -s * dx + c * dy, p[2])
+
+    return replace(
+        context,
+        position=local(context.position),
+        yaw=context.yaw - heading,
+        obstacles=tuple(replace(o, position=local(o.position)) for o in context.obstacles),
+        goals=tuple(local(g) for g in context.goals),
+        goal_yaw=None if context.goal_yaw is None else context.goal_yaw - heading,
+        goal_yaws=tuple(y - heading for y in context.goal_yaws),
+    )
+
+
+def _to_world(point: Vector3, base_pose: Vector3) -> Vector3:
+    """A point of the robot's frame at ``base_pose`` in {W} (:func:`in_robot_frame`'s inverse)."""
+    x0, y0, heading = base_pose
+    c, s = math.cos(heading), math.sin(heading)
+    return (x0 + c * point[0] - s * point[1], y0 + s * point[0] + c * point[1], point[2])
+
+
 def assess(
     context: ObjectContext, robot: RobotCapabilities, config: ReasonerConfig
 ) -> HardAssessment:
@@ -581,8 +610,18 @@ def assess(
     Returns
     -------
     HardAssessment
-        Feasible grasps and the reasons.
+        Feasible grasps and the reasons; the options' palms in {W}.
     """
+    if any(robot.base_pose):
+        # Left and right, near and far, are the robot's: reason in its frame.
+        pose = robot.base_pose
+        hard = assess(
+            in_robot_frame(context, pose), replace(robot, base_pose=(0.0, 0.0, 0.0)), config
+        )
+        options = tuple(
+            replace(o, palms=tuple(_to_world(p, pose) for p in o.palms)) for o in hard.options
+        )
+        return replace(hard, options=options)
     mass, payload = context.mass_kg, robot.payload_per_arm_kg
     width = grip_width(context)
     hand_limit = config.one_hand_width_factor * robot.palm_width_m

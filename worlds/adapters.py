@@ -47,6 +47,11 @@ def robot_capabilities(world: World | WorldSpec) -> RobotCapabilities:
         palm_friction=palm_mu,
         end_effectors=robot_model_of(robot).end_effectors,
         max_turn_rad=math.radians(_MAX_TURN_DEG.get(robot.model, 45.0)),
+        base_pose=(
+            float(robot.base_position[0]),
+            float(robot.base_position[1]),
+            math.radians(robot.base_rpy_deg[2]),
+        ),
     )
 
 

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
+from typing import Any
 
 import pytest
 from numpy.testing import assert_allclose
@@ -13,6 +15,7 @@ from affordances import (
     required_squeeze_force,
     spare_grip_acceleration,
 )
+from affordances.context import RobotCapabilities
 from affordances.physics import (
     FaceAxis,
     assess,
@@ -21,8 +24,16 @@ from affordances.physics import (
     parallel_face_pairs,
     wrap_angle,
 )
-from skills.vocabulary import AffordanceElement, GraspType
-from tests.affordances.cases import ROBOT, heavy_box, open_bottle, parcel, small_box, tray
+from skills.vocabulary import AffordanceElement, Arm, GraspType
+from tests.affordances.cases import (
+    HANDED_ROBOT,
+    ROBOT,
+    heavy_box,
+    open_bottle,
+    parcel,
+    small_box,
+    tray,
+)
 
 
 def test_friction_combines_as_bullet_does() -> None:
@@ -106,3 +117,45 @@ def test_tray_keeps_level_and_open_bottle_upright() -> None:
 def test_wrap_angle() -> None:
     wrapped = [wrap_angle(a) for a in (0.5, 3 * math.pi, -3.5)]
     assert_allclose(wrapped, [0.5, -math.pi, 2 * math.pi - 3.5])
+
+
+def _turned(point: tuple[float, float, float], heading: float) -> tuple[float, float, float]:
+    c, s = math.cos(heading), math.sin(heading)
+    return (c * point[0] - s * point[1], s * point[0] + c * point[1], point[2])
+
+
+@pytest.mark.parametrize("heading_deg", [90.0, 180.0, -45.0])
+@pytest.mark.parametrize(
+    ("make", "robot"),
+    [(parcel, ROBOT), (small_box, HANDED_ROBOT), (tray, ROBOT)],
+    ids=["lateral", "one_arm", "support"],
+)
+def test_a_robot_turned_with_its_world_reasons_the_same_grasps(
+    heading_deg: float, make: Any, robot: RobotCapabilities
+) -> None:
+    """Left is the robot's left: the world turned about z, robot and all, turns the palms
+    with it and changes nothing else (the arm on the object's side, the faces squeezed)."""
+    heading = math.radians(heading_deg)
+    # The object on the robot's right, its goal ahead on the left; turned 20 degrees.
+    at, goal = (0.45, -0.12, 0.075), (0.5, 0.2, 0.075)
+    before = assess(make(position=at, goals=[goal], yaw=0.35), robot, ReasonerConfig())
+    turned = make(position=_turned(at, heading), goals=[_turned(goal, heading)], yaw=0.35 + heading)
+    after = assess(turned, replace(robot, base_pose=(0.0, 0.0, heading)), ReasonerConfig())
+    assert before.options and [o.grasp for o in after.options] == [o.grasp for o in before.options]
+    for a, b in zip(after.options, before.options, strict=True):
+        assert a.arms == b.arms
+        assert_allclose(a.palms, [_turned(p, heading) for p in b.palms], atol=1e-12)
+    assert after.elements == before.elements
+    assert after.because == before.because
+
+
+def test_a_robot_standing_elsewhere_picks_the_arm_on_its_own_side() -> None:
+    """An object at world y > 0 is on the right of a robot standing further left."""
+    box = small_box(position=(0.45, 0.1, 0.03), goals=[(0.45, 0.1, 0.03)])
+    here = assess(box, HANDED_ROBOT, ReasonerConfig())
+    moved = assess(box, replace(HANDED_ROBOT, base_pose=(0.0, 0.3, 0.0)), ReasonerConfig())
+    one_arm = [o for o in here.options if o.grasp == GraspType.ONE_ARM_SIDE]
+    assert one_arm and one_arm[0].arms == (Arm.LEFT,)
+    (side,) = [o for o in moved.options if o.grasp == GraspType.ONE_ARM_SIDE]
+    assert side.arms == (Arm.RIGHT,)
+    assert side.palms[0][1] < 0.1  # on the object's face toward the robot's right
