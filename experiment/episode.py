@@ -478,6 +478,7 @@ def run_episode(
                     sim.scene.client,
                     world.objects[0].pose.position,
                     distance=1.6 * float(np.hypot(table[0], table[1])),
+                    heading_deg=world.robot.base.rpy_deg[2],
                 )
         last = [""]
 

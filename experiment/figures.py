@@ -423,6 +423,8 @@ class Animation:
     distance : float
         Camera distance from a point ``distance / 16`` above ``target``, m; about 1.6 times
         the table's diagonal frames the robot and the table.
+    heading_deg : float
+        The robot's heading about z, degrees: the camera turns with it.
     """
 
     def __init__(
@@ -432,6 +434,7 @@ class Animation:
         size: tuple[int, int] = (320, 240),
         period: float = 0.2,
         distance: float = 1.9,
+        heading_deg: float = 0.0,
     ) -> None:
         self.client = client
         self.size = size
@@ -443,7 +446,7 @@ class Animation:
         self.view = pb.computeViewMatrixFromYawPitchRoll(
             cameraTargetPosition=look_at,
             distance=distance,
-            yaw=110.0,
+            yaw=110.0 + heading_deg,
             pitch=-24.0,
             roll=0.0,
             upAxisIndex=2,
