@@ -1,6 +1,8 @@
 """Two-palm reach map: how well a world's robot reaches and holds the lateral grasp over a grid.
 
-For each object centre of a grid (x, y at a few heights above the table) and each grip yaw,
+For each object centre of a grid (x, y at a few heights above the table; in the robot's frame,
+x ahead of its base and y to its left: the world's for a robot at the origin facing +x) and
+each grip yaw (from the palms' natural pose, along the robot's y axis),
 the object stands on the table there, turned by the grip yaw, and the palms are placed on its
 turned +-y faces by the episode's own start-posture solve
 (:meth:`worlds.scene.Scene.place_palms`: a humanoid's torso included, both palms solved
@@ -33,7 +35,9 @@ def palm_error(
     world: World, centre: np.ndarray, hold_s: float = 0.5, grip_yaw_deg: float = 0.0
 ) -> float:
     """Larger palm position error (m) after holding the grasp at ``centre`` (the object's
-    centre, m) for ``hold_s``, the grip turned by ``grip_yaw_deg`` about z."""
+    centre, m, world frame) for ``hold_s``, the grip turned by ``grip_yaw_deg`` about z from
+    its natural pose (palms along the robot's y axis, as the robot is turned)."""
+    grip_yaw_deg += float(world.robot.base.rpy_deg[2])
     obj = world.objects[0]
     half_span = float(obj.shape.size[1]) / 2.0  # type: ignore[union-attr]
     # The object where the palms hold it (its start pose would stand in their way elsewhere),
@@ -103,7 +107,14 @@ def main() -> int:
     args = parser.parse_args()
     world = load_world(args.world)
     rest = np.asarray(world.objects[0].pose.position, dtype=float)
-    xs = rest[0] + args.dx * np.arange(-args.nx, args.nx + 1)
+    # The grid in the robot's frame (x forward from its base, y to its left): the object's
+    # rest distance ahead of the robot, either side of its centre line.
+    heading = math.radians(world.robot.base.rpy_deg[2])
+    base = np.asarray(world.robot.base.position, dtype=float)
+    forward = np.array([math.cos(heading), math.sin(heading), 0.0])
+    left = np.array([-math.sin(heading), math.cos(heading), 0.0])
+    ahead = float((rest - base) @ forward)
+    xs = ahead + args.dx * np.arange(-args.nx, args.nx + 1)
     ys = args.dy * np.arange(-args.ny, args.ny + 1)
     grid: list[list[float]] = []
     for grip in args.grip_yaws:
@@ -117,7 +128,9 @@ def main() -> int:
             for x in xs:
                 row = []
                 for y in ys:
-                    error = palm_error(world, np.array([x, y, z]), grip_yaw_deg=grip)
+                    at = base + x * forward + y * left
+                    at[2] = z
+                    error = palm_error(world, at, grip_yaw_deg=grip)
                     cell = [round(float(x), 4), round(float(y), 4), round(z, 4), grip, error * 1e3]
                     grid.append(cell)
                     row.append(f"{error * 1e3:7.1f}")
