@@ -76,6 +76,27 @@ def _table_problem(obj: ObjectSpec, move: MoveSpec, table: TableSpec) -> tuple[s
     return None
 
 
+def _robot_problem(spec: WorldSpec) -> WorldFileProblem | None:
+    """Why the robot cannot stand where the world puts it: an arm's base inside the table
+    top's footprint (the robot would stand in the table); else None."""
+    table = spec.scene.table
+    tx, ty, _ = table.position
+    half_x, half_y = table.size[0] / 2.0, table.size[1] / 2.0
+    model = robot_model_of(spec.scene.robot)
+    for arm in (Arm.LEFT, Arm.RIGHT):
+        x, y, _ = model.bodies[model.arms[arm].body].base2world_position
+        if abs(x - tx) < half_x and abs(y - ty) < half_y:
+            return WorldFileProblem(
+                "robot.base.position",
+                f"a robot beside the table, its arms' bases off the table top "
+                f"(x {_fmt(tx - half_x)}..{_fmt(tx + half_x)} m, "
+                f"y {_fmt(ty - half_y)}..{_fmt(ty + half_y)} m)",
+                f"{_vec(spec.scene.robot.base_position)}: the {arm.value} arm's base at "
+                f"[{_fmt(x)}, {_fmt(y)}] m stands inside it",
+            )
+    return None
+
+
 def _out_of_reach(option: GraspOption, reach: Mapping[Arm, ArmReach]) -> str | None:
     """How a grasp's palms at the goal fall outside their arms' reach, or None."""
     for arm, palm in zip(option.arms, option.palms, strict=True):
@@ -118,6 +139,9 @@ def feasibility_problems(
         Empty when the checks pass; fields are paths in the world file.
     """
     spec = as_world_spec(world)
+    standing = _robot_problem(spec)
+    if standing is not None:  # every other check assumes the robot stands beside the table
+        return [standing]
     robot = robot_capabilities(spec)
     config = ReasonerConfig()
     contexts = {c.name: c for c in object_contexts(spec)}

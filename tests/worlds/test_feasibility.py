@@ -35,6 +35,11 @@ PROBLEMS = {
         "two_palm_lateral puts the left palm at [1.45, 0.3, 0.675], 1.42 m from the left "
         "shoulder [0.0563, 0.35, 0.956]; the arm reaches at most 0.969 m"
     ),
+    "robot_in_the_table.yaml": (
+        "robot.base.position: expected a robot beside the table, its arms' bases off the "
+        "table top (x 0.35..0.95 m, y -0.5..0.5 m), got [0.5, 0, 0]: the left arm's base at "
+        "[0.5, 0.35] m stands inside it"
+    ),
     "too_wide.yaml": (
         "objects[0]: expected a grasp the robot can make, got none for parcel: "
         "two_palm_lateral: faces 0.7 m, 0.65 m apart, outside the palms' span 0.1..0.6 m; "
