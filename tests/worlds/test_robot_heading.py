@@ -62,6 +62,13 @@ def turned_world(world: World, quarter_turns: int, trials: bool = True) -> World
         obj["pose"]["rpy_deg"][2] += deg
     for obstacle in data["obstacles"]:
         obstacle["position"] = _turn_xy(obstacle["position"], quarter_turns)
+    for fixture in data.get("fixtures") or []:
+        fixture["position"] = _turn_xy(fixture["position"], quarter_turns)
+        fixture["yaw_deg"] += deg
+    for push in data.get("disturbances") or []:
+        for key in ("force_n", "torque_nm"):
+            if push.get(key) is not None:
+                push[key] = _turn_xy(push[key], quarter_turns)
     for step in data["task"]:
         for move in step["moves"]:
             move["goal"]["position"] = _turn_xy(move["goal"]["position"], quarter_turns)
