@@ -166,3 +166,12 @@ def test_the_default_world_turned_a_quarter_turn_is_done_as_well() -> None:
     assert base.success and report.success, report.failure
     assert not report.obstacle_contacts
     assert_allclose(report.placement_error_m, base.placement_error_m, atol=0.002)
+
+
+def test_the_icub_turned_a_quarter_turn_places_as_it_does_unturned() -> None:
+    """One body carrying both arms (and a torso): its palms wait, and its grips turn, with it."""
+    world = load_world(ROOT / "worlds" / "icub_parcel_pick_place.yaml")
+    report = run_episode(turned_world(world, 1, trials=False), animation=False)
+    assert report.success, report.failure
+    assert not report.obstacle_contacts
+    assert all(e is not None and e < 0.005 for e in report.placement_error_m)
