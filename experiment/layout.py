@@ -348,7 +348,8 @@ def _draw_trial(
         sphere: Sphere | None = None
         low, high = _yaw_range(region)
         for attempt in range(YAW_ATTEMPTS):
-            if attempt == YAW_ATTEMPTS - 1 and low <= math.degrees(prev_yaw) <= high:
+            # The same yaw a whole turn apart is the same (a range may run past 180 degrees).
+            if attempt == YAW_ATTEMPTS - 1 and (math.degrees(prev_yaw) - low) % 360.0 <= high - low:
                 goal_yaws[i] = math.degrees(prev_yaw)  # at last, no turn at all
             elif attempt:  # no sphere fits the robot turning this way: another turn
                 goal_yaws[i] = _uniform(turn_rng, (low, high))

@@ -491,8 +491,12 @@ class Region(_FileModel):
 
 
 def _yaw_in_a_turn(yaw: tuple[float, float] | None) -> tuple[float, float] | None:
-    if yaw is not None and (yaw[0] < -180.0 or yaw[1] > 180.0):
-        raise field_problem("angles within [-180, 180] degrees", yaw)
+    # One turn at most, anywhere in [-360, 360]: [90, 270] is the yaws a robot facing -x
+    # holds as one facing +x holds [-90, 90].
+    if yaw is not None and (yaw[0] < -360.0 or yaw[1] > 360.0 or yaw[1] - yaw[0] > 360.0):
+        raise field_problem(
+            "angles within [-360, 360] degrees spanning at most one turn (360 degrees)", yaw
+        )
     return yaw
 
 
@@ -506,8 +510,8 @@ class GoalRegion(Region):
 
     yaw_deg: OptionalRange = Field(
         default=None,
-        description="[low, high] of the goal's yaw about z, degrees, within [-180, 180]; "
-        "default: trials.goal_yaw_deg",
+        description="[low, high] of the goal's yaw about z, degrees, within [-360, 360] and "
+        "one turn (e.g. [90, 270] for a robot facing -x); default: trials.goal_yaw_deg",
     )
     obstacles: tuple[ObstacleKind, ...] = Field(
         default=OBSTACLE_KINDS,
@@ -745,8 +749,8 @@ class TrialSettings(_FileModel):
     )
     goal_yaw_deg: Range = Field(
         default=(0.0, 0.0),
-        description="[low, high] of each goal's yaw about z, degrees, within [-180, 180] "
-        "(a move's own yaw_deg replaces it)",
+        description="[low, high] of each goal's yaw about z, degrees, within [-360, 360] and "
+        "one turn (e.g. [90, 270] for a robot facing -x; a move's own yaw_deg replaces it)",
     )
     moves: tuple[GoalRegion, ...] = Field(
         default=(),

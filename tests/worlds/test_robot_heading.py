@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 import pytest
 from numpy.testing import assert_allclose
+from pydantic import ValidationError
 
 from experiment.episode import run_episode
 from experiment.layout import Posture, RobotClearance, draw_trial
@@ -46,8 +47,7 @@ def _turn_region(region: dict[str, Any], quarter_turns: int) -> dict[str, Any]:
 
 def turned_world(world: World, quarter_turns: int, trials: bool = True) -> World:
     """``world`` turned about the world's z axis through the origin by ``quarter_turns``
-    (its trial layout too, or, without ``trials``, left out: a goal yaw range turned by a half
-    turn does not fit in [-180, 180] degrees)."""
+    (its trial layout too, or, without ``trials``, left out)."""
     data = copy.deepcopy(world.model_dump(mode="json"))
     deg = 90.0 * quarter_turns
     robot = data["robot"]["base"]
@@ -103,7 +103,7 @@ def test_the_waiting_palms_turn_with_the_world(quarter_turns: int) -> None:
     world = load_world(DEFAULT)
     rest = (0.10, 0.38, 0.25)
     before = rest_palm_poses(as_world_spec(world).scene, rest)
-    turned = turned_world(world, quarter_turns, trials=False)
+    turned = turned_world(world, quarter_turns)
     after = rest_palm_poses(as_world_spec(turned).scene, rest)
     turn = quat.from_axis_angle(np.array([0.0, 0.0, 1.0]), quarter_turns * math.pi / 2.0)
     for arm in (Arm.LEFT, Arm.RIGHT):
@@ -175,3 +175,23 @@ def test_the_icub_turned_a_quarter_turn_places_as_it_does_unturned() -> None:
     assert report.success, report.failure
     assert not report.obstacle_contacts
     assert all(e is not None and e < 0.005 for e in report.placement_error_m)
+
+
+def test_a_robot_facing_minus_x_draws_its_goal_yaws_across_180_degrees() -> None:
+    """[90, 270] is to a robot facing -x what [-90, 90] is to one facing +x."""
+    world = turned_world(load_world(DEFAULT), 2)
+    assert world.trials.goal_yaw_deg == (90.0, 270.0)
+    with RobotClearance(world) as robot:
+        for trial in range(3):
+            drawn, _ = draw_trial(world, 0, trial, robot)
+            for move in drawn.task[0].moves:
+                yaw = move.goal.rpy_deg[2]
+                assert 90.0 <= yaw <= 270.0 or (yaw - 90.0) % 360.0 <= 180.0
+
+
+@pytest.mark.parametrize("yaws", [(-200.0, 200.0), (-400.0, -300.0), (100.0, 370.0)])
+def test_a_goal_yaw_range_is_one_turn_within_two(yaws: tuple[float, float]) -> None:
+    data = load_world(DEFAULT).model_dump(mode="json")
+    data["trials"]["goal_yaw_deg"] = list(yaws)
+    with pytest.raises(ValidationError, match="spanning at most one turn"):
+        world_from_data(data, DEFAULT)

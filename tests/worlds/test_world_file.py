@@ -235,8 +235,8 @@ CASES = [
     (
         "trials_move_yaw.yaml",
         r"trials\.moves\[0\]\.yaw_deg",
-        r"angles within \[-180, 180\] degrees",
-        r"\[-200\.0, 0\.0\]",
+        r"angles within \[-360, 360\] degrees spanning at most one turn",
+        r"\[-200\.0, 200\.0\]",
     ),
 ]
 
