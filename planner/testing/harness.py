@@ -63,6 +63,13 @@ def set_up(
     return leaf
 
 
+def _tick_to_success(leaf: py_trees.behaviour.Behaviour, world: WorldPort, dt: float) -> None:
+    """Tick a set-up ``leaf`` until it stops; an AssertionError with its feedback unless it
+    succeeded."""
+    log = tick_until(leaf, world, dt)
+    assert log.final == Status.SUCCESS, f"{leaf.name}: {log.feedback}"
+
+
 def select_skills(
     world: WorldPort,
     library: SkillLibrary,
@@ -74,8 +81,7 @@ def select_skills(
     plan, also left in blackboard key ``plan_key``. An AssertionError with the leaf's feedback
     if it fails."""
     leaf = set_up(SelectSkills("select"), world, library, dt, object=name, plan=f"{{{plan_key}}}")
-    log = tick_until(leaf, world, dt)
-    assert log.final == Status.SUCCESS, f"select: {log.feedback}"
+    _tick_to_success(leaf, world, dt)
     plan = py_trees.blackboard.Blackboard.get(f"/{plan_key}")
     assert isinstance(plan, SemanticAction), f"blackboard /{plan_key}: {plan!r}"
     return plan
@@ -106,8 +112,7 @@ def grasp_object(
         state=f"{{{state_key}}}",
     )
     for leaf in (approach, grasp):
-        log = tick_until(leaf, world, dt)
-        assert log.final == Status.SUCCESS, f"{leaf.name}: {log.feedback}"
+        _tick_to_success(leaf, world, dt)
     return plan
 
 
