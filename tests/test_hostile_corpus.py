@@ -583,7 +583,8 @@ CASES: dict[str, Case] = {
         19,
         world_edit(_BALL, "position: [0.65, 0.0, 0.70]"),
         2,
-        r"obstacles\[0\]\.position: expected ball_right clear of parcel at the goal of move 0 "
+        r"obstacles\[0\]\.position: expected ball_right at least 1 mm clear of parcel at the goal "
+        r"of move 0 "
         r"when task\[0\]\.moves\[1\] starts, got \[0\.65, 0, 0\.7\]: 90 mm inside parcel",
     ),
     "json_world_repeated_key": Case(

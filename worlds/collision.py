@@ -1240,6 +1240,13 @@ def _hit(
     return bool(fcl.collide(probe, obstacle, fcl.CollisionRequest(), fcl.CollisionResult()))
 
 
+def _posed(shape: ShapeSpec, pose: tuple[ArrayLike, ArrayLike]) -> fcl.CollisionObject:
+    position, quaternion = pose
+    rotation = quat.to_matrix(np.asarray(quaternion, dtype=float))
+    transform = fcl.Transform(rotation, np.asarray(position, dtype=float))
+    return fcl.CollisionObject(_shape_geometry(shape)[0], transform)
+
+
 def penetration_depth(
     shape_a: ShapeSpec,
     pose_a: tuple[ArrayLike, ArrayLike],
@@ -1248,17 +1255,29 @@ def penetration_depth(
 ) -> float:
     """How deep two shapes at their poses (position (3,), quaternion (4,) scalar-last, world
     frame) interpenetrate, m; 0 when they are apart or only touch."""
-    objects = []
-    for shape, (position, quaternion) in ((shape_a, pose_a), (shape_b, pose_b)):
-        geometry = _shape_geometry(shape)[0]
-        rotation = quat.to_matrix(np.asarray(quaternion, dtype=float))
-        transform = fcl.Transform(rotation, np.asarray(position, dtype=float))
-        objects.append(fcl.CollisionObject(geometry, transform))
+    a, b = _posed(shape_a, pose_a), _posed(shape_b, pose_b)
     request = fcl.CollisionRequest(num_max_contacts=1, enable_contact=True)
     result = fcl.CollisionResult()
-    if not fcl.collide(objects[0], objects[1], request, result) or not result.contacts:
+    if not fcl.collide(a, b, request, result) or not result.contacts:
         return 0.0
     return max(float(result.contacts[0].penetration_depth), 0.0)
+
+
+def shape_gap(
+    shape_a: ShapeSpec,
+    pose_a: tuple[ArrayLike, ArrayLike],
+    shape_b: ShapeSpec,
+    pose_b: tuple[ArrayLike, ArrayLike],
+) -> float:
+    """Signed gap between two shapes at their poses (as :func:`penetration_depth`), m: their
+    distance when apart, 0 when they touch, minus the penetration depth when they overlap."""
+    a, b = _posed(shape_a, pose_a), _posed(shape_b, pose_b)
+    request = fcl.CollisionRequest(num_max_contacts=1, enable_contact=True)
+    result = fcl.CollisionResult()
+    if fcl.collide(a, b, request, result):
+        depth = float(result.contacts[0].penetration_depth) if result.contacts else 0.0
+        return -max(depth, 0.0)
+    return max(float(fcl.distance(a, b, fcl.DistanceRequest())), 0.0)
 
 
 def welded_links(body: int, link: int, client: int) -> frozenset[int]:

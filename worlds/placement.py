@@ -7,9 +7,11 @@ that names neither. These checks find it from the numbers alone, before anything
 
 - an object over the table whose bottom is more than :data:`SINK_TOLERANCE_M` below the top;
 - two objects interpenetrating at their start poses by more than :data:`OVERLAP_TOLERANCE_M`;
-- an obstacle of a move interpenetrating any object where it stands when that move starts:
-  the moved object at its start or its previous goal, the others at their start poses or
-  where their own moves left them.
+- an obstacle of a move touching, or nearer than :data:`OBSTACLE_GAP_M` to, any object
+  where it stands when that move starts (the moved object at its start or its previous goal,
+  the others at their start poses or where their own moves left them), or the moved object at
+  the move's goal. An obstacle switched on against an object, or standing where the object
+  must be set down, makes a contact the judge fails whatever the robot does.
 
 Shapes are compared exactly (FCL, :func:`worlds.collision.penetration_depth`), so objects
 standing side by side, or one stacked on another, pass.
@@ -23,7 +25,7 @@ import numpy as np
 
 from skills import quaternion as quat
 from skills.flip import vertical_half_extent
-from worlds.collision import penetration_depth
+from worlds.collision import penetration_depth, shape_gap
 from worlds.spec import ObjectSpec, ObstacleSpec, ShapeSpec, WorldSpec
 from worlds.world_errors import WorldFileProblem
 
@@ -32,6 +34,9 @@ from worlds.world_errors import WorldFileProblem
 SINK_TOLERANCE_M = 0.001
 #: How deep two bodies may interpenetrate at the start, m (touching is fine).
 OVERLAP_TOLERANCE_M = 0.002
+#: Least gap between an obstacle and an object where the object stands when a move naming the
+#: obstacle starts, and at the move's goal, m: a touching obstacle is a contact.
+OBSTACLE_GAP_M = 0.001
 
 Quat = tuple[float, float, float, float]
 Vec3 = tuple[float, float, float]
@@ -108,30 +113,45 @@ def start_problems(
     }
     for i, step in enumerate(spec.task):
         for j, move in enumerate(step.moves):
+            good = (i, j) not in bad_goals
+            goal = (move.goal_position, move.goal_quaternion)
             for name in move.obstacles:
                 o, obstacle = obstacles[name]
+                where: list[tuple[str, tuple[Vec3, Quat], str]] = []
                 for body, pose in poses.items():
                     if pose is None:
                         continue
-                    depth = _obstacle_depth(obstacle, by_name[body], *pose)
-                    if depth > OVERLAP_TOLERANCE_M:
-                        moved = body == step.object
-                        at = (
-                            ("at its start pose" if j == 0 else f"at the goal of move {j - 1}")
-                            if moved
-                            else "where it stands"
-                        )
+                    moved = body == step.object
+                    at = (
+                        ("at its start pose" if j == 0 else f"at the goal of move {j - 1}")
+                        if moved
+                        else "where it stands"
+                    )
+                    where.append((body, pose, f"{at} when task[{i}].moves[{j}] starts"))
+                if good:
+                    where.append((step.object, goal, f"at the goal of task[{i}].moves[{j}]"))
+                for body, pose, at in where:
+                    gap = _obstacle_gap(obstacle, by_name[body], *pose)
+                    if gap < OBSTACLE_GAP_M:
                         problems.append(
                             WorldFileProblem(
                                 f"obstacles[{o}].position",
-                                f"{name} clear of {body} {at} when task[{i}].moves[{j}] starts",
-                                f"{vec(obstacle.position)}: {fmt(depth * 1000)} mm inside "
-                                f"{body} at {vec(pose[0])}",
+                                f"{name} at least {fmt(OBSTACLE_GAP_M * 1000)} mm clear of "
+                                f"{body} {at}",
+                                f"{vec(obstacle.position)}: {_gap_words(gap)} {body} at "
+                                f"{vec(pose[0])}",
                             )
                         )
-            good = (i, j) not in bad_goals
-            poses[step.object] = (move.goal_position, move.goal_quaternion) if good else None
+            poses[step.object] = goal if good else None
     return problems
+
+
+def _gap_words(gap: float) -> str:
+    if abs(gap) < 1e-6:  # FCL's distances between touching shapes are off by rounding alone
+        return "touching"
+    if gap < 0.0:
+        return f"{fmt(-gap * 1000)} mm inside"
+    return f"{fmt(gap * 1000)} mm from"
 
 
 def _depth(
@@ -159,18 +179,21 @@ def _parts(
     return parts
 
 
-def _obstacle_depth(
+def _obstacle_gap(
     obstacle: ObstacleSpec,
     obj: ObjectSpec,
     position: tuple[float, float, float],
     quaternion: Quat,
 ) -> float:
-    return penetration_depth(
-        obstacle.shape, (obstacle.position, _UPRIGHT), obj.shape, (position, quaternion)
+    # A tray is its floor and walls: a sphere over a tray's well is as far as its nearest part.
+    return min(
+        shape_gap(obstacle.shape, (obstacle.position, _UPRIGHT), part, pose)
+        for part, pose in _parts(obj.shape, position, quaternion)
     )
 
 
 __all__ = [
+    "OBSTACLE_GAP_M",
     "OVERLAP_TOLERANCE_M",
     "SINK_TOLERANCE_M",
     "fmt",

@@ -75,6 +75,43 @@ def test_an_obstacle_in_the_way_of_any_object_when_its_move_starts() -> None:
     (found,) = problems(TWO, post_on_the_right_parcel)
     assert found == (
         "obstacles[0].position",
-        "expected post clear of parcel_right where it stands when task[0].moves[0] starts, "
+        "expected post at least 1 mm clear of parcel_right where it stands when task[0].moves[0] "
+        "starts, "
         "got [0.72, -0.22, 0.7]: 130 mm inside parcel_right at [0.72, -0.22, 0.675]",
     )
+
+
+@pytest.mark.parametrize(
+    ("bottom_gap", "words"), [(0.0, "touching"), (0.0005, "0.5 mm from"), (0.0015, None)]
+)
+def test_an_obstacle_resting_on_the_object_is_a_contact(
+    bottom_gap: float, words: str | None
+) -> None:
+    # ball_right (r 0.04) straight over the parcel's top (0.75) at move 1's start, the centre
+    # goal: touching, or half a millimetre off, fails whatever the robot does; 1.5 mm passes.
+    def rest_on_top(d: dict[str, Any]) -> None:
+        d["obstacles"][0]["position"] = [0.65, 0.05, 0.75 + 0.04 + bottom_gap]
+
+    found = problems(DEFAULT, rest_on_top)
+    if words is None:
+        assert found == []
+        return
+    assert found == [
+        ("obstacles[0].position",
+         "expected ball_right at least 1 mm clear of parcel at the goal of move 0 when "
+         f"task[0].moves[1] starts, got [0.65, 0.05, {0.79 + bottom_gap:.3g}]: {words} parcel at "
+         "[0.65, 0, 0.675]"),
+    ]  # fmt: skip
+
+
+def test_an_obstacle_where_the_object_is_set_down() -> None:
+    # ball_left moved beside the left goal (0.60, 0.15): its surface 2 cm inside the parcel's
+    # -x face there, clear of the parcel where move 2 starts (the right goal).
+    def beside_the_goal(d: dict[str, Any]) -> None:
+        d["obstacles"][1]["position"] = [0.48, 0.15, 0.70]
+
+    assert problems(DEFAULT, beside_the_goal) == [
+        ("obstacles[1].position",
+         "expected ball_left at least 1 mm clear of parcel at the goal of task[0].moves[2], "
+         "got [0.48, 0.15, 0.7]: 20 mm inside parcel at [0.6, 0.15, 0.675]"),
+    ]  # fmt: skip
