@@ -94,7 +94,7 @@ class EpisodeReport:
     #: Smallest FCL distance from a forearm to an active obstacle, m (inf: none measured).
     min_forearm_distance_m: float = math.inf
     #: Physics steps with an arm's link other than its hand touching the table, by
-    #: ``"<arm>_arm ~ table"`` (:attr:`worlds.sim_world.SafetyRecord.table_contacts`).
+    #: ``"<arm>_arm ~ table"`` (:attr:`worlds.safety_monitor.SafetyRecord.table_contacts`).
     table_contacts: dict[str, int] = field(default_factory=dict)
     #: Per carried tray and ball loose on it, its peak tilt and the ball's path relative to
     #: the tray (:meth:`experiment.tray.TrayVerdict.summary`); empty without trays.

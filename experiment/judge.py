@@ -15,7 +15,8 @@ from collections.abc import Sequence
 from py_trees.common import Status
 
 from planner.runner import RunResult
-from worlds.sim_world import SafetyRecord, SimWorld
+from worlds.safety_monitor import SafetyRecord
+from worlds.sim_world import SimWorld
 
 PLACE_TOLERANCE_M = 0.02
 PLACE_TOLERANCE_DEG = 10.0

@@ -1,9 +1,10 @@
 """The simulated world behind the planner's port: PyBullet scene, FCL mirror, safety monitor.
 
 :class:`SimWorld` satisfies :class:`planner.port.WorldPort`. Between control ticks it steps
-physics at the world file's rate and watches what a trial is judged on: contacts between any
-robot link or the parcel and an obstacle (PyBullet, every physics step), the arms touching each
-other, the smallest FCL distance to an obstacle, and the parcel falling.
+physics at the world file's rate and has a :class:`worlds.safety_monitor.SafetyMonitor` watch
+what a trial is judged on: contacts between any robot link or the parcel and an obstacle
+(PyBullet, every physics step), the arms touching each other, the smallest FCL distance to an
+obstacle, and the parcel falling.
 
 Given a :class:`worlds.truth.PhysicalTruth`, the physics follows it while the port still
 answers from the world file (masses, frictions, the table), and :meth:`SimWorld.object_pose`
@@ -16,8 +17,8 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass, field, replace
-from typing import Any, NamedTuple
+from dataclasses import replace
+from typing import NamedTuple
 
 import numpy as np
 import pybullet as pb
@@ -41,9 +42,10 @@ from skills.types import Array
 from skills.vocabulary import ARMS, Arm
 from worlds.adapters import object_contexts, robot_capabilities
 from worlds.arm_prediction import WAYPOINT_ITERATIONS, WAYPOINT_TOLERANCE, ArmPredictor
-from worlds.collision import FIXTURES, CollisionWorld, arm_group, welded_links
+from worlds.collision import CollisionWorld
 from worlds.control import ImpedanceGains, PalmCommand
-from worlds.fixtures import FixtureLog, wall_forces
+from worlds.fixtures import FixtureLog
+from worlds.safety_monitor import SafetyMonitor, SafetyRecord
 from worlds.scene import Scene, rest_palm_poses
 from worlds.spec import Shape, ShapeSpec, WorldSpec
 from worlds.trays import TrayFrame, riders
@@ -84,25 +86,6 @@ MAX_LIFT_M = 0.30
 LOCATED_BY_GRASP_N = 0.5
 
 
-def touching(points: Sequence[Sequence[Any]]) -> bool:
-    """Whether PyBullet contact points (``getContactPoints`` tuples) say two bodies touch: a
-    point at or below zero distance, or one that carries a normal force.
-
-    Bullet keeps a manifold's points a little past separation (positive distance, no force)
-    so that contacts persist cheaply; such a point is a near miss, which the FCL clearance
-    measures, not a contact.
-    """
-    return any(p[8] <= 0.0 or p[9] > 0.0 for p in points)
-
-
-def _points_on(
-    points: Sequence[Sequence[Any]], body: int, links: frozenset[int] | None
-) -> list[Sequence[Any]]:
-    """The contact points of ``points`` (obstacle as body A) on ``body``'s ``links`` (None:
-    any of its links)."""
-    return [p for p in points if p[2] == body and (links is None or p[4] in links)]
-
-
 def forearm_doubt(palm_positions: Array, palm_orientations: Array) -> Array:
     """Extra clearance asked of the forearms at each waypoint (N,), m: grows with the palms'
     travel from the first waypoint (:data:`FOREARM_DOUBT_PER_M`), up to
@@ -132,56 +115,6 @@ def shape_extents(shape: ShapeSpec) -> Array:
     if shape.kind is Shape.CYLINDER:
         return np.array([2.0 * shape.radius, 2.0 * shape.radius, shape.height])
     return np.full(3, 2.0 * shape.bounding_radius())
-
-
-@dataclass
-class SafetyRecord:
-    """What the monitor saw over a run (the trial's success criteria).
-
-    Attributes
-    ----------
-    obstacle_contacts : dict
-        ``"<body> ~ <obstacle>"`` -> number of physics steps in contact.
-    arm_contacts : int
-        Physics steps with the two arms touching.
-    min_obstacle_distance_m : float
-        Smallest FCL distance from an arm link or the object to an active obstacle, m.
-    closest : str
-        What came closest to what.
-    dropped : bool
-        An object fell: above the table and touched by neither palm while moving down.
-    drop_time : float or None
-    dropped_object : str
-        The object that fell first ("" if none did).
-    spawned_inside : dict
-        ``obstacle -> [bodies]``: an obstacle switched on where an object or an arm already
-        was (PyBullet would push it out at once, or, for a fixed base, never).
-    forearm_contacts : dict
-        ``"<arm>_forearm ~ <obstacle>"`` -> physics steps with a forearm link
-        (:attr:`worlds.robots.RobotModel.forearm_link_names`) touching it; these steps count
-        in ``obstacle_contacts`` too, under the arm.
-    min_forearm_distance_m : float
-        Smallest FCL distance from a forearm link to an active obstacle, m.
-    forearm_closest : str
-        Which forearm link came closest to which obstacle.
-    table_contacts : dict
-        ``"<arm>_arm ~ table"`` -> physics steps with a link of the arm other than its hand
-        (the palm and the links welded to it) touching the table: a wrist or forearm dragged
-        over it, or pinned on it. A report, not a success criterion.
-    """
-
-    obstacle_contacts: dict[str, int] = field(default_factory=dict)
-    arm_contacts: int = 0
-    min_obstacle_distance_m: float = math.inf
-    closest: str = ""
-    dropped: bool = False
-    drop_time: float | None = None
-    dropped_object: str = ""
-    spawned_inside: dict[str, list[str]] = field(default_factory=dict)
-    forearm_contacts: dict[str, int] = field(default_factory=dict)
-    min_forearm_distance_m: float = math.inf
-    forearm_closest: str = ""
-    table_contacts: dict[str, int] = field(default_factory=dict)
 
 
 class LinkHits(NamedTuple):
@@ -276,7 +209,6 @@ class SimWorld:
         self.watched: tuple[str, ...] = (
             (object_name,) if object_name else task_objects or (spec.scene.objects[0].name,)
         )
-        self.safety = SafetyRecord()
         self._rest = self._rest_poses()
         self.scene.place_palms({a: (p.position, p.orientation) for a, p in self._rest.items()})
         self._commands: dict[Arm, Pose] = dict(self._rest)
@@ -287,53 +219,10 @@ class SimWorld:
             for o in self.scene.spec.obstacles
         }
         self._substeps = max(1, round(spec.scene.physics_hz / spec.scene.control_hz))
-        #: What the contact monitor watches against the obstacles, by label: the arms (a body
-        #: and its links, None: all of them), the objects, and the forearms' links apart
-        #: (fixed once the scene is built).
-        robot = self.scene.robot
-        self._watched_bodies: dict[str, tuple[int, frozenset[int] | None]] = {
-            f"{a.value}_arm": (self.scene.robot_ids[robot.arms[a].body], self.scene.arm_links[a])
-            for a in ARMS
-        }
-        self._watched_bodies.update({n: (b, None) for n, b in self.scene.object_ids.items()})
-        # The groups whose clearance the judge watches every control step: both arms (palms
-        # included) and every object.
-        self._clearance_groups = (
-            *(arm_group(a) for a in ARMS),
-            *self.scene.object_ids,
-        )
-        self._forearm_links: dict[str, tuple[int, frozenset[int]]] = {}
-        self._forearm_elements: list[str] = []
-        for a in ARMS:
-            names = robot.forearm_link_names.get(a, frozenset())
-            if not names:
-                continue
-            body = self.scene.robot_ids[robot.arms[a].body]
-            links = frozenset(
-                j
-                for j in range(pb.getNumJoints(body, physicsClientId=self.scene.client))
-                if pb.getJointInfo(body, j, physicsClientId=self.scene.client)[12].decode() in names
-            )
-            self._forearm_links[f"{a.value}_forearm"] = (body, links)
-            self._forearm_elements.extend(
-                e
-                for e in self.collision.arm_links(a)
-                if e.split("/", 1)[1].split("#", 1)[0] in names
-            )
-        #: Per arm, its body and the links watched against the table: the arm's links but its
-        #: hand (a palm may rest on the table beside a low object; a wrist may not).
-        self._table_links: dict[str, tuple[int, frozenset[int]]] = {}
-        client = self.scene.client
-        for a in ARMS:
-            arm = robot.arms[a]
-            body = self.scene.robot_ids[arm.body]
-            arm_links = self.scene.arm_links[a]
-            if arm_links is None:
-                arm_links = frozenset(range(pb.getNumJoints(body, physicsClientId=client)))
-            hand = welded_links(body, arm.palm_link, client)
-            self._table_links[f"{a.value}_arm"] = (body, frozenset(arm_links - hand - {-1}))
-        #: The fixtures' walls' forces and the robot's touches, every physics step.
-        self.fixture_log = FixtureLog(self.scene.physics_dt)
+        #: What the run is judged on, watched as the physics runs (:mod:`worlds.safety_monitor`).
+        self.monitor = SafetyMonitor(self.scene, self.collision, self.watched)
+        self.safety: SafetyRecord = self.monitor.record
+        self.fixture_log: FixtureLog = self.monitor.fixture_log
         self._fixture_info = tuple(
             FixtureInfo(
                 f.name,
@@ -345,9 +234,6 @@ class SimWorld:
             )
             for f in spec.scene.fixtures
         )
-        self._rest_z = {
-            o.name: float(o.position[2]) for o in self.scene.physical.objects
-        }  # resting centre height, on the true table
         self.collision.sync()
 
     def _sensed_context(self, context: ObjectContext) -> ObjectContext:
@@ -388,14 +274,9 @@ class SimWorld:
         steps = max(1, round(dt / self.scene.physics_dt))
         for _ in range(steps):
             self.scene.step(1)
-            self._watch_contacts()
-            if self.scene.fixture_ids:
-                self._watch_fixtures()
+            self.monitor.after_physics_step()
         self.collision.sync()
-        self._watch_distances()
-        if self._fixture_info:
-            self._watch_fixture_distances()
-        self._watch_drop()
+        self.monitor.after_control_step()
         if self._unlocated:
             self._locate_held()
 
@@ -404,111 +285,6 @@ class SimWorld:
         self._unlocated = tuple(
             name for name in self._unlocated if not self.scene.is_held(name, LOCATED_BY_GRASP_N)
         )
-
-    def _watch_contacts(self) -> None:
-        c = self.scene.client
-        bodies = self._watched_bodies
-        contacts = self.safety.obstacle_contacts
-        for name in self.scene.active_obstacles:
-            # One query per obstacle: PyBullet gives every point of it with any body, each
-            # turned to have the obstacle as body A (the same points, distances and forces as
-            # one query per pair).
-            points = pb.getContactPoints(bodyA=self.scene.obstacle_ids[name], physicsClientId=c)
-            if not points:
-                continue
-            for label, (body, links) in bodies.items():
-                if touching(_points_on(points, body, links)):
-                    key = f"{label} ~ {name}"
-                    contacts[key] = contacts.get(key, 0) + 1
-            for label, (body, links) in self._forearm_links.items():
-                if touching(_points_on(points, body, links)):
-                    key = f"{label} ~ {name}"
-                    forearm = self.safety.forearm_contacts
-                    forearm[key] = forearm.get(key, 0) + 1
-        # One query for the table too, sorted by arm (the iCub's two arms share one body).
-        points = pb.getContactPoints(bodyA=self.scene.table_id, physicsClientId=c)
-        for label, (body, links) in self._table_links.items():
-            if points and touching(_points_on(points, body, links)):
-                key = f"{label} ~ table"
-                self.safety.table_contacts[key] = self.safety.table_contacts.get(key, 0) + 1
-        (left, left_links), (right, right_links) = bodies["left_arm"], bodies["right_arm"]
-        if left != right:
-            if touching(pb.getContactPoints(bodyA=left, bodyB=right, physicsClientId=c)):
-                self.safety.arm_contacts += 1
-        elif left_links is not None and right_links is not None:
-            # One body carrying both arms: its own contacts between the two arms' links.
-            points = pb.getContactPoints(bodyA=left, bodyB=left, physicsClientId=c)
-            if touching(
-                [
-                    p
-                    for p in points
-                    if (p[3] in left_links and p[4] in right_links)
-                    or (p[3] in right_links and p[4] in left_links)
-                ]
-            ):
-                self.safety.arm_contacts += 1
-
-    def _watch_fixtures(self) -> None:
-        """Each fixture's walls' forces on the objects, and any robot body touching it."""
-        c = self.scene.client
-        log = self.fixture_log
-        for f in self.scene.physical.fixtures:  # where they stand, to tell their walls apart
-            body = self.scene.fixture_ids[f.name]
-            forces = np.zeros(4)
-            for obj in self.scene.object_ids.values():
-                forces += wall_forces(c, body, f, obj)
-            log.wall_forces.setdefault(f.name, []).append(forces)
-            points = pb.getContactPoints(bodyA=body, physicsClientId=c)
-            if not points:
-                continue
-            for a in ARMS:
-                robot_body, links = self._watched_bodies[f"{a.value}_arm"]
-                if touching(_points_on(points, robot_body, links)):
-                    key = f"{a.value}_arm ~ {f.name}"
-                    log.robot_contacts[key] = log.robot_contacts.get(key, 0) + 1
-
-    def _watch_fixture_distances(self) -> None:
-        """The arms' (palms included) smallest FCL distance to a fixture's walls."""
-        log = self.fixture_log
-        for arm in ARMS:
-            prox = self.collision.closer_than(arm_group(arm), FIXTURES, log.min_robot_distance_m)
-            if prox is not None:
-                log.min_robot_distance_m = prox.distance
-                log.robot_closest = f"{prox.element_a} ~ {prox.element_b}"
-
-    def _watch_distances(self) -> None:
-        if not self.scene.active_obstacles:
-            return
-        for group in self._clearance_groups:
-            prox = self.collision.closer_than(
-                group, "obstacles", self.safety.min_obstacle_distance_m
-            )
-            if prox is not None:
-                self.safety.min_obstacle_distance_m = prox.distance
-                self.safety.closest = f"{prox.element_a} ~ {prox.element_b}"
-        if self._forearm_elements:
-            forearm = self.collision.elements_closer_than(
-                self._forearm_elements, "obstacles", self.safety.min_forearm_distance_m
-            )
-            if forearm is not None:
-                self.safety.min_forearm_distance_m = forearm.distance
-                self.safety.forearm_closest = f"{forearm.element_a} ~ {forearm.element_b}"
-
-    def _watch_drop(self) -> None:
-        for name in self.watched:
-            pos, _ = self.scene.object_pose(name)
-            vel, _ = self.scene.object_velocity(name)
-            lifted = pos[2] > self._rest_z[name] + 0.01
-            # The contact forces are read only for a lifted object falling (reads, no effect).
-            if (
-                lifted
-                and vel[2] < -0.2
-                and not self.safety.dropped
-                and not any(self.scene.palm_contact_force(a, name) > 0.5 for a in ARMS)
-            ):
-                self.safety.dropped = True
-                self.safety.drop_time = self.time()
-                self.safety.dropped_object = name
 
     # -- objects and task --------------------------------------------------------------------
     def object_pose(self, name: str) -> Pose:

@@ -14,7 +14,8 @@ from experiment.judge import judge
 from experiment.layout import TrialLayoutError, check_trial_layout
 from planner.runner import RunResult
 from worlds.bodies import x_display_reachable
-from worlds.sim_world import SafetyRecord, SimWorld
+from worlds.safety_monitor import SafetyRecord
+from worlds.sim_world import SimWorld
 from worlds.world_file import load_world, world_from_data
 
 DEFAULT = Path(__file__).resolve().parents[2] / "worlds" / "parcel_pick_place.yaml"

@@ -14,7 +14,7 @@ from experiment.episode import move_keys, run_episode, task_steps
 from experiment.judge import judge, move_labels
 from planner.default_tree import TaskStep, pick_and_place_xml
 from planner.runner import RunResult
-from worlds.sim_world import SafetyRecord
+from worlds.safety_monitor import SafetyRecord
 from worlds.world_file import load_world
 
 TWO_PARCELS = Path(__file__).resolve().parents[1] / "data" / "worlds" / "two_parcels.yaml"

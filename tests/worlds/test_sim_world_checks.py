@@ -8,13 +8,13 @@ import pytest
 from numpy.testing import assert_allclose
 
 from skills.vocabulary import Arm
+from worlds.safety_monitor import touching
 from worlds.sim_world import (
     FOREARM_DOUBT_PER_M,
     FOREARM_LEVER_M,
     FOREARM_MARGIN_M,
     LinkHits,
     forearm_doubt,
-    touching,
 )
 
 
@@ -79,9 +79,9 @@ def test_one_contact_query_per_obstacle_counts_as_one_per_pair() -> None:
         expected: dict[str, int] = {}
         for _ in range(60):
             scene.step(1)
-            sim._watch_contacts()
+            sim.monitor.watch_contacts()
             for name in sorted(scene.active_obstacles):
-                for label, (body, links) in sim._watched_bodies.items():
+                for label, (body, links) in sim.monitor.watched_bodies.items():
                     assert links is None  # the iiwas: one body per arm
                     pair = pb.getContactPoints(
                         bodyA=body, bodyB=scene.obstacle_ids[name], physicsClientId=c
@@ -231,14 +231,14 @@ def test_the_table_is_watched_against_the_arms_links_but_their_hands() -> None:
     with SimWorld(world) as sim:
         scene, c = sim.scene, sim.scene.client
         for arm in (Arm.LEFT, Arm.RIGHT):
-            body, links = sim._table_links[f"{arm.value}_arm"]
+            body, links = sim.monitor.table_links[f"{arm.value}_arm"]
             palm = scene.robot.arms[arm].palm_link
             hand = welded_links(body, palm, c)
             assert palm in hand and len(hand) >= 2  # the iiwa's flange is welded to its palm
             assert not links & hand
-            forearm = sim._forearm_links[f"{arm.value}_forearm"][1]
+            forearm = sim.monitor.forearm_links[f"{arm.value}_forearm"][1]
             assert forearm - hand and forearm - hand <= links  # the wrist and the forearm
-        body, watched = sim._table_links["left_arm"]
+        body, watched = sim.monitor.table_links["left_arm"]
         hand = welded_links(body, scene.robot.arms[Arm.LEFT].palm_link, c)
         half_height = world.table.size[2] / 2.0
 
@@ -260,14 +260,14 @@ def test_the_table_is_watched_against_the_arms_links_but_their_hands() -> None:
         assert hand_gap + 0.004 < arm_gap - 0.004  # the palm hangs lowest, at rest
         # Raised 4 mm into the palm: the hand touches the table, and that does not count.
         table_top_at(reference + hand_gap + 0.004)
-        sim._watch_contacts()
+        sim.monitor.watch_contacts()
         touched = pb.getContactPoints(bodyA=scene.table_id, bodyB=body, physicsClientId=c)
         assert touching(touched) and {p[4] for p in touched} <= hand
         assert "left_arm ~ table" not in sim.safety.table_contacts
         # Raised 4 mm into the lowest link of the wrist or forearm: it counts, once a step.
         table_top_at(reference + arm_gap + 0.004)
         for _ in range(3):
-            sim._watch_contacts()
+            sim.monitor.watch_contacts()
         assert sim.safety.table_contacts["left_arm ~ table"] == 3
 
 
