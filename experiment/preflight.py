@@ -2,7 +2,9 @@
 
 :func:`preflight_problems` gathers the world's feasibility (:mod:`worlds.feasibility`: a grasp
 the robot can make, goals on the table and within reach) and, with a tree, the tree's own checks
-(:mod:`planner.validate`) and its moves against the world's task (:mod:`planner.tree_task`).
+(:mod:`planner.validate`) and its moves against the world's task (:mod:`planner.tree_task`),
+and, once those pass, that no obstacle appears where the arms hold the object
+(:mod:`worlds.obstacle_holds`).
 ``app.py validate``, ``run`` and ``trials`` call it before anything is simulated.
 """
 
@@ -20,6 +22,7 @@ from planner.tree_reading import TreeDocument, read_tree_document
 from planner.tree_task import check_tree_moves, tree_grasps
 from planner.validate import validate_tree
 from worlds.feasibility import feasibility_problems
+from worlds.obstacle_holds import obstacle_hold_problems
 from worlds.sim_world import task_moves
 from worlds.world_file import World, WorldFileError, load_world, world_spec, world_summary
 
@@ -74,6 +77,8 @@ def preflight_problems(
     except TreeFileError as err:
         return [str(p) for p in err.problems]
     lines = [p.format(world_file) for p in feasibility_problems(world, tree_grasps(doc))]
+    if not lines:  # the arms posed at goals the checks above found sound
+        lines = [p.format(world_file) for p in obstacle_hold_problems(world)]
     if tree is not None:
         lines += tree_task_problems(world, doc)
     return lines + move_skill_problems(world, world_file)

@@ -387,6 +387,28 @@ class SimWorld:
                         return False
         return True
 
+    def hold_touches(self, name: str, obstacle: str, hold: Hold) -> str:
+        """What of the robot holding object ``name`` in ``hold`` touches ``obstacle`` (active
+        or not): "a palm", or an arm's links solved to convergence (:data:`HOLD_SOLVE`) on the
+        kinematic copy; "" when nothing does. Asked of the collision world and the copy
+        alone: nothing moves in the physics."""
+        robot_yaw = math.radians(self.spec.scene.robot.base_rpy_deg[2])
+        palms, palm_quats, _ = hold_poses(
+            hold, self._extents[name], self.palm_thickness(), robot_yaw
+        )
+        with self.collision.obstacles_present((obstacle,)):
+            if self.collision.check_trajectory(palms[None], palm_quats[None]).collides[0]:
+                return "a palm touches it"
+            links = {arm: self.collision.arm_moving_links(arm) for arm in ARMS}
+            frames = self._predictor().link_frames(
+                palms[None], palm_quats[None], links, *HOLD_SOLVE
+            )
+            for arm in ARMS:
+                f = frames[arm]
+                if self.collision.check_link_frames(arm, f.links, f.positions, f.quaternions)[0]:
+                    return f"the {arm.value} arm touches it"
+        return ""
+
     def gravity(self) -> float:
         """Magnitude of the scene's gravity, m/s^2."""
         return abs(float(self.scene.spec.gravity))

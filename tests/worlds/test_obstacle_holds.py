@@ -1,0 +1,70 @@
+"""An obstacle that appears inside an arm holding the object (worlds.obstacle_holds)."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from worlds.obstacle_holds import obstacle_hold_problems
+from worlds.world_file import load_world, world_from_data
+
+ROOT = Path(__file__).resolve().parents[2]
+DEFAULT = ROOT / "worlds" / "parcel_pick_place.yaml"
+IN_THE_ARM = ROOT / "tests" / "data" / "infeasible_worlds" / "obstacle_in_the_holding_arm.yaml"
+EXPECTED = (
+    "obstacles[1].position: expected ball_left clear of the arms holding parcel at the goal of "
+    "move 1 when task[0].moves[2] starts, got [0.74, 0, 0.8]: the left arm touches it, with "
+    "parcel at [0.7, -0.25, 0.675]"
+)
+
+pytestmark = pytest.mark.sim
+
+
+def _edited(path: Path, edit: Any) -> Any:
+    world = load_world(path)
+    data = world.model_dump(mode="json")
+    edit(data)
+    return world_from_data(data, world.source)
+
+
+def test_the_shipped_worlds_obstacles_appear_clear_of_the_arms() -> None:
+    assert obstacle_hold_problems(load_world(DEFAULT)) == []
+    assert obstacle_hold_problems(load_world(ROOT / "worlds" / "icub_parcel_pick_place.yaml")) == []
+
+
+def test_a_sphere_appearing_inside_the_forearm_that_holds_the_parcel() -> None:
+    problems = obstacle_hold_problems(load_world(IN_THE_ARM))
+    assert [p.format("w.yaml") for p in problems] == [f"w.yaml: {EXPECTED}"]
+
+
+def test_moved_out_of_the_forearm_the_same_sphere_is_clear() -> None:
+    def higher(data: dict[str, Any]) -> None:
+        data["obstacles"][1]["position"] = [0.74, 0.0, 1.10]  # 30 cm above the forearm
+
+    assert obstacle_hold_problems(_edited(IN_THE_ARM, higher)) == []
+
+
+def test_only_the_moves_after_the_first_are_asked() -> None:
+    # The same sphere in the first move: the palms are still at rest when it appears.
+    def first(data: dict[str, Any]) -> None:
+        moves = data["task"][0]["moves"]
+        moves[0]["obstacles"], moves[2]["obstacles"] = ["ball_left"], []
+
+    assert obstacle_hold_problems(_edited(IN_THE_ARM, first)) == []
+
+
+def test_validate_exits_2_naming_the_obstacle() -> None:
+    done = subprocess.run(
+        [sys.executable, str(ROOT / "app.py"), "validate", str(IN_THE_ARM)],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        check=False,
+    )
+    assert done.returncode == 2, done.stderr
+    assert "Traceback" not in done.stderr
+    assert f"{IN_THE_ARM}: {EXPECTED}" in done.stdout + done.stderr

@@ -1,0 +1,99 @@
+"""An obstacle that appears where the robot's arms already are.
+
+A move's obstacles are switched on when the move starts. From a task's second move on, the
+palms are then holding the object where the move before left it, and an obstacle placed
+through an arm there appears inside it: PyBullet would shove the arm out on the next step,
+and the run fails at once ("obstacle spawned inside a body"), after seconds of simulation.
+:func:`obstacle_hold_problems` finds it before anything is stepped: for each such move it
+poses the arms holding the object at the previous goal, in the grip the previous move ends
+in (:func:`skills.turns.move_holds`), by inverse kinematics solved to convergence on the
+robot's kinematic copy, and asks the FCL mirror whether a palm or an arm link touches each
+of the move's obstacles there (:meth:`worlds.sim_world.SimWorld.hold_touches`). Objects the
+reasoner would not grasp between two palms on opposite faces are not asked.
+
+The posture is the solver's, not the controller's: a compliant arm settles a few centimetres
+off it. The check asks only for touching (no margin), so an obstacle it refuses stands where
+the arm is, not merely near it.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from affordances.config import ReasonerConfig
+from affordances.physics import assess
+from skills.turns import move_holds, yaw_of
+from skills.vocabulary import GraspType
+from worlds.adapters import object_contexts, robot_capabilities
+from worlds.placement import vec
+from worlds.sim_world import SimWorld
+from worlds.spec import WorldSpec
+from worlds.world_errors import WorldFileProblem
+from worlds.world_file import World, as_world_spec
+
+
+def obstacle_hold_problems(world: World | WorldSpec) -> list[WorldFileProblem]:
+    """Every obstacle of a move (its task's second or later) that the arms, holding the object
+    at the previous goal, touch when it appears.
+
+    Returns
+    -------
+    list of WorldFileProblem
+        Fields are the obstacles' positions (``obstacles[1].position``).
+    """
+    spec = as_world_spec(world)
+    asked = [
+        (i, j)
+        for i, step in enumerate(spec.task)
+        for j, move in enumerate(step.moves)
+        if j > 0 and move.obstacles
+    ]
+    if not asked:
+        return []
+    index = {o.name: k for k, o in enumerate(spec.scene.obstacles)}
+    robot = robot_capabilities(spec)
+    # The holds are the lateral grasp's palms on the held faces: asked only of objects the
+    # reasoner would grasp that way.
+    lateral = {
+        c.name
+        for c in object_contexts(spec)
+        if any(
+            o.grasp is GraspType.TWO_PALM_LATERAL
+            for o in assess(c, robot, ReasonerConfig()).options
+        )
+    }
+    asked = [(i, j) for i, j in asked if spec.task[i].object in lateral]
+    if not asked:
+        return []
+    max_turn = robot.max_turn_rad
+    robot_yaw = math.radians(spec.scene.robot.base_rpy_deg[2])
+    problems: list[WorldFileProblem] = []
+    with SimWorld(spec) as sim:
+        for i, step in enumerate(spec.task):
+            obj = next(o for o in spec.scene.objects if o.name == step.object)
+            position, yaw = np.asarray(obj.position, dtype=float), float(obj.yaw)
+            held = None
+            for j, move in enumerate(step.moves):
+                if (i, j) in asked and held is not None:
+                    for name in move.obstacles:
+                        what = sim.hold_touches(step.object, name, held)
+                        if what:
+                            problems.append(
+                                WorldFileProblem(
+                                    f"obstacles[{index[name]}].position",
+                                    f"{name} clear of the arms holding {step.object} at the "
+                                    f"goal of move {j - 1} when task[{i}].moves[{j}] starts",
+                                    f"{vec(spec.scene.obstacles[index[name]].position)}: "
+                                    f"{what}, with {step.object} at {vec(held.position)}",
+                                )
+                            )
+                goal = np.asarray(move.goal_position, dtype=float)
+                goal_yaw = yaw_of(move.goal_quaternion)
+                held = move_holds(position, yaw, goal, goal_yaw, max_turn, robot_yaw)[-1]
+                position, yaw = goal, goal_yaw
+    return problems
+
+
+__all__ = ["obstacle_hold_problems"]
