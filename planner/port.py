@@ -424,7 +424,7 @@ class ObstacleScene(Protocol):
         Shapes: object (N, 3), (N, 4); palms (N, 2, 3), (N, 2, 4), left then right.
         ``link_doubt``: where the world predicts the arms' links less surely than the palms,
         it may ask them more than ``margin_m`` (the simulator's grows with the palms' travel,
-        :func:`worlds.sim_world.forearm_doubt`); False asks them ``margin_m`` alone.
+        :func:`worlds.path_checks.forearm_doubt`); False asks them ``margin_m`` alone.
         """
         ...
 

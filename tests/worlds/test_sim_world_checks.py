@@ -8,14 +8,14 @@ import pytest
 from numpy.testing import assert_allclose
 
 from skills.vocabulary import Arm
-from worlds.safety_monitor import touching
-from worlds.sim_world import (
+from worlds.path_checks import (
     FOREARM_DOUBT_PER_M,
     FOREARM_LEVER_M,
     FOREARM_MARGIN_M,
     LinkHits,
     forearm_doubt,
 )
+from worlds.safety_monitor import touching
 
 
 def _yaw(angle: np.ndarray) -> np.ndarray:
@@ -201,7 +201,7 @@ def test_a_check_without_link_doubt_asks_the_links_the_margin_alone(
             asked.append(np.asarray(margins, dtype=float).copy())
             return LinkHits(np.zeros(n, dtype=bool), np.zeros(n, dtype=bool))
 
-        monkeypatch.setattr(sim, "_predicted_links_collide", record)
+        monkeypatch.setattr(sim.paths, "predicted_links_collide", record)
         for doubt in (True, False):
             sim.check_trajectory(
                 "parcel",
