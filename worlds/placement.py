@@ -13,7 +13,7 @@ that names neither. These checks find it from the numbers alone, before anything
   the move's goal. An obstacle switched on against an object, or standing where the object
   must be set down, makes a contact the judge fails whatever the robot does.
 
-Shapes are compared exactly (FCL, :func:`worlds.collision.penetration_depth`), so objects
+Shapes are compared exactly (FCL, :func:`worlds.fcl_shapes.penetration_depth`), so objects
 standing side by side, or one stacked on another, pass.
 """
 
@@ -25,7 +25,7 @@ import numpy as np
 
 from skills import quaternion as quat
 from skills.flip import vertical_half_extent
-from worlds.collision import penetration_depth, shape_gap
+from worlds.fcl_shapes import penetration_depth, shape_gap
 from worlds.spec import ObjectSpec, ObstacleSpec, ShapeSpec, WorldSpec
 from worlds.world_errors import WorldFileProblem
 

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from skills import file_cache
-from worlds.collision import _mesh_hull, cached_mesh_hull
+from worlds.fcl_shapes import _mesh_hull, cached_mesh_hull
 
 trimesh = pytest.importorskip("trimesh")
 
