@@ -194,6 +194,15 @@ class PathChecks:
         link_doubt: bool = True,
         solve: tuple[int, float] = (WAYPOINT_ITERATIONS, WAYPOINT_TOLERANCE),
     ) -> PathCheck:
+        """Check the palms' path (N, 2, 3) m and (N, 2, 4) scalar-last, world frame, and the
+        arms' links solved along it, against the active obstacles with ``margin_m`` (the links
+        with :func:`forearm_doubt` more unless ``link_doubt`` is False).
+
+        ``held`` is (name, positions (N, 3), quaternions (N, 4)) of the object the palms carry;
+        None for empty palms, which then keep ``object_margin_m`` from every object where it
+        rests (one they touch where the path starts is free of it). ``solve`` is each
+        waypoint's inverse kinematics: most steps and the pose error it stops at.
+        """
         name, object_positions, object_orientations = held if held else (None, None, None)
         avoid = () if held else tuple(o.name for o in self.scene.spec.objects)
         check = self.collision.check_trajectory(
