@@ -9,7 +9,8 @@ poses the arms holding the object at the previous goal, in the grip the previous
 in (:func:`skills.turns.move_holds`), by inverse kinematics solved to convergence on the
 robot's kinematic copy, and asks the FCL mirror whether a palm or an arm link touches each
 of the move's obstacles there (:meth:`worlds.sim_world.SimWorld.hold_touches`). Objects the
-reasoner would not grasp between two palms on opposite faces are not asked.
+reasoner would not grasp between two palms on opposite faces are not asked, nor moves after
+one that leaves the object off upright (a flip) or seated in a fixture.
 
 The posture is the solver's, not the controller's: a compliant arm settles a few centimetres
 off it. The check asks only for touching (no margin), so an obstacle it refuses stands where
@@ -24,6 +25,7 @@ import numpy as np
 
 from affordances.config import ReasonerConfig
 from affordances.physics import assess
+from skills import quaternion as quat
 from skills.turns import move_holds, yaw_of
 from skills.vocabulary import GraspType
 from worlds.adapters import object_contexts, robot_capabilities
@@ -32,6 +34,10 @@ from worlds.sim_world import SimWorld
 from worlds.spec import WorldSpec
 from worlds.world_errors import WorldFileProblem
 from worlds.world_file import World, as_world_spec
+
+_Z = np.array([0.0, 0.0, 1.0])
+#: An object whose z axis is within a degree of the world's stands upright.
+_UPRIGHT_COS = math.cos(math.radians(1.0))
 
 
 def obstacle_hold_problems(world: World | WorldSpec) -> list[WorldFileProblem]:
@@ -91,7 +97,14 @@ def obstacle_hold_problems(world: World | WorldSpec) -> list[WorldFileProblem]:
                             )
                 goal = np.asarray(move.goal_position, dtype=float)
                 goal_yaw = yaw_of(move.goal_quaternion)
-                held = move_holds(position, yaw, goal, goal_yaw, max_turn, robot_yaw)[-1]
+                # Where the lateral holds say how it is held: upright, carried (not seated
+                # in a fixture, which the palms may let go of). Else not asked after it.
+                upright = quat.rotate(np.asarray(move.goal_quaternion), _Z)[2] > _UPRIGHT_COS
+                held = (
+                    move_holds(position, yaw, goal, goal_yaw, max_turn, robot_yaw)[-1]
+                    if upright and move.fixture is None
+                    else None
+                )
                 position, yaw = goal, goal_yaw
     return problems
 

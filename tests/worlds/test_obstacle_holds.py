@@ -68,3 +68,11 @@ def test_validate_exits_2_naming_the_obstacle() -> None:
     assert done.returncode == 2, done.stderr
     assert "Traceback" not in done.stderr
     assert f"{IN_THE_ARM}: {EXPECTED}" in done.stdout + done.stderr
+
+
+def test_after_a_move_that_leaves_the_object_on_its_side_nothing_is_asked() -> None:
+    # The lateral holds say nothing of how a box on its side is held.
+    def on_its_side(data: dict[str, Any]) -> None:
+        data["task"][0]["moves"][1]["goal"]["rpy_deg"] = [90.0, 0.0, 0.0]
+
+    assert obstacle_hold_problems(_edited(IN_THE_ARM, on_its_side)) == []
