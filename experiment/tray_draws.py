@@ -5,7 +5,7 @@ The tray's extents and mass come from ``trials.size_scale`` and ``trials.mass_kg
 (:mod:`experiment.flip_draws`); its height is then kept at least :func:`least_tray_height`,
 since the palms squeeze the walls at the tray's centre height and their long side stands
 vertical: a lower tray would put them on the table. Its floor and rim keep the file's
-thickness. The balls (``trials.riders``, :class:`worlds.world_schema.RiderTrials`) come from a
+thickness. The balls (``trials.riders``, :class:`worlds.trial_schema.RiderTrials`) come from a
 generator of their own (``[seed, trial, RIDER_STREAM, redraw]``), so a world without riders or
 a size draw draws the same starts, goals and spheres as before they existed, and its balls
 keep their place on the tray.
@@ -21,8 +21,8 @@ import numpy as np
 from skills import quaternion as quat
 from worlds.spec import ShapeSpec
 from worlds.trays import TrayFrame
+from worlds.trial_schema import RiderTrials
 from worlds.world_file import SphereShape, TrayShape, World
-from worlds.world_schema import RiderTrials
 
 __all__ = [
     "PALM_TABLE_GAP_M",

@@ -32,6 +32,7 @@ from pydantic import ValidationError
 
 from affordances.safe_yaml import YamlFileError, parse_yaml, read_bounded
 from worlds.fixture_schema import Fixture
+from worlds.schema_types import Range
 from worlds.spec import (
     DisturbanceSpec,
     FixtureSpec,
@@ -50,6 +51,7 @@ from worlds.spec import (
     TaskStepSpec,
     WorldSpec,
 )
+from worlds.trial_schema import GoalRegion, HardSettings, Region, TrialSettings
 from worlds.world_errors import WorldFileError, WorldFileProblem, problems_from, show_value
 from worlds.world_schema import (
     CONTEXT_BASE_DIR,
@@ -58,14 +60,10 @@ from worlds.world_schema import (
     BoxShape,
     CylinderShape,
     DisturbanceEntry,
-    GoalRegion,
-    HardSettings,
     MeshShape,
     MoveEntry,
     Obstacle,
     PoseEntry,
-    Range,
-    Region,
     Robot,
     ShapeModel,
     SimSettings,
@@ -74,7 +72,6 @@ from worlds.world_schema import (
     Table,
     TaskStep,
     TrayShape,
-    TrialSettings,
     World,
     WorldObject,
 )
