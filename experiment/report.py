@@ -93,6 +93,7 @@ def report_figure(campaigns: list[Campaign], path: Path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     import numpy as np
+    from matplotlib.ticker import MaxNLocator
 
     records = [r for c in campaigns for r in c.records]
     fig, (where, why, near) = plt.subplots(1, 3, figsize=(15, 4.5))
@@ -135,6 +136,7 @@ def report_figure(campaigns: list[Campaign], path: Path) -> None:
         names = sorted(reasons, key=lambda k: (reasons[k], k))
         why.barh([n[:40] for n in names], [reasons[n] for n in names], color="tab:red")
         why.tick_params(axis="y", labelsize=7)
+        why.xaxis.set_major_locator(MaxNLocator(integer=True))  # trials are counted whole
     else:
         why.text(0.5, 0.5, "no failures", ha="center", transform=why.transAxes)
     why.set(title="failure reasons", xlabel="trials")
