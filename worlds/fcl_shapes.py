@@ -159,6 +159,15 @@ def _posed(shape: ShapeSpec, pose: tuple[ArrayLike, ArrayLike]) -> fcl.Collision
     return fcl.CollisionObject(shape_geometry(shape)[0], transform)
 
 
+def _overlap(a: fcl.CollisionObject, b: fcl.CollisionObject) -> float | None:
+    """How deep two posed objects interpenetrate, m (0 when they only touch); None when apart."""
+    request = fcl.CollisionRequest(num_max_contacts=1, enable_contact=True)
+    result = fcl.CollisionResult()
+    if not fcl.collide(a, b, request, result):
+        return None
+    return max(float(result.contacts[0].penetration_depth), 0.0) if result.contacts else 0.0
+
+
 def penetration_depth(
     shape_a: ShapeSpec,
     pose_a: tuple[ArrayLike, ArrayLike],
@@ -167,12 +176,8 @@ def penetration_depth(
 ) -> float:
     """How deep two shapes at their poses (position (3,), quaternion (4,) scalar-last, world
     frame) interpenetrate, m; 0 when they are apart or only touch."""
-    a, b = _posed(shape_a, pose_a), _posed(shape_b, pose_b)
-    request = fcl.CollisionRequest(num_max_contacts=1, enable_contact=True)
-    result = fcl.CollisionResult()
-    if not fcl.collide(a, b, request, result) or not result.contacts:
-        return 0.0
-    return max(float(result.contacts[0].penetration_depth), 0.0)
+    depth = _overlap(_posed(shape_a, pose_a), _posed(shape_b, pose_b))
+    return 0.0 if depth is None else depth
 
 
 def shape_gap(
@@ -184,11 +189,9 @@ def shape_gap(
     """Signed gap between two shapes at their poses (as :func:`penetration_depth`), m: their
     distance when apart, 0 when they touch, minus the penetration depth when they overlap."""
     a, b = _posed(shape_a, pose_a), _posed(shape_b, pose_b)
-    request = fcl.CollisionRequest(num_max_contacts=1, enable_contact=True)
-    result = fcl.CollisionResult()
-    if fcl.collide(a, b, request, result):
-        depth = float(result.contacts[0].penetration_depth) if result.contacts else 0.0
-        return -max(depth, 0.0)
+    depth = _overlap(a, b)
+    if depth is not None:
+        return -depth
     return max(float(fcl.distance(a, b, fcl.DistanceRequest())), 0.0)
 
 

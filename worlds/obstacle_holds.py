@@ -50,13 +50,10 @@ def obstacle_hold_problems(world: World | WorldSpec) -> list[WorldFileProblem]:
         Fields are the obstacles' positions (``obstacles[1].position``).
     """
     spec = as_world_spec(world)
-    asked = [
-        (i, j)
-        for i, step in enumerate(spec.task)
-        for j, move in enumerate(step.moves)
-        if j > 0 and move.obstacles
+    moving = [
+        (i, j) for i, s in enumerate(spec.task) for j, m in enumerate(s.moves) if j and m.obstacles
     ]
-    if not asked:
+    if not moving:
         return []
     index = {o.name: k for k, o in enumerate(spec.scene.obstacles)}
     robot = robot_capabilities(spec)
@@ -70,7 +67,7 @@ def obstacle_hold_problems(world: World | WorldSpec) -> list[WorldFileProblem]:
             for o in assess(c, robot, ReasonerConfig()).options
         )
     }
-    asked = [(i, j) for i, j in asked if spec.task[i].object in lateral]
+    asked = {(i, j) for i, j in moving if spec.task[i].object in lateral}
     if not asked:
         return []
     max_turn = robot.max_turn_rad
@@ -83,18 +80,17 @@ def obstacle_hold_problems(world: World | WorldSpec) -> list[WorldFileProblem]:
             held = None
             for j, move in enumerate(step.moves):
                 if (i, j) in asked and held is not None:
-                    for name in move.obstacles:
-                        what = sim.hold_touches(step.object, name, held)
-                        if what:
-                            problems.append(
-                                WorldFileProblem(
-                                    f"obstacles[{index[name]}].position",
-                                    f"{name} clear of the arms holding {step.object} at the "
-                                    f"goal of move {j - 1} when task[{i}].moves[{j}] starts",
-                                    f"{vec(spec.scene.obstacles[index[name]].position)}: "
-                                    f"{what}, with {step.object} at {vec(held.position)}",
-                                )
+                    touched = sim.hold_touches(step.object, move.obstacles, held)
+                    for name, what in touched.items():
+                        problems.append(
+                            WorldFileProblem(
+                                f"obstacles[{index[name]}].position",
+                                f"{name} clear of the arms holding {step.object} at the "
+                                f"goal of move {j - 1} when task[{i}].moves[{j}] starts",
+                                f"{vec(spec.scene.obstacles[index[name]].position)}: "
+                                f"{what}, with {step.object} at {vec(held.position)}",
                             )
+                        )
                 goal = np.asarray(move.goal_position, dtype=float)
                 goal_yaw = yaw_of(move.goal_quaternion)
                 # Where the lateral holds say how it is held: upright, carried (not seated

@@ -115,6 +115,7 @@ class PathChecks:
         self.collision = collision
         self._extents = extents
         self.palm_thickness = float(scene.spec.robot.palm_size[2])
+        self._robot_yaw = math.radians(scene.spec.robot.base_rpy_deg[2])  # the grips' heading
         # Arms that share joints (a torso) are predicted by inverse kinematics on a copy of
         # the robot, built at the first path check (worlds.arm_prediction).
         self._arm_predictor: ArmPredictor | None = None
@@ -140,11 +141,10 @@ class PathChecks:
         within :data:`HOLD_REACH_M`: the test of a place other than the goal);
         asked of the collision world and the kinematic copy alone: nothing moves in the
         physics."""
-        robot_yaw = math.radians(self.scene.spec.robot.base_rpy_deg[2])
         with self.collision.obstacles_present(obstacles):
             for hold in holds:
                 palms, palm_quats, object_quat = hold_poses(
-                    hold, self._extents[name], self.palm_thickness, robot_yaw
+                    hold, self._extents[name], self.palm_thickness, self._robot_yaw
                 )
                 check = self.check(
                     palms[None],
@@ -166,23 +166,30 @@ class PathChecks:
                         return False
         return True
 
-    def hold_touches(self, name: str, obstacle: str, hold: Hold) -> str:
-        """What of the robot holding object ``name`` in ``hold`` touches ``obstacle`` (active
-        or not): "a palm", or an arm's links solved to convergence (:data:`HOLD_SOLVE`) on the
-        kinematic copy; "" when nothing does. Asked of the collision world and the copy
-        alone: nothing moves in the physics."""
-        robot_yaw = math.radians(self.scene.spec.robot.base_rpy_deg[2])
-        palms, palm_quats, _ = hold_poses(hold, self._extents[name], self.palm_thickness, robot_yaw)
-        with self.collision.obstacles_present((obstacle,)):
-            if self.collision.check_trajectory(palms[None], palm_quats[None]).collides[0]:
-                return "a palm touches it"
-            links = {arm: self.collision.arm_moving_links(arm) for arm in ARMS}
-            frames = self.predictor().link_frames(palms[None], palm_quats[None], links, *HOLD_SOLVE)
-            for arm in ARMS:
-                f = frames[arm]
-                if self.collision.check_link_frames(arm, f.links, f.positions, f.quaternions)[0]:
-                    return f"the {arm.value} arm touches it"
-        return ""
+    def hold_touches(self, name: str, obstacles: Sequence[str], hold: Hold) -> dict[str, str]:
+        """What of the robot holding object ``name`` in ``hold`` touches each of ``obstacles``
+        (active or not): "a palm", or an arm's links solved to convergence
+        (:data:`HOLD_SOLVE`, once for all of them) on the kinematic copy; obstacles nothing
+        touches are left out. Asked of the collision world and the copy alone: nothing moves
+        in the physics."""
+        palms, palm_quats, _ = hold_poses(
+            hold, self._extents[name], self.palm_thickness, self._robot_yaw
+        )
+        links = {arm: self.collision.arm_moving_links(arm) for arm in ARMS}
+        frames = self.predictor().link_frames(palms[None], palm_quats[None], links, *HOLD_SOLVE)
+        touched: dict[str, str] = {}
+        for obstacle in obstacles:
+            with self.collision.obstacles_present((obstacle,)):
+                if self.collision.check_trajectory(palms[None], palm_quats[None]).collides[0]:
+                    touched[obstacle] = "a palm touches it"
+                    continue
+                for arm in ARMS:
+                    f = frames[arm]
+                    at = (arm, f.links, f.positions, f.quaternions)
+                    if self.collision.check_link_frames(*at)[0]:
+                        touched[obstacle] = f"the {arm.value} arm touches it"
+                        break
+        return touched
 
     def check(
         self,

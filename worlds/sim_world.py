@@ -277,10 +277,10 @@ class SimWorld:
             moves = self._task_moves[name] = task_moves(self.spec, name, places)
         return moves
 
-    def hold_touches(self, name: str, obstacle: str, hold: Hold) -> str:
-        """What of the robot holding ``name`` in ``hold`` touches ``obstacle``; "" if nothing
+    def hold_touches(self, name: str, obstacles: Sequence[str], hold: Hold) -> dict[str, str]:
+        """What of the robot holding ``name`` in ``hold`` touches each of ``obstacles``
         (:meth:`worlds.path_checks.PathChecks.hold_touches`)."""
-        return self.paths.hold_touches(name, obstacle, hold)
+        return self.paths.hold_touches(name, obstacles, hold)
 
     def gravity(self) -> float:
         """Magnitude of the scene's gravity, m/s^2."""
