@@ -539,7 +539,7 @@ def _trials_command(args: argparse.Namespace) -> int:
     """The paper's experiment: N trials of three moves with new obstacles, judged, resumable."""
     from experiment.progress import Progress
     from experiment.results import ResultsFileError
-    from experiment.summary import contact_lines, summary_lines
+    from experiment.summary import contact_lines, split_line, summary_lines
     from experiment.trials import campaign_of, campaign_results, reason_of, run_campaign, summarise
 
     world = _load_world_or_exit(args.world)
@@ -654,6 +654,9 @@ def _trials_command(args: argparse.Namespace) -> int:
         f"  simulated {summary['sim_time_s']:.0f} s in {summary['wall_time_s']:.0f} s of "
         f"worker time ({summary['realtime_factor']}x real time per worker)"
     )
+    split = split_line(summary)
+    if split is not None:
+        print(split)
     if args.json:
         print(json.dumps(summary))
     return EXIT_OK if summary["successes"] == summary["trials"] else EXIT_FAILURE
@@ -663,7 +666,7 @@ def _report_command(args: argparse.Namespace) -> int:
     """A campaign's outcome table with Wilson 95 % intervals, and its picture."""
     from experiment.report import read_campaigns, report_figure, report_summaries
     from experiment.results import ResultsFileError
-    from experiment.summary import contact_lines, summary_lines
+    from experiment.summary import contact_lines, split_line, summary_lines
 
     out = Path(args.out)
     try:
@@ -683,6 +686,9 @@ def _report_command(args: argparse.Namespace) -> int:
             print(line)
         for line in contact_lines(summary):
             print(line)
+        split = split_line(summary)
+        if split is not None:
+            print(split)
     figure = out / "report.png" if out.is_dir() else out.with_name(f"{out.stem}_report.png")
     try:
         report_figure(found.campaigns, figure)

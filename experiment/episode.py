@@ -82,6 +82,10 @@ class EpisodeReport:
     skills: list[str | None] = field(default_factory=list)
     #: Wall time inside the physics engine's steps alone, s (no control, tree or checks).
     physics_wall_s: float = 0.0
+    #: Wall time computing and sending the torques before each physics step, s.
+    control_wall_s: float = 0.0
+    #: Wall time watching contacts every physics step and clearances every control step, s.
+    watch_wall_s: float = 0.0
     #: Per disturbance of the world, in file order, what it did
     #: (:meth:`worlds.disturbances.AppliedDisturbance.summary`); empty for a world without.
     disturbances: list[dict[str, Any]] = field(default_factory=list)
@@ -138,6 +142,8 @@ class EpisodeReport:
             "sim_time_s": round(self.sim_time_s, 3),
             "wall_time_s": round(self.wall_time_s, 3),
             "physics_wall_s": round(self.physics_wall_s, 3),
+            "control_wall_s": round(self.control_wall_s, 3),
+            "watch_wall_s": round(self.watch_wall_s, 3),
             "compositions": self.compositions,
             "skills": self.skills,
             **extra,
@@ -540,6 +546,8 @@ def run_episode(
         )
         report.replaced_outputs = replaced
         report.physics_wall_s = sim.scene.physics_wall_s
+        report.control_wall_s = sim.scene.control_wall_s
+        report.watch_wall_s = sim.watch_wall_s()
         report.disturbances = [a.summary() for a in sim.scene.disturbances.applied()]
         report.grip = recorder.grip.metrics(HELD_FORCE_N)
         report.forearm_contacts = dict(sim.safety.forearm_contacts)

@@ -20,7 +20,15 @@ from typing import Any
 PROJECT = Path(__file__).resolve().parents[1]
 
 #: The fields of a record that say where and when it ran, not what happened.
-RUN_FIELDS = ("wall_time_s", "physics_wall_s", "host", "backend", "realtime_factor")
+RUN_FIELDS = (
+    "wall_time_s",
+    "physics_wall_s",
+    "control_wall_s",
+    "watch_wall_s",
+    "host",
+    "backend",
+    "realtime_factor",
+)
 
 #: The fields that make a campaign: records agreeing on all of them are the same campaign's.
 KEY_FIELDS = ("world", "world_sha256", "tree", "tree_sha256", "seed", "settings")

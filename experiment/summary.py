@@ -167,7 +167,47 @@ def summarise(records: Iterable[dict[str, Any]]) -> dict[str, Any]:
         "realtime_factor": round(sim / wall, 2) if wall > 0 else math.nan,
         # The physics engine's steps alone, in the same trials (records that lack it: nan).
         "physics_only_realtime_factor": round(sim / physics, 2) if physics > 0 else math.nan,
+        "worker_time_split": worker_time_split(recs),
     }
+
+
+#: The parts of a trial's loop :func:`worker_time_split` names, in the order it gives them.
+LOOP_PARTS = ("physics", "control", "watch", "tree")
+
+
+def worker_time_split(records: Iterable[dict[str, Any]]) -> dict[str, float] | None:
+    """Where the loops of ``records`` spent their wall time, s, summed over the records that
+    measured it (records made before it was: None): ``physics`` (PyBullet's steps),
+    ``control`` (the torques computed and sent before each step), ``watch`` (contacts every
+    physics step, clearances every control step) and ``tree`` (the rest: the tree's ticks,
+    its leaves' planning and checks, the run's recording)."""
+    timed = [r for r in records if r.get("control_wall_s") is not None]
+    if not timed:
+        return None
+    parts = {
+        "physics": sum(float(r.get("physics_wall_s") or 0.0) for r in timed),
+        "control": sum(float(r["control_wall_s"]) for r in timed),
+        "watch": sum(float(r.get("watch_wall_s") or 0.0) for r in timed),
+    }
+    whole = sum(float(r.get("wall_time_s") or 0.0) for r in timed)
+    parts["tree"] = max(0.0, whole - sum(parts.values()))
+    return {name: round(parts[name], 2) for name in LOOP_PARTS}
+
+
+def split_line(summary: dict[str, Any]) -> str | None:
+    """The printed line of :func:`summarise`'s ``worker_time_split`` (None: not measured)."""
+    split = summary.get("worker_time_split")
+    whole = sum(split.values()) if split else 0.0
+    if not split or whole <= 0.0:
+        return None
+    labels = {
+        "physics": "physics",
+        "control": "control law",
+        "watch": "safety watch",
+        "tree": "tree and leaves",
+    }
+    shares = ", ".join(f"{labels[k]} {100.0 * split[k] / whole:.0f} %" for k in LOOP_PARTS)
+    return f"  worker time: {shares}"
 
 
 def summary_lines(summary: dict[str, Any]) -> list[str]:

@@ -198,6 +198,9 @@ class Scene:
         self.step_count = 0
         #: Wall time spent inside PyBullet's stepSimulation, s: the physics alone.
         self.physics_wall_s = 0.0
+        #: Wall time spent computing and sending the torques (and the world's disturbances)
+        #: before each step, s: the control law.
+        self.control_wall_s = 0.0
 
     @classmethod
     def from_world(
@@ -477,16 +480,20 @@ class Scene:
         step = pb.stepSimulation
         clock = time.perf_counter
         c = self.client
-        spent = 0.0
+        spent = control = 0.0
         for i in range(steps):
+            began = clock()
             apply()
             if disturb is not None:
                 disturb(self.step_count + i)
             started = clock()
             step(physicsClientId=c)
-            spent += clock() - started
+            ended = clock()
+            control += started - began
+            spent += ended - started
         self.step_count += steps
         self.physics_wall_s += spent
+        self.control_wall_s += control
 
     def set_palm_command(self, arm: Arm, command: PalmCommand) -> None:
         """Set the target pose (and feed-forward twist, squeeze offset) of ``arm``'s palm."""

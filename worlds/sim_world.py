@@ -16,6 +16,7 @@ The safety monitor and the judge read the physics.
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Iterable, Sequence
 from dataclasses import replace
 
@@ -126,6 +127,9 @@ class SimWorld:
             o.name for o in spec.scene.objects if self.scene.truth.of(o.name).sensed_offset
         )
         self.gains = self.scene.controller.gains(Arm.LEFT)
+        #: Wall time spent advancing, s: the physics steps, the control law before each
+        #: (the scene's ``physics_wall_s`` and ``control_wall_s``) and the safety watch.
+        self.advance_wall_s = 0.0
         self.collision = CollisionWorld(self.scene)
         # What is welded to each palm, in the palm frame: constant, so read once, here.
         self._welded = {
@@ -202,6 +206,7 @@ class SimWorld:
 
     def advance(self, dt: float) -> None:
         """Step physics for ``dt`` (whole physics steps), watching contacts every step."""
+        began = time.perf_counter()
         steps = max(1, round(dt / self.scene.physics_dt))
         for _ in range(steps):
             self.scene.step(1)
@@ -210,6 +215,13 @@ class SimWorld:
         self.monitor.after_control_step()
         if self._unlocated:
             self._locate_held()
+        self.advance_wall_s += time.perf_counter() - began
+
+    def watch_wall_s(self) -> float:
+        """Wall time spent watching the contacts, clearances and drops while advancing, s:
+        :attr:`advance_wall_s` less the physics and the control law."""
+        scene = self.scene
+        return max(0.0, self.advance_wall_s - scene.physics_wall_s - scene.control_wall_s)
 
     def _locate_held(self) -> None:
         """Sense where they are the objects both palms now press (:data:`LOCATED_BY_GRASP_N`)."""

@@ -10,6 +10,7 @@ from typing import Any
 import pytest
 
 from experiment import trials
+from experiment.records import RUN_FIELDS
 from experiment.results import read_results
 from experiment.trials import POOL_RETRIES, run_campaign
 from worlds.world_file import load_world
@@ -84,7 +85,7 @@ def test_a_campaign_on_two_workers_survives_a_worker_dying_mid_trial(
     # What the dead worker left is what the serial run records, wall-clock fields aside.
     monkeypatch.delenv("DUET_TEST_DIE_ONCE")
     serial = run_campaign(world, 3, 0, tmp_path / "serial", workers=1, tree=tree)
-    wall = {"wall_time_s", "physics_wall_s"}
+    wall = set(RUN_FIELDS)
     for a, b in zip(records, serial, strict=True):
         assert {k: v for k, v in a.items() if k not in wall} == {
             k: v for k, v in b.items() if k not in wall

@@ -213,3 +213,7 @@ def test_the_default_world_reports_plausible_grip_metrics() -> None:
     assert 2 * HELD_FORCE_N < record["peak_squeeze_n"] < 100.0
     assert 1 <= record["contact_count"] <= 3
     assert record["regrasp_count"] == record["contact_count"] - 1
+    # Where the loop's wall time went: each part measured, together within the whole.
+    parts = [record[k] for k in ("physics_wall_s", "control_wall_s", "watch_wall_s")]
+    assert all(p > 0.0 for p in parts), parts
+    assert sum(parts) <= record["wall_time_s"] + 3e-3  # each rounded to 1 ms

@@ -11,6 +11,7 @@ from experiment.progress import Progress
 from experiment.summary import (
     conditions,
     contact_lines,
+    split_line,
     summarise,
     summary_lines,
     wilson_interval,
@@ -134,3 +135,39 @@ def test_trials_with_an_arm_on_the_table_are_counted_and_old_records_say_nothing
     old = summarise([{**base, "trial": 0}])
     assert old["table_contacts"] is None
     assert not any("on the table" in line for line in contact_lines(old))
+
+
+def test_worker_time_splits_into_physics_control_watch_and_tree() -> None:
+    # Two trials that measured their parts, one recorded before the parts were: left out.
+    records = [
+        {
+            "trial": 0,
+            "success": True,
+            "wall_time_s": 10.0,
+            "physics_wall_s": 3.0,
+            "control_wall_s": 2.0,
+            "watch_wall_s": 1.0,
+        },
+        {
+            "trial": 1,
+            "success": True,
+            "wall_time_s": 6.0,
+            "physics_wall_s": 2.0,
+            "control_wall_s": 1.0,
+            "watch_wall_s": 1.0,
+        },
+        {"trial": 2, "success": True, "wall_time_s": 50.0, "physics_wall_s": 9.0},
+    ]
+    summary = summarise(records)
+    assert summary["worker_time_split"] == {
+        "physics": 5.0,
+        "control": 3.0,
+        "watch": 2.0,
+        "tree": 6.0,
+    }
+    assert split_line(summary) == (
+        "  worker time: physics 31 %, control law 19 %, safety watch 12 %, tree and leaves 38 %"
+    )
+    old = summarise(records[2:])
+    assert old["worker_time_split"] is None
+    assert split_line(old) is None
