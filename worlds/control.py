@@ -46,6 +46,7 @@ from worlds.impedance import (
 from worlds.robots import ArmSpec, RobotModel
 
 FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.intp]
 
 
 @kernel
@@ -217,6 +218,14 @@ class DualArmImpedanceController:
         self._batch_tasks = [
             np.array([self._body_arms[g] for g in batch], dtype=np.intp) for batch in self._batches
         ]
+        # Each batch's rows of the driven vector, (k, n): a batch's joint values in one read.
+        self._batch_rows = [
+            np.array(
+                [np.arange(self._body_rows[g].start, self._body_rows[g].stop) for g in batch],
+                dtype=np.intp,
+            )
+            for batch in self._batches
+        ]
         self._lower = np.array([d.lower for d in driven], dtype=float)
         self._upper = np.array([d.upper for d in driven], dtype=float)
         self._max_torque = np.array([d.max_torque for d in driven], dtype=float)
@@ -253,6 +262,7 @@ class DualArmImpedanceController:
         self._terms: list[ImpedanceTerms] = []
         self._targets_changed = True
         self._gravity_world = np.array([0.0, 0.0, -9.81])
+        self._gravity_world_xyz = self._gravity_world.tolist()
         self._base_rotation: dict[int, Array | None] = {}
         self._gravity_in_base: dict[int, list[float] | None] = {}
         self._steps_since_refresh = 0
@@ -287,6 +297,7 @@ class DualArmImpedanceController:
         self._gravity_world = np.array(
             [params[f"gravityAcceleration{axis}"] for axis in "XYZ"], dtype=float
         )
+        self._gravity_world_xyz = self._gravity_world.tolist()
         for body in self._bodies:
             _, base_q = pb.getBasePositionAndOrientation(body, physicsClientId=self.client)
             rotation = quat.to_matrix(base_q)
@@ -368,6 +379,7 @@ class DualArmImpedanceController:
         ]
         margin = np.array([self._gains[i].limit_margin for i in self._joint_arm])
         self._avoid_band = np.array([self._gains[i].posture_limit_band for i in self._joint_arm])
+        self._avoids_limits = bool(self._avoid_band.any())
         self._avoid_weight = np.array(
             [self._gains[i].posture_limit_weight for i in self._joint_arm]
         )
@@ -407,22 +419,21 @@ class DualArmImpedanceController:
         self._q_lin = self._q.copy()
         c = self.client
         self._terms = []
-        for batch, tasks, gains in zip(
-            self._batches, self._batch_tasks, self._gain_arrays, strict=True
+        for batch, tasks, gains, batch_rows in zip(
+            self._batches, self._batch_tasks, self._gain_arrays, self._batch_rows, strict=True
         ):
             k, t = tasks.shape
             nb = len(self._body_joints[batch[0]])
             jacobian = np.empty((k, 6 * t, nb))
             gravity = np.empty((k, nb))
             mass = np.empty((k, nb, nb))
-            q = np.empty((k, nb))
+            q = self._q[batch_rows]
             position = np.empty((k, t, 3))
             quaternion = np.empty((k, t, 4))
+            zeros = [0.0] * nb
             for j, g in enumerate(batch):
                 body = self._bodies[g]
-                q[j] = self._q[self._body_rows[g]]
                 q_body = q[j].tolist()
-                zeros = [0.0] * nb
                 # PyBullet's inverse dynamics works in the base frame with the world's gravity
                 # vector: hand it gravity in the base frame for a turned base, then restore it.
                 gravity_in_base = self._gravity_in_base[body]
@@ -432,21 +443,24 @@ class DualArmImpedanceController:
                     body, q_body, zeros, zeros, physicsClientId=c
                 )
                 if gravity_in_base is not None:
-                    pb.setGravity(*self._gravity_world, physicsClientId=c)
+                    pb.setGravity(*self._gravity_world_xyz, physicsClientId=c)
                 mass[j] = pb.calculateMassMatrix(body, q_body, physicsClientId=c)
                 base2world = self._base_rotation[body]
+                body_jacobian = jacobian[j]
                 for s, i in enumerate(tasks[j]):
                     palm = self._specs[i].palm_link
                     linear, angular = pb.calculateJacobian(
                         body, palm, [0.0, 0.0, 0.0], q_body, zeros, zeros, physicsClientId=c
                     )
-                    rows = slice(6 * s, 6 * s + 6)
-                    jacobian[j, rows][:3] = linear
-                    jacobian[j, rows][3:] = angular
+                    row = 6 * s
+                    body_jacobian[row : row + 3] = linear
+                    body_jacobian[row + 3 : row + 6] = angular
                     # PyBullet's Jacobian is in the base frame; the law works in the world's.
                     if base2world is not None:
-                        jacobian[j, rows][:3] = base2world @ jacobian[j, rows][:3]
-                        jacobian[j, rows][3:] = base2world @ jacobian[j, rows][3:]
+                        body_jacobian[row : row + 3] = base2world @ body_jacobian[row : row + 3]
+                        body_jacobian[row + 3 : row + 6] = (
+                            base2world @ body_jacobian[row + 3 : row + 6]
+                        )
                     link = pb.getLinkState(
                         body, palm, computeForwardKinematics=1, physicsClientId=c
                     )
@@ -458,7 +472,7 @@ class DualArmImpedanceController:
                 quaternion,
                 q,
                 gravity,
-                *self._posture(gains, batch),
+                *self._posture(gains, batch_rows),
                 mass_matrix=mass,
                 dt=self.physics_dt,
             )
@@ -474,21 +488,21 @@ class DualArmImpedanceController:
         self._update_targets()
         self._steps_since_refresh = 0
 
-    def _posture(self, gains: GainArrays, batch: list[int]) -> tuple[GainArrays, FloatArray]:
-        """A batch's posture gains and targets (k, n) at the joint state read
-        (:func:`worlds.impedance.limit_posture` where a band is set)."""
-        rows = [self._body_rows[g] for g in batch]
-        rest = np.array([self._rest[r] for r in rows])
-        if not self._avoid_band.any():
+    def _posture(self, gains: GainArrays, rows: IntArray) -> tuple[GainArrays, FloatArray]:
+        """A batch's posture gains and targets (k, n) at the joint state read, its ``rows``
+        (k, n) of the driven vector (:func:`worlds.impedance.limit_posture` where a band is
+        set)."""
+        rest = self._rest[rows]
+        if not self._avoids_limits:
             return gains, rest
         weight, rest = limit_posture(
-            np.array([self._q[r] for r in rows]),
-            np.array([self._lower[r] for r in rows]),
-            np.array([self._upper[r] for r in rows]),
+            self._q[rows],
+            self._lower[rows],
+            self._upper[rows],
             rest,
             gains.posture_weight if gains.posture_weight is not None else np.ones_like(rest),
-            np.array([self._avoid_band[r] for r in rows]),
-            np.array([self._avoid_weight[r] for r in rows]),
+            self._avoid_band[rows],
+            self._avoid_weight[rows],
         )
         return replace(gains, posture_weight=weight), rest
 

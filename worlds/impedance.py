@@ -519,6 +519,15 @@ def limit_posture(
 def _by_palm(x: ArrayLike, k: int, width: int) -> FloatArray:
     """``x`` as (k, t, width) floats, contiguous: ``k`` bodies' ``t`` palms (one palm a body
     may come as (k, width))."""
+    if (
+        isinstance(x, np.ndarray)
+        and x.dtype == np.float64
+        and x.ndim == 3
+        and x.shape[0] == k
+        and x.shape[2] == width
+        and x.flags.c_contiguous
+    ):
+        return x  # already so (the controller's every call): no copy, no reshape
     return np.ascontiguousarray(np.reshape(x, (k, -1, width)), dtype=float)
 
 
