@@ -36,7 +36,7 @@ from planner.move_result import MoveResult, move_placements, move_results
 from planner.port import Move
 from planner.render import render_tree
 from planner.runlog import RunLog
-from planner.runner import run_tree
+from planner.runner import readable, run_tree
 from planner.tree_dataflow import RUN_WRITES, TASK_OBJECT_KEY
 from skills import quaternion as quat
 from skills.default_library import default_library
@@ -494,7 +494,7 @@ def run_episode(
             tip = tree.tip()
             if progress is not None and tip is not None and tip.name != last[0]:
                 last[0] = tip.name
-                progress(sim.time(), tip.name, tip.feedback_message)
+                progress(sim.time(), readable(tip.name), readable(tip.feedback_message))
 
         try:
             result = run_tree(

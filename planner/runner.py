@@ -7,6 +7,7 @@ against the PyBullet world and the in-memory fake.
 from __future__ import annotations
 
 import math
+import re
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
@@ -87,6 +88,19 @@ def status_chain(root: py_trees.behaviour.Behaviour) -> list[py_trees.behaviour.
     return chain
 
 
+#: The suffix py_trees gives a node the file does not name (``Transport_<uuid4>``), and the
+#: bare uuid4 it names an unnamed composite above it by (``<uuid4>.``).
+_UUID = r"[0-9a-f]{8}-[0-9a-f]{4}-4[0-9a-f]{3}-[89ab][0-9a-f]{3}-[0-9a-f]{12}"
+_UNNAMED = re.compile(rf"_{_UUID}|(?<![\w-]){_UUID}\.")
+
+
+def readable(text: str) -> str:
+    """``text`` with the uuids py_trees names the file's unnamed nodes by taken out: an
+    unnamed node reads as its type, as BehaviorTree.CPP names it (``Transport``), and an
+    unnamed composite above it drops out of its path."""
+    return _UNNAMED.sub("", text)
+
+
 def explain(root: py_trees.behaviour.Behaviour) -> str:
     """Why ``root`` has its status: the deepest node of :func:`status_chain`, named, and what it
     said; never empty.
@@ -97,12 +111,12 @@ def explain(root: py_trees.behaviour.Behaviour) -> str:
     chain = status_chain(root)
     deepest = chain[-1]
     if deepest.feedback_message:
-        return f"{deepest.name}: {deepest.feedback_message}"
+        return readable(f"{deepest.name}: {deepest.feedback_message}")
     text = f"{deepest.name}: {deepest.status.value.lower()} without a feedback message"
     above = [n for n in chain[:-1] if n.feedback_message]
     if above:
         text += f" (under {above[-1].name}: {above[-1].feedback_message})"
-    return text
+    return readable(text)
 
 
 def tick_tree(tree: py_trees.trees.BehaviourTree) -> None:

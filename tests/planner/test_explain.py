@@ -6,7 +6,7 @@ import py_trees
 from py_trees.common import Status
 
 from planner.loader import load_tree_string
-from planner.runner import explain, status_chain
+from planner.runner import explain, readable, status_chain
 from tests.planner.stub_leaves import FakeClock, StubCheck, StubCounter  # noqa: F401 (registers)
 
 
@@ -103,3 +103,25 @@ def test_a_branch_skipped_once_and_run_later_is_a_reason_again() -> None:
     )
     assert root.status == Status.FAILURE
     assert [n.name for n in status_chain(root)][-1] == "s.second.b.c2"
+
+
+def test_nodes_the_file_leaves_unnamed_read_as_their_type() -> None:
+    # py_trees names an unnamed node <Type>_<uuid4> and an unnamed composite by a bare uuid4;
+    # the reason reads as BehaviorTree.CPP names them: by type, with no uuid in it.
+    root = run(
+        '<Sequence><StubCounter ticks="1"/><Timeout msec="300">'
+        '<StubCounter ticks="50"/></Timeout></Sequence>'
+    )
+    assert root.status == Status.FAILURE
+    # The names themselves keep their uuids (they must be unique); what is shown does not.
+    assert root.name != "Sequence" and readable(root.name) == "Sequence"
+    reason = explain(root)
+    assert reason.startswith("Timeout: timed out after 0.300 s"), reason
+    assert "halted 'StubCounter' while StubCounter said" in reason, reason
+
+
+def test_readable_takes_out_only_py_trees_uuids() -> None:
+    uid = "c61cbfdd-e6e3-459e-8d3f-6d43d02bb0fd"
+    assert readable(f"{uid}.Transport_{uid}: no data") == "Transport: no data"
+    assert readable("task.move_6.transport: ok") == "task.move_6.transport: ok"
+    assert readable(f"named {uid} in the text") == f"named {uid} in the text"
