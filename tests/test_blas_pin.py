@@ -54,9 +54,13 @@ else:
 """
 
 
-def test_app_pins_the_kernel_before_numpy_loads_it() -> None:
+@pytest.mark.parametrize("first", ["app", "planner.testing.fixtures", "worlds.testing"])
+def test_the_kernel_is_pinned_before_numpy_loads_it(first: str) -> None:
     # A fresh interpreter: importing app sets the variable, and OpenBLAS loads that kernel.
-    code = "import os; os.environ.pop('OPENBLAS_CORETYPE', None); import app\n" + CORE_NAME
+    # pytest imports its plugins before any conftest.py, so the two the package registers
+    # pin it too: a suite run without xdist ran its trials on the CPU's own kernel (SkylakeX
+    # here), and its in-process records differed from Ray's in the last digits.
+    code = f"import os; os.environ.pop('OPENBLAS_CORETYPE', None); import {first}\n" + CORE_NAME
     code += "print(os.environ.get('OPENBLAS_CORETYPE'))\n"
     core, asked = subprocess.run(
         [sys.executable, "-c", code],

@@ -21,11 +21,19 @@ A suite can also override the ``sim_world_file`` fixture to choose the world of 
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator
-from pathlib import Path
-from typing import TYPE_CHECKING, Any
+# isort: off
+from duet_robot.blas import pin_blas_kernel
 
-import pytest
+# pytest loads its plugins before any conftest.py: the kernel app.py pins (duet_robot.blas),
+# asked for here, before anything this plugin imports loads numpy.
+pin_blas_kernel()
+from collections.abc import Callable, Iterator  # noqa: E402
+from pathlib import Path  # noqa: E402
+from typing import TYPE_CHECKING, Any  # noqa: E402
+
+import pytest  # noqa: E402
+
+# isort: on
 
 if TYPE_CHECKING:
     from worlds.sim_world import SimWorld
