@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import sys
 from collections.abc import Callable, Sequence
@@ -314,6 +315,13 @@ def _skills_command(args: argparse.Namespace) -> int:
 
 def _teach_command(args: argparse.Namespace) -> int:
     """Learn a skill from a demonstration CSV into a library; report recognition first."""
+    from skills.demo_conditioning import (
+        DEFAULT_SMOOTHING_S,
+        MAX_SETTLE_DEG,
+        MAX_SETTLE_M,
+        low_pass,
+        reproduction,
+    )
     from skills.demos.io import DemoFileError, read_demo_csv
     from skills.library import LibraryFileError, check_save_target
     from skills.pose_dmp import fit_pose
@@ -357,6 +365,11 @@ def _teach_command(args: argparse.Namespace) -> int:
     except ValueError as err:
         print(err, file=sys.stderr)  # the message starts with the file
         return EXIT_BAD_INPUT
+    smoothing_s = DEFAULT_SMOOTHING_S if args.smooth_ms is None else args.smooth_ms / 1000.0
+    if not (math.isfinite(smoothing_s) and 0.0 <= smoothing_s <= 1.0):
+        print(f"--smooth-ms: expected 0 to 1000 ms, got {args.smooth_ms}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    demo = low_pass(demo, smoothing_s)  # recognised and learnt smoothed, alike
     threshold = DEFAULT_THRESHOLD if args.threshold is None else args.threshold
     if not -1.0 <= threshold <= 1.0:
         print(
@@ -404,6 +417,32 @@ def _teach_command(args: argparse.Namespace) -> int:
                 model = fit_pose(demo)
         except ValueError as err:
             print(f"{args.demo}: {err}", file=sys.stderr)
+            return EXIT_BAD_INPUT
+        # The skill must do what was shown before it is kept: rolled out between the
+        # demonstration's own start and goal, and past its duration, where a forcing fitted
+        # to noise throws it off its goal.
+        shown = reproduction(model, demo)
+        summary["reproduction"] = {
+            "rms_m": round(shown.rms_m, 6),
+            "settle_m": round(shown.settle_m, 6),
+            "settle_deg": round(shown.settle_deg, 4),
+            "smoothing_ms": round(1000.0 * smoothing_s, 3),
+        }
+        print(
+            f"reproduces the demonstration within {1000.0 * shown.rms_m:.1f} mm RMS; after its "
+            f"duration stays within {1000.0 * shown.settle_m:.1f} mm and "
+            f"{shown.settle_deg:.1f} deg of its goal"
+        )
+        if not shown.settles:
+            print(
+                f"{args.demo}: expected a skill that settles at its goal (within "
+                f"{1000.0 * MAX_SETTLE_M:.0f} mm and {MAX_SETTLE_DEG:g} deg after its "
+                f"duration), got one that strays {1000.0 * shown.settle_m:.0f} mm and "
+                f"{shown.settle_deg:.1f} deg from it: the recording is too noisy to learn "
+                f"from as it is (smoothed over {1000.0 * smoothing_s:g} ms); try a larger "
+                "--smooth-ms. Nothing was added.",
+                file=sys.stderr,
+            )
             return EXIT_BAD_INPUT
         try:
             skill = learnt_skill(
@@ -887,6 +926,14 @@ def build_parser() -> argparse.ArgumentParser:
         "(default: skills.recognition.DEFAULT_THRESHOLD, derived there)",
     )
     teach.add_argument("--force", action="store_true", help="add even if it matches a skill")
+    teach.add_argument(
+        "--smooth-ms",
+        type=float,
+        default=None,
+        help="smooth the recording over this many ms before learning (a Gaussian's standard "
+        "deviation; default 40, 0: as recorded): a recording's noise, differentiated twice, "
+        "is what the forcing would learn",
+    )
     teach.add_argument("--json", action="store_true", help="print a JSON summary last")
     teach.set_defaults(handler=_teach_command)
     return parser

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -143,3 +144,32 @@ def test_a_taught_wave_carries_the_parcel_in_physics(taught: Path, tmp_path: Pat
     report = run_episode(load_world(path), None, out=None, animation=False)
     assert report.success, report.failure
     assert all(e is not None and e < 0.01 for e in report.placement_error_m)
+
+
+def test_teach_smooths_a_noisy_recording_and_refuses_one_it_cannot_learn(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # The pick-and-place teacher's carry recorded with 0.5 mm of white noise per sample.
+    demo = waved_carry(0.0, seed=2)
+    assert demo.orientations is not None
+    noisy = demo.positions + 5e-4 * np.random.default_rng(0).standard_normal(demo.positions.shape)
+    csv = write_demo_csv(tmp_path / "noisy.csv", demo.t, noisy, demo.orientations)
+    argv = ["teach", str(csv), "--label", "noisy", "--space", "absolute", "--force"]
+    # As recorded, the forcing fits the noise and the skill leaves its goal: nothing is saved.
+    raw = tmp_path / "raw"
+    assert app.main([*argv, "--library", str(raw), "--smooth-ms", "0"]) == app.EXIT_BAD_INPUT
+    err = capsys.readouterr().err
+    assert err.startswith(f"{csv}: expected a skill that settles at its goal"), err
+    assert "try a larger --smooth-ms. Nothing was added." in err
+    assert not raw.exists()
+    # Smoothed (the default), it is learnt, and says how well it reproduces the recording.
+    lib = tmp_path / "lib"
+    assert app.main([*argv, "--library", str(lib), "--json"]) == app.EXIT_OK
+    out = capsys.readouterr().out
+    assert "reproduces the demonstration within" in out
+    shown = json.loads(out.splitlines()[-1])["reproduction"]
+    assert shown["smoothing_ms"] == 40.0
+    assert shown["settle_m"] < 0.02 and shown["rms_m"] < 0.005
+    assert SkillLibrary.load(lib).named("noisy").label == "noisy"
+    assert app.main([*argv, "--library", str(lib), "--smooth-ms", "-5"]) == app.EXIT_BAD_INPUT
+    assert "--smooth-ms: expected 0 to 1000 ms, got -5.0" in capsys.readouterr().err
