@@ -2,10 +2,11 @@
 
 - :func:`trajectory_figure`: in the style of the paper's Fig. 3, per move of every object:
   the learnt transport skill the move actually ran, alone from the move's start to its goal
-  (green: its demonstration as the skill generalises it), the executed path of the object
-  (blue) with its heading (arrows of its x-axis), its footprint to scale at the start (dashed)
-  and the goal (solid), and the obstacles in their own shapes (red), in a top view and a side
-  view along the move's own direction, both at equal axis scales.
+  (green, another colour for each other skill: its demonstration as the skill generalises
+  it), the executed path of the object (blue) with its heading (arrows of its x-axis), its
+  footprint to scale at the start (dashed) and the goal (solid), and the obstacles in their
+  own shapes (red), in a top view and a side view along the move's own direction, both at
+  equal axis scales; a title too long for one line (a failure's reason) wrapped.
 - :class:`Animation`: frames from PyBullet's CPU renderer (TinyRenderer) written as a GIF.
 """
 
@@ -223,8 +224,13 @@ def headings(orientations: Array, view: View) -> Array:
     return np.atleast_2d(x_axis) @ view.axes.T
 
 
-def draw_move(ax: Any, tr: MoveTrace, view: View) -> list[Array]:
-    """Draw one move in one view; returns the plotted points (for the limits)."""
+#: Colours of the demonstrated paths, one per skill in the order the moves name them.
+SKILL_COLOURS = ("green", "tab:olive", "darkcyan", "tab:brown", "tab:pink")
+
+
+def draw_move(ax: Any, tr: MoveTrace, view: View, demo_colour: str = "green") -> list[Array]:
+    """Draw one move in one view (its skill's demonstration in ``demo_colour``); returns the
+    plotted points (for the limits)."""
     from matplotlib.patches import Circle, Polygon
 
     drawn: list[Array] = []
@@ -266,7 +272,7 @@ def draw_move(ax: Any, tr: MoveTrace, view: View) -> list[Array]:
             drawn.append(poly)
     if tr.demonstrated is not None:
         demo = view.project(tr.demonstrated)
-        ax.plot(*demo.T, color="green", lw=2.2, label=f"demonstrated: {tr.skill}")
+        ax.plot(*demo.T, color=demo_colour, lw=2.2, label=f"demonstrated: {tr.skill}")
         drawn.append(demo)
     if len(tr.path):
         path = view.project(tr.path)
@@ -341,12 +347,16 @@ def _trajectory_figure(traces: Sequence[MoveTrace], path: Path, title: str) -> P
     top = top_view()
     tops: list[tuple[Any, list[Array]]] = []
     sides: list[tuple[Any, list[Array]]] = []
+    # Each skill's demonstrations in a colour of its own (a move may name a taught one).
+    skills = list(dict.fromkeys(tr.skill for tr in traces if tr.demonstrated is not None))
+    colours = {k: SKILL_COLOURS[i % len(SKILL_COLOURS)] for i, k in enumerate(skills)}
     for k, tr in enumerate(traces):
         r, c = divmod(k, cols)
         ax_top, ax_side = axes[2 * r, c], axes[2 * r + 1, c]
         side = side_view(tr.start, tr.goal)
-        tops.append((ax_top, draw_move(ax_top, tr, top)))
-        sides.append((ax_side, draw_move(ax_side, tr, side)))
+        colour = colours.get(tr.skill, SKILL_COLOURS[0])
+        tops.append((ax_top, draw_move(ax_top, tr, top, colour)))
+        sides.append((ax_side, draw_move(ax_side, tr, side, colour)))
         for ax, view in ((ax_top, top), (ax_side, side)):
             ax.set_xlabel(view.labels[0])
             ax.set_ylabel(view.labels[1])
@@ -380,11 +390,28 @@ def _trajectory_figure(traces: Sequence[MoveTrace], path: Path, title: str) -> P
             fontsize=8,
             bbox_to_anchor=(0.5, 0.08 / height),
         )
-    fig.suptitle(title, y=1.0 - 0.25 / height)
+    text, size = fitted_title(title, width)
+    fig.suptitle(text, y=1.0 - 0.25 / height, fontsize=size)
     path.parent.mkdir(parents=True, exist_ok=True)
     with atomic_path(path) as temporary:  # never half a figure under its name
         fig.savefig(temporary, dpi=110, format="png")
     return path
+
+
+def fitted_title(title: str, width_in: float) -> tuple[str, float]:
+    """``title`` as it fits a figure ``width_in`` inches wide above its panels, and its font
+    size: one line at 12 pt if it fits, else wrapped at 9 pt to three lines at most (a long
+    failure reason, the last line cut with an ellipsis)."""
+    import textwrap
+
+    if len(title) <= int(width_in * 9.5):  # about 9.5 characters an inch at 12 pt
+        return title, 12.0
+    lines = textwrap.wrap(title, width=int(width_in * 13.5), break_long_words=True)
+    if len(lines) > 3:
+        lines = [*lines[:2], textwrap.shorten(" ".join(lines[2:]), int(width_in * 13.5))]
+        if not lines[2].endswith("[...]"):
+            lines[2] += " [...]"
+    return "\n".join(lines), 9.0
 
 
 def _frame(panels: list[tuple[Any, list[Array]]], share: tuple[bool, bool]) -> None:

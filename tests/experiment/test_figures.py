@@ -16,10 +16,12 @@ import matplotlib.pyplot as plt
 from matplotlib.patches import Circle, Polygon
 
 from experiment.figures import (
+    SKILL_COLOURS,
     MoveTrace,
     convex_hull_2d,
     demonstrated_path,
     draw_move,
+    fitted_title,
     headings,
     outline,
     side_view,
@@ -181,3 +183,34 @@ def test_the_figure_is_written_for_moves_of_several_objects(tmp_path: Path) -> N
         )
     out = trajectory_figure(traces, tmp_path / "trajectories.png", "two objects")
     assert out.stat().st_size > 10_000
+
+
+def test_each_skill_is_drawn_in_its_own_colour() -> None:
+    # Two moves, one carried with the shipped carry and one with a taught wave: two entries.
+    start, goal = np.array([0.55, 0.0, 0.675]), np.array([0.85, 0.0, 0.675])
+    skills = (build_default_library().get("pick_and_place"), wave_skill())
+    fig, axes = plt.subplots(1, 2)
+    for ax, skill, colour in zip(axes, skills, SKILL_COLOURS, strict=False):
+        demo = demonstrated_path(skill, start, quat.IDENTITY, goal, quat.IDENTITY)
+        trace = MoveTrace(
+            "move", start, goal, np.empty((0, 3)), (), skill=skill.name, demonstrated=demo
+        )
+        draw_move(ax, trace, top_view(), colour)
+    drawn = [
+        line.get_color()
+        for ax in axes
+        for line in ax.get_lines()
+        if line.get_label().startswith("demonstrated")
+    ]
+    plt.close(fig)
+    assert drawn == list(SKILL_COLOURS[:2])
+
+
+def test_a_long_title_is_wrapped_to_the_figures_width() -> None:
+    assert fitted_title("parcel_pick_place: success", 13.2) == ("parcel_pick_place: success", 12.0)
+    reason = "task.parcel.pick_and_place.move_centre.carry.grip_intact: not held: " * 3
+    text, size = fitted_title(f"w: failure: tree failure: {reason}", 13.2)
+    assert size == 9.0 and 1 < len(text.splitlines()) <= 3
+    assert max(len(line) for line in text.splitlines()) <= int(13.2 * 13.5)
+    text, _ = fitted_title("word " * 200, 4.4)
+    assert len(text.splitlines()) == 3 and text.endswith("[...]")
