@@ -319,6 +319,7 @@ def _teach_command(args: argparse.Namespace) -> int:
         DEFAULT_SMOOTHING_S,
         MAX_SETTLE_DEG,
         MAX_SETTLE_M,
+        end_speed,
         low_pass,
         reproduction,
     )
@@ -369,7 +370,7 @@ def _teach_command(args: argparse.Namespace) -> int:
     if not (math.isfinite(smoothing_s) and 0.0 <= smoothing_s <= 1.0):
         print(f"--smooth-ms: expected 0 to 1000 ms, got {args.smooth_ms}", file=sys.stderr)
         return EXIT_BAD_INPUT
-    demo = low_pass(demo, smoothing_s)  # recognised and learnt smoothed, alike
+    recorded, demo = demo, low_pass(demo, smoothing_s)  # recognised and learnt smoothed
     threshold = DEFAULT_THRESHOLD if args.threshold is None else args.threshold
     if not -1.0 <= threshold <= 1.0:
         print(
@@ -434,13 +435,19 @@ def _teach_command(args: argparse.Namespace) -> int:
             f"{shown.settle_deg:.1f} deg of its goal"
         )
         if not shown.settles:
+            final, peak = end_speed(low_pass(recorded, max(smoothing_s, DEFAULT_SMOOTHING_S)))
+            why = (
+                f"the recording ends moving, at {final:.3f} m/s (its peak {peak:.3f} m/s): "
+                "record until the motion has stopped"
+                if final > 0.1 * peak
+                else f"the recording is too noisy to learn from as it is (smoothed over "
+                f"{1000.0 * smoothing_s:g} ms); try a larger --smooth-ms"
+            )
             print(
                 f"{args.demo}: expected a skill that settles at its goal (within "
                 f"{1000.0 * MAX_SETTLE_M:.0f} mm and {MAX_SETTLE_DEG:g} deg after its "
                 f"duration), got one that strays {1000.0 * shown.settle_m:.0f} mm and "
-                f"{shown.settle_deg:.1f} deg from it: the recording is too noisy to learn "
-                f"from as it is (smoothed over {1000.0 * smoothing_s:g} ms); try a larger "
-                "--smooth-ms. Nothing was added.",
+                f"{shown.settle_deg:.1f} deg from it: {why}. Nothing was added.",
                 file=sys.stderr,
             )
             return EXIT_BAD_INPUT

@@ -88,6 +88,15 @@ def low_pass(demo: Demonstration, sigma_s: float = DEFAULT_SMOOTHING_S) -> Demon
     return Demonstration.create(demo.t, positions, orientations, demo.name)
 
 
+def end_speed(demo: Demonstration) -> tuple[float, float]:
+    """The speed ``demo`` ends at and its peak speed, m/s (its positions' finite differences;
+    give it smoothed, :func:`low_pass`, or the noise is what they measure). A skill learnt
+    from a recording cut before the motion stopped overshoots its goal, as one learnt from
+    noise strays from it."""
+    speed = np.linalg.norm(demo.position_derivatives()[0], axis=1)
+    return float(speed[-1]), float(speed.max())
+
+
 @dataclass(frozen=True)
 class Reproduction:
     """How a learnt skill, rolled out from its demonstration's start to its goal, compares.
@@ -146,6 +155,7 @@ __all__ = [
     "MAX_SETTLE_DEG",
     "MAX_SETTLE_M",
     "Reproduction",
+    "end_speed",
     "low_pass",
     "reproduction",
 ]

@@ -173,3 +173,20 @@ def test_teach_smooths_a_noisy_recording_and_refuses_one_it_cannot_learn(
     assert SkillLibrary.load(lib).named("noisy").label == "noisy"
     assert app.main([*argv, "--library", str(lib), "--smooth-ms", "-5"]) == app.EXIT_BAD_INPUT
     assert "--smooth-ms: expected 0 to 1000 ms, got -5.0" in capsys.readouterr().err
+
+
+def test_teach_says_when_a_recording_was_cut_before_the_motion_stopped(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    demo = waved_carry(0.0, seed=2)
+    assert demo.orientations is not None
+    keep = demo.t <= demo.t[0] + 0.8 * demo.duration  # stopped recording mid-carry
+    csv = write_demo_csv(
+        tmp_path / "cut.csv", demo.t[keep], demo.positions[keep], demo.orientations[keep]
+    )
+    argv = ["teach", str(csv), "--label", "cut", "--space", "absolute", "--force"]
+    assert app.main([*argv, "--library", str(tmp_path / "lib")]) == app.EXIT_BAD_INPUT
+    err = capsys.readouterr().err
+    assert err.startswith(f"{csv}: expected a skill that settles at its goal"), err
+    assert "the recording ends moving, at" in err and "record until the motion has stopped" in err
+    assert not (tmp_path / "lib").exists()

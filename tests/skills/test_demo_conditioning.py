@@ -6,7 +6,13 @@ import numpy as np
 import pytest
 
 from skills import quaternion as quat
-from skills.demo_conditioning import MAX_SETTLE_DEG, MAX_SETTLE_M, low_pass, reproduction
+from skills.demo_conditioning import (
+    MAX_SETTLE_DEG,
+    MAX_SETTLE_M,
+    end_speed,
+    low_pass,
+    reproduction,
+)
 from skills.demonstration import Demonstration
 from skills.pose_model import PoseModel, fit_pose
 from skills.scaling import Scaling
@@ -81,3 +87,13 @@ def test_orientations_are_smoothed_as_unit_quaternions() -> None:
     assert np.sqrt(np.mean(after**2)) < 0.3 * np.sqrt(np.mean(before**2))
     shown = reproduction(learnt(smooth), smooth)
     assert shown.settles and shown.settle_deg < MAX_SETTLE_DEG
+
+
+def test_a_recording_cut_before_the_motion_stopped_is_told_from_a_noisy_one() -> None:
+    final, peak = end_speed(low_pass(lifted_carry(noise_m=5e-4)))
+    assert final < 0.02 < 0.2 < peak  # at rest, once smoothed (0.012 m/s here)
+    whole = lifted_carry()
+    cut = Demonstration.create(whole.t[:261], whole.positions[:261], None, "cut")
+    final, peak = end_speed(cut)
+    assert final == pytest.approx(0.152, abs=0.002)  # the carry's speed at 2.6 s
+    assert end_speed(low_pass(cut))[0] > 0.1 * peak  # smoothed, still moving at the end
