@@ -28,8 +28,8 @@ from affordances.config import ReasonerConfig
 from affordances.physics import GraspOption, HardAssessment, assess
 from skills.vocabulary import Arm, GraspType
 from worlds.adapters import object_contexts, robot_capabilities
+from worlds.placement import face_problem, resting_half_height, start_problems
 from worlds.placement import fmt as _fmt
-from worlds.placement import resting_half_height, start_problems
 from worlds.placement import vec as _vec
 from worlds.robots import robot_model_of
 from worlds.robots.reach import ArmReach, arm_reach
@@ -171,6 +171,11 @@ def feasibility_problems(
         obj = spec.scene.objects[index[step.object]]
         for j, move in enumerate(step.moves):
             field = f"task[{i}].moves[{j}].goal.position"
+            tilted = face_problem(obj, move.goal_quaternion)
+            if tilted is not None:
+                problems.append(WorldFileProblem(f"task[{i}].moves[{j}].goal.rpy_deg", *tilted))
+                bad_goals.add((i, j))
+                continue
             table = _table_problem(obj, move, spec.scene.table)
             if table is not None:
                 problems.append(WorldFileProblem(field, *table))

@@ -23,6 +23,7 @@ from collections.abc import Collection
 
 import numpy as np
 
+from affordances.context import Shape
 from skills import quaternion as quat
 from skills.flip import vertical_half_extent
 from worlds.fcl_shapes import penetration_depth, shape_gap
@@ -37,6 +38,11 @@ OVERLAP_TOLERANCE_M = 0.002
 #: Least gap between an obstacle and an object where the object stands when a move naming the
 #: obstacle starts, and at the move's goal, m: a touching obstacle is a contact.
 OBSTACLE_GAP_M = 0.001
+
+#: How far from resting on a face (a box's axis, or a cylinder's, vertical or a cylinder's
+#: level) an object may be turned at its start or goal, deg: tilted further it rests on an
+#: edge, where it cannot stay.
+REST_TILT_DEG = 2.0
 
 Quat = tuple[float, float, float, float]
 Vec3 = tuple[float, float, float]
@@ -56,6 +62,39 @@ def vec(values: tuple[float, ...] | np.ndarray) -> str:
 def resting_half_height(obj: ObjectSpec, quaternion: Quat) -> float:
     """Half the object's extent along world z when turned by ``quaternion``, m."""
     return float(vertical_half_extent(obj.shape.extents(), quaternion))
+
+
+def off_face_deg(shape: ShapeSpec, quaternion: Quat) -> float:
+    """How far ``shape`` turned by ``quaternion`` is from resting on a face of its own, deg:
+    a box's nearest axis from the vertical; a cylinder's axis from the vertical (standing) or
+    the level (lying), the nearer; 0 for a sphere, and for a mesh (not checked: its faces are
+    its hull's)."""
+    if shape.kind in (Shape.SPHERE, Shape.MESH):
+        return 0.0
+    rotation = quat.to_matrix(np.asarray(quaternion, dtype=float))
+    up = np.abs(rotation[2])  # each body axis's component along world z
+    if shape.kind is Shape.CYLINDER:
+        standing = float(np.degrees(np.arccos(min(1.0, up[2]))))
+        return min(standing, abs(90.0 - standing))
+    return float(np.degrees(np.arccos(min(1.0, float(up.max())))))
+
+
+def face_problem(obj: ObjectSpec, quaternion: Quat) -> tuple[str, str] | None:
+    """What a resting pose of ``obj`` should be and what it is, if turned by ``quaternion``
+    off every face it could rest on; else None."""
+    off = off_face_deg(obj.shape, quaternion)
+    if off <= REST_TILT_DEG:
+        return None
+    faces = (
+        "its axis vertical or level"
+        if obj.shape.kind is Shape.CYLINDER
+        else "one of its axes vertical (roll and pitch multiples of 90 deg)"
+    )
+    return (
+        f"{obj.name} resting on a face, {faces} within {fmt(REST_TILT_DEG)} deg",
+        f"rpy_deg {vec(np.degrees(quat.to_rpy(quaternion)))}: {fmt(off)} deg off its nearest face, "
+        "on an edge it cannot stay on",
+    )
 
 
 def start_problems(
@@ -80,6 +119,9 @@ def start_problems(
     table = spec.scene.table
     tx, ty, top = table.position
     for k, obj in enumerate(objects):
+        tilted = face_problem(obj, obj.quaternion)
+        if tilted is not None:
+            problems.append(WorldFileProblem(f"objects[{k}].pose.rpy_deg", *tilted))
         x, y, z = obj.position
         over = abs(x - tx) <= table.size[0] / 2.0 and abs(y - ty) <= table.size[1] / 2.0
         half = resting_half_height(obj, obj.quaternion)

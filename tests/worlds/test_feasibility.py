@@ -5,15 +5,18 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
 from skills import quaternion as quat
 from skills.vocabulary import Arm, GraspType
 from worlds.feasibility import check_feasible, feasibility_problems, resting_half_height
+from worlds.placement import off_face_deg
 from worlds.robots import robot_model_of
 from worlds.robots.kuka import MOUNT_PITCH_DEG, palm2flange_position
 from worlds.robots.reach import arm_reach
+from worlds.spec import ShapeSpec
 from worlds.world_file import WorldFileError, load_world, world_spec
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -29,6 +32,11 @@ PROBLEMS = {
     "goal_in_the_air.yaml": (
         "task[0].moves[0].goal.position: expected z = 0.675 m within 0.01 m, where parcel "
         "rests on the table top (0.6 m + half its height 0.075 m), got z = 0.875 m"
+    ),
+    "goal_on_an_edge.yaml": (
+        "task[0].moves[2].goal.rpy_deg: expected parcel resting on a face, one of its axes "
+        "vertical (roll and pitch multiples of 90 deg) within 2 deg, got rpy_deg [30, 0, 0]: "
+        "30 deg off its nearest face, on an edge it cannot stay on"
     ),
     "goal_out_of_reach.yaml": (
         "task[0].moves[2].goal.position: expected a goal within the arms' reach, got "
@@ -117,3 +125,34 @@ def test_resting_height_of_a_box_on_its_side() -> None:
     assert_allclose(resting_half_height(obj, on_side), 0.15, atol=1e-12)  # the 0.30 m side up
     turned = quat.as_tuple(quat.from_axis_angle([0.0, 0.0, 1.0], 1.0))
     assert_allclose(resting_half_height(obj, turned), 0.075, atol=1e-12)
+
+
+def test_a_resting_pose_is_on_a_face_of_the_shape() -> None:
+    # A box on any of its faces, a cylinder standing or lying; on an edge, neither.
+    box, cylinder = ShapeSpec.box((0.2, 0.3, 0.15)), ShapeSpec.cylinder(0.05, 0.2)
+    turned = {
+        rpy: tuple(quat.from_rpy(np.radians(rpy)))
+        for rpy in ((0, 0, 37), (90, 0, 0), (0, -90, 45), (30, 0, 0), (0, 1.5, 0), (45, 0, 0))
+    }
+    off = {rpy: (off_face_deg(box, q), off_face_deg(cylinder, q)) for rpy, q in turned.items()}
+    for rpy in ((0, 0, 37), (90, 0, 0), (0, -90, 45)):
+        assert off[rpy] == pytest.approx((0.0, 0.0), abs=1e-6)
+    assert off[(30, 0, 0)] == pytest.approx((30.0, 30.0))
+    assert off[(0, 1.5, 0)][0] == pytest.approx(1.5)  # within REST_TILT_DEG: let be
+    assert off[(45, 0, 0)] == pytest.approx((45.0, 45.0))
+    assert off_face_deg(ShapeSpec.sphere(0.05), turned[(30, 0, 0)]) == 0.0
+
+
+def test_an_object_starting_on_an_edge_is_refused_naming_its_pose(tmp_path: Path) -> None:
+    text = (INFEASIBLE / "goal_in_the_air.yaml").read_text(encoding="utf-8")
+    text = text.replace("position: [0.65, 0.0, 0.875]", "position: [0.65, 0.0, 0.675]")
+    start = "      position: [0.55, 0.0, 0.675]  # m; z = table top 0.6 + half height 0.075\n"
+    assert start in text
+    text = text.replace(
+        start + "      rpy_deg: [0.0, 0.0, 0.0]", start + "      rpy_deg: [0.0, 20.0, 0.0]"
+    )
+    path = tmp_path / "tilted_start.yaml"
+    path.write_text(text, encoding="utf-8")
+    found = [p.format("w.yaml") for p in feasibility_problems(load_world(path), LATERAL)]
+    assert "w.yaml: objects[0].pose.rpy_deg: expected parcel resting on a face" in found[0]
+    assert "got rpy_deg [0, 20, 0]: 20 deg off its nearest face" in found[0]
