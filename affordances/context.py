@@ -237,6 +237,10 @@ class ObjectContext:
     goal_fixtures : tuple of str
         The fixture each move of ``goals`` seats the object in ("" for none), in visiting
         order; may be empty (no move into a fixture).
+    squeeze_axes : tuple of str
+        A mesh: the axes of {O}, of ``"x"`` and ``"y"``, across which two sides of its hull
+        hold a lateral squeeze (:mod:`worlds.mesh_sides`); empty for the other shapes, whose
+        faces their dimensions give.
     """
 
     name: str
@@ -256,6 +260,7 @@ class ObjectContext:
     goal_yaws: tuple[float, ...] = ()
     goal_grasp_turns: tuple[float, ...] = ()
     goal_fixtures: tuple[str, ...] = ()
+    squeeze_axes: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name:
@@ -309,6 +314,10 @@ class ObjectContext:
                 f"{owner}.goal_fixtures: expected a list of fixture names, got {fixtures!r}"
             )
         put(self, "goal_fixtures", tuple(fixtures))
+        axes = self.squeeze_axes
+        if isinstance(axes, str | bytes) or not all(a in ("x", "y") for a in axes):
+            raise ValueError(f"{owner}.squeeze_axes: expected axes of x and y, got {axes!r}")
+        put(self, "squeeze_axes", tuple(axes))
 
 
 def _check_dimensions(value: Any, shape: Shape, owner: str) -> tuple[float, ...]:

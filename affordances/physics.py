@@ -15,7 +15,9 @@ Which shapes offer two parallel faces for a squeeze:
   the diameter as the span;
 - sphere: no; each palm touches a single point, and two point contacts cannot stop the
   sphere spinning about the line joining them;
-- mesh: no; its faces are unknown from the bounding box alone.
+- mesh: the pairs of sides of its convex hull the world found pressable across x and y of
+  {O} (``ObjectContext.squeeze_axes``, :mod:`worlds.mesh_sides`), as a box's of its bounding
+  box; none, or only point contacts, and no.
 """
 
 from __future__ import annotations
@@ -255,6 +257,10 @@ def parallel_face_pairs(context: ObjectContext) -> tuple[FacePair, ...]:
     if context.shape == Shape.BOX:
         ex, ey = horizontal_extents(context)
         return (FacePair(FaceAxis.X, ex, height), FacePair(FaceAxis.Y, ey, height))
+    if context.shape == Shape.MESH:
+        ex, ey = horizontal_extents(context)
+        pairs = (FacePair(FaceAxis.X, ex, height), FacePair(FaceAxis.Y, ey, height))
+        return tuple(p for p in pairs if p.axis.value in context.squeeze_axes)
     if context.shape == Shape.CYLINDER:
         return (FacePair(FaceAxis.DIAMETER, 2.0 * context.dimensions[0], height),)
     return ()
@@ -338,7 +344,7 @@ def _lateral(
         why = (
             "a sphere has no parallel faces"
             if context.shape == Shape.SPHERE
-            else "mesh faces unknown"
+            else "no two sides of its hull a palm can press, across x or y"
         )
         return None, (f"hard: no lateral squeeze: {why}",), why
     min_height = config.min_contact_height_factor * robot.palm_width_m

@@ -11,6 +11,7 @@ import math
 from affordances import ObjectContext, RobotCapabilities
 from affordances.context import Obstacle
 from skills.flip import grasp_axis_turn
+from worlds.mesh_sides import squeeze_axes
 from worlds.robots import robot_model_of
 from worlds.spec import ObjectSpec, ObstacleSpec, RobotModelName, Shape, ShapeSpec, WorldSpec
 from worlds.world_file import World, as_world_spec
@@ -105,6 +106,7 @@ def _object_context(
             )
         ),
         goal_fixtures=tuple(m.fixture or "" for m in moves),
+        squeeze_axes=squeeze_axes(obj.shape) if obj.shape.kind is Shape.MESH else (),
     )
 
 

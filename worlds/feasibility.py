@@ -23,17 +23,20 @@ from __future__ import annotations
 from collections.abc import Collection, Mapping
 from dataclasses import replace
 
+import numpy as np
+
 from affordances.actions import GRASP_ORDER
 from affordances.config import ReasonerConfig
 from affordances.physics import GraspOption, HardAssessment, assess
 from skills.vocabulary import Arm, GraspType
 from worlds.adapters import object_contexts, robot_capabilities
+from worlds.mesh_sides import CENTRE_TOLERANCE_M, mesh_centre
 from worlds.placement import face_problem, resting_half_height, start_problems
 from worlds.placement import fmt as _fmt
 from worlds.placement import vec as _vec
 from worlds.robots import robot_model_of
 from worlds.robots.reach import ArmReach, arm_reach
-from worlds.spec import MoveSpec, ObjectSpec, TableSpec, WorldSpec
+from worlds.spec import MoveSpec, ObjectSpec, Shape, TableSpec, WorldSpec
 from worlds.world_errors import WorldFileError, WorldFileProblem
 from worlds.world_file import World, as_world_spec
 
@@ -74,6 +77,24 @@ def _table_problem(obj: ObjectSpec, move: MoveSpec, table: TableSpec) -> tuple[s
             f"z = {_fmt(gz)} m",
         )
     return None
+
+
+def _mesh_off_centre(obj: ObjectSpec) -> tuple[str, str] | None:
+    """What a mesh object's file should be and what it is, if the mesh is not centred on its
+    origin (its pose, rests and grasps are reckoned from its bounding box's centre); else
+    None."""
+    if obj.shape.kind is not Shape.MESH:
+        return None
+    centre = mesh_centre(obj.shape)
+    if float(np.max(np.abs(centre))) <= CENTRE_TOLERANCE_M:
+        return None
+    return (
+        f"a mesh centred on its origin (its bounding box's centre within "
+        f"{_fmt(CENTRE_TOLERANCE_M * 1000)} mm of [0, 0, 0]: {obj.name}'s position is its "
+        "origin's, and its rests and grasps are reckoned from its centre)",
+        f"{obj.shape.mesh_path}: its bounding box centred at {_vec(centre)} m; move its "
+        "vertices by minus that",
+    )
 
 
 def _robot_problem(spec: WorldSpec) -> WorldFileProblem | None:
@@ -157,6 +178,9 @@ def feasibility_problems(
     # An object the task does not move (a ball loose on a tray) need not be graspable.
     moved = {step.object for step in spec.task}
     for k, obj in enumerate(spec.scene.objects):
+        off_centre = _mesh_off_centre(obj)
+        if off_centre is not None:
+            problems.append(WorldFileProblem(f"objects[{k}].shape.file", *off_centre))
         hard = assess(contexts[obj.name], robot, config)
         graspable[obj.name] = bool(usable(hard.options))
         if not graspable[obj.name] and obj.name in moved:

@@ -46,7 +46,7 @@ from worlds.fixtures import FixtureLog
 from worlds.path_checks import PathChecks
 from worlds.safety_monitor import SafetyMonitor, SafetyRecord
 from worlds.scene import Scene, rest_palm_poses
-from worlds.spec import Shape, ShapeSpec, WorldSpec
+from worlds.spec import ShapeSpec, WorldSpec
 from worlds.trays import TrayFrame, riders
 from worlds.truth import PhysicalTruth, sensed_pose
 from worlds.turn_choice import turn_places
@@ -60,14 +60,8 @@ LOCATED_BY_GRASP_N = 0.5
 
 
 def shape_extents(shape: ShapeSpec) -> Array:
-    """Bounding-box extents (3,) of a shape in its own frame, m."""
-    if shape.kind is Shape.BOX:
-        return np.asarray(shape.size, dtype=float)
-    if shape.kind is Shape.SPHERE:
-        return np.full(3, 2.0 * shape.radius)
-    if shape.kind is Shape.CYLINDER:
-        return np.array([2.0 * shape.radius, 2.0 * shape.radius, shape.height])
-    return np.full(3, 2.0 * shape.bounding_radius())
+    """Bounding-box extents (3,) of a shape in its own frame, m (:meth:`ShapeSpec.extents`)."""
+    return np.asarray(shape.extents(), dtype=float)
 
 
 def task_moves(

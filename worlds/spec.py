@@ -158,7 +158,7 @@ class ShapeSpec:
 
     def extents(self) -> Vec3:
         """Full extents of the shape's bounding box along its own x, y, z, m (meshes: of their
-        vertices, which need not be centred)."""
+        vertices; an object's must be centred on its origin, :mod:`worlds.mesh_sides`)."""
         if self.kind == Shape.BOX:
             return self.size
         if self.kind == Shape.SPHERE:
