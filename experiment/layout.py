@@ -45,6 +45,7 @@ from worlds.adapters import robot_capabilities
 from worlds.scene import Scene, lateral_grasp_palm_poses
 from worlds.trays import riders
 from worlds.world_file import (
+    BoxShape,
     GoalRegion,
     ObstacleKind,
     Region,
@@ -154,12 +155,7 @@ class RobotClearance:
     def __init__(self, world: World) -> None:
         self._scene = Scene.from_world(world)
         self._scene.set_active_obstacles(())
-        obj = world.objects[0]
-        size = getattr(obj.shape, "size", None)
-        if size is None:
-            raise ValueError(
-                f"trials: expected a box object to grasp, got a {obj.shape.type} ({obj.name!r})"
-            )
+        object_size(world)  # a box, tray or mesh object to grasp, or a ValueError
         self._thickness = float(world.robot.palm_size[2])
         # The grips' yaws are the robot's (skills.turns): the palms turn with its heading.
         self._robot_yaw = math.radians(world.robot.base.rpy_deg[2])
@@ -294,6 +290,24 @@ def draw_trial(
     raise AssertionError("unreachable")
 
 
+#: The object shapes trials draw layouts around: their bounding boxes.
+TRIAL_SHAPES = ("box", "tray", "mesh")
+
+
+def object_size(world: World) -> tuple[float, float, float]:
+    """Full extents of the world's first object, m: a box's or tray's size, a mesh's
+    bounding box (its file read); a ValueError for any other shape."""
+    shape = world.objects[0].shape
+    if shape.type not in TRIAL_SHAPES:
+        raise ValueError(
+            f"trials: expected a box, tray or mesh object to grasp, got a {shape.type} "
+            f"({world.objects[0].name!r})"
+        )
+    if isinstance(shape, BoxShape | TrayShape):
+        return (float(shape.size[0]), float(shape.size[1]), float(shape.size[2]))
+    return as_world_spec(world).scene.objects[0].shape.extents()  # a mesh's, its file read
+
+
 def _turns(region: GoalRegion) -> bool:
     """Whether a move's goal yaw is drawn from a range rather than fixed."""
     assert region.yaw_deg is not None  # given by TrialSettings.goal_regions
@@ -313,9 +327,7 @@ def _draw_trial(
     rng = np.random.default_rng([seed, trial] if redraw == 0 else [seed, trial, 2, redraw])
     obj = base.objects[0]
     regions = layout.goal_regions()
-    drawn = draw_object(
-        layout, regions, getattr(obj.shape, "size", (0.2, 0.3, 0.15)), seed, trial, redraw
-    )
+    drawn = draw_object(layout, regions, object_size(base), seed, trial, redraw)
     if isinstance(obj.shape, TrayShape) and layout.size_scale is not None:
         # Its walls stay as tall as the palms need (experiment.tray_draws).
         palm = float(base.robot.palm_size[0])
@@ -498,10 +510,16 @@ def check_trial_layout(base: World, seed: int, label: str) -> None:
     drawing one costs a fraction of a second, and tells before a campaign starts.
     """
     obj = base.objects[0]
-    if obj.shape.type not in ("box", "tray"):
+    if obj.shape.type not in TRIAL_SHAPES:
         raise TrialLayoutError(
-            f"{label}: objects[0].shape: expected a box or tray object for trials (their obstacles "
-            f"and grasps are drawn around a box), got a {obj.shape.type} ({obj.name!r})"
+            f"{label}: objects[0].shape: expected a box, tray or mesh object for trials (their "
+            f"obstacles and grasps are drawn around its bounding box), got a {obj.shape.type} "
+            f"({obj.name!r})"
+        )
+    if obj.shape.type == "mesh" and base.trials.size_scale is not None:
+        raise TrialLayoutError(
+            f"{label}: trials.size_scale: expected none for a mesh object (its size is its "
+            f"file's), got {list(base.trials.size_scale)}"
         )
     problem = tray_layout_problem(base, riding(base))
     if problem is not None:

@@ -549,7 +549,7 @@ CASES: dict[str, Case] = {
             "trials",
         ),
         2,
-        r"objects\[0\]\.shape: expected a box or tray object for trials "
+        r"objects\[0\]\.shape: expected a box, tray or mesh object for trials "
         r".*got a cylinder \('parcel'\)",
     ),
     "gui_without_a_display": Case(
