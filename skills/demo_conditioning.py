@@ -51,19 +51,21 @@ def _gaussian_means(t: Array, values: Array, sigma: float) -> Array:
     near it, ``(N, D)``; beyond the ends the end samples stand in, repeated at the end steps
     (a demonstration starts and ends at rest: held there, not cut off)."""
     reach = _REACH * sigma
-    before = np.arange(int(np.ceil(reach / (t[1] - t[0]))), 0, -1)
-    after = np.arange(1, int(np.ceil(reach / (t[-1] - t[-2]))) + 1)
-    times = np.concatenate((t[0] - before * (t[1] - t[0]), t, t[-1] + after * (t[-1] - t[-2])))
+    step = float(np.median(np.diff(t)))  # the padding's, at the recording's usual rate
+    count = int(np.ceil(reach / step))
+    held = step * np.arange(1, count + 1)
+    times = np.concatenate((t[0] - held[::-1], t, t[-1] + held))
     padded = np.concatenate(
-        (np.repeat(values[:1], before.size, 0), values, np.repeat(values[-1:], after.size, 0))
+        (np.repeat(values[:1], count, 0), values, np.repeat(values[-1:], count, 0))
     )
     lo = np.searchsorted(times, t - reach, side="left")
     hi = np.searchsorted(times, t + reach, side="right")
-    out = np.empty_like(values)
-    for i in range(t.size):
-        w = np.exp(-0.5 * ((times[lo[i] : hi[i]] - t[i]) / sigma) ** 2)
-        out[i] = (w @ padded[lo[i] : hi[i]]) / w.sum()
-    return out
+    # Every sample's window at once: (N, K) indices into the padded samples, K the widest.
+    index = lo[:, None] + np.arange(int(np.max(hi - lo)))
+    inside = index < hi[:, None]
+    index = np.minimum(index, times.size - 1)
+    weight = np.where(inside, np.exp(-0.5 * ((times[index] - t[:, None]) / sigma) ** 2), 0.0)
+    return np.einsum("nk,nkd->nd", weight, padded[index]) / weight.sum(axis=1)[:, None]
 
 
 def low_pass(demo: Demonstration, sigma_s: float = DEFAULT_SMOOTHING_S) -> Demonstration:
@@ -132,10 +134,8 @@ def reproduction(model: PoseModel, demo: Demonstration, dt: float = 1.0 / 120.0)
     dmp = PoseDMP.start(
         model, PoseState.at_rest(demo.positions[0], q0), goal, goal_q, tau, blend_fraction=0.0
     )
-    n = int(np.ceil(1.5 * tau / dt))
-    times = dt * np.arange(1, n + 1)
-    states = [dmp.step(dt) for _ in range(n)]
-    positions = np.array([s.position for s in states])
+    path = dmp.rollout(dt, int(np.ceil(1.5 * tau / dt)))
+    times, positions = path.t, path.positions
     during = times <= tau
     shown = np.column_stack(
         [np.interp(times[during], demo.t - demo.t[0], demo.positions[:, k]) for k in range(3)]
@@ -145,7 +145,7 @@ def reproduction(model: PoseModel, demo: Demonstration, dt: float = 1.0 / 120.0)
     settle_m = float(np.max(np.linalg.norm(positions[after] - goal, axis=1), initial=0.0))
     settle_deg = 0.0
     if q is not None and after.any():
-        turned = quat.angle_between(np.array([s.orientation for s in states])[after], goal_q)
+        turned = quat.angle_between(path.orientations[after], goal_q)
         settle_deg = float(np.degrees(np.max(turned)))
     return Reproduction(rms, settle_m, settle_deg)
 
