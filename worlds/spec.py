@@ -13,6 +13,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from enum import StrEnum
+from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
@@ -172,13 +173,22 @@ class ShapeSpec:
         return (x, y, z)
 
     def mesh_vertices(self) -> np.ndarray:
-        """Scaled mesh vertices (V, 3), m."""
-        import trimesh  # lazily: only worlds with meshes pay for it
-
+        """Scaled mesh vertices (V, 3), m (read-only: the file is read once per version)."""
         assert self.mesh_path is not None
-        mesh = trimesh.load(self.mesh_path, force="mesh")
-        assert isinstance(mesh, trimesh.Trimesh)
-        return np.asarray(mesh.vertices, dtype=float) * self.scale
+        return _mesh_vertices(self.mesh_path, self.mesh_path.stat().st_mtime_ns) * self.scale
+
+
+@lru_cache(maxsize=32)
+def _mesh_vertices(path: Path, version: int) -> np.ndarray:
+    """A mesh file's vertices (V, 3) as written, read once per ``version`` (its change time):
+    a world's checks, its reasoner and its scene each ask for them."""
+    import trimesh  # lazily: only worlds with meshes pay for it
+
+    mesh = trimesh.load(path, force="mesh")
+    assert isinstance(mesh, trimesh.Trimesh)
+    vertices = np.asarray(mesh.vertices, dtype=float)
+    vertices.flags.writeable = False
+    return vertices
 
 
 @dataclass(frozen=True)
