@@ -98,7 +98,7 @@ def test_a_trials_layout_that_cannot_be_drawn_is_one_error() -> None:
 
     with pytest.raises(
         TrialLayoutError,
-        match=r"objects\[0\]\.shape: expected a box or tray object "
+        match=r"objects\[0\]\.shape: expected a box, tray or mesh object "
         r"for trials .*got a cylinder \('parcel'\)",
     ):
         check_trial_layout(_world(cylinder), 0, "w.yaml")
