@@ -28,10 +28,11 @@ import numpy as np
 from affordances.actions import GRASP_ORDER
 from affordances.config import ReasonerConfig
 from affordances.physics import GraspOption, HardAssessment, assess
+from skills import quaternion as quat
 from skills.vocabulary import Arm, GraspType
 from worlds.adapters import object_contexts, robot_capabilities
 from worlds.mesh_sides import CENTRE_TOLERANCE_M, mesh_centre
-from worlds.placement import face_problem, resting_half_height, start_problems
+from worlds.placement import REST_TILT_DEG, face_problem, resting_half_height, start_problems
 from worlds.placement import fmt as _fmt
 from worlds.placement import vec as _vec
 from worlds.robots import robot_model_of
@@ -77,6 +78,32 @@ def _table_problem(obj: ObjectSpec, move: MoveSpec, table: TableSpec) -> tuple[s
             f"z = {_fmt(gz)} m",
         )
     return None
+
+
+def _not_upright(obj: ObjectSpec) -> tuple[str, str] | None:
+    """What the start of an object the task moves should be and what it is, if it does not
+    stand on its own z axis (its grasps are planned on the axes it stands on; a flip is a
+    goal's, from upright); else None."""
+    rotation = quat.to_matrix(np.asarray(obj.quaternion, dtype=float))
+    tilt = float(np.degrees(np.arccos(np.clip(rotation[2, 2], -1.0, 1.0))))
+    if tilt <= REST_TILT_DEG:
+        return None
+    rpy = _vec(np.degrees(quat.to_rpy(np.asarray(obj.quaternion, dtype=float))))
+    if obj.shape.kind is Shape.BOX:
+        size = np.abs(rotation) @ np.asarray(obj.shape.size, dtype=float)  # along world x, y, z
+        how = (
+            f"the same box standing is size {_vec(size)} with rpy_deg [0, 0, 0] (a box "
+            "standing on another face is its size given in that frame)"
+        )
+    elif obj.shape.kind is Shape.MESH:
+        how = "turn the mesh file's vertices so that it stands on its z axis"
+    else:
+        how = "a cylinder is grasped standing, across its diameter"
+    return (
+        f"{obj.name} upright at its start, its z axis up within {_fmt(REST_TILT_DEG)} deg (its "
+        "grasps are planned on the axes it stands on)",
+        f"rpy_deg {rpy}: its z axis {_fmt(tilt)} deg from up; {how}",
+    )
 
 
 def _mesh_off_centre(obj: ObjectSpec) -> tuple[str, str] | None:
@@ -181,6 +208,11 @@ def feasibility_problems(
         off_centre = _mesh_off_centre(obj)
         if off_centre is not None:
             problems.append(WorldFileProblem(f"objects[{k}].shape.file", *off_centre))
+        lying = _not_upright(obj) if obj.name in moved else None
+        if lying is not None:
+            problems.append(WorldFileProblem(f"objects[{k}].pose.rpy_deg", *lying))
+            graspable[obj.name] = False  # its grasps would be planned on the wrong axes
+            continue
         hard = assess(contexts[obj.name], robot, config)
         graspable[obj.name] = bool(usable(hard.options))
         if not graspable[obj.name] and obj.name in moved:

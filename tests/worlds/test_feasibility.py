@@ -156,3 +156,49 @@ def test_an_object_starting_on_an_edge_is_refused_naming_its_pose(tmp_path: Path
     found = [p.format("w.yaml") for p in feasibility_problems(load_world(path), LATERAL)]
     assert "w.yaml: objects[0].pose.rpy_deg: expected parcel resting on a face" in found[0]
     assert "got rpy_deg [0, 20, 0]: 20 deg off its nearest face" in found[0]
+
+
+@pytest.mark.parametrize(
+    ("shape", "rpy", "z", "hint"),
+    [
+        (
+            "{type: box, size: [0.20, 0.30, 0.15]}",
+            "[90.0, 0.0, 0.0]",
+            0.75,
+            "the same box standing is size [0.2, 0.15, 0.3] with rpy_deg [0, 0, 0]",
+        ),
+        (
+            "{type: cylinder, radius: 0.07, height: 0.25}",
+            "[90.0, 0.0, 0.0]",
+            0.67,
+            "a cylinder is grasped standing, across its diameter",
+        ),
+    ],
+    ids=["box on its side", "lying cylinder"],
+)
+def test_an_object_the_task_moves_must_start_upright(
+    tmp_path: Path, shape: str, rpy: str, z: float, hint: str
+) -> None:
+    # Resting on a face, but not on its own z axis: its grasps would be planned on the wrong
+    # axes (the palms closed on air, or a lying cylinder's arms touched).
+    text = (INFEASIBLE / "goal_in_the_air.yaml").read_text(encoding="utf-8")
+    text = text.replace("shape: {type: box, size: [0.20, 0.30, 0.15]}", f"shape: {shape}")
+    start = "      position: [0.55, 0.0, 0.675]  # m; z = table top 0.6 + half height 0.075\n"
+    assert start in text
+    text = text.replace(
+        start + "      rpy_deg: [0.0, 0.0, 0.0]",
+        f"      position: [0.55, 0.0, {z}]\n      rpy_deg: {rpy}",
+    )
+    path = tmp_path / "lying.yaml"
+    path.write_text(text, encoding="utf-8")
+    found = [p.format("w.yaml") for p in feasibility_problems(load_world(path), LATERAL)]
+    assert found[0] == (
+        "w.yaml: objects[0].pose.rpy_deg: expected parcel upright at its start, its z axis up "
+        "within 2 deg (its grasps are planned on the axes it stands on), got rpy_deg [90, 0, "
+        f"0]: its z axis 90 deg from up; {hint}"
+        + (
+            " (a box standing on another face is its size given in that frame)"
+            if "box" in hint
+            else ""
+        )
+    )
