@@ -11,7 +11,7 @@ import math
 from affordances import ObjectContext, RobotCapabilities
 from affordances.context import Obstacle
 from skills.flip import grasp_axis_turn
-from worlds.mesh_sides import squeeze_axes
+from worlds.mesh_sides import mesh_centre, squeeze_axes
 from worlds.robots import robot_model_of
 from worlds.spec import ObjectSpec, ObstacleSpec, RobotModelName, Shape, ShapeSpec, WorldSpec
 from worlds.world_file import World, as_world_spec
@@ -74,6 +74,9 @@ def _obstacle(obstacle: ObstacleSpec) -> Obstacle:
         return Obstacle(
             obstacle.name, obstacle.position, math.hypot(shape.radius, shape.height / 2)
         )
+    if shape.kind is Shape.MESH:  # about its bounding box's centre, which its file may offset
+        x, y, z = (p + c for p, c in zip(obstacle.position, mesh_centre(shape), strict=True))
+        return Obstacle.from_box(obstacle.name, (float(x), float(y), float(z)), shape.extents())
     return Obstacle.from_box(obstacle.name, obstacle.position, shape.extents())
 
 

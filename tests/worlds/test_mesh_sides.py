@@ -10,6 +10,7 @@ import trimesh
 import yaml
 
 from skills.vocabulary import GraspType
+from worlds.adapters import object_contexts
 from worlds.feasibility import feasibility_problems
 from worlds.mesh_sides import mesh_centre, squeeze_axes
 from worlds.spec import ShapeSpec
@@ -96,3 +97,17 @@ def test_a_mesh_object_the_robot_cannot_hold_is_refused(
         for p in feasibility_problems(load_world(mesh_world(tmp_path, made)), LATERAL)
     ]
     assert any(p.startswith(f"w.yaml: {expected}") for p in problems), problems
+
+
+def test_a_mesh_obstacle_is_bounded_about_its_bounding_box_centre(tmp_path: Path) -> None:
+    # A 10 cm cube whose file puts its origin at its bottom face, standing at z = 0.8.
+    cube = trimesh.creation.box(extents=[0.1, 0.1, 0.1]).apply_translation([0.0, 0.0, 0.05])
+    cube.export(tmp_path / "cube.obj")
+    data = yaml.safe_load((ROOT / "worlds" / "parcel_pick_place.yaml").read_text())
+    data["obstacles"][0]["shape"] = {"type": "mesh", "file": "cube.obj"}
+    data["obstacles"][0]["position"] = [0.62, -0.08, 0.8]
+    path = tmp_path / "w.yaml"
+    path.write_text(yaml.safe_dump(data), encoding="utf-8")
+    bound = object_contexts(load_world(path))[0].obstacles[0]
+    np.testing.assert_allclose(bound.position, [0.62, -0.08, 0.85])
+    assert bound.radius == pytest.approx(0.05 * np.sqrt(3.0))
