@@ -9,6 +9,10 @@ what would otherwise fail only after seconds of simulation:
 - a goal off the table: the object's centre must be over the table top's footprint (so its
   weight rests on the table) and at the height where it rests on the top, within
   :data:`REST_TOLERANCE_M` (lower is inside the table; higher drops it on release);
+- a start or goal that turns an object off every face it could rest on
+  (:func:`worlds.placement.face_problem`), and an object the task moves that does not start
+  upright on its own z axis (its grasps are planned on the axes it stands on);
+- a mesh object whose file is not centred on its origin (:mod:`worlds.mesh_sides`);
 - a body that starts sunk into the table or inside another (:mod:`worlds.placement`);
 - a goal out of reach: each palm of a grasp the reasoner offers, placed at the goal, must lie
   inside its arm's reach sphere (:func:`worlds.robots.reach.arm_reach`). The palms are taken
