@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import functools
+import re
 from collections.abc import Callable
 from typing import Any, ClassVar
 
@@ -36,6 +37,44 @@ IMPOSSIBLE_VALUE_ERRORS: tuple[type[Exception], ...] = (
 )
 
 
+#: The blackboard key a py_trees "has no data available" message names.
+_MAPPED_TO = re.compile(r"\(mapped to '([^']+)'\) has no data available")
+
+
+def _writers(leaf: py_trees.behaviour.Behaviour, key: str) -> list[str]:
+    """``type.port`` of every node of ``leaf``'s tree with an output port writing blackboard
+    ``key``, in tree order."""
+    root = leaf
+    while root.parent is not None:
+        root = root.parent
+    found = []
+    for node in root.iterate():
+        outputs = getattr(type(node), "output_ports", None)
+        client = getattr(node, "blackboard_client", None)
+        if outputs is None or client is None:
+            continue
+        for port in outputs():
+            absolute = client.absolute_name(port)
+            if client.remappings.get(absolute, absolute) == key:
+                found.append(f"{type(node).__name__}.{port}")
+    return found
+
+
+def _no_data_hint(leaf: py_trees.behaviour.Behaviour, err: Exception) -> str:
+    """For an input port with nothing on it, which nodes of the tree write its key (none have
+    yet), so a tree's author sees which leaf had to run first."""
+    found = _MAPPED_TO.search(str(err))
+    if found is None:
+        return ""
+    counts: dict[str, int] = {}
+    for writer in _writers(leaf, found.group(1)):
+        counts[writer] = counts.get(writer, 0) + 1
+    if not counts:
+        return f"; no node of the tree writes {found.group(1)}"
+    named = ", ".join(w if n == 1 else f"{w} ({n} of them)" for w, n in counts.items())
+    return f"; written by {named} in this tree, none of which has yet"
+
+
 def _failing_softly(hook: Callable[..., Any], name: str) -> Callable[..., Any]:
     """``hook`` (a leaf's ``initialise`` or ``update``), failing the leaf on an impossible value."""
 
@@ -47,7 +86,9 @@ def _failing_softly(hook: Callable[..., Any], name: str) -> Callable[..., Any]:
         try:
             return hook(self)
         except IMPOSSIBLE_VALUE_ERRORS as err:
-            message = f"cannot {name}: {type(err).__name__}: {err}"
+            hint = _no_data_hint(self, err) if isinstance(err, NoDataAvailable) else ""
+            text = str(err).rstrip(".") if hint else str(err)
+            message = f"cannot {name}: {type(err).__name__}: {text}{hint}"
             if name == "update":
                 return self.fail(message)
             self._impossible = message  # the tick's update reports it

@@ -6,7 +6,9 @@ import py_trees
 from py_trees.common import Status
 
 from planner.loader import load_tree_string
-from planner.runner import explain, readable, status_chain
+from planner.runner import explain, readable, run_tree, status_chain
+from planner.testing import FakeWorld
+from skills.library import SkillLibrary
 from tests.planner.stub_leaves import FakeClock, StubCheck, StubCounter  # noqa: F401 (registers)
 
 
@@ -125,3 +127,26 @@ def test_readable_takes_out_only_py_trees_uuids() -> None:
     assert readable(f"{uid}.Transport_{uid}: no data") == "Transport: no data"
     assert readable("task.move_6.transport: ok") == "task.move_6.transport: ok"
     assert readable(f"named {uid} in the text") == f"named {uid} in the text"
+
+
+def test_a_port_with_nothing_on_it_names_the_nodes_that_write_its_key(
+    fake_world: FakeWorld, library: SkillLibrary
+) -> None:
+    # A carry before the grasp that writes its state: the reason says who writes {state}.
+    body = (
+        '<Sequence name="s"><SelectSkills object="{object}" plan="{plan}"/>'
+        '<Transport name="carry" object="{object}" move="0" plan="{plan}" '
+        'from_state="{state}" to_state="{state}"/>'
+        '<Grasp object="{object}" plan="{plan}" state="{state}"/></Sequence>'
+    )
+    root = load_tree_string(
+        f'<root BTCPP_format="4" main_tree_to_execute="T"><BehaviorTree ID="T">{body}'
+        "</BehaviorTree></root>"
+    )
+    result = run_tree(root, fake_world, library, 1 / 60, 5.0, {"/object": "parcel"})
+    assert result.status == Status.FAILURE
+    assert result.reason == (
+        "s.carry: cannot initialise: NoDataAvailable: s.carry: Input port 'from_state' "
+        "(mapped to '/state') has no data available; written by Transport.to_state, "
+        "Grasp.state in this tree, none of which has yet"
+    )
