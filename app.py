@@ -435,7 +435,9 @@ def _teach_command(args: argparse.Namespace) -> int:
             f"{shown.settle_deg:.1f} deg of its goal"
         )
         if not shown.settles:
-            final, peak = end_speed(low_pass(recorded, max(smoothing_s, DEFAULT_SMOOTHING_S)))
+            # Its end speed read smoothed at least as the default does (raw, it is the noise's).
+            settled = demo if smoothing_s >= DEFAULT_SMOOTHING_S else low_pass(recorded)
+            final, peak = end_speed(settled)
             why = (
                 f"the recording ends moving, at {final:.3f} m/s (its peak {peak:.3f} m/s): "
                 "record until the motion has stopped"

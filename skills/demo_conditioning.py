@@ -82,12 +82,18 @@ def low_pass(demo: Demonstration, sigma_s: float = DEFAULT_SMOOTHING_S) -> Demon
         raise ValueError(f"smoothing: expected a duration >= 0 s, got {sigma_s!r}")
     if sigma_s == 0.0:
         return demo
-    positions = _gaussian_means(demo.t, demo.positions, sigma_s)
+    d = demo.positions.shape[1]
+    shown = (
+        demo.positions
+        if demo.orientations is None
+        else np.hstack((demo.positions, demo.orientations))
+    )
+    smooth = _gaussian_means(demo.t, shown, sigma_s)  # one set of windows for both
     orientations = None
     if demo.orientations is not None:
-        q = _gaussian_means(demo.t, demo.orientations, sigma_s)
+        q = smooth[:, d:]
         orientations = q / np.linalg.norm(q, axis=1, keepdims=True)
-    return Demonstration.create(demo.t, positions, orientations, demo.name)
+    return Demonstration.create(demo.t, smooth[:, :d], orientations, demo.name)
 
 
 def end_speed(demo: Demonstration) -> tuple[float, float]:

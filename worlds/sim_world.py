@@ -46,7 +46,7 @@ from worlds.fixtures import FixtureLog
 from worlds.path_checks import PathChecks
 from worlds.safety_monitor import SafetyMonitor, SafetyRecord
 from worlds.scene import Scene, rest_palm_poses
-from worlds.spec import ShapeSpec, WorldSpec
+from worlds.spec import WorldSpec
 from worlds.trays import TrayFrame, riders
 from worlds.truth import PhysicalTruth, sensed_pose
 from worlds.turn_choice import turn_places
@@ -57,11 +57,6 @@ MAX_LIFT_M = 0.30
 #: Contact force each palm must press an object with, N, for the grasp to locate it: from the
 #: first control tick it does, the object is sensed where it is.
 LOCATED_BY_GRASP_N = 0.5
-
-
-def shape_extents(shape: ShapeSpec) -> Array:
-    """Bounding-box extents (3,) of a shape in its own frame, m (:meth:`ShapeSpec.extents`)."""
-    return np.asarray(shape.extents(), dtype=float)
 
 
 def task_moves(
@@ -141,7 +136,9 @@ class SimWorld:
         self.scene.place_palms({a: (p.position, p.orientation) for a, p in self._rest.items()})
         self._commands: dict[Arm, Pose] = dict(self._rest)
         self._contexts = {c.name: self._sensed_context(c) for c in object_contexts(spec)}
-        self._extents = {o.name: shape_extents(o.shape) for o in self.scene.spec.objects}
+        self._extents = {
+            o.name: np.asarray(o.shape.extents(), dtype=float) for o in self.scene.spec.objects
+        }
         #: Predicted paths and holds checked against the obstacles (:mod:`worlds.path_checks`).
         self.paths = PathChecks(self.scene, self.collision, self._extents)
         self._obstacle_info = {
