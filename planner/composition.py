@@ -32,7 +32,13 @@ from skills.level_carry import level_carry_tau, max_carry_acceleration
 from skills.library import SkillLibrary
 from skills.pose_dmp import PoseState
 from skills.skill import Skill, SkillKind
-from skills.turns import held_quarter_turns, lateral_quarter_turns, wrap_angle, yaw_of
+from skills.turns import (
+    grip_options,
+    held_quarter_turns,
+    lateral_quarter_turns,
+    wrap_angle,
+    yaw_of,
+)
 from skills.vocabulary import ARMS, Action, Arm, Space
 
 #: Shortest move duration, s (the demonstrations last about 2 s).
@@ -114,6 +120,41 @@ def grasp_quarter_turns(world: WorldPort, name: str, turn: float = 0.0) -> int:
     (:func:`skills.turns.lateral_quarter_turns`, from its measured yaw and the robot's)."""
     yaw = yaw_of(world.object_pose(name).orientation)
     return lateral_quarter_turns(yaw, turn, robot_yaw(world))
+
+
+#: How far beyond the robot's largest grip turn a grip may be and still make a turn, degrees
+#: (a box set down a degree past half way between two face pairs).
+GRIP_TURN_TOLERANCE_DEG = 5.0
+
+
+def grasp_options(world: WorldPort, name: str, turn: float = 0.0) -> list[int]:
+    """The face pairs that can make a turn of ``turn`` rad about z, the usual one first
+    (:func:`grasp_quarter_turns`), then any other the arms hold over the whole turn, within
+    :data:`GRIP_TURN_TOLERANCE_DEG` (:func:`skills.turns.grip_options`)."""
+    yaw = yaw_of(world.object_pose(name).orientation)
+    limit = world.robot_capabilities().max_turn_rad + math.radians(GRIP_TURN_TOLERANCE_DEG)
+    return grip_options(yaw, turn, limit, robot_yaw(world))
+
+
+#: How far each palm may stand from its face's grasp position for :func:`facing_quarter_turns`
+#: to take the palms as beside that face pair, m: an approach's stand-off, with room.
+FACING_M = 0.10
+
+
+def facing_quarter_turns(world: WorldPort, name: str) -> int | None:
+    """The face pair the palms stand beside (each palm within :data:`FACING_M` of its face's
+    grasp position: where an approach left them), or None."""
+    pose = world.object_pose(name)
+    left, _ = relative_from_world(
+        pose.position, pose.orientation, world.palm_pose(Arm.LEFT).position, quat.IDENTITY
+    )
+    k = held_quarter_turns(left)
+    g = lateral_geometry(world, name, k)
+    for arm in ARMS:
+        at = pose.position + quat.rotate(pose.orientation, g.position(arm))
+        if float(np.linalg.norm(world.palm_pose(arm).position - at)) > FACING_M:
+            return None
+    return k
 
 
 def move_turn(world: ObjectSensing, name: str, index: int | None) -> float:

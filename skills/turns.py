@@ -30,6 +30,7 @@ from numpy.typing import ArrayLike, NDArray
 
 __all__ = [
     "Hold",
+    "grip_options",
     "grip_yaw",
     "held_quarter_turns",
     "lateral_quarter_turns",
@@ -77,12 +78,35 @@ def lateral_quarter_turns(object_yaw: float, turn: float = 0.0, robot_yaw: float
     whose normals lie closest to the robot's y axis.
     """
 
-    def cost(k: int) -> tuple[float, float, int]:
-        start = grip_yaw(object_yaw, k, robot_yaw)
-        end = start + turn
-        return (round(max(abs(start), abs(end)), 9), round(abs(start), 9), k)
+    return min(range(4), key=lambda k: _grip_cost(object_yaw, k, turn, robot_yaw))
 
-    return min(range(4), key=cost)
+
+def _grip_cost(
+    object_yaw: float, k: int, turn: float, robot_yaw: float
+) -> tuple[float, float, int]:
+    """Face pair ``k``'s rank for a turn: its largest grip yaw over the turn, then its grip yaw
+    at the start, then ``k``."""
+    start = grip_yaw(object_yaw, k, robot_yaw)
+    end = start + turn
+    return (round(max(abs(start), abs(end)), 9), round(abs(start), 9), k)
+
+
+def grip_options(
+    object_yaw: float, turn: float, max_turn: float, robot_yaw: float = 0.0
+) -> list[int]:
+    """The face pairs (quarter turns) that can make a turn of ``turn`` rad, best first:
+    :func:`lateral_quarter_turns`'s choice, then each other pair whose grip yaw stays within
+    ``+-max_turn`` over the whole turn, in the same order.
+
+    A box turned near half way between two face pairs has two that make a small turn: with one
+    of them an arm may reach round into an obstacle where the other stands clear. The first is
+    always listed, even when it needs a turn beyond ``max_turn`` (the turn is then made in
+    steps, :func:`turn_steps`)."""
+    ranked = sorted(range(4), key=lambda k: _grip_cost(object_yaw, k, turn, robot_yaw))
+    limit = round(max_turn, 9)
+    return ranked[:1] + [
+        k for k in ranked[1:] if _grip_cost(object_yaw, k, turn, robot_yaw)[0] <= limit
+    ]
 
 
 def held_quarter_turns(left_palm_in_object: ArrayLike) -> int:

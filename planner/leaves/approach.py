@@ -7,9 +7,9 @@ from typing import ClassVar
 import numpy as np
 from py_trees.ports import PortInformation
 
-from planner.composition import grasp_quarter_turns, lateral_geometry, move_turn, robot_yaw
+from planner.composition import grasp_options, lateral_geometry, move_turn, robot_yaw
 from planner.leaves.base import grasp_move_port
-from planner.leaves.palm_motion import ViaPointLeaf, measured_state
+from planner.leaves.palm_motion import ViaPointLeaf, ViaPointMotion, measured_state
 from planner.leaves.palm_routes import PalmRoute, margin_port, take_clear_route
 from planner.port import ObjectSensing, ObstacleScene, PalmControl, Pose, WorldPort
 from skills import quaternion as quat
@@ -123,7 +123,11 @@ class Approach(ViaPointLeaf):
     """Move both palms to ``standoff`` m outside the object's faces via set-points above.
 
     The faces are the pair that suits move ``move``'s turn (:mod:`skills.turns`), from the
-    object's measured yaw: after a turn, the palms meet the faces that now face them.
+    object's measured yaw: after a turn, the palms meet the faces that now face them. When every
+    way in to that pair ends with a palm or an arm link on an obstacle (a box set down turned
+    beside a sphere, an arm reaching round its far face into it), the other pairs that make the
+    turn are tried (:func:`~planner.composition.grasp_options`) and the first with a way in is
+    taken; ``Grasp`` closes on the faces the palms come to.
 
     An object that lies off the table (:func:`off_the_table`: fallen to the floor) is out of
     reach: the leaf fails at once, saying where it lies.
@@ -189,7 +193,38 @@ class Approach(ViaPointLeaf):
             self.refusal = why
             return
         turn = move_turn(world, name, int(self.get_input("move")))
-        quarter_turns = grasp_quarter_turns(world, name, turn)
+        starts = {a: measured_state(world.palm_pose(a), world.palm_twist(a)) for a in ARMS}
+        options = grasp_options(world, name, turn)
+        first: tuple[ViaPointMotion | None, str | None, str] | None = None
+        for k in options:
+            take_clear_route(
+                self,
+                world,
+                starts,
+                self._routes(world, name, k, starts),
+                float(self.get_input("segment_s")),
+                float(self.get_input("margin_m")),
+                detour_of=0,
+                around=world.other_objects(name),
+                object_margin_m=float(self.get_input("object_margin_m")),
+            )
+            if self.refusal is None:
+                if first is not None:
+                    self.route_note = f"on the other faces that make the turn: {first[1]}" + (
+                        f"; {self.route_note}" if self.route_note else ""
+                    )
+                return
+            if first is None:
+                first = (self.motion, self.refusal, self.route_note)
+        # Every pair of faces refused: the usual pair's reason.
+        assert first is not None
+        self.motion, self.refusal, self.route_note = first
+
+    def _routes(
+        self, world: WorldPort, name: str, quarter_turns: int, starts: dict[Arm, PoseState]
+    ) -> list[PalmRoute]:
+        """The ways in to face pair ``quarter_turns``: the usual, the other (from above or from
+        the side), and each of them rising first where the palms start low."""
         g = lateral_geometry(world, name, quarter_turns)
         pose = world.object_pose(name)
         rise_m = float(self.get_input("rise_m"))
@@ -214,16 +249,5 @@ class Approach(ViaPointLeaf):
         routes = [PalmRoute(f"coming in {usual}", way_in(rise))]
         if other_rise != rise:
             routes.append(PalmRoute(f"coming in {other}", way_in(other_rise)))
-        starts = {a: measured_state(world.palm_pose(a), world.palm_twist(a)) for a in ARMS}
         routes.extend(rising_first(routes, starts))
-        take_clear_route(
-            self,
-            world,
-            starts,
-            routes,
-            float(self.get_input("segment_s")),
-            float(self.get_input("margin_m")),
-            detour_of=0,
-            around=world.other_objects(name),
-            object_margin_m=float(self.get_input("object_margin_m")),
-        )
+        return routes

@@ -11,6 +11,7 @@ from py_trees.ports import PortInformation
 from affordances import SemanticAction
 from planner.composition import (
     closing_dual_state,
+    facing_quarter_turns,
     grasp_quarter_turns,
     hold_terms,
     lateral_geometry,
@@ -60,8 +61,9 @@ def anchored(composer: DualArmComposer, measured: Pose, shift: Array | None = No
 
 
 class Grasp(MotionLeaf):
-    """Lateral contact, then squeeze: grasp maintenance pulls the palms onto the faces (the
-    pair that suits move ``move``'s turn, as :class:`~planner.leaves.Approach` chose it).
+    """Lateral contact, then squeeze: grasp maintenance pulls the palms onto the faces the
+    palms stand beside, as :class:`~planner.leaves.Approach` left them; palms that stand beside
+    none close on the pair that suits move ``move``'s turn.
 
     Closing can push the object: a palm that meets its face first (the object sensed off its
     true pose, or an actuator biased) shoves it until the other palm arrives. Near an
@@ -110,8 +112,14 @@ class Grasp(MotionLeaf):
         name = self.get_input("object")
         self.force = self.palm_squeeze_force(self.optional_input("plan"))
         depth = world.squeeze_depth(self.force)
-        turn = move_turn(world, name, int(self.get_input("move")))
-        geometry = lateral_geometry(world, name, grasp_quarter_turns(world, name, turn))
+        # The faces the palms stand beside (an approach may have taken other faces than the
+        # usual pair, the usual one's way in ending on an obstacle); else the usual pair.
+        k = facing_quarter_turns(world, name)
+        if k is None:
+            k = grasp_quarter_turns(
+                world, name, move_turn(world, name, int(self.get_input("move")))
+            )
+        geometry = lateral_geometry(world, name, k)
         relative = hold_terms(self.optional_input("plan"), self.library, geometry, depth)
         self.composer = static_composition(
             closing_dual_state(world, name),

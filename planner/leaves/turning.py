@@ -8,7 +8,7 @@ import numpy as np
 from py_trees.common import Status
 from py_trees.ports import PortInformation
 
-from planner.composition import move_turn, robot_yaw
+from planner.composition import GRIP_TURN_TOLERANCE_DEG, move_turn, robot_yaw
 from planner.leaves.base import WorldLeaf
 from planner.port import ObjectSensing, PalmControl
 from skills.composer import relative_from_world
@@ -37,7 +37,7 @@ class GripTurns(WorldLeaf):
         "tolerance_deg": PortInformation(
             float,
             required=False,
-            default_value=5.0,
+            default_value=GRIP_TURN_TOLERANCE_DEG,
             description="grip yaw allowed beyond the robot's largest turn, degrees",
         ),
     }

@@ -11,6 +11,7 @@ from numpy.testing import assert_allclose
 from skills import quaternion as quat
 from skills.dual_arm import GraspGeometry
 from skills.turns import (
+    grip_options,
     grip_yaw,
     held_quarter_turns,
     lateral_quarter_turns,
@@ -89,6 +90,28 @@ def test_faces_for_a_turn_are_the_pair_that_stays_within_reach() -> None:
     k = lateral_quarter_turns(D(45), D(45))
     assert k == 3
     assert math.degrees(grip_yaw(D(45), k)) == pytest.approx(-45.0)
+
+
+def test_grip_options_list_the_usual_pair_then_others_that_make_the_turn() -> None:
+    # A box set down at 44 degrees: the pairs at grip yaws 44 and -46 both hold it within 50.
+    options = grip_options(D(44), 0.0, D(50))
+    assert options[0] == lateral_quarter_turns(D(44))
+    assert len(options) == 2
+    assert sorted(abs(math.degrees(grip_yaw(D(44), k))) for k in options) == pytest.approx(
+        [44.0, 46.0]
+    )
+    # Each listed pair stays within the limit over the whole turn.
+    for k in grip_options(D(30), D(10), D(50)):
+        start = math.degrees(grip_yaw(D(30), k))
+        assert max(abs(start), abs(start + 10.0)) <= 50.0 + 1e-9
+
+
+def test_grip_options_keep_the_usual_pair_alone_when_no_other_makes_the_turn() -> None:
+    assert grip_options(D(10), 0.0, D(50)) == [lateral_quarter_turns(D(10))]
+    # A turn no pair makes within the limit: the usual pair, whose turn goes in steps.
+    assert grip_options(D(0), D(120), D(50)) == [lateral_quarter_turns(D(0), D(120))]
+    # A turned robot: the same pairs as the object turned back by its heading.
+    assert grip_options(D(74), 0.0, D(50), robot_yaw=D(30)) == grip_options(D(44), 0.0, D(50))
 
 
 def test_held_faces_from_the_left_palm_position() -> None:
