@@ -692,6 +692,11 @@ class CollisionWorld:
         """Whether the queries see any obstacle now."""
         return bool(self._active)
 
+    def active_obstacle_names(self) -> tuple[str, ...]:
+        """The obstacles the queries see now, by name."""
+        rows = set(self._active)
+        return tuple(name for name, row in self._obstacles.items() if row in rows)
+
     # -- queries -----------------------------------------------------------------------------
 
     def _rows(self, group: str) -> list[int]:

@@ -15,17 +15,23 @@ a move's obstacles (:meth:`PathChecks.holds_clear`, for
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import NamedTuple
 
 import numpy as np
+import pybullet as pb
 from numpy.typing import NDArray
 
 from planner.port import PathCheck
 from skills.turns import Hold
 from skills.types import Array
 from skills.vocabulary import ARMS, Arm
-from worlds.arm_prediction import WAYPOINT_ITERATIONS, WAYPOINT_TOLERANCE, ArmPredictor
+from worlds.arm_prediction import (
+    WAYPOINT_ITERATIONS,
+    WAYPOINT_TOLERANCE,
+    ArmPredictor,
+    LinkFrames,
+)
 from worlds.collision import CollisionWorld
 from worlds.scene import Scene
 from worlds.turn_choice import hold_poses
@@ -95,6 +101,11 @@ class LinkHits(NamedTuple):
     on_objects: NDArray[np.bool_]
     end_on_obstacle: bool = False
     end_objects: tuple[str, ...] = ()
+    #: ``who(i, margin)``: the first arm link, and the active obstacle, that come within
+    #: ``margin`` of each other at waypoint ``i`` (as its nearest solved waypoint poses the
+    #: links), e.g. ("the right arm's lbr_iiwa_link_5", "ball_left"); None if no one link does
+    #: alone.
+    who: Callable[[int, float], tuple[str, str] | None] | None = None
 
 
 class PathChecks:
@@ -257,7 +268,13 @@ class PathChecks:
             elif arms_on_objects[first]:
                 what = f"an arm link within {object_margin_m:g} m of an object"
             else:
-                what = f"an arm link within {margin_m + doubt[first]:.3f} m"
+                margin = margin_m + doubt[first]
+                who = hits.who(first, margin) if hits.who is not None else None
+                what = (
+                    f"{who[0]} within {margin:.3f} m of {who[1]}"
+                    if who
+                    else f"an arm link within {margin:.3f} m"
+                )
             what += f" at step {first}"
         # The last pose alone, against the obstacles (the objects are the palms' to touch),
         # its links asked the margin without the doubt: a way that ends within the margin of
@@ -352,7 +369,37 @@ class PathChecks:
         nearest = np.clip(
             np.searchsorted(solved, np.arange(n) - PREDICTION_STRIDE // 2), 0, solved.size - 1
         )
-        return LinkHits(on_obstacles[nearest], on_objects[nearest], at_end, end_objects)
+
+        def who(i: int, margin: float) -> tuple[str, str] | None:
+            return self._touching_link(frames, int(nearest[i]), margin)
+
+        return LinkHits(on_obstacles[nearest], on_objects[nearest], at_end, end_objects, who)
+
+    def _touching_link(
+        self, frames: dict[Arm, LinkFrames], i: int, margin: float
+    ) -> tuple[str, str] | None:
+        """The first arm link (left arm first, base to palm) within ``margin`` of an active
+        obstacle in solved pose ``i`` of ``frames``, named, with that obstacle (each link
+        checked over the way up to there, as the path's check does: one that starts nearer than
+        the margin may keep its gap); None when no one link is. Asked only to say why a path was
+        refused."""
+        robot = self.scene.robot
+        for obstacle in self.collision.active_obstacle_names():
+            with self.collision.obstacles_present((obstacle,)):
+                for arm in ARMS:
+                    f = frames[arm]
+                    body = self.scene.robot_ids[robot.arms[arm].body]
+                    for k, link in enumerate(f.links):
+                        if self.collision.check_link_frames(
+                            arm,
+                            (link,),
+                            f.positions[: i + 1, k : k + 1],
+                            f.quaternions[: i + 1, k : k + 1],
+                            margin,
+                        )[-1]:
+                            info = pb.getJointInfo(body, link, physicsClientId=self.scene.client)
+                            return f"the {arm.value} arm's {info[12].decode()}", obstacle
+        return None
 
 
 __all__ = [

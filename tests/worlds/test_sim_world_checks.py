@@ -312,3 +312,38 @@ def test_a_path_says_whether_its_end_keeps_clear_of_the_obstacles_whatever_its_w
         assert into.end_objects == () and through.end_objects == ()
         # A path with nothing near ends clear as it goes.
         assert sim.check_palm_path(left_palm_to(start[0]), q, 0.0).end_clear
+
+
+@pytest.mark.sim
+def test_a_refused_path_names_the_arm_link_and_the_obstacle_it_comes_near() -> None:
+    from worlds.sim_world import SimWorld
+    from worlds.testing import DEFAULT_WORLD
+    from worlds.world_file import load_world, world_from_data
+
+    base = load_world(DEFAULT_WORLD)
+    with SimWorld(base) as sim:
+        # Where the right arm's fourth link (the elbow) stands at rest.
+        body = sim.scene.robot_ids[sim.scene.robot.arms[Arm.RIGHT].body]
+        elbow = np.array(pb.getLinkState(body, 3, physicsClientId=sim.scene.client)[4])
+    data = base.model_dump(mode="json")
+    right = next(o for o in data["obstacles"] if o["name"] == "ball_right")
+    right["position"] = [float(v) for v in elbow + np.array([0.0, 0.0, 0.09])]
+    world = world_from_data(data, base.source)
+    with SimWorld(world) as sim:
+        sim.set_active_obstacles(["ball_right"])
+        parcel = sim.object_pose("parcel")
+        palms = np.stack([sim.palm_pose(a).position for a in (Arm.LEFT, Arm.RIGHT)])
+        q = np.stack([sim.palm_pose(a).orientation for a in (Arm.LEFT, Arm.RIGHT)])
+        n = 3
+        check = sim.check_trajectory(
+            "parcel",
+            np.repeat(parcel.position[None], n, axis=0),
+            np.repeat(parcel.orientation[None], n, axis=0),
+            np.repeat(palms[None], n, axis=0),
+            np.repeat(q[None], n, axis=0),
+            0.01,
+            link_doubt=False,
+        )
+        assert not check.clear
+        assert "the right arm's lbr_iiwa_link_" in check.detail
+        assert "within 0.010 m of ball_right at step 0" in check.detail
