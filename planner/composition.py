@@ -33,6 +33,7 @@ from skills.library import SkillLibrary
 from skills.pose_dmp import PoseState
 from skills.skill import Skill, SkillKind
 from skills.turns import (
+    GRIP_TURN_TOLERANCE_DEG,
     grip_options,
     held_quarter_turns,
     lateral_quarter_turns,
@@ -122,15 +123,10 @@ def grasp_quarter_turns(world: WorldPort, name: str, turn: float = 0.0) -> int:
     return lateral_quarter_turns(yaw, turn, robot_yaw(world))
 
 
-#: How far beyond the robot's largest grip turn a grip may be and still make a turn, degrees
-#: (a box set down a degree past half way between two face pairs).
-GRIP_TURN_TOLERANCE_DEG = 5.0
-
-
 def grasp_options(world: WorldPort, name: str, turn: float = 0.0) -> list[int]:
     """The face pairs that can make a turn of ``turn`` rad about z, the usual one first
     (:func:`grasp_quarter_turns`), then any other the arms hold over the whole turn, within
-    :data:`GRIP_TURN_TOLERANCE_DEG` (:func:`skills.turns.grip_options`)."""
+    :data:`skills.turns.GRIP_TURN_TOLERANCE_DEG` (:func:`skills.turns.grip_options`)."""
     yaw = yaw_of(world.object_pose(name).orientation)
     limit = world.robot_capabilities().max_turn_rad + math.radians(GRIP_TURN_TOLERANCE_DEG)
     return grip_options(yaw, turn, limit, robot_yaw(world))

@@ -29,6 +29,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 __all__ = [
+    "GRIP_TURN_TOLERANCE_DEG",
     "Hold",
     "grip_options",
     "grip_yaw",
@@ -42,6 +43,9 @@ __all__ = [
 
 #: Turns below this are no turn, rad (rounding of measured yaws).
 _EPS = 1e-6
+#: How far beyond the robot's largest grip turn a grip may be and still make a turn, degrees
+#: (a box set down a degree past half way between two face pairs).
+GRIP_TURN_TOLERANCE_DEG = 5.0
 
 
 def wrap_angle(angle: float) -> float:

@@ -26,7 +26,7 @@ import numpy as np
 from affordances.config import ReasonerConfig
 from affordances.physics import assess
 from skills import quaternion as quat
-from skills.turns import move_holds, yaw_of
+from skills.turns import GRIP_TURN_TOLERANCE_DEG, Hold, grip_yaw, move_holds, yaw_of
 from skills.vocabulary import GraspType
 from worlds.adapters import object_contexts, robot_capabilities
 from worlds.placement import vec
@@ -42,17 +42,18 @@ _UPRIGHT_COS = math.cos(math.radians(1.0))
 
 def obstacle_hold_problems(world: World | WorldSpec) -> list[WorldFileProblem]:
     """Every obstacle of a move (its task's second or later) that the arms, holding the object
-    at the previous goal, touch when it appears.
+    at the previous goal, touch when it appears; and every goal the arms cannot hold the object
+    at without touching one of its move's obstacles, in any grip they reach
+    (:func:`goal_hold_touches`).
 
     Returns
     -------
     list of WorldFileProblem
-        Fields are the obstacles' positions (``obstacles[1].position``).
+        Fields are the obstacles' positions (``obstacles[1].position``) and the goals
+        (``task[0].moves[2].goal``).
     """
     spec = as_world_spec(world)
-    moving = [
-        (i, j) for i, s in enumerate(spec.task) for j, m in enumerate(s.moves) if j and m.obstacles
-    ]
+    moving = [(i, j) for i, s in enumerate(spec.task) for j, m in enumerate(s.moves) if m.obstacles]
     if not moving:
         return []
     index = {o.name: k for k, o in enumerate(spec.scene.obstacles)}
@@ -79,7 +80,7 @@ def obstacle_hold_problems(world: World | WorldSpec) -> list[WorldFileProblem]:
             position, yaw = np.asarray(obj.position, dtype=float), float(obj.yaw)
             held = None
             for j, move in enumerate(step.moves):
-                if (i, j) in asked and held is not None:
+                if j and (i, j) in asked and held is not None:
                     touched = sim.hold_touches(step.object, move.obstacles, held)
                     for name, what in touched.items():
                         problems.append(
@@ -96,6 +97,18 @@ def obstacle_hold_problems(world: World | WorldSpec) -> list[WorldFileProblem]:
                 # Where the lateral holds say how it is held: upright, carried (not seated
                 # in a fixture, which the palms may let go of). Else not asked after it.
                 upright = quat.rotate(np.asarray(move.goal_quaternion), _Z)[2] > _UPRIGHT_COS
+                if (i, j) in asked and upright and move.fixture is None:
+                    grips = goal_hold_touches(sim, step.object, move.obstacles, goal, goal_yaw)
+                    if grips:
+                        problems.append(
+                            WorldFileProblem(
+                                f"task[{i}].moves[{j}].goal",
+                                f"{step.object} held at its goal clear of the move's "
+                                "obstacles, in a grip the arms reach",
+                                f"{vec(goal)} turned {math.degrees(goal_yaw):.0f} deg: "
+                                + "; ".join(grips),
+                            )
+                        )
                 held = (
                     move_holds(position, yaw, goal, goal_yaw, max_turn, robot_yaw)[-1]
                     if upright and move.fixture is None
@@ -105,4 +118,30 @@ def obstacle_hold_problems(world: World | WorldSpec) -> list[WorldFileProblem]:
     return problems
 
 
-__all__ = ["obstacle_hold_problems"]
+def goal_hold_touches(
+    sim: SimWorld, name: str, obstacles: tuple[str, ...], goal: np.ndarray, goal_yaw: float
+) -> list[str]:
+    """How the robot holding object ``name`` at ``goal`` turned ``goal_yaw`` touches
+    ``obstacles``, one line per grip it reaches there (face pairs whose grip yaw is within the
+    robot's largest turn and :data:`skills.turns.GRIP_TURN_TOLERANCE_DEG`), e.g. "grip 30 deg:
+    the right arm touches ball_left"; empty when any one of those grips touches none. The arms
+    are solved to convergence on the kinematic copy: the compliant arm settles a few
+    centimetres off that posture, and only touching is asked."""
+    limit = robot_capabilities(sim.spec).max_turn_rad + math.radians(GRIP_TURN_TOLERANCE_DEG)
+    robot_yaw = math.radians(sim.spec.scene.robot.base_rpy_deg[2])
+    lines = []
+    for k in range(4):
+        grip = grip_yaw(goal_yaw, k, robot_yaw)
+        if abs(grip) > limit:
+            continue
+        touched = sim.hold_touches(name, obstacles, Hold(goal, goal_yaw, grip, k))
+        if not touched:
+            return []
+        lines.append(
+            f"grip {math.degrees(grip):.0f} deg: "
+            + ", ".join(f"{what} ({o})" for o, what in touched.items())
+        )
+    return lines
+
+
+__all__ = ["goal_hold_touches", "obstacle_hold_problems"]

@@ -8,11 +8,11 @@ import numpy as np
 from py_trees.common import Status
 from py_trees.ports import PortInformation
 
-from planner.composition import GRIP_TURN_TOLERANCE_DEG, move_turn, robot_yaw
+from planner.composition import move_turn, robot_yaw
 from planner.leaves.base import WorldLeaf
 from planner.port import ObjectSensing, PalmControl
 from skills.composer import relative_from_world
-from skills.turns import grip_yaw, held_quarter_turns, yaw_of
+from skills.turns import GRIP_TURN_TOLERANCE_DEG, grip_yaw, held_quarter_turns, yaw_of
 from skills.vocabulary import ARMS, Arm
 
 

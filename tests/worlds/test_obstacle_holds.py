@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pytest
 
 from worlds.obstacle_holds import obstacle_hold_problems
@@ -76,3 +77,38 @@ def test_after_a_move_that_leaves_the_object_on_its_side_nothing_is_asked() -> N
         data["task"][0]["moves"][1]["goal"]["rpy_deg"] = [90.0, 0.0, 0.0]
 
     assert obstacle_hold_problems(_edited(IN_THE_ARM, on_its_side)) == []
+
+
+HELD_INTO = ROOT / "tests" / "data" / "infeasible_worlds" / "goal_held_only_into_a_sphere.yaml"
+
+
+def test_a_goal_the_arms_can_hold_only_into_its_obstacle() -> None:
+    problems = obstacle_hold_problems(load_world(HELD_INTO))
+    assert [p.format("w.yaml") for p in problems] == [
+        "w.yaml: task[0].moves[2].goal: expected parcel held at its goal clear of the move's "
+        "obstacles, in a grip the arms reach, got [0.6, 0.15, 0.675] turned -60 deg: grip 30 "
+        "deg: the right arm touches it (ball_left)"
+    ]
+
+
+def test_a_goal_with_one_grip_into_its_obstacle_and_one_clear_passes() -> None:
+    from skills.turns import Hold
+    from worlds.obstacle_holds import goal_hold_touches
+    from worlds.sim_world import SimWorld
+
+    def turned_45(data: dict[str, Any]) -> None:
+        data["task"][0]["moves"][2]["goal"]["rpy_deg"] = [0.0, 0.0, 45.0]
+
+    world = _edited(DEFAULT, turned_45)
+    assert obstacle_hold_problems(world) == []
+    # Asked of one grip at a time, the 45 degree grip touches ball_left, the -45 one does not.
+    with SimWorld(world) as sim:
+        goal = np.array([0.6, 0.15, 0.675])
+        yaw = np.radians(45.0)
+        into = sim.hold_touches("parcel", ("ball_left",), Hold(goal, yaw, yaw, 0))
+        assert into == {"ball_left": "the right arm touches it"}
+        assert sim.hold_touches("parcel", ("ball_left",), Hold(goal, yaw, -yaw, 3)) == {}
+        assert goal_hold_touches(sim, "parcel", ("ball_left",), goal, yaw) == []
+        # The same goal turned -60 reaches one grip only: the problem names it.
+        lines = goal_hold_touches(sim, "parcel", ("ball_left",), goal, np.radians(-60.0))
+    assert lines == ["grip 30 deg: the right arm touches it (ball_left)"]
