@@ -176,7 +176,8 @@ def task_steps(world: World) -> list[TaskStep]:
         first_file = done.get(step.object, 0)
         files = range(first_file, first_file + len(step.moves))
         indices = [i for i, m in enumerate(stepped[step.object]) if m.task_move in files]
-        steps.append(TaskStep(step.object, len(indices), indices[0] if indices else 0))
+        of = tuple(int(stepped[step.object][i].task_move or 0) for i in indices)
+        steps.append(TaskStep(step.object, len(indices), indices[0] if indices else 0, of))
         done[step.object] = first_file + len(step.moves)
     return steps
 

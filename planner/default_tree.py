@@ -17,8 +17,9 @@ the file's PickAndPlace (``PickAndPlace_<first>_<count>``) whose Move subtrees a
 Move instance repeated once per move of the step, with the object's move indices (a step that
 follows another of the same object goes on from that one's last move). The moves keep the
 file's names (``move_centre``, ``move_right``, ``move_left``) and further ones are
-``move_<n>`` (from 1). Nothing of a tree is built in code: subtrees, compositions, guards and
-timeouts are the file's.
+``move_<n>`` (from 1); a task move made in several (a turn the grip cannot make in one) is
+one Move per step, ``move_left_step_1``, ``move_left_step_2``. Nothing of a tree is built in
+code: subtrees, compositions, guards and timeouts are the file's.
 
 To change what a step does (e.g. regrasp between moves), change the file's PickAndPlace or
 Move subtree; to change what runs per move, the Move subtree. :class:`TaskStep` is the only
@@ -64,11 +65,17 @@ class TaskStep:
         Number of moves, at least 1.
     first_move : int
         Index of the step's first move among the object's moves (``task_moves``), from 0.
+    task_moves : tuple of int
+        Per move, the index of the task's move (as the world file lists the object's moves) it
+        is a step of (:attr:`planner.port.Move.task_move`): a turn the grip cannot make in one
+        is several moves, each named after the task's move (``move_left_step_1``,
+        ``move_left_step_2``). Empty: each move is a task move of its own.
     """
 
     object: str
     moves: int
     first_move: int = 0
+    task_moves: tuple[int, ...] = ()
 
     def __post_init__(self) -> None:
         if self.moves < 1:
@@ -79,6 +86,23 @@ class TaskStep:
             raise ValueError(
                 f"TaskStep {self.object!r}: expected first_move >= 0, got {self.first_move}"
             )
+        if self.task_moves and len(self.task_moves) != self.moves:
+            raise ValueError(
+                f"TaskStep {self.object!r}: expected one task move per move ({self.moves}), "
+                f"got {len(self.task_moves)}"
+            )
+
+    def move_names(self, names: Sequence[str]) -> list[str]:
+        """Each move's node name: the task move's name in ``names`` (the template's, by task
+        move index) or ``move_<n>`` (n from 1) beyond them, with ``_step_<k>`` (k from 1)
+        where the task move is made in several."""
+        tasks = self.task_moves or tuple(range(self.first_move, self.first_move + self.moves))
+        out = []
+        for i, task in enumerate(tasks):
+            base = names[task] if task < len(names) else f"move_{task + 1}"
+            steps = tasks.count(task)
+            out.append(base if steps == 1 else f"{base}_step_{tasks[: i + 1].count(task)}")
+        return out
 
 
 def _template_problem(template: Path, message: str) -> TreeFileError:
@@ -134,10 +158,10 @@ def _with_moves(definition: ET.Element, tree_id: str, step: TaskStep) -> ET.Elem
     at = list(body).index(shipped[0])
     for element in shipped:
         body.remove(element)
-    for i in range(step.moves):
+    for i, name in enumerate(step.move_names(names)):
         index = step.first_move + i
         element = copy.deepcopy(shipped[0])
-        element.set("name", names[index] if index < len(names) else f"move_{index + 1}")
+        element.set("name", name)
         element.set("move", str(index))
         body.insert(at + i, element)
     return out

@@ -111,3 +111,37 @@ def test_a_task_without_steps_or_moves_is_refused() -> None:
         task_xml([])
     with pytest.raises(ValueError, match="TaskStep 'parcel': expected at least 1 move, got 0"):
         TaskStep("parcel", 0)
+
+
+def test_a_task_move_made_in_steps_names_each_step_after_it() -> None:
+    # The right move turned past the grip: two steps, then the left move.
+    step = TaskStep("parcel", 4, task_moves=(0, 1, 1, 2))
+    assert step.move_names(["move_centre", "move_right", "move_left"]) == [
+        "move_centre",
+        "move_right_step_1",
+        "move_right_step_2",
+        "move_left",
+    ]
+    root = default_tree([step])
+    moves = sorted(
+        {(n.name.split(".")[3], int(n.get_input("move"))) for n in transports(root)},
+        key=lambda m: m[1],
+    )
+    assert moves == [
+        ("move_centre", 0),
+        ("move_right_step_1", 1),
+        ("move_right_step_2", 2),
+        ("move_left", 3),
+    ]
+    # Without task moves each move is a task move of its own, named by its index.
+    assert TaskStep("parcel", 2, first_move=3).move_names(["a", "b", "c"]) == [
+        "move_4",
+        "move_5",
+    ]
+    assert TaskStep("box", 3, first_move=2, task_moves=(3, 3, 4)).move_names(["a"]) == [
+        "move_4_step_1",
+        "move_4_step_2",
+        "move_5",
+    ]
+    with pytest.raises(ValueError, match="one task move per move"):
+        TaskStep("parcel", 2, task_moves=(0,))
