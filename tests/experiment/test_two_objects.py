@@ -23,7 +23,10 @@ PLACED = ["parcel_left", "parcel_left", "parcel_right", "parcel_right"]
 
 def test_the_task_is_read_step_by_step_with_each_objects_move_indices() -> None:
     world = load_world(TWO_PARCELS)
-    assert task_steps(world) == [TaskStep("parcel_left", 2, 0), TaskStep("parcel_right", 2, 0)]
+    assert task_steps(world) == [
+        TaskStep("parcel_left", 2, 0, task_moves=(0, 1)),
+        TaskStep("parcel_right", 2, 0, task_moves=(0, 1)),
+    ]
     assert move_keys(world) == [
         ("parcel_left", 0),
         ("parcel_left", 1),
