@@ -27,11 +27,11 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
-from types import TracebackType
 
 import numpy as np
 import pybullet as pb
 
+from duet_robot.closing import Closing
 from experiment.flip_draws import draw_object, goal_half_height, pitched_goal_postures
 from experiment.insertion_trials import place_fixture
 
@@ -139,7 +139,7 @@ def move_postures(
     ]
 
 
-class RobotClearance:
+class RobotClearance(Closing):
     """Distance from a sphere to the robot grasping the object at a given centre.
 
     The robot is posed by the same inverse-kinematics placement that starts an episode
@@ -244,17 +244,6 @@ class RobotClearance:
     def close(self) -> None:
         """Disconnect the scene."""
         self._scene.close()
-
-    def __enter__(self) -> RobotClearance:
-        return self
-
-    def __exit__(
-        self,
-        kind: type[BaseException] | None,
-        error: BaseException | None,
-        trace: TracebackType | None,
-    ) -> None:
-        self.close()
 
 
 def _uniform(rng: np.random.Generator, bounds: tuple[float, float]) -> float:

@@ -27,13 +27,13 @@ import uuid
 import xml.etree.ElementTree as ET
 from collections.abc import Callable
 from dataclasses import dataclass
-from types import TracebackType
 from typing import IO
 
 import py_trees
 from py_trees.common import Status
 from py_trees.ports import PortsMixin
 
+from duet_robot.closing import Closing
 from planner.decorators import SimTimeout
 from planner.nodes_model import add_node_model
 from planner.render import node_kind, node_type, short_name
@@ -185,7 +185,7 @@ def groot_tree_xml(root: py_trees.behaviour.Behaviour, tree_id: str = "MainTree"
     return GrootTree(ET.tostring(document, encoding="unicode"), uids, subtree_uids)
 
 
-class BtLog:
+class BtLog(Closing):
     """Write a tree's status changes as a Groot2 replay log (see the module's layout).
 
     Parameters
@@ -246,14 +246,3 @@ class BtLog:
         if self._file is not None:
             self._file.close()
             self._file = None
-
-    def __enter__(self) -> BtLog:
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        traceback: TracebackType | None,
-    ) -> None:
-        self.close()

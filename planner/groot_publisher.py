@@ -20,11 +20,11 @@ from __future__ import annotations
 import hashlib
 import struct
 import threading
-from types import TracebackType
 
 import py_trees
 from py_trees.common import Status
 
+from duet_robot.closing import Closing
 from planner.btlog import STATUS_CODES, GrootTree
 
 __all__ = ["PROTOCOL_ID", "GrootPublisher", "GrootUnavailableError", "groot_problem"]
@@ -50,7 +50,7 @@ def groot_problem(port: int) -> str | None:
     return None
 
 
-class GrootPublisher:
+class GrootPublisher(Closing):
     """Serve a tree's status to Groot2 while it runs (see the module's protocol).
 
     Parameters
@@ -155,14 +155,3 @@ class GrootPublisher:
         self._stop.set()
         self._thread.join()
         self._close_sockets()
-
-    def __enter__(self) -> GrootPublisher:
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        traceback: TracebackType | None,
-    ) -> None:
-        self.close()

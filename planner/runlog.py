@@ -30,7 +30,6 @@ import uuid
 from collections import Counter
 from collections.abc import Callable
 from pathlib import Path
-from types import TracebackType
 from typing import IO, Any
 
 import numpy as np
@@ -38,6 +37,7 @@ import py_trees
 from py_trees.blackboard import ActivityType, Blackboard
 from py_trees.common import Status
 
+from duet_robot.closing import Closing
 from planner.atomic_file import commit, temporary_beside
 from planner.render import node_kind, node_type
 
@@ -134,7 +134,7 @@ class _VisitOrder(py_trees.visitors.VisitorBase):
         self.order.append(behaviour.id)
 
 
-class RunLog:
+class RunLog(Closing):
     """Log every status change and blackboard write of a tree to a JSON-lines file.
 
     Parameters
@@ -367,14 +367,3 @@ class RunLog:
                 except OSError as err:
                     self._abandon(err)
             self._file = None
-
-    def __enter__(self) -> RunLog:
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        traceback: TracebackType | None,
-    ) -> None:
-        self.close()

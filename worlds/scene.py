@@ -25,6 +25,7 @@ import numpy as np
 import pybullet as pb
 from numpy.typing import ArrayLike, NDArray
 
+from duet_robot.closing import Closing
 from skills import quaternion as quat
 from skills.vocabulary import Arm
 from worlds.bodies import (
@@ -152,7 +153,7 @@ def rest_palm_poses(
     return poses
 
 
-class Scene:
+class Scene(Closing):
     """A running PyBullet scene with two impedance-controlled palms.
 
     Parameters
@@ -623,12 +624,6 @@ class Scene:
         if self.client >= 0 and pb.isConnected(self.client):
             pb.disconnect(self.client)
         self.client = -1
-
-    def __enter__(self) -> Scene:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
 
 
 # NoDisplayError is re-exported: the command line catches it from here.

@@ -25,6 +25,7 @@ import pybullet as pb
 
 from affordances import ObjectContext, RobotCapabilities, SceneQuery
 from affordances.scene import GeometricSceneQuery
+from duet_robot.closing import Closing
 from planner.port import (
     FixtureInfo,
     Move,
@@ -84,7 +85,7 @@ def task_moves(
     )
 
 
-class SimWorld:
+class SimWorld(Closing):
     """A world file brought to life in PyBullet, behind the planner's port.
 
     Parameters
@@ -183,12 +184,6 @@ class SimWorld:
         """Disconnect PyBullet (and the arms' kinematic copy, if one was built)."""
         self.paths.close()
         self.scene.close()
-
-    def __enter__(self) -> SimWorld:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
 
     # -- time --------------------------------------------------------------------------------
     def time(self) -> float:
