@@ -137,14 +137,20 @@ def grasp_options(world: WorldPort, name: str, turn: float = 0.0) -> list[int]:
 FACING_M = 0.10
 
 
+def left_palm_quarter_turns(world: WorldPort, name: str) -> int:
+    """The face pair whose left face lies towards the left palm, from where the palm stands in
+    the object's frame (:func:`skills.turns.held_quarter_turns`): the pair held, when held."""
+    pose = world.object_pose(name)
+    palm = world.palm_pose(Arm.LEFT).position
+    left, _ = relative_from_world(pose.position, pose.orientation, palm, quat.IDENTITY)
+    return held_quarter_turns(left)
+
+
 def facing_quarter_turns(world: WorldPort, name: str) -> int | None:
     """The face pair the palms stand beside (each palm within :data:`FACING_M` of its face's
     grasp position: where an approach left them), or None."""
     pose = world.object_pose(name)
-    left, _ = relative_from_world(
-        pose.position, pose.orientation, world.palm_pose(Arm.LEFT).position, quat.IDENTITY
-    )
-    k = held_quarter_turns(left)
+    k = left_palm_quarter_turns(world, name)
     g = lateral_geometry(world, name, k)
     for arm in ARMS:
         at = pose.position + quat.rotate(pose.orientation, g.position(arm))

@@ -224,6 +224,8 @@ class CollisionWorld:
         # (frame positions, frame quaternions) as flat lists: per link track, its moving links'
         # then its base's, then each task object's (see _pick and _moving_rows).
         self._read: tuple[list[Any], list[Any]] | None = None
+        # Each arm's link names, by link index (as its elements are named).
+        self._link_names: dict[Arm, dict[int, str]] = {}
         for arm in (Arm.LEFT, Arm.RIGHT):
             spec = scene.robot.arms[arm]
             body = scene.robot_ids[spec.body]
@@ -242,6 +244,7 @@ class CollisionWorld:
                     link_name = "palm"  # whatever the URDF calls it
                 else:
                     link_name = pb.getJointInfo(body, link, physicsClientId=c)[12].decode()
+                self._link_names.setdefault(arm, {})[link] = link_name
                 shapes = pb.getCollisionShapeData(body, link, physicsClientId=c)
                 for k, data in enumerate(shapes):
                     geometry, centre, radius = pybullet_geometry(data)
@@ -691,6 +694,11 @@ class CollisionWorld:
     def obstacles_active(self) -> bool:
         """Whether the queries see any obstacle now."""
         return bool(self._active)
+
+    def link_name(self, arm: Arm, link: int) -> str:
+        """The name of link ``link`` of ``arm``'s body, as its elements are named ("palm" for
+        the palm, "base" for -1)."""
+        return self._link_names[Arm(arm)][link]
 
     def active_obstacle_names(self) -> tuple[str, ...]:
         """The obstacles the queries see now, by name."""

@@ -26,7 +26,14 @@ import numpy as np
 from affordances.config import ReasonerConfig
 from affordances.physics import assess
 from skills import quaternion as quat
-from skills.turns import GRIP_TURN_TOLERANCE_DEG, Hold, grip_yaw, move_holds, yaw_of
+from skills.turns import (
+    GRIP_TURN_TOLERANCE_DEG,
+    Hold,
+    grip_options,
+    grip_yaw,
+    move_holds,
+    yaw_of,
+)
 from skills.vocabulary import GraspType
 from worlds.adapters import object_contexts, robot_capabilities
 from worlds.placement import vec
@@ -130,10 +137,8 @@ def goal_hold_touches(
     limit = robot_capabilities(sim.spec).max_turn_rad + math.radians(GRIP_TURN_TOLERANCE_DEG)
     robot_yaw = math.radians(sim.spec.scene.robot.base_rpy_deg[2])
     lines = []
-    for k in range(4):
+    for k in grip_options(goal_yaw, 0.0, limit, robot_yaw):
         grip = grip_yaw(goal_yaw, k, robot_yaw)
-        if abs(grip) > limit:
-            continue
         touched = sim.hold_touches(name, obstacles, Hold(goal, goal_yaw, grip, k))
         if not touched:
             return []

@@ -19,7 +19,6 @@ from collections.abc import Callable, Sequence
 from typing import NamedTuple
 
 import numpy as np
-import pybullet as pb
 from numpy.typing import NDArray
 
 from planner.port import PathCheck
@@ -383,12 +382,10 @@ class PathChecks:
         checked over the way up to there, as the path's check does: one that starts nearer than
         the margin may keep its gap); None when no one link is. Asked only to say why a path was
         refused."""
-        robot = self.scene.robot
         for obstacle in self.collision.active_obstacle_names():
             with self.collision.obstacles_present((obstacle,)):
                 for arm in ARMS:
                     f = frames[arm]
-                    body = self.scene.robot_ids[robot.arms[arm].body]
                     for k, link in enumerate(f.links):
                         if self.collision.check_link_frames(
                             arm,
@@ -397,8 +394,8 @@ class PathChecks:
                             f.quaternions[: i + 1, k : k + 1],
                             margin,
                         )[-1]:
-                            info = pb.getJointInfo(body, link, physicsClientId=self.scene.client)
-                            return f"the {arm.value} arm's {info[12].decode()}", obstacle
+                            name = self.collision.link_name(arm, link)
+                            return f"the {arm.value} arm's {name}", obstacle
         return None
 
 

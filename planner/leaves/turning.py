@@ -8,12 +8,11 @@ import numpy as np
 from py_trees.common import Status
 from py_trees.ports import PortInformation
 
-from planner.composition import move_turn, robot_yaw
+from planner.composition import left_palm_quarter_turns, move_turn, robot_yaw
 from planner.leaves.base import WorldLeaf
 from planner.port import ObjectSensing, PalmControl
-from skills.composer import relative_from_world
-from skills.turns import GRIP_TURN_TOLERANCE_DEG, grip_yaw, held_quarter_turns, yaw_of
-from skills.vocabulary import ARMS, Arm
+from skills.turns import GRIP_TURN_TOLERANCE_DEG, grip_yaw, yaw_of
+from skills.vocabulary import ARMS
 
 
 class GripTurns(WorldLeaf):
@@ -53,12 +52,8 @@ class GripTurns(WorldLeaf):
         forces = [world.contact_force(arm, name) for arm in ARMS]
         if min(forces) < float(self.get_input("min_force_n")):
             return self.succeed("not held: no grip to turn")
-        obj = world.object_pose(name)
-        palm = world.palm_pose(Arm.LEFT)
-        left, _ = relative_from_world(
-            obj.position, obj.orientation, palm.position, palm.orientation
-        )
-        start = grip_yaw(yaw_of(obj.orientation), held_quarter_turns(left), robot_yaw(world))
+        held = left_palm_quarter_turns(world, name)
+        start = grip_yaw(yaw_of(world.object_pose(name).orientation), held, robot_yaw(world))
         end = start + move_turn(world, name, index)
         limit = world.robot_capabilities().max_turn_rad
         text = (
