@@ -314,176 +314,67 @@ def _skills_command(args: argparse.Namespace) -> int:
 
 
 def _teach_command(args: argparse.Namespace) -> int:
-    """Learn a skill from a demonstration CSV into a library; report recognition first."""
-    from skills.demo_conditioning import (
-        DEFAULT_SMOOTHING_S,
-        MAX_SETTLE_DEG,
-        MAX_SETTLE_M,
-        end_speed,
-        low_pass,
-        reproduction,
-    )
-    from skills.demos.io import DemoFileError, read_demo_csv
-    from skills.library import LibraryFileError, check_save_target
-    from skills.pose_dmp import fit_pose
-    from skills.pose_model import check_pose_demonstration
-    from skills.recognition import DEFAULT_THRESHOLD, recognise
-    from skills.scaling import Scaling
-    from skills.skill import Provenance, check_label, learnt_skill
+    """Learn a skill from a demonstration CSV into a library; report recognition first
+    (:func:`skills.teaching.teach`)."""
+    from skills.demo_conditioning import DEFAULT_SMOOTHING_S
+    from skills.recognition import DEFAULT_THRESHOLD
+    from skills.teaching import TeachingError, teach
     from skills.vocabulary import Action, Space
 
-    try:
-        label = check_label(args.label, "--label")
-    except ValueError as err:
-        print(err, file=sys.stderr)
-        return EXIT_BAD_INPUT
-    space = Space(args.space)
-    kinds = {a.value: a for a in Action}
-    if args.action is not None:
-        action = kinds[args.action]
-    elif label in kinds:
-        action = kinds[label]
-    elif space is Space.ABSOLUTE:
-        action = Action.TRANSPORT  # an absolute motion of the object: a move can name it
-    else:
-        print(
-            f"--action: expected one of {', '.join(kinds)} for the relative skill {label!r} "
-            "(its label is not an action kind)",
-            file=sys.stderr,
-        )
-        return EXIT_BAD_INPUT
-    folder = Path(args.library)
-    try:
-        check_save_target(folder)
-        demo_file = read_demo_csv(args.demo)
-        library = _load_library(str(folder) if (folder / "library.json").exists() else None)
-    except (DemoFileError, LibraryFileError) as err:
-        print(err, file=sys.stderr)
-        return EXIT_BAD_INPUT
-    demo = demo_file.demonstration
-    try:
-        check_pose_demonstration(demo)  # before recognition compares it with anything
-    except ValueError as err:
-        print(err, file=sys.stderr)  # the message starts with the file
-        return EXIT_BAD_INPUT
     smoothing_s = DEFAULT_SMOOTHING_S if args.smooth_ms is None else args.smooth_ms / 1000.0
     if not (math.isfinite(smoothing_s) and 0.0 <= smoothing_s <= 1.0):
         print(f"--smooth-ms: expected 0 to 1000 ms, got {args.smooth_ms}", file=sys.stderr)
         return EXIT_BAD_INPUT
-    recorded, demo = demo, low_pass(demo, smoothing_s)  # recognised and learnt smoothed
-    threshold = DEFAULT_THRESHOLD if args.threshold is None else args.threshold
-    if not -1.0 <= threshold <= 1.0:
-        print(
-            f"--threshold: expected a cosine similarity in [-1, 1], got {threshold}",
-            file=sys.stderr,
+    try:
+        lesson = teach(
+            args.demo,
+            args.library,
+            args.label,
+            Space(args.space),
+            action=None if args.action is None else Action(args.action),
+            name=args.name,
+            smoothing_s=smoothing_s,
+            threshold=DEFAULT_THRESHOLD if args.threshold is None else args.threshold,
+            force=args.force,
+            report=print,
+            names=_TEACH_OPTIONS,
         )
+    except TeachingError as err:
+        print(err, file=sys.stderr)
         return EXIT_BAD_INPUT
-    match = recognise(library, demo, space, threshold)
-    name = args.name or Path(args.demo).stem
-    summary: dict[str, Any] = {
-        "closest": match.best,
-        "similarity": round(match.similarity, 4),
-        "matched": match.matched,
-        "threshold": match.threshold,
-        "added": None,
-        "library": str(folder),
-    }
-    if match.best is None:
-        print(f"no {space.value} learnt skill to compare with: a new skill")
-    else:
-        verdict = "matches" if match.matched else "does not match"
-        print(
-            f"closest skill: {match.best} (similarity {match.similarity:.3f}); "
-            f"{verdict} at threshold {match.threshold:g}"
-        )
-    if match.matched and not args.force:
-        print(f"not added: it is the skill {match.best!r} already (use --force to add anyway)")
-    else:
-        if name in library:
-            print(
-                f"--name: expected a new skill name, got {name!r} (already in the library)",
-                file=sys.stderr,
-            )
-            return EXIT_BAD_INPUT
-        method = "pose DMP, 50 RBF per dimension, ridge regression"
-        try:
-            if action is Action.TRANSPORT:
-                # As the shipped carry: turned and scaled about the vertical to any start and
-                # goal, so that a move in another direction is the same shape.
-                model = fit_pose(
-                    demo, position_scaling=Scaling.ROTATION_Z, orientation_scaling=Scaling.NONE
-                )
-                method += "; forcing turned and scaled about the vertical to new starts and goals"
-            else:
-                model = fit_pose(demo)
-        except ValueError as err:
-            print(f"{args.demo}: {err}", file=sys.stderr)
-            return EXIT_BAD_INPUT
-        # The skill must do what was shown before it is kept: rolled out between the
-        # demonstration's own start and goal, and past its duration, where a forcing fitted
-        # to noise throws it off its goal.
-        shown = reproduction(model, demo)
-        summary["reproduction"] = {
-            "rms_m": round(shown.rms_m, 6),
-            "settle_m": round(shown.settle_m, 6),
-            "settle_deg": round(shown.settle_deg, 4),
-            "smoothing_ms": round(1000.0 * smoothing_s, 3),
-        }
-        print(
-            f"reproduces the demonstration within {1000.0 * shown.rms_m:.1f} mm RMS; after its "
-            f"duration stays within {1000.0 * shown.settle_m:.1f} mm and "
-            f"{shown.settle_deg:.1f} deg of its goal"
-        )
-        if not shown.settles:
-            # Its end speed read smoothed at least as the default does (raw, it is the noise's).
-            settled = demo if smoothing_s >= DEFAULT_SMOOTHING_S else low_pass(recorded)
-            final, peak = end_speed(settled)
-            why = (
-                f"the recording ends moving, at {final:.3f} m/s (its peak {peak:.3f} m/s): "
-                "record until the motion has stopped"
-                if final > 0.1 * peak
-                else f"the recording is too noisy to learn from as it is (smoothed over "
-                f"{1000.0 * smoothing_s:g} ms); try a larger --smooth-ms"
-            )
-            print(
-                f"{args.demo}: expected a skill that settles at its goal (within "
-                f"{1000.0 * MAX_SETTLE_M:.0f} mm and {MAX_SETTLE_DEG:g} deg after its "
-                f"duration), got one that strays {1000.0 * shown.settle_m:.0f} mm and "
-                f"{shown.settle_deg:.1f} deg from it: {why}. Nothing was added.",
-                file=sys.stderr,
-            )
-            return EXIT_BAD_INPUT
-        try:
-            skill = learnt_skill(
-                name,
-                action,
-                space,
-                model,
-                (),
-                Provenance.now((Path(args.demo).name,), method),
-                label,
-            )
-        except ValueError as err:
-            print(f"--name: {err}", file=sys.stderr)
-            return EXIT_BAD_INPUT
-        library.add(skill)
-        try:
-            library.save(folder)
-        except OSError as err:  # a read-only parent, a full disk: nothing half-written stays
-            print(
-                f"{folder}: expected to save the library, got {err.strerror or err}",
-                file=sys.stderr,
-            )
-            return EXIT_BAD_INPUT
-        summary["added"] = name
-        summary["label"] = label
-        summary["action"] = action.value
-        print(
-            f"added skill {name!r} labelled {label!r} ({action.value}, {space.value}) to {folder}"
-        )
     if args.json:
+        match, shown, added = lesson.recognition, lesson.reproduction, lesson.added
+        summary: dict[str, Any] = {
+            "closest": match.best,
+            "similarity": round(match.similarity, 4),
+            "matched": match.matched,
+            "threshold": match.threshold,
+            "added": None if added is None else added.name,
+            "library": str(lesson.library),
+        }
+        if shown is not None:
+            summary["reproduction"] = {
+                "rms_m": round(shown.rms_m, 6),
+                "settle_m": round(shown.settle_m, 6),
+                "settle_deg": round(shown.settle_deg, 4),
+                "smoothing_ms": round(1000.0 * lesson.smoothing_s, 3),
+            }
+        if added is not None:
+            summary["label"] = added.label
+            summary["action"] = added.action.value
         print(json.dumps(summary))
     return EXIT_OK
+
+
+#: ``teach``'s options, by the names :func:`skills.teaching.teach` gives its arguments.
+_TEACH_OPTIONS = {
+    "label": "--label",
+    "action": "--action",
+    "name": "--name",
+    "smoothing_s": "--smooth-ms",
+    "threshold": "--threshold",
+    "force": "--force",
+}
 
 
 def _run_command(args: argparse.Namespace) -> int:

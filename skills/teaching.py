@@ -1,0 +1,303 @@
+"""Teaching a skill from a recorded demonstration, as ``app.py teach`` does, from Python.
+
+:func:`teach` reads a demonstration CSV, smooths it (:func:`skills.demo_conditioning.low_pass`),
+recognises it against a library's learnt skills (:func:`skills.recognition.recognise`) and,
+when it matches none (or ``force``), learns it as a pose DMP, rolls the skill out between the
+demonstration's own start and goal to check that it settles there
+(:func:`skills.demo_conditioning.reproduction`), and adds it to the library folder, saved
+atomically. Nothing is written unless the skill is added.
+
+Bad input raises :class:`TeachingError`: its ``field`` names the argument at fault (None when
+the message already starts with the file), and the message says what was expected. A caller
+that offers the arguments under other names (a command line's ``--smooth-ms``) passes them in
+``names``, and the messages use them.
+
+    >>> from skills.teaching import teach
+    >>> lesson = teach("my_wave.csv", "mylib", "my_wave", Space.ABSOLUTE)  # doctest: +SKIP
+    >>> lesson.added, lesson.reproduction.rms_m  # doctest: +SKIP
+    ('my_wave', 0.0007)
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from skills.default_library import default_library
+from skills.demo_conditioning import (
+    DEFAULT_SMOOTHING_S,
+    MAX_SETTLE_DEG,
+    MAX_SETTLE_M,
+    Reproduction,
+    end_speed,
+    low_pass,
+    reproduction,
+)
+from skills.demonstration import Demonstration
+from skills.demos.io import read_demo_csv
+from skills.library import SkillLibrary, check_save_target
+from skills.pose_dmp import fit_pose
+from skills.pose_model import PoseModel, check_pose_demonstration
+from skills.recognition import DEFAULT_THRESHOLD, Recognition, recognise
+from skills.scaling import Scaling
+from skills.skill import Provenance, Skill, check_label, learnt_skill
+from skills.vocabulary import Action, Space
+
+__all__ = ["Lesson", "TeachingError", "teach", "teaching_action"]
+
+#: How the skill is learnt, as its provenance records it.
+METHOD = "pose DMP, 50 RBF per dimension, ridge regression"
+#: What a ``transport`` skill adds to :data:`METHOD`.
+TRANSPORT_METHOD = "; forcing turned and scaled about the vertical to new starts and goals"
+
+
+class TeachingError(ValueError):
+    """A demonstration, library or argument :func:`teach` cannot take.
+
+    Attributes
+    ----------
+    field : str or None
+        The argument at fault, as the caller named it (``names``), which the message starts
+        with; None when it starts with the file at fault.
+    """
+
+    def __init__(self, message: str, field: str | None = None) -> None:
+        self.field = field
+        super().__init__(message)
+
+
+@dataclass(frozen=True)
+class Lesson:
+    """What :func:`teach` found and did.
+
+    Attributes
+    ----------
+    recognition : Recognition
+        The smoothed demonstration against the library's learnt skills of its space.
+    smoothing_s : float
+        The smoothing it was recognised and learnt with, s.
+    reproduction : Reproduction or None
+        The learnt skill rolled out against the demonstration; None when nothing was learnt
+        (it matched a skill already there).
+    added : Skill or None
+        The skill added to the library, None when it matched one (and not ``force``).
+    library : Path
+        The library folder.
+    """
+
+    recognition: Recognition
+    smoothing_s: float
+    reproduction: Reproduction | None = None
+    added: Skill | None = None
+    library: Path = field(default_factory=Path)
+
+
+def teaching_action(
+    label: str, space: Space, action: Action | None = None, names: Mapping[str, str] | None = None
+) -> Action:
+    """The action kind a taught skill gets: ``action`` if given; else its label's when the label
+    is an action kind; else ``transport`` for an absolute skill (a learnt motion of the object,
+    which a move can name). A relative skill with any other label needs ``action``."""
+    if action is not None:
+        return Action(action)
+    kinds = {a.value: a for a in Action}
+    if label in kinds:
+        return kinds[label]
+    if Space(space) is Space.ABSOLUTE:
+        return Action.TRANSPORT
+    field = (names or {}).get("action", "action")
+    raise TeachingError(
+        f"{field}: expected one of {', '.join(kinds)} for the relative skill {label!r} "
+        "(its label is not an action kind)",
+        field,
+    )
+
+
+def teach(
+    demo: str | os.PathLike[str],
+    library: str | os.PathLike[str],
+    label: str,
+    space: Space,
+    action: Action | None = None,
+    name: str | None = None,
+    smoothing_s: float = DEFAULT_SMOOTHING_S,
+    threshold: float = DEFAULT_THRESHOLD,
+    force: bool = False,
+    report: Callable[[str], None] | None = None,
+    names: Mapping[str, str] | None = None,
+) -> Lesson:
+    """Learn the demonstration in CSV file ``demo`` as a skill of ``library`` (a folder; a new
+    one starts from the default library) unless it is a skill the library has already.
+
+    Parameters
+    ----------
+    demo : path
+        The demonstration CSV (:func:`skills.demos.io.read_demo_csv`).
+    library : path
+        The library folder to add to: a saved library, or nothing yet.
+    label : str
+        The skill's label, an identifier (``my_wave``).
+    space : Space
+        Absolute (the object's motion) or relative (the palms' in the object's frame).
+    action : Action, optional
+        Its kind (:func:`teaching_action` when None).
+    name : str, optional
+        The new skill's name; None: the file's stem.
+    smoothing_s : float
+        The Gaussian smoothing's standard deviation, s, in [0, 1]; 0 learns the samples.
+    threshold : float
+        The cosine similarity in [-1, 1] at which it is a known skill.
+    force : bool
+        Add it even when it matches a skill of the library.
+    report : callable, optional
+        Called with each line of what was found (the closest skill, the reproduction, what
+        was added), as ``app.py teach`` prints them.
+    names : mapping of str to str
+        The caller's names of the arguments, for the messages (``{"smoothing_s":
+        "--smooth-ms"}``); an argument not in it goes by its own name.
+
+    Returns
+    -------
+    Lesson
+
+    Raises
+    ------
+    TeachingError
+        A bad argument, an unreadable or unusable demonstration, a library folder that is
+        not one, a name already in the library, or a skill that does not settle at its goal;
+        nothing is written.
+    """
+    names = dict(names or {})
+    say = report or (lambda line: None)
+
+    def name_of(argument: str) -> str:
+        return names.get(argument, argument)
+
+    try:
+        label = check_label(label, name_of("label"))
+    except ValueError as err:
+        raise TeachingError(str(err), name_of("label")) from None
+    space = Space(space)
+    kind = teaching_action(label, space, action, names)
+    if not (math.isfinite(smoothing_s) and 0.0 <= smoothing_s <= 1.0):
+        field = name_of("smoothing_s")
+        raise TeachingError(f"{field}: expected 0 to 1 s, got {smoothing_s}", field)
+    if not -1.0 <= threshold <= 1.0:
+        field = name_of("threshold")
+        raise TeachingError(
+            f"{field}: expected a cosine similarity in [-1, 1], got {threshold}", field
+        )
+    folder = Path(library)
+    try:
+        check_save_target(folder)
+        recorded = read_demo_csv(demo).demonstration
+        skills = (
+            SkillLibrary.load(folder) if (folder / "library.json").exists() else default_library()
+        )
+        check_pose_demonstration(recorded)  # before recognition compares it with anything
+    except ValueError as err:  # DemoFileError, LibraryFileError: the message starts with the file
+        raise TeachingError(str(err)) from None
+    smoothed = low_pass(recorded, smoothing_s)  # recognised and learnt smoothed
+    match = recognise(skills, smoothed, space, threshold)
+    lesson = Lesson(match, smoothing_s, library=folder)
+    if match.best is None:
+        say(f"no {space.value} learnt skill to compare with: a new skill")
+    else:
+        verdict = "matches" if match.matched else "does not match"
+        say(
+            f"closest skill: {match.best} (similarity {match.similarity:.3f}); "
+            f"{verdict} at threshold {match.threshold:g}"
+        )
+    if match.matched and not force:
+        say(
+            f"not added: it is the skill {match.best!r} already "
+            f"(use {name_of('force')} to add anyway)"
+        )
+        return lesson
+    new_name = name if name is not None else Path(demo).stem
+    if new_name in skills:
+        field = name_of("name")
+        raise TeachingError(
+            f"{field}: expected a new skill name, got {new_name!r} (already in the library)", field
+        )
+    model, method = _learn(demo, smoothed, kind)
+    # The skill must do what was shown before it is kept: rolled out between the
+    # demonstration's own start and goal, and past its duration, where a forcing fitted to
+    # noise throws it off its goal.
+    shown = reproduction(model, smoothed)
+    say(
+        f"reproduces the demonstration within {1000.0 * shown.rms_m:.1f} mm RMS; after its "
+        f"duration stays within {1000.0 * shown.settle_m:.1f} mm and "
+        f"{shown.settle_deg:.1f} deg of its goal"
+    )
+    if not shown.settles:
+        raise TeachingError(_unsettled(demo, recorded, smoothed, smoothing_s, shown, name_of))
+    try:
+        skill = learnt_skill(
+            new_name,
+            kind,
+            space,
+            model,
+            (),
+            Provenance.now((Path(demo).name,), method),
+            label,
+        )
+    except ValueError as err:
+        raise TeachingError(f"{name_of('name')}: {err}", name_of("name")) from None
+    skills.add(skill)
+    try:
+        skills.save(folder)
+    except OSError as err:  # a read-only parent, a full disk: nothing half-written stays
+        raise TeachingError(
+            f"{folder}: expected to save the library, got {err.strerror or err}"
+        ) from None
+    say(f"added skill {new_name!r} labelled {label!r} ({kind.value}, {space.value}) to {folder}")
+    return Lesson(match, smoothing_s, shown, skill, folder)
+
+
+def _learn(
+    demo: str | os.PathLike[str], smoothed: Demonstration, kind: Action
+) -> tuple[PoseModel, str]:
+    """The pose DMP fitted to ``smoothed`` and how it was learnt. A transport is turned and
+    scaled about the vertical to any start and goal, as the shipped carry, so that a move in
+    another direction is the same shape."""
+    try:
+        if kind is Action.TRANSPORT:
+            model = fit_pose(
+                smoothed, position_scaling=Scaling.ROTATION_Z, orientation_scaling=Scaling.NONE
+            )
+            return model, METHOD + TRANSPORT_METHOD
+        return fit_pose(smoothed), METHOD
+    except ValueError as err:
+        raise TeachingError(f"{demo}: {err}") from None
+
+
+def _unsettled(
+    demo: str | os.PathLike[str],
+    recorded: Demonstration,
+    smoothed: Demonstration,
+    smoothing_s: float,
+    shown: Reproduction,
+    name_of: Callable[[str], str],
+) -> str:
+    """Why a skill that strays from its goal was not added: a recording cut before the motion
+    stopped, or one too noisy for the smoothing."""
+    # Its end speed read smoothed at least as the default does (raw, it is the noise's).
+    settled = smoothed if smoothing_s >= DEFAULT_SMOOTHING_S else low_pass(recorded)
+    final, peak = end_speed(settled)
+    why = (
+        f"the recording ends moving, at {final:.3f} m/s (its peak {peak:.3f} m/s): "
+        "record until the motion has stopped"
+        if final > 0.1 * peak
+        else f"the recording is too noisy to learn from as it is (smoothed over "
+        f"{1000.0 * smoothing_s:g} ms); try a larger {name_of('smoothing_s')}"
+    )
+    return (
+        f"{demo}: expected a skill that settles at its goal (within "
+        f"{1000.0 * MAX_SETTLE_M:.0f} mm and {MAX_SETTLE_DEG:g} deg after its duration), got "
+        f"one that strays {1000.0 * shown.settle_m:.0f} mm and {shown.settle_deg:.1f} deg "
+        f"from it: {why}. Nothing was added."
+    )

@@ -1,0 +1,85 @@
+"""Teaching from Python (skills.teaching.teach): the command line's teach, with errors that name
+the argument at fault and nothing written unless a skill is added."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from skills.demos.io import write_demo_csv
+from skills.library import SkillLibrary
+from skills.teaching import TeachingError, teach, teaching_action
+from skills.vocabulary import Action, Space
+from tests.skills.conftest import waved_carry
+
+
+@pytest.fixture(scope="module")
+def wave_csv(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The carry with a 3 cm lateral wave, as a CSV."""
+    demo = waved_carry(0.03, seed=1)
+    assert demo.orientations is not None
+    folder = tmp_path_factory.mktemp("teaching")
+    return write_demo_csv(folder / "wave.csv", demo.t, demo.positions, demo.orientations)
+
+
+def test_teach_adds_a_new_skill_that_reproduces_its_demonstration(
+    wave_csv: Path, tmp_path: Path
+) -> None:
+    lines: list[str] = []
+    lesson = teach(wave_csv, tmp_path / "lib", "my_wave", Space.ABSOLUTE, report=lines.append)
+    assert lesson.added is not None
+    assert (lesson.added.name, lesson.added.label, lesson.added.action) == (
+        "wave",
+        "my_wave",
+        Action.TRANSPORT,
+    )
+    # The plain carry is its closest skill, and not a match: the wave is a new shape.
+    assert lesson.recognition.best == "pick_and_place" and not lesson.recognition.matched
+    assert lesson.reproduction is not None and lesson.reproduction.settles
+    assert lesson.reproduction.rms_m < 0.005
+    saved = SkillLibrary.load(tmp_path / "lib")
+    for key, values in lesson.added.arrays.items():
+        np.testing.assert_array_equal(saved.named("wave").arrays[key], values, err_msg=key)
+    assert lines[0].startswith("closest skill: pick_and_place")
+    assert lines[-1] == (
+        f"added skill 'wave' labelled 'my_wave' (transport, absolute) to {tmp_path / 'lib'}"
+    )
+    # Taught again into that library, it is the skill it now is: nothing is learnt or written.
+    again = teach(wave_csv, tmp_path / "lib", "again", Space.ABSOLUTE)
+    assert again.recognition.best == "wave" and again.recognition.matched
+    assert again.added is None and again.reproduction is None
+    assert "again" not in SkillLibrary.load(tmp_path / "lib")
+
+
+def test_teach_errors_name_the_argument_and_write_nothing(wave_csv: Path, tmp_path: Path) -> None:
+    folder = tmp_path / "lib"
+    cases = [
+        (dict(label="my-wave"), "label"),
+        (dict(label="wave_in_palm", space=Space.RELATIVE), "action"),
+        (dict(threshold=float("nan")), "threshold"),
+        (dict(smoothing_s=-0.005), "smoothing_s"),
+        (dict(name="pick_and_place", force=True), "name"),
+    ]
+    for changes, field in cases:
+        args: dict[str, object] = dict(label="my_wave", space=Space.ABSOLUTE) | changes
+        with pytest.raises(TeachingError) as raised:
+            teach(wave_csv, folder, **args)  # type: ignore[arg-type]
+        assert raised.value.field == field, changes
+        assert str(raised.value).startswith(f"{field}: expected"), str(raised.value)
+        # A caller's own names for the arguments are the ones the message gives.
+        with pytest.raises(TeachingError, match=rf"^--{field}: expected"):
+            teach(wave_csv, folder, names={field: f"--{field}"}, **args)  # type: ignore[arg-type]
+    with pytest.raises(TeachingError) as raised:
+        teach(tmp_path / "missing.csv", folder, "my_wave", Space.ABSOLUTE)
+    assert raised.value.field is None and "missing.csv" in str(raised.value)
+    assert not folder.exists()
+
+
+def test_teaching_action_follows_the_label_then_the_space() -> None:
+    assert teaching_action("rotate_z", Space.RELATIVE) is Action.ROTATE_Z
+    assert teaching_action("my_wave", Space.ABSOLUTE) is Action.TRANSPORT
+    assert teaching_action("my_wave", Space.RELATIVE, Action.HOLD_LATERAL) is Action.HOLD_LATERAL
+    with pytest.raises(TeachingError, match="for the relative skill 'my_wave'"):
+        teaching_action("my_wave", Space.RELATIVE)
