@@ -393,7 +393,7 @@ def test_link_frames_posed_as_the_rigid_carry_give_its_answer() -> None:
 def test_elements_are_posed_as_their_frames_composed_with_their_shapes() -> None:
     """The compiled pose pass is the rigid composition ``frame * shape`` (and the sphere centre
     carried along), element by element, to rounding."""
-    from worlds.collision import _moving_poses
+    from worlds.collision_geometry import _moving_poses
 
     rng = np.random.default_rng(7)
     k = 9
