@@ -100,7 +100,7 @@ def tree_task_problems(world: World, doc: TreeDocument) -> list[str]:
 def move_skill_problems(world: World, world_file: str) -> list[str]:
     """One line per move whose ``skill`` the world's library cannot carry it with."""
     from experiment.episode import load_library
-    from planner.composition import SkillChoiceError, transport_skill
+    from planner.skill_choice import SkillChoiceError, transport_skill
     from skills.library import LibraryFileError
 
     named = [

@@ -4,7 +4,9 @@ The affordance reasoner names skills by label with a weight and parameters
 (:class:`affordances.SkillSelection`); the library holds the learnt skills with those labels;
 the world supplies what only it knows (obstacles, distances, gravity). This module puts
 them together into a :class:`skills.composer.DualArmComposer` for one move, and into the
-relative-only compositions that close and open the grasp.
+relative-only compositions that close and open the grasp. Which faces the palms hold is
+:mod:`planner.grips`'s, which learnt skill carries the move :mod:`planner.skill_choice`'s, and
+the closed chain a skill starts from :mod:`planner.held_states`'s.
 """
 
 from __future__ import annotations
@@ -16,10 +18,18 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from affordances import SemanticAction, SkillSelection, spare_grip_acceleration
-from planner.fixture_moves import fixture_grasp_height, hover_move
-from planner.port import Move, ObjectSensing, PalmControl, Pose, WorldPort
+from planner.fixture_moves import hover_move
+from planner.held_states import held_lateral_geometry, on_measured_object
+from planner.port import Move, ObjectSensing, Pose, WorldPort
+from planner.skill_choice import (
+    carried_skill,
+    level_carry_duration,
+    level_carry_key,
+    skill_for,
+    transport_skill,
+)
 from skills import quaternion as quat
-from skills.composer import DualArmComposer, DualArmState, commands_for, relative_from_world
+from skills.composer import DualArmComposer, DualArmState
 from skills.couplings import LearntForcing, Saturated
 from skills.couplings.grasp import GraspMaintenance
 from skills.couplings.limits import WorkspaceRepulsion
@@ -28,18 +38,8 @@ from skills.couplings.steering import ObstacleSteering
 from skills.couplings.term import CouplingTerm
 from skills.dual_arm import GraspGeometry
 from skills.flip import vertical_half_extent
-from skills.level_carry import level_carry_tau, max_carry_acceleration
 from skills.library import SkillLibrary
-from skills.pose_dmp import PoseState
 from skills.skill import Skill, SkillKind
-from skills.turns import (
-    GRIP_TURN_TOLERANCE_DEG,
-    grip_options,
-    held_quarter_turns,
-    lateral_quarter_turns,
-    wrap_angle,
-    yaw_of,
-)
 from skills.vocabulary import ARMS, Action, Arm, Space
 
 #: Shortest move duration, s (the demonstrations last about 2 s).
@@ -108,88 +108,6 @@ def saturate_avoidance(
     return out
 
 
-def robot_yaw(world: PalmControl) -> float:
-    """The robot's heading about world z, rad: its y axis runs from the right palm's rest
-    pose to the left's."""
-    left = world.rest_palm_pose(Arm.LEFT).position
-    right = world.rest_palm_pose(Arm.RIGHT).position
-    return float(np.arctan2(left[1] - right[1], left[0] - right[0]) - np.pi / 2.0)
-
-
-def grasp_quarter_turns(world: WorldPort, name: str, turn: float = 0.0) -> int:
-    """The face pair to grasp an object on for a turn of ``turn`` rad about z
-    (:func:`skills.turns.lateral_quarter_turns`, from its measured yaw and the robot's)."""
-    yaw = yaw_of(world.object_pose(name).orientation)
-    return lateral_quarter_turns(yaw, turn, robot_yaw(world))
-
-
-def grasp_options(world: WorldPort, name: str, turn: float = 0.0) -> list[int]:
-    """The face pairs that can make a turn of ``turn`` rad about z, the usual one first
-    (:func:`grasp_quarter_turns`), then any other the arms hold over the whole turn, within
-    :data:`skills.turns.GRIP_TURN_TOLERANCE_DEG` (:func:`skills.turns.grip_options`)."""
-    yaw = yaw_of(world.object_pose(name).orientation)
-    limit = world.robot_capabilities().max_turn_rad + math.radians(GRIP_TURN_TOLERANCE_DEG)
-    return grip_options(yaw, turn, limit, robot_yaw(world))
-
-
-#: How far each palm may stand from its face's grasp position for :func:`facing_quarter_turns`
-#: to take the palms as beside that face pair, m: an approach's stand-off, with room.
-FACING_M = 0.10
-
-
-def left_palm_quarter_turns(world: WorldPort, name: str) -> int:
-    """The face pair whose left face lies towards the left palm, from where the palm stands in
-    the object's frame (:func:`skills.turns.held_quarter_turns`): the pair held, when held."""
-    pose = world.object_pose(name)
-    palm = world.palm_pose(Arm.LEFT).position
-    left, _ = relative_from_world(pose.position, pose.orientation, palm, quat.IDENTITY)
-    return held_quarter_turns(left)
-
-
-def facing_quarter_turns(world: WorldPort, name: str) -> int | None:
-    """The face pair the palms stand beside (each palm within :data:`FACING_M` of its face's
-    grasp position: where an approach left them), or None."""
-    pose = world.object_pose(name)
-    k = left_palm_quarter_turns(world, name)
-    g = lateral_geometry(world, name, k)
-    for arm in ARMS:
-        at = pose.position + quat.rotate(pose.orientation, g.position(arm))
-        if float(np.linalg.norm(world.palm_pose(arm).position - at)) > FACING_M:
-            return None
-    return k
-
-
-def move_turn(world: ObjectSensing, name: str, index: int | None) -> float:
-    """The turn about z (rad, in [-pi, pi)) from the object's measured yaw to the goal of move
-    ``index`` of ``world.task_moves(name)``; 0 for ``None`` or an index out of range."""
-    moves = world.task_moves(name)
-    if index is None or not 0 <= index < len(moves):
-        return 0.0
-    now = yaw_of(world.object_pose(name).orientation)
-    return wrap_angle(yaw_of(moves[index].goal.orientation) - now)
-
-
-def lateral_geometry(
-    world: WorldPort, name: str, quarter_turns: int | None = None
-) -> GraspGeometry:
-    """The two-palm lateral grasp geometry of an object's box, palms flat on a pair of side
-    faces: face pair ``quarter_turns`` (:mod:`skills.turns`), by default the pair whose normals
-    lie closest to the robot's y axis as the object stands now. The width is the box's extent
-    between those faces."""
-    k = grasp_quarter_turns(world, name) if quarter_turns is None else quarter_turns
-    extents = world.object_extents(name)
-    width = float(extents[1] if k % 2 == 0 else extents[0])
-    # Up the faces, over the walls of a fixture the object goes into (0 in most worlds).
-    height = fixture_grasp_height(world, world, name)
-    return GraspGeometry.lateral(width, world.palm_thickness(), quarter_turns=k, height=height)
-
-
-def held_lateral_geometry(world: WorldPort, name: str, state: DualArmState) -> GraspGeometry:
-    """The grip of a handed-over state: its palms' poses in {O}, the held faces' normals."""
-    nominal = lateral_geometry(world, name, held_quarter_turns(state.left.position))
-    return held_geometry(state, nominal)
-
-
 def move_duration(start: np.ndarray, goal: np.ndarray, settings: TransportSettings) -> float:
     """``tau`` for a move: the path (up, across, down) at ``max_speed`` peak, at least 2 s.
 
@@ -221,89 +139,6 @@ def reweight(
 def _param(selection: SkillSelection, key: str, default: float) -> float:
     value = selection.params.get(key, default)
     return float(value) if isinstance(value, int | float) else default
-
-
-class SkillChoiceError(ValueError):
-    """A move or a port names a skill the library cannot carry a move with."""
-
-
-def transport_skill(library: SkillLibrary, key: str) -> Skill:
-    """The absolute learnt skill called (or labelled) ``key``, to carry a move with.
-
-    Raises
-    ------
-    SkillChoiceError
-        Naming ``key`` and the library's skills, when none is called so, or it is not a
-        learnt motion.
-    """
-    try:
-        skill = library.named(key, Space.ABSOLUTE)
-    except KeyError as err:
-        raise SkillChoiceError(str(err.args[0])) from None
-    if skill.kind is not SkillKind.LEARNT_DMP:
-        learnt = ", ".join(
-            s.name for s in library if s.kind is SkillKind.LEARNT_DMP and s.space is Space.ABSOLUTE
-        )
-        raise SkillChoiceError(
-            f"skill {key!r}: expected a learnt motion ({SkillKind.LEARNT_DMP.value}) to carry "
-            f"the move, got {skill.name!r} ({skill.kind.value}); the library's learnt motions: "
-            f"{learnt or 'none'}"
-        )
-    return skill
-
-
-def level_carry_key(plan: SemanticAction, library: SkillLibrary) -> str | None:
-    """The label of the level carry (``keep_level``) when the plan keeps the object level and
-    the library has a learnt absolute motion so labelled; else None (the plan's transport)."""
-    if plan.skill(Action.KEEP_LEVEL) is None:
-        return None
-    key = Action.KEEP_LEVEL.value
-    try:
-        skill = library.named(key, Space.ABSOLUTE)
-    except KeyError:
-        return None
-    return key if skill.kind is SkillKind.LEARNT_DMP else None
-
-
-def level_carry_duration(world: WorldPort, name: str, move: Move) -> float:
-    """The shortest ``tau`` that keeps the balls loose on ``name`` on it across ``move`` (0 if
-    it carries none): :func:`skills.level_carry.max_carry_acceleration` at the judge's tilt."""
-    balls = world.loose_balls(name)
-    if not balls:
-        return 0.0
-    start = world.object_pose(name).position
-    across = float(np.linalg.norm(np.asarray(move.goal.position)[:2] - np.asarray(start)[:2]))
-    bound = min(max_carry_acceleration(b, gravity=world.gravity()) for b in balls)
-    if bound <= 0.0:
-        raise SkillChoiceError(
-            f"{name}: no level carry keeps its loose balls on (their rim is too low to hold "
-            "them at the tilt allowed)"
-        )
-    return level_carry_tau(across, bound)
-
-
-def _skill_for(
-    library: SkillLibrary, selection: SkillSelection, transport: Skill | None = None
-) -> Skill:
-    if transport is not None and selection.action is Action.TRANSPORT:
-        return transport
-    return library.first(selection.action, selection.space)
-
-
-def carried_skill(
-    plan: SemanticAction, library: SkillLibrary, key: str | None = None
-) -> str | None:
-    """Name of the learnt skill a move is carried with: the one called ``key`` (a port's or
-    the move's choice), else the plan's transport selection; None when the plan composes no
-    transport. The same lookups :func:`transport_composition` composes with, so a move's
-    record names the skill (and so the demonstration) it actually ran."""
-    sel = plan.skill(Action.TRANSPORT)
-    if sel is None or sel.space is not Space.ABSOLUTE or sel.weight == 0.0:
-        return None
-    key = key or level_carry_key(plan, library)
-    if key:
-        return transport_skill(library, key).name
-    return _skill_for(library, sel).name
 
 
 def absolute_terms(
@@ -352,7 +187,7 @@ def absolute_terms(
         # Insert leaf; a carry to above the fixture does not descend with it.
         if sel.action in (Action.APPROACH, Action.RETREAT, Action.INSERT):
             continue
-        skill = _skill_for(library, sel, transport)
+        skill = skill_for(library, sel, transport)
         if skill.kind is SkillKind.LEARNT_DMP:
             terms.append((LearntForcing(skill.pose_model()), sel.weight))
         elif skill.kind is SkillKind.OBSTACLE_STEERING:
@@ -494,41 +329,6 @@ def hold_terms(
     }
 
 
-def on_measured_object(world: ObjectSensing, name: str, state: DualArmState) -> DualArmState:
-    """The handed-over state with {O} moved onto the object as measured, the palms' world
-    references (and every velocity) unchanged.
-
-    A held box slips a little in two palms, most when it turns; the next move must carry it
-    from where it is, not from where the last one commanded it, or the slips of a sequence
-    of moves (and of a turn made in steps) add up.
-    """
-    measured = world.object_pose(name)
-    cmd = commands_for(state)
-    rel = [
-        relative_from_world(
-            measured.position, measured.orientation, cmd.positions[i], cmd.orientations[i]
-        )
-        for i in range(2)
-    ]
-    return DualArmState(
-        state.object._replace(position=measured.position, orientation=measured.orientation),
-        state.left._replace(position=rel[0][0], orientation=rel[0][1]),
-        state.right._replace(position=rel[1][0], orientation=rel[1][1]),
-    )
-
-
-def held_geometry(state: DualArmState, nominal: GraspGeometry) -> GraspGeometry:
-    """The grip as it is: the palms' poses in {O} from a handed-over state, nominal normals."""
-    return GraspGeometry(
-        state.left.position.copy(),
-        state.left.orientation.copy(),
-        state.right.position.copy(),
-        state.right.orientation.copy(),
-        nominal.left_normal,
-        nominal.right_normal,
-    )
-
-
 def opening_terms(
     geometry: GraspGeometry, opening: float
 ) -> dict[Arm, list[tuple[CouplingTerm, float]]]:
@@ -548,44 +348,6 @@ def opening_terms(
         ]
         for arm in ARMS
     }
-
-
-def measured_dual_state(world: WorldPort, name: str) -> DualArmState:
-    """The closed chain as measured: object pose, each palm's pose in {O}, all at rest."""
-    return _dual_state_at(world.object_pose(name), {arm: world.palm_pose(arm) for arm in ARMS})
-
-
-def closing_dual_state(world: WorldPort, name: str) -> DualArmState:
-    """The closed chain a grasp closes from: the object as measured, a palm that already
-    presses it where it was sent (:meth:`~planner.port.PalmControl.palm_target`), any other
-    palm as measured; all in {O}, at rest.
-
-    A palm pressing the object is held off its target by the face, and by a biased actuator
-    pushing it into the face: moved onto the palm, its reference would let that push go that
-    much further at once. Kept where it was sent, the palm's force does not change at the
-    first step. A palm not touching the object starts where it is, as every other skill does.
-    """
-    palms = {
-        arm: world.palm_target(arm)
-        if world.contact_force(arm, name) > 0.0
-        else world.palm_pose(arm)
-        for arm in ARMS
-    }
-    return _dual_state_at(world.object_pose(name), palms)
-
-
-def _dual_state_at(obj: Pose, palms: Mapping[Arm, Pose]) -> DualArmState:
-    rel = {
-        arm: relative_from_world(
-            obj.position, obj.orientation, palms[arm].position, palms[arm].orientation
-        )
-        for arm in ARMS
-    }
-    return DualArmState(
-        PoseState.at_rest(obj.position, obj.orientation),
-        PoseState.at_rest(*rel[Arm.LEFT]),
-        PoseState.at_rest(*rel[Arm.RIGHT]),
-    )
 
 
 def static_composition(

@@ -7,7 +7,7 @@ from typing import ClassVar
 import numpy as np
 from py_trees.ports import PortInformation
 
-from planner.composition import grasp_options, lateral_geometry, move_turn, robot_yaw
+from planner.grips import grasp_options, lateral_geometry, move_turn, robot_yaw
 from planner.leaves.base import grasp_move_port
 from planner.leaves.palm_motion import ViaPointLeaf, ViaPointMotion, measured_state
 from planner.leaves.palm_routes import PalmRoute, margin_port, take_clear_route
@@ -126,7 +126,7 @@ class Approach(ViaPointLeaf):
     object's measured yaw: after a turn, the palms meet the faces that now face them. When every
     way in to that pair ends with a palm or an arm link on an obstacle (a box set down turned
     beside a sphere, an arm reaching round its far face into it), the other pairs that make the
-    turn are tried (:func:`~planner.composition.grasp_options`) and the first with a way in is
+    turn are tried (:func:`~planner.grips.grasp_options`) and the first with a way in is
     taken; ``Grasp`` closes on the faces the palms come to.
 
     An object that lies off the table (:func:`off_the_table`: fallen to the floor) is out of

@@ -9,10 +9,11 @@ from py_trees.common import Status
 from py_trees.ports import PortInformation
 
 from affordances import SemanticAction
-from planner.composition import MovePlan, SkillChoiceError, goal_error
+from planner.composition import MovePlan, goal_error
 from planner.leaves.base import WorldLeaf, composed_move, composition_ports
 from planner.move_result import move_placements
 from planner.port import ObjectSensing, ObstacleScene, PalmControl, Pose
+from planner.skill_choice import SkillChoiceError
 from skills.composer import DualArmState, relative_from_world
 from skills.dual_arm import shift_along_face
 from skills.vocabulary import ARMS

@@ -9,15 +9,9 @@ from py_trees.common import Status
 from py_trees.ports import PortInformation
 
 from affordances import SemanticAction
-from planner.composition import (
-    closing_dual_state,
-    facing_quarter_turns,
-    grasp_quarter_turns,
-    hold_terms,
-    lateral_geometry,
-    move_turn,
-    static_composition,
-)
+from planner.composition import hold_terms, static_composition
+from planner.grips import facing_quarter_turns, grasp_quarter_turns, lateral_geometry, move_turn
+from planner.held_states import closing_dual_state
 from planner.leaves.base import SQUEEZE_FORCE_N, MotionLeaf, grasp_move_port
 from planner.leaves.reflex import reflex_shift
 from planner.port import Clock, ObjectSensing, ObstacleScene, PalmControl, Pose
@@ -74,7 +68,7 @@ class Grasp(MotionLeaf):
 
     A palm that already presses the object when closing starts (at the pre-grasp pose a
     biased actuator can hold it centimetres off its target, into the face) closes from where
-    it was sent, not from where it is (:func:`~planner.composition.closing_dual_state`): a
+    it was sent, not from where it is (:func:`~planner.held_states.closing_dual_state`): a
     reference moved onto it would let the bias push it that much further into the face at
     once.
     """

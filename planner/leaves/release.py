@@ -8,12 +8,8 @@ import numpy as np
 from py_trees.common import Status
 from py_trees.ports import PortInformation
 
-from planner.composition import (
-    measured_dual_state,
-    on_measured_object,
-    opening_terms,
-    static_composition,
-)
+from planner.composition import opening_terms, static_composition
+from planner.held_states import measured_dual_state, on_measured_object
 from planner.leaves.base import MotionLeaf
 from planner.leaves.palm_motion import ViaPointLeaf, measured_state
 from planner.leaves.palm_routes import PalmRoute, margin_port, take_clear_route
@@ -58,7 +54,7 @@ def held_at_rest(state: DualArmState) -> DualArmState:
 class Release(MotionLeaf):
     """Move each palm ``opening_m`` out along its contact normal (a relative skill), from where
     the palms and the object are as measured
-    (:func:`~planner.composition.measured_dual_state`): both let the squeeze off together.
+    (:func:`~planner.held_states.measured_dual_state`): both let the squeeze off together.
     Opening from the commanded references, pressed into the faces, a palm that leaves first lets
     the other's squeeze push the object over (a slipped parcel squeezed at 100 N toppled so).
 

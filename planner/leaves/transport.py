@@ -9,7 +9,7 @@ from py_trees.common import Status
 from py_trees.ports import PortInformation
 
 from affordances import SemanticAction
-from planner.composition import MovePlan, SkillChoiceError, goal_error
+from planner.composition import MovePlan, goal_error
 from planner.leaves.base import MotionLeaf, composed_move, composition_ports
 from planner.leaves.reflex import reflex_shift
 from planner.leaves.set_down import (
@@ -20,6 +20,7 @@ from planner.leaves.set_down import (
 )
 from planner.move_result import MoveResult, publish_move_result
 from planner.port import Clock, Move, ObjectSensing, ObstacleScene, PalmControl, Pose
+from planner.skill_choice import SkillChoiceError
 from skills.composer import DualArmComposer, DualArmState
 from skills.types import Array
 from skills.vocabulary import ARMS

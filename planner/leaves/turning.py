@@ -8,7 +8,7 @@ import numpy as np
 from py_trees.common import Status
 from py_trees.ports import PortInformation
 
-from planner.composition import left_palm_quarter_turns, move_turn, robot_yaw
+from planner.grips import left_palm_quarter_turns, move_turn, robot_yaw
 from planner.leaves.base import WorldLeaf
 from planner.port import ObjectSensing, PalmControl
 from skills.turns import GRIP_TURN_TOLERANCE_DEG, grip_yaw, yaw_of

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from py_trees.common import Status
 
-from planner.composition import facing_quarter_turns, grasp_options, lateral_geometry
+from planner.grips import facing_quarter_turns, grasp_options, lateral_geometry
 from planner.leaves import Approach
 from planner.port import ObstacleInfo, Pose
 from planner.testing import CONTROL_DT, FakeWorld, grasp_object, tick_until

@@ -13,7 +13,8 @@ import pytest
 from py_trees.common import Status
 
 from affordances import SemanticAction, SkillSelection
-from planner.composition import MovePlan, compose_move, lateral_geometry, squeeze_force
+from planner.composition import MovePlan, compose_move, squeeze_force
+from planner.grips import lateral_geometry
 from planner.leaves import (
     Approach,
     AtGoal,

@@ -19,7 +19,7 @@ from pydantic import ValidationError
 
 from experiment.episode import run_episode
 from experiment.layout import Posture, RobotClearance, draw_trial
-from planner.composition import robot_yaw
+from planner.grips import robot_yaw
 from skills import quaternion as quat
 from skills.vocabulary import Arm
 from worlds.scene import LATERAL_PALM_QUATERNIONS, lateral_grasp_palm_poses, rest_palm_poses
