@@ -38,6 +38,7 @@ from affordances.context import (
     Shape,
     Vector3,
 )
+from skills.turns import wrap_angle
 from skills.vocabulary import Action, AffordanceElement, Arm, EndEffector, GraspType
 
 #: Bullet clamps the combined friction coefficient to this value.
@@ -495,11 +496,6 @@ def _transport(arms: tuple[Arm, ...]) -> SkillSelection:
         1.0,
         {"arms": tuple(a.value for a in arms)},
     )
-
-
-def wrap_angle(angle: float) -> float:
-    """Wrap an angle to [-pi, pi), radians."""
-    return (angle + math.pi) % (2.0 * math.pi) - math.pi
 
 
 def _common_skills(

@@ -22,8 +22,8 @@ from affordances.physics import (
     bounding_radius,
     grip_width,
     parallel_face_pairs,
-    wrap_angle,
 )
+from skills.turns import wrap_angle
 from skills.vocabulary import AffordanceElement, Arm, GraspType
 from tests.affordances.cases import (
     HANDED_ROBOT,
