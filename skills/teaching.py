@@ -24,7 +24,9 @@ import math
 import os
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from enum import Enum
 from pathlib import Path
+from typing import TypeVar
 
 from skills.default_library import default_library
 from skills.demo_conditioning import (
@@ -47,6 +49,8 @@ from skills.skill import Provenance, Skill, check_label, learnt_skill
 from skills.vocabulary import Action, Space
 
 __all__ = ["Lesson", "TeachingError", "teach", "teaching_action"]
+
+EnumT = TypeVar("EnumT", bound=Enum)
 
 #: How the skill is learnt, as its provenance records it.
 METHOD = "pose DMP, 50 RBF per dimension, ridge regression"
@@ -96,14 +100,17 @@ class Lesson:
 
 
 def teaching_action(
-    label: str, space: Space, action: Action | None = None, names: Mapping[str, str] | None = None
+    label: str,
+    space: Space,
+    action: Action | str | None = None,
+    names: Mapping[str, str] | None = None,
 ) -> Action:
     """The action kind a taught skill gets: ``action`` if given; else its label's when the label
     is an action kind; else ``transport`` for an absolute skill (a learnt motion of the object,
     which a move can name). A relative skill with any other label needs ``action``."""
-    if action is not None:
-        return Action(action)
     kinds = {a.value: a for a in Action}
+    if action is not None:
+        return _member(Action, action, (names or {}).get("action", "action"))
     if label in kinds:
         return kinds[label]
     if Space(space) is Space.ABSOLUTE:
@@ -120,8 +127,8 @@ def teach(
     demo: str | os.PathLike[str],
     library: str | os.PathLike[str],
     label: str,
-    space: Space,
-    action: Action | None = None,
+    space: Space | str,
+    action: Action | str | None = None,
     name: str | None = None,
     smoothing_s: float = DEFAULT_SMOOTHING_S,
     threshold: float = DEFAULT_THRESHOLD,
@@ -140,9 +147,9 @@ def teach(
         The library folder to add to: a saved library, or nothing yet.
     label : str
         The skill's label, an identifier (``my_wave``).
-    space : Space
+    space : Space or str
         Absolute (the object's motion) or relative (the palms' in the object's frame).
-    action : Action, optional
+    action : Action or str, optional
         Its kind (:func:`teaching_action` when None).
     name : str, optional
         The new skill's name; None: the file's stem.
@@ -180,7 +187,7 @@ def teach(
         label = check_label(label, name_of("label"))
     except ValueError as err:
         raise TeachingError(str(err), name_of("label")) from None
-    space = Space(space)
+    space = _member(Space, space, name_of("space"))
     kind = teaching_action(label, space, action, names)
     if not (math.isfinite(smoothing_s) and 0.0 <= smoothing_s <= 1.0):
         field = name_of("smoothing_s")
@@ -256,6 +263,16 @@ def teach(
         ) from None
     say(f"added skill {new_name!r} labelled {label!r} ({kind.value}, {space.value}) to {folder}")
     return Lesson(match, smoothing_s, shown, skill, folder)
+
+
+def _member(kind: type[EnumT], value: object, field: str) -> EnumT:
+    """``value`` as a member of the enum ``kind`` (a member or its value); TeachingError
+    naming ``field`` and the members otherwise."""
+    try:
+        return kind(value)
+    except ValueError:
+        members = ", ".join(str(m.value) for m in kind)
+        raise TeachingError(f"{field}: expected one of {members}, got {value!r}", field) from None
 
 
 def _learn(

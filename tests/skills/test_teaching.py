@@ -61,6 +61,8 @@ def test_teach_errors_name_the_argument_and_write_nothing(wave_csv: Path, tmp_pa
         (dict(threshold=float("nan")), "threshold"),
         (dict(smoothing_s=-0.005), "smoothing_s"),
         (dict(name="pick_and_place", force=True), "name"),
+        (dict(space="sideways"), "space"),
+        (dict(action="fly"), "action"),
     ]
     for changes, field in cases:
         args: dict[str, object] = dict(label="my_wave", space=Space.ABSOLUTE) | changes
