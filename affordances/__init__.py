@@ -18,7 +18,7 @@ from affordances.context import (
     Shape,
     make_object_context,
 )
-from affordances.physics import (
+from affordances.grip_physics import (
     combined_friction,
     grip_friction_n,
     palm_contact_friction,

@@ -1,23 +1,10 @@
 """Stage 1: hard physics constraints on how the object can be held.
 
-Friction follows Bullet's default contact model: the coefficient of a contact is the product
-of the two bodies' coefficients (``btManifoldResult::calculateCombinedFriction``), clamped
-to 10. A two-palm lateral squeeze holds the object by friction alone, so with both palms
-pressing with ``F`` the grasp carries the weight when ``2 * mu * F >= k * m * g``.
-
-Which shapes offer two parallel faces for a squeeze:
-
-- box: the two pairs of side faces (x and y of {O}); the top and bottom are not reachable
-  from the sides;
-- cylinder (axis along z of {O}): two palms on planes tangent to opposite sides of the
-  diameter are parallel, and each touches the cylinder along a vertical line as tall as the
-  cylinder, which resists tipping about the line joining the contacts; so it counts, with
-  the diameter as the span;
-- sphere: no; each palm touches a single point, and two point contacts cannot stop the
-  sphere spinning about the line joining them;
-- mesh: the pairs of sides of its convex hull the world found pressable across x and y of
-  {O} (``ObjectContext.squeeze_axes``, :mod:`worlds.mesh_sides`), as a box's of its bounding
-  box; none, or only point contacts, and no.
+Which grasps the robot's end-effectors can make, and of those which the object's weight,
+width and faces allow: a two-palm lateral squeeze on a pair of parallel faces
+(:mod:`affordances.object_geometry`) that its friction lets carry the weight
+(:mod:`affordances.grip_physics`), two palms under it, or one hand. Each grasp kept says why;
+each refused one says why not, with the numbers.
 """
 
 from __future__ import annotations
@@ -25,7 +12,6 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
-from enum import StrEnum
 from types import MappingProxyType
 
 from affordances.actions import DEFAULT_SPACE, GRASP_ORDER, SkillSelection
@@ -38,11 +24,18 @@ from affordances.context import (
     Shape,
     Vector3,
 )
+from affordances.grip_physics import palm_contact_friction, required_squeeze_force
+from affordances.object_geometry import (
+    FaceAxis,
+    FacePair,
+    axis_in_world,
+    grip_width,
+    horizontal_extents,
+    object_height,
+    parallel_face_pairs,
+)
 from skills.turns import wrap_angle
 from skills.vocabulary import Action, AffordanceElement, Arm, EndEffector, GraspType
-
-#: Bullet clamps the combined friction coefficient to this value.
-BULLET_MAX_FRICTION = 10.0
 
 #: The end-effector each grasp needs on the arms it uses. Both two-arm grasps are palm grasps:
 #: the lateral one presses two palms on opposite faces, the support one carries the object
@@ -65,33 +58,6 @@ _STATE_ELEMENTS = {
     ObjectState.HOT: AffordanceElement.HOT,
     ObjectState.CONTAINS_ITEMS: AffordanceElement.CONTAINS_ITEMS,
 }
-
-
-class FaceAxis(StrEnum):
-    """Normal of a pair of parallel faces in {O}; ``diameter`` is any horizontal one."""
-
-    X = "x"
-    Y = "y"
-    DIAMETER = "diameter"
-
-
-@dataclass(frozen=True)
-class FacePair:
-    """Two parallel faces a lateral squeeze can press on.
-
-    Attributes
-    ----------
-    axis : FaceAxis
-        Normal of the faces in {O}.
-    separation_m : float
-        Distance between the faces, metres: the palm span the squeeze needs.
-    contact_height_m : float
-        Height of the faces, metres.
-    """
-
-    axis: FaceAxis
-    separation_m: float
-    contact_height_m: float
 
 
 @dataclass(frozen=True)
@@ -171,109 +137,6 @@ class HardAssessment:
     def no_grasp_reason(self) -> str:
         """Why no grasp is feasible, one clause per grasp: ``two_palm_lateral: ...; ...``."""
         return "; ".join(str(r) for r in self.refused)
-
-
-def combined_friction(mu_object: float, mu_palm: float) -> float:
-    """Friction coefficient of a palm-object contact as Bullet combines it (product, <= 10)."""
-    return min(mu_object * mu_palm, BULLET_MAX_FRICTION)
-
-
-def palm_contact_friction(context: ObjectContext, robot: RobotCapabilities) -> float:
-    """Friction coefficient of a palm on the object, from both declared coefficients."""
-    return combined_friction(context.friction, robot.palm_friction)
-
-
-def grip_friction_n(mu: float, squeeze_force_n: float) -> float:
-    """Load, N, that two palms pressing with ``squeeze_force_n`` N each carry by friction.
-
-    The lateral grip's law, ``2 * mu * F``: the reasoner's required force and the planner's
-    spare acceleration both come from it.
-    """
-    return 2.0 * mu * squeeze_force_n
-
-
-def required_squeeze_force(
-    mass_kg: float, mu: float, safety_factor: float, gravity: float
-) -> float:
-    """Normal force per palm, N, for two palms to hold ``safety_factor`` times the weight.
-
-    Solves ``grip_friction_n(mu, F) = k * m * g`` for ``F``; infinite when ``mu`` is 0.
-    """
-    if mu <= 0.0:
-        return math.inf
-    return safety_factor * mass_kg * gravity / grip_friction_n(mu, 1.0)
-
-
-def spare_grip_acceleration(
-    context: ObjectContext, robot: RobotCapabilities, squeeze_force_n: float, gravity: float
-) -> float:
-    """Acceleration, m/s^2, a two-palm squeeze of ``squeeze_force_n`` N per palm can still
-    give the object once it carries its weight under ``gravity`` (m/s^2); negative when the
-    grip cannot carry it.
-
-    ``(grip_friction_n(mu, F) - m g) / m``, with ``mu`` the palm-object contact's
-    (:func:`palm_contact_friction`).
-    """
-    mu = palm_contact_friction(context, robot)
-    weight = context.mass_kg * gravity
-    return (grip_friction_n(mu, squeeze_force_n) - weight) / context.mass_kg
-
-
-def horizontal_extents(context: ObjectContext) -> tuple[float, float]:
-    """Full extents along x and y of {O}, metres."""
-    dims = context.dimensions
-    if context.shape in (Shape.BOX, Shape.MESH):
-        return dims[0], dims[1]
-    return 2.0 * dims[0], 2.0 * dims[0]
-
-
-def object_height(context: ObjectContext) -> float:
-    """Full extent along z of {O}, metres."""
-    dims = context.dimensions
-    if context.shape in (Shape.BOX, Shape.MESH):
-        return dims[2]
-    if context.shape == Shape.CYLINDER:
-        return dims[1]
-    return 2.0 * dims[0]
-
-
-def grip_width(context: ObjectContext) -> float:
-    """Narrowest horizontal extent, metres: what one hand must close around."""
-    return min(horizontal_extents(context))
-
-
-def bounding_radius(context: ObjectContext) -> float:
-    """Radius of the sphere about the object's centre that contains it, metres."""
-    dims = context.dimensions
-    if context.shape in (Shape.BOX, Shape.MESH):
-        return 0.5 * math.hypot(*dims)
-    if context.shape == Shape.CYLINDER:
-        return math.hypot(dims[0], 0.5 * dims[1])
-    return dims[0]
-
-
-def parallel_face_pairs(context: ObjectContext) -> tuple[FacePair, ...]:
-    """Pairs of parallel faces a lateral squeeze could press on (see the module docstring)."""
-    height = object_height(context)
-    if context.shape == Shape.BOX:
-        ex, ey = horizontal_extents(context)
-        return (FacePair(FaceAxis.X, ex, height), FacePair(FaceAxis.Y, ey, height))
-    if context.shape == Shape.MESH:
-        ex, ey = horizontal_extents(context)
-        pairs = (FacePair(FaceAxis.X, ex, height), FacePair(FaceAxis.Y, ey, height))
-        return tuple(p for p in pairs if p.axis.value in context.squeeze_axes)
-    if context.shape == Shape.CYLINDER:
-        return (FacePair(FaceAxis.DIAMETER, 2.0 * context.dimensions[0], height),)
-    return ()
-
-
-def axis_in_world(axis: FaceAxis, yaw: float) -> Vector3:
-    """Unit vector of a face normal in {W}; a cylinder's diameter is taken along world y."""
-    if axis == FaceAxis.X:
-        return (math.cos(yaw), math.sin(yaw), 0.0)
-    if axis == FaceAxis.Y:
-        return (-math.sin(yaw), math.cos(yaw), 0.0)
-    return (0.0, 1.0, 0.0)
 
 
 def _offset(position: Vector3, direction: Vector3, distance: float) -> Vector3:

@@ -18,7 +18,8 @@ from dataclasses import dataclass, field, replace
 from affordances.actions import GRASP_ORDER, ParamValue, SemanticAction, SkillSelection, sort_skills
 from affordances.config import ReasonerConfig
 from affordances.context import ObjectContext, RobotCapabilities
-from affordances.physics import GraspOption, HardAssessment, assess, grip_width, object_height
+from affordances.object_geometry import grip_width, object_height
+from affordances.physics import GraspOption, HardAssessment, assess
 from affordances.rules import (
     Fact,
     FactValue,

@@ -19,7 +19,8 @@ from numpy.typing import NDArray
 from affordances.actions import DEFAULT_SPACE, SkillSelection
 from affordances.config import ReasonerConfig
 from affordances.context import ObjectContext, Obstacle, Vector3, check_positive, check_vector3
-from affordances.physics import GraspOption, bounding_radius
+from affordances.object_geometry import bounding_radius
+from affordances.physics import GraspOption
 from skills.vocabulary import Action, AffordanceElement, Arm
 
 FloatArray = NDArray[np.float64]

@@ -16,13 +16,8 @@ from affordances import (
     spare_grip_acceleration,
 )
 from affordances.context import RobotCapabilities
-from affordances.physics import (
-    FaceAxis,
-    assess,
-    bounding_radius,
-    grip_width,
-    parallel_face_pairs,
-)
+from affordances.object_geometry import FaceAxis, bounding_radius, grip_width, parallel_face_pairs
+from affordances.physics import assess
 from skills.turns import wrap_angle
 from skills.vocabulary import AffordanceElement, Arm, GraspType
 from tests.affordances.cases import (
