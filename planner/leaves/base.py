@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import functools
 import re
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any, ClassVar
 
 import py_trees
@@ -14,7 +14,7 @@ from py_trees.ports import BehaviourWithPorts, NoDataAvailable, PortInformation
 from affordances import SemanticAction
 from planner.composition import MovePlan, compose_move, squeeze_force
 from planner.leaves.set_down import table_found_dz
-from planner.port import WorldPort
+from planner.port import Move, WorldPort
 from skills.library import SkillLibrary
 
 #: Control period used when ``setup()`` is not given one, s.
@@ -204,6 +204,21 @@ class WorldLeaf(BehaviourWithPorts):
         if not 0 <= index < count:
             return f"move {index}: expected an index below {count}"
         return None
+
+
+def move_label(moves: Sequence[Move], name: str, index: int) -> str:
+    """Move ``index`` of object ``name``'s ``moves`` (its task as the robot makes it) as the run's
+    summary counts it: ``parcel move 3`` for the world file's third move, with ``, step 1 of
+    2`` for a step of a turn made in several grasps; ``move 2`` for a move no world file
+    listed."""
+    task_move = moves[index].task_move
+    if task_move is None:
+        return f"move {index}"
+    steps = [i for i, m in enumerate(moves) if m.task_move == task_move]
+    label = f"{name} move {task_move + 1}"
+    if len(steps) > 1:
+        label += f", step {steps.index(index) + 1} of {len(steps)}"
+    return label
 
 
 def status_is_halt(new_status: Status) -> bool:

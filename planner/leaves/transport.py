@@ -10,7 +10,7 @@ from py_trees.ports import PortInformation
 
 from affordances import SemanticAction
 from planner.composition import MovePlan, goal_error
-from planner.leaves.base import MotionLeaf, composed_move, composition_ports
+from planner.leaves.base import MotionLeaf, composed_move, composition_ports, move_label
 from planner.leaves.reflex import reflex_shift
 from planner.leaves.set_down import (
     SET_DOWN_SPEED_M_S,
@@ -172,6 +172,7 @@ class Transport(MotionLeaf):
         # does not change under a running move; the blackboard's checks cost more than a step).
         self.object_name = name
         self.move_index = index
+        self.move_label = move_label(world.task_moves(name), name, index)
         self.min_force_n = float(self.get_input("min_force_n"))
         self.settle_s = float(self.get_input("settle_s"))
         self.tolerance = (
@@ -241,7 +242,9 @@ class Transport(MotionLeaf):
                 return self.fail(
                     f"came to rest {off} (tolerance {tol_m * 1000:.0f} mm, {tol_deg:g} deg)"
                 )
-        return self.running(f"move {self.move_index}: {elapsed:.1f} of {tau:.1f} s")
+        return self.running(
+            f"{self.move_label}: {elapsed:.1f} of {tau:.1f} s (move={self.move_index})"
+        )
 
     def _reflex(self, name: str) -> Array:
         """The shift of both palms' targets, (3,) m, away from a near obstacle
