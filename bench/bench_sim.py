@@ -31,7 +31,8 @@ if str(ROOT) not in sys.path:
 from skills.vocabulary import Arm  # noqa: E402
 from worlds.collision import CollisionWorld  # noqa: E402
 from worlds.control import PalmCommand  # noqa: E402
-from worlds.scene import LATERAL_PALM_QUATERNIONS, Scene, lateral_grasp_palm_poses  # noqa: E402
+from worlds.palm_poses import LATERAL_PALM_QUATERNIONS, lateral_grasp_palm_poses  # noqa: E402
+from worlds.scene import Scene  # noqa: E402
 from worlds.world_file import BoxShape, load_world  # noqa: E402
 
 SQUEEZE = 0.015

@@ -27,7 +27,8 @@ from pathlib import Path
 import numpy as np
 
 from skills.vocabulary import Arm
-from worlds.scene import Scene, lateral_grasp_palm_poses
+from worlds.palm_poses import lateral_grasp_palm_poses
+from worlds.scene import Scene
 from worlds.world_file import World, load_world, world_from_data
 
 

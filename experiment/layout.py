@@ -42,7 +42,8 @@ from experiment.summary import summarise as summarise
 from experiment.tray_draws import place_riders, tray_height, tray_layout_problem
 from skills.turns import move_holds
 from worlds.adapters import robot_capabilities
-from worlds.scene import Scene, lateral_grasp_palm_poses
+from worlds.palm_poses import lateral_grasp_palm_poses
+from worlds.scene import Scene
 from worlds.trays import riders
 from worlds.world_file import (
     BoxShape,

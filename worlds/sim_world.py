@@ -44,9 +44,10 @@ from worlds.adapters import object_contexts, robot_capabilities
 from worlds.collision import CollisionWorld
 from worlds.control import ImpedanceGains, PalmCommand
 from worlds.fixtures import FixtureLog
+from worlds.palm_poses import rest_palm_poses
 from worlds.path_checks import PathChecks
 from worlds.safety_monitor import SafetyMonitor, SafetyRecord
-from worlds.scene import Scene, rest_palm_poses
+from worlds.scene import Scene
 from worlds.spec import WorldSpec
 from worlds.trays import TrayFrame, riders
 from worlds.truth import PhysicalTruth, sensed_pose
@@ -176,7 +177,7 @@ class SimWorld(Closing):
 
     def _rest_poses(self) -> dict[Arm, Pose]:
         """Palms waiting above the table's near edge, outside the objects, facing inwards
-        (:func:`worlds.scene.rest_palm_poses`, in the robot's frame)."""
+        (:func:`worlds.palm_poses.rest_palm_poses`, in the robot's frame)."""
         poses = rest_palm_poses(self.spec.scene, self.scene.robot.rest_palms)
         return {arm: Pose.of(position, q) for arm, (position, q) in poses.items()}
 

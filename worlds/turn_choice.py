@@ -26,7 +26,7 @@ from skills import quaternion as quat
 from skills.turns import Hold, move_holds, yaw_of
 from skills.vocabulary import Arm
 from worlds.adapters import robot_capabilities
-from worlds.scene import lateral_grasp_palm_poses
+from worlds.palm_poses import lateral_grasp_palm_poses
 from worlds.spec import WorldSpec
 
 __all__ = [

@@ -16,7 +16,7 @@ from experiment.layout import Posture, RobotClearance, _box_gap, draw_trial, mov
 from experiment.results import read_results
 from experiment.trials import campaign_of, campaign_results, reason_of, summarise
 from worlds.adapters import robot_capabilities
-from worlds.scene import lateral_grasp_palm_poses
+from worlds.palm_poses import lateral_grasp_palm_poses
 from worlds.world_file import World, load_world, world_from_data
 
 WORLDS = Path(__file__).resolve().parents[2] / "worlds"

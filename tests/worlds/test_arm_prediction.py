@@ -14,7 +14,8 @@ from skills.vocabulary import ARMS, Arm
 from tests.worlds.test_icub import WORLD, empty_scene, minimum_jerk, start
 from worlds.arm_prediction import ArmPredictor
 from worlds.control import PalmCommand
-from worlds.scene import Scene, lateral_grasp_palm_poses
+from worlds.palm_poses import lateral_grasp_palm_poses
+from worlds.scene import Scene
 from worlds.world_file import World, load_world
 
 pytestmark = pytest.mark.sim

@@ -12,7 +12,8 @@ import pytest
 from skills import quaternion as quat
 from skills.vocabulary import Arm
 from worlds.collision import OBSTACLES, TABLE, CollisionWorld, arm_group
-from worlds.scene import LATERAL_PALM_QUATERNIONS, Scene, lateral_grasp_palm_poses
+from worlds.palm_poses import LATERAL_PALM_QUATERNIONS, lateral_grasp_palm_poses
+from worlds.scene import Scene
 from worlds.spec import ObstacleSpec, SceneSpec, ShapeSpec
 
 pytestmark = pytest.mark.sim

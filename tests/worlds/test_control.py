@@ -17,8 +17,9 @@ from worlds.impedance import (
     affine_law,
     impedance_terms,
 )
+from worlds.palm_poses import LATERAL_PALM_QUATERNIONS
 from worlds.robots import build_robot_model
-from worlds.scene import LATERAL_PALM_QUATERNIONS, Scene
+from worlds.scene import Scene
 from worlds.spec import SceneSpec
 
 RNG_SEED = 3

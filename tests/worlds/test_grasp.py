@@ -15,7 +15,8 @@ from scipy.spatial.transform import Rotation
 
 from skills.vocabulary import Arm
 from worlds.control import PalmCommand
-from worlds.scene import Scene, lateral_grasp_palm_poses
+from worlds.palm_poses import lateral_grasp_palm_poses
+from worlds.scene import Scene
 from worlds.spec import SceneSpec
 
 pytestmark = pytest.mark.sim

@@ -20,8 +20,9 @@ from skills.vocabulary import ARMS, Arm
 from tests.worlds.test_grasp import Log, minimum_jerk, tilt_deg
 from worlds.collision import CollisionWorld, welded_links
 from worlds.control import PalmCommand
+from worlds.palm_poses import lateral_grasp_palm_poses
 from worlds.robots.icub import ARM_JOINTS, TORSO_JOINTS
-from worlds.scene import Scene, lateral_grasp_palm_poses
+from worlds.scene import Scene
 from worlds.sim_world import SimWorld
 from worlds.world_file import World, as_world_spec, load_world, world_from_data
 

@@ -22,7 +22,7 @@ from experiment.layout import Posture, RobotClearance, draw_trial
 from planner.grips import robot_yaw
 from skills import quaternion as quat
 from skills.vocabulary import Arm
-from worlds.scene import LATERAL_PALM_QUATERNIONS, lateral_grasp_palm_poses, rest_palm_poses
+from worlds.palm_poses import LATERAL_PALM_QUATERNIONS, lateral_grasp_palm_poses, rest_palm_poses
 from worlds.sim_world import SimWorld
 from worlds.world_file import World, as_world_spec, load_world, world_from_data
 

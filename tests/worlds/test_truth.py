@@ -53,7 +53,8 @@ def test_physics_has_the_truth_and_the_robot_the_file() -> None:
     import pybullet as pb
 
     from skills.vocabulary import ARMS
-    from worlds.scene import Scene, lateral_grasp_palm_poses
+    from worlds.palm_poses import lateral_grasp_palm_poses
+    from worlds.scene import Scene
     from worlds.sim_world import SimWorld
     from worlds.testing import DEFAULT_WORLD
     from worlds.world_file import load_world

@@ -182,7 +182,7 @@ class RobotModel:
     rest_palms : tuple of float
         Where the palms wait: (inset from the table's near edge along the robot's forward
         axis, distance from the robot's midplane, height above the table top), m
-        (:func:`worlds.scene.rest_palm_poses`).
+        (:func:`worlds.palm_poses.rest_palm_poses`).
     gain_overrides : Mapping[str, float]
         :class:`worlds.control.ImpedanceGains` fields that differ from the defaults for this
         robot (a light arm wants less damping), applied when no gains are given.
