@@ -319,7 +319,6 @@ def _teach_command(args: argparse.Namespace) -> int:
     from skills.demo_conditioning import DEFAULT_SMOOTHING_S
     from skills.recognition import DEFAULT_THRESHOLD
     from skills.teaching import TeachingError, teach
-    from skills.vocabulary import Action, Space
 
     smoothing_s = DEFAULT_SMOOTHING_S if args.smooth_ms is None else args.smooth_ms / 1000.0
     if not (math.isfinite(smoothing_s) and 0.0 <= smoothing_s <= 1.0):
@@ -330,8 +329,8 @@ def _teach_command(args: argparse.Namespace) -> int:
             args.demo,
             args.library,
             args.label,
-            Space(args.space),
-            action=None if args.action is None else Action(args.action),
+            args.space,  # the parser's choices are the enums' values
+            action=args.action,
             name=args.name,
             smoothing_s=smoothing_s,
             threshold=DEFAULT_THRESHOLD if args.threshold is None else args.threshold,

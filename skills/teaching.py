@@ -23,7 +23,7 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from enum import Enum
 from pathlib import Path
 from typing import TypeVar
@@ -83,20 +83,20 @@ class Lesson:
         The smoothed demonstration against the library's learnt skills of its space.
     smoothing_s : float
         The smoothing it was recognised and learnt with, s.
+    library : Path
+        The library folder.
     reproduction : Reproduction or None
         The learnt skill rolled out against the demonstration; None when nothing was learnt
         (it matched a skill already there).
     added : Skill or None
         The skill added to the library, None when it matched one (and not ``force``).
-    library : Path
-        The library folder.
     """
 
     recognition: Recognition
     smoothing_s: float
+    library: Path
     reproduction: Reproduction | None = None
     added: Skill | None = None
-    library: Path = field(default_factory=Path)
 
 
 def teaching_action(
@@ -108,14 +108,14 @@ def teaching_action(
     """The action kind a taught skill gets: ``action`` if given; else its label's when the label
     is an action kind; else ``transport`` for an absolute skill (a learnt motion of the object,
     which a move can name). A relative skill with any other label needs ``action``."""
-    kinds = {a.value: a for a in Action}
+    field = (names or {}).get("action", "action")
     if action is not None:
-        return _member(Action, action, (names or {}).get("action", "action"))
+        return _member(Action, action, field)
+    kinds = {a.value: a for a in Action}
     if label in kinds:
         return kinds[label]
     if Space(space) is Space.ABSOLUTE:
         return Action.TRANSPORT
-    field = (names or {}).get("action", "action")
     raise TeachingError(
         f"{field}: expected one of {', '.join(kinds)} for the relative skill {label!r} "
         "(its label is not an action kind)",
@@ -209,7 +209,7 @@ def teach(
         raise TeachingError(str(err)) from None
     smoothed = low_pass(recorded, smoothing_s)  # recognised and learnt smoothed
     match = recognise(skills, smoothed, space, threshold)
-    lesson = Lesson(match, smoothing_s, library=folder)
+    lesson = Lesson(match, smoothing_s, folder)
     if match.best is None:
         say(f"no {space.value} learnt skill to compare with: a new skill")
     else:
@@ -262,7 +262,7 @@ def teach(
             f"{folder}: expected to save the library, got {err.strerror or err}"
         ) from None
     say(f"added skill {new_name!r} labelled {label!r} ({kind.value}, {space.value}) to {folder}")
-    return Lesson(match, smoothing_s, shown, skill, folder)
+    return Lesson(match, smoothing_s, folder, shown, skill)
 
 
 def _member(kind: type[EnumT], value: object, field: str) -> EnumT:
