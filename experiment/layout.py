@@ -281,16 +281,17 @@ def draw_trial(
 
 
 #: The object shapes trials draw layouts around: their bounding boxes.
-TRIAL_SHAPES = ("box", "tray", "mesh")
+TRIAL_SHAPES = ("box", "tray", "mesh", "cylinder")
 
 
 def object_size(world: World) -> tuple[float, float, float]:
-    """Full extents of the world's first object, m: a box's or tray's size, a mesh's
-    bounding box (its file read); a ValueError for any other shape."""
+    """Full extents of the world's first object, m: a box's or tray's size, a mesh's or
+    an upright cylinder's bounding box (a mesh's file read); a ValueError for any other
+    shape."""
     shape = world.objects[0].shape
     if shape.type not in TRIAL_SHAPES:
         raise ValueError(
-            f"trials: expected a box, tray or mesh object to grasp, got a {shape.type} "
+            f"trials: expected a box, tray, mesh or cylinder object to grasp, got a {shape.type} "
             f"({world.objects[0].name!r})"
         )
     if isinstance(shape, BoxShape | TrayShape):
@@ -318,6 +319,8 @@ def _draw_trial(
     obj = base.objects[0]
     regions = layout.goal_regions()
     drawn = draw_object(layout, regions, object_size(base), seed, trial, redraw)
+    if obj.shape.type == "cylinder":
+        drawn.size[1] = drawn.size[0]  # a scaled cylinder stays round
     if isinstance(obj.shape, TrayShape) and layout.size_scale is not None:
         # Its walls stay as tall as the palms need (experiment.tray_draws).
         palm = float(base.robot.palm_size[0])
@@ -382,7 +385,11 @@ def _draw_trial(
         prev, prev_yaw = goal, yaw
     data = base.model_dump(mode="json")
     data["objects"][0]["pose"]["position"] = start.tolist()
-    if layout.size_scale is not None:
+    if layout.size_scale is not None and data["objects"][0]["shape"]["type"] == "cylinder":
+        # Round still: its diameter scaled as its x extent was (the layout was drawn so).
+        data["objects"][0]["shape"]["radius"] = float(drawn.size[0]) / 2.0
+        data["objects"][0]["shape"]["height"] = float(drawn.size[2])
+    elif layout.size_scale is not None:
         data["objects"][0]["shape"]["size"] = drawn.size.tolist()
     if drawn.mass is not None:
         data["objects"][0]["mass"] = drawn.mass
@@ -502,7 +509,8 @@ def check_trial_layout(base: World, seed: int, label: str) -> None:
     obj = base.objects[0]
     if obj.shape.type not in TRIAL_SHAPES:
         raise TrialLayoutError(
-            f"{label}: objects[0].shape: expected a box, tray or mesh object for trials (their "
+            f"{label}: objects[0].shape: expected a box, tray, mesh or cylinder object for "
+            f"trials (their "
             f"obstacles and grasps are drawn around its bounding box), got a {obj.shape.type} "
             f"({obj.name!r})"
         )
@@ -511,6 +519,13 @@ def check_trial_layout(base: World, seed: int, label: str) -> None:
             f"{label}: trials.size_scale: expected none for a mesh object (its size is its "
             f"file's), got {list(base.trials.size_scale)}"
         )
+    if obj.shape.type == "cylinder":
+        for i, region in enumerate(base.trials.moves or ()):
+            if any(p % 360.0 for p in region.pitch_deg or ()):
+                raise TrialLayoutError(
+                    f"{label}: trials.moves[{i}].pitch_deg: expected none for a cylinder (turned "
+                    f"off its end it would roll once let go), got {list(region.pitch_deg)}"
+                )
     problem = tray_layout_problem(base, riding(base))
     if problem is not None:
         raise TrialLayoutError(f"{label}: {problem}")

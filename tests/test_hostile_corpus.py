@@ -541,16 +541,16 @@ CASES: dict[str, Case] = {
         2,
         r"trials: expected a layout whose obstacles can be drawn, got none for trial 0",
     ),
-    "trials_not_a_box": Case(
+    "trials_of_a_ball": Case(
         17,
         world_edit(
             "shape: {type: box, size: [0.20, 0.30, 0.15]}",
-            "shape: {type: cylinder, radius: 0.1, height: 0.15}",
+            "shape: {type: sphere, radius: 0.08}",
             "trials",
         ),
         2,
-        r"objects\[0\]\.shape: expected a box, tray or mesh object for trials "
-        r".*got a cylinder \('parcel'\)",
+        r"objects\[0\]: expected a grasp the robot can make, got none for parcel: "
+        r"two_palm_lateral: a sphere has no parallel faces",
     ),
     "gui_without_a_display": Case(
         17,

@@ -93,15 +93,15 @@ def test_a_trials_layout_that_cannot_be_drawn_is_one_error() -> None:
     ):
         check_trial_layout(_world(far), 0, "w.yaml")
 
-    def cylinder(data: dict[str, Any]) -> None:
-        data["objects"][0]["shape"] = {"type": "cylinder", "radius": 0.1, "height": 0.15}
+    def ball(data: dict[str, Any]) -> None:
+        data["objects"][0]["shape"] = {"type": "sphere", "radius": 0.08}
 
     with pytest.raises(
         TrialLayoutError,
-        match=r"objects\[0\]\.shape: expected a box, tray or mesh object "
-        r"for trials .*got a cylinder \('parcel'\)",
+        match=r"objects\[0\]\.shape: expected a box, tray, mesh or cylinder object "
+        r"for trials .*got a sphere \('parcel'\)",
     ):
-        check_trial_layout(_world(cylinder), 0, "w.yaml")
+        check_trial_layout(_world(ball), 0, "w.yaml")
     check_trial_layout(load_world(DEFAULT), 0, "w.yaml")
 
 
