@@ -32,16 +32,13 @@ from worlds.actuators import (
     torque_loop_start,
     torque_loop_step,
 )
-from worlds.impedance import (
+from worlds.impedance import ImpedanceTerms, affine_law, impedance_terms, limit_posture
+from worlds.impedance_values import (
     GainArrays,
     ImpedanceGains,
-    ImpedanceTerms,
     PalmCommand,
     PalmState,
-    affine_law,
     checked_vector,
-    impedance_terms,
-    limit_posture,
 )
 from worlds.robots import ArmSpec, RobotModel
 

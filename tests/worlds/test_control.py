@@ -9,14 +9,8 @@ from scipy.spatial.transform import Rotation
 
 from skills import quaternion as quat
 from skills.vocabulary import Arm
-from worlds.impedance import (
-    AffineTorqueLaw,
-    GainArrays,
-    ImpedanceGains,
-    PalmCommand,
-    affine_law,
-    impedance_terms,
-)
+from worlds.impedance import AffineTorqueLaw, affine_law, impedance_terms
+from worlds.impedance_values import GainArrays, ImpedanceGains, PalmCommand
 from worlds.palm_poses import LATERAL_PALM_QUATERNIONS
 from worlds.robots import build_robot_model
 from worlds.scene import Scene

@@ -157,7 +157,7 @@ def test_in_physics_the_loop_holds_biased_palms_where_they_are_told() -> None:
 @pytest.mark.sim
 def test_in_physics_the_icub_arms_settle_under_the_slowest_lag_only_with_their_loop() -> None:
     from skills.vocabulary import ARMS
-    from worlds.impedance import PalmCommand
+    from worlds.impedance_values import PalmCommand
     from worlds.robots.icub import icub_model
     from worlds.scene import Scene
     from worlds.truth import PhysicalTruth
@@ -207,7 +207,7 @@ def test_in_physics_every_joint_comes_to_rest_after_a_step_under_the_slowest_lag
     import pybullet as pb
 
     from skills.vocabulary import ARMS
-    from worlds.impedance import PalmCommand
+    from worlds.impedance_values import PalmCommand
     from worlds.scene import Scene
     from worlds.truth import PhysicalTruth
     from worlds.world_file import as_world_spec, load_world
