@@ -261,7 +261,7 @@ def _load_world_or_exit(path: str) -> Any:
 def _affordances_command(args: argparse.Namespace) -> int:
     """Print the affordance reasoning for each object of a world."""
     from affordances import AffordanceReasoner, render_json, render_text
-    from affordances.rules import RuleFileError, rule_set
+    from affordances.rule_file import RuleFileError, rule_set
     from worlds.adapters import object_contexts, robot_capabilities
 
     world = _load_world_or_exit(args.world)

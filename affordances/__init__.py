@@ -27,7 +27,8 @@ from affordances.grip_physics import (
 )
 from affordances.reasoner import AffordanceReasoner, needs_both_arms, reason
 from affordances.report import render_json, render_text, to_json_data
-from affordances.rules import Rule, RuleFileError, default_rules, load_rules, parse_rules, rule_set
+from affordances.rule_file import RuleFileError, default_rules, load_rules, parse_rules, rule_set
+from affordances.rules import Rule
 from affordances.scene import GeometricSceneQuery, SceneQuery
 
 __all__ = [

@@ -20,6 +20,7 @@ from affordances.config import ReasonerConfig
 from affordances.context import ObjectContext, RobotCapabilities
 from affordances.object_geometry import grip_width, object_height
 from affordances.physics import GraspOption, HardAssessment, assess
+from affordances.rule_file import default_rules
 from affordances.rules import (
     Fact,
     FactValue,
@@ -27,7 +28,6 @@ from affordances.rules import (
     ParamEffect,
     Rule,
     SkillEffect,
-    default_rules,
 )
 from affordances.scene import GeometricSceneQuery, SceneQuery, check_scene
 from skills.vocabulary import Action, GraspType
