@@ -9,12 +9,13 @@ from py_trees.common import Status
 from py_trees.ports import PortInformation
 
 from affordances import SemanticAction
-from planner.composition import hold_terms, static_composition
+from planner.composition import static_composition
 from planner.grips import facing_quarter_turns, grasp_quarter_turns, lateral_geometry, move_turn
 from planner.held_states import closing_dual_state
 from planner.leaves.base import SQUEEZE_FORCE_N, MotionLeaf, grasp_move_port
 from planner.leaves.reflex import reflex_shift
 from planner.port import Clock, ObjectSensing, ObstacleScene, PalmControl, Pose
+from planner.skill_terms import hold_terms
 from skills.composer import DualArmComposer, DualArmState, relative_from_world
 from skills.pose_dmp import PoseState
 from skills.types import Array

@@ -8,13 +8,14 @@ import numpy as np
 from py_trees.common import Status
 from py_trees.ports import PortInformation
 
-from planner.composition import opening_terms, static_composition
+from planner.composition import static_composition
 from planner.held_states import measured_dual_state, on_measured_object
 from planner.leaves.base import MotionLeaf
 from planner.leaves.palm_motion import ViaPointLeaf, measured_state
 from planner.leaves.palm_routes import PalmRoute, margin_port, take_clear_route
 from planner.leaves.set_down import lowered, palm_load_n, supported_below_n
 from planner.port import Clock, ObjectSensing, ObstacleScene, PalmControl, Pose
+from planner.skill_terms import opening_terms
 from skills import quaternion as quat
 from skills.composer import DualArmComposer, DualArmState, commands_for
 from skills.dual_arm import GraspGeometry

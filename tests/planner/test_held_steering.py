@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.testing import assert_allclose
 
-from planner.composition import held_spheres, held_steering
 from planner.port import ObstacleInfo
+from planner.skill_terms import held_spheres, held_steering
 from skills import quaternion as quat
 from skills.composer import DualArmState
 from skills.library import SkillLibrary
