@@ -378,7 +378,8 @@ _TEACH_OPTIONS = {
 
 def _run_command(args: argparse.Namespace) -> int:
     """Run a world's task in PyBullet, show progress, judge it and write what it shows."""
-    from experiment.episode import move_labels, run_episode
+    from experiment.episode import run_episode
+    from experiment.judge import move_labels
     from planner.groot_publisher import GrootUnavailableError
     from planner.loader import TreeFileError
     from skills.library import LibraryFileError
