@@ -82,8 +82,9 @@ def two_parcels_run(tmp_path_factory: pytest.TempPathFactory) -> tuple[Any, Path
 @pytest.mark.sim
 @pytest.mark.xfail(
     strict=True,
-    reason="known: carrying parcel_right, the left forearm crosses the placed parcel_left and "
-    "knocks it about 4 cm; carries keep clear of the obstacles, not of resting objects",
+    reason="known: from parcel_right's grasp on, the left forearm lies on the placed "
+    "parcel_left's front top edge, and the carry pushes parcel_left about 4 cm (README, "
+    "Status: two objects)",
 )
 def test_two_parcels_end_where_they_were_placed(two_parcels_run: tuple[Any, Path]) -> None:
     report, _ = two_parcels_run
