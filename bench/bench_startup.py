@@ -37,6 +37,7 @@ CHILD = """
 import json, os, sys, time
 import app
 import experiment.episode as episode
+import experiment.move_recorder as move_recorder
 import planner.runner as runner
 moments = {"import": time.monotonic()}
 first_tick = runner.tick_tree
@@ -47,7 +48,7 @@ def tick_tree(tree):
         cpu = os.times()
         moments["first_tick_cpu"] = cpu.user + cpu.system
 runner.tick_tree = tick_tree
-traces, figure = episode._Recorder.traces, episode.trajectory_figure
+traces, figure = move_recorder.MoveRecorder.traces, episode.trajectory_figure
 def timed_traces(self, library):
     moments["figure_start"] = time.monotonic()
     return traces(self, library)
@@ -55,7 +56,7 @@ def timed_figure(*args, **kwargs):
     path = figure(*args, **kwargs)
     moments["figure_end"] = time.monotonic()
     return path
-episode._Recorder.traces, episode.trajectory_figure = timed_traces, timed_figure
+move_recorder.MoveRecorder.traces, episode.trajectory_figure = timed_traces, timed_figure
 code = app.main(["run", sys.argv[1], "--out", sys.argv[2], "--no-animation"])
 print(json.dumps(moments))
 sys.exit(code)
@@ -74,7 +75,10 @@ def one_run(world: Path, out: Path) -> dict[str, float]:
     )
     if done.returncode not in (0, 1):  # 1: the task failed, still a run to time
         raise SystemExit(f"app.py run exited {done.returncode}:\n{done.stderr[-2000:]}")
-    moments = json.loads(done.stdout.strip().splitlines()[-1])
+    lines = done.stdout.strip().splitlines()
+    if not lines:
+        raise SystemExit(f"app.py run printed nothing to time:\n{done.stderr[-2000:]}")
+    moments = json.loads(lines[-1])
     return {
         "import_s": moments["import"] - start,
         "first_tick_s": moments["first_tick"] - start,
