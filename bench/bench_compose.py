@@ -29,9 +29,10 @@ import numpy as np
 
 from skills import quaternion as quat
 from skills.composer import DualArmComposer, PalmCommands, grasped_state, reference_step
+from skills.couplings.distance_queries import DistanceQuery, SphereObstacles
 from skills.couplings.forcing import LearntForcing
 from skills.couplings.grasp import GraspMaintenance
-from skills.couplings.potential import DistanceQuery, PotentialFieldAvoidance, SphereObstacles
+from skills.couplings.potential import PotentialFieldAvoidance
 from skills.couplings.steering import ObstacleSteering
 from skills.couplings.term import CouplingTerm
 from skills.default_library import build_default_library

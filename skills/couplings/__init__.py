@@ -17,15 +17,11 @@ returns additive (linear m/s^2, angular rad/s^2) accelerations for a pose DMP.
 =============================  ===========================================================
 """
 
+from skills.couplings.distance_queries import DistanceQuery, MovingPoints, SphereObstacles
 from skills.couplings.forcing import LearntForcing
 from skills.couplings.grasp import ForceTrackingGrasp, GraspMaintenance
 from skills.couplings.limits import JointLimitRepulsion, WorkspaceRepulsion
-from skills.couplings.potential import (
-    DistanceQuery,
-    MovingPoints,
-    PotentialFieldAvoidance,
-    SphereObstacles,
-)
+from skills.couplings.potential import PotentialFieldAvoidance
 from skills.couplings.saturated import Saturated
 from skills.couplings.steering import ObstacleSteering, steering_accelerations
 from skills.couplings.steering_fit import (
