@@ -237,10 +237,22 @@ class RobotClearance(Closing):
         ]
 
     def _reset(self, positions: list[tuple[int, int, float]]) -> None:
-        """Reset every joint to its position in ``positions`` (:meth:`_joint_positions`)."""
+        """Reset every joint to its position in ``positions`` (:meth:`_joint_positions`), at
+        rest: one call per body (a draw resets the robot thousands of times)."""
         client = self._scene.client
+        bodies: dict[int, tuple[list[int], list[list[float]]]] = {}
         for body, joint, value in positions:
-            pb.resetJointState(body, joint, value, 0.0, physicsClientId=client)
+            joints, values = bodies.setdefault(body, ([], []))
+            joints.append(joint)
+            values.append([value])
+        for body, (joints, values) in bodies.items():
+            pb.resetJointStatesMultiDof(
+                body,
+                joints,
+                targetValues=values,
+                targetVelocities=[[0.0]] * len(joints),
+                physicsClientId=client,
+            )
 
     def close(self) -> None:
         """Disconnect the scene."""
