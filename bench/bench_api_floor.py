@@ -3,9 +3,9 @@
 Usage: ``python bench/bench_api_floor.py [--n N] [--seed S] [--json]``
 
 Runs ``N`` trials of the default world in this process, as ``app.py trials`` draws them (after
-one more, trial ``N``, to warm up). After
-every physics step it makes again, and times, the PyBullet calls that step needed at the least,
-with no Python around them but the loops that make them:
+one more, trial ``N``, to warm up). After every physics step the safety watch sees, it makes
+again, and times, the PyBullet calls that step needed at the least, with no Python around them
+but the loops that make them:
 
 - the control law: each robot body's joint states read and torques written (zeros: torque
   control adds them to the next step's, so the write changes nothing), and, whenever the law
@@ -41,7 +41,7 @@ from duet_robot.blas import pin_blas_kernel  # noqa: E402
 pin_blas_kernel()  # as app.py does, before anything loads numpy (pybullet does)
 import pybullet as pb  # noqa: E402
 import worlds.control as control  # noqa: E402
-import worlds.sim_world as sim_world  # noqa: E402
+import worlds.safety_monitor as safety_monitor  # noqa: E402
 from experiment.trials import campaign_of, run_trial  # noqa: E402
 from worlds.world_file import load_world  # noqa: E402
 
@@ -58,9 +58,8 @@ class _Floor:
         self.relinearised = 0
 
 
-def _replay_step(sim: Any, floor: _Floor) -> None:
+def _replay_step(scene: Any, floor: _Floor) -> None:
     """The calls one physics step needed, made again and timed."""
-    scene = sim.scene
     c = scene.client
     law = scene.controller
     began = time.perf_counter()
@@ -100,12 +99,11 @@ def _replay_step(sim: Any, floor: _Floor) -> None:
     floor.seconds += time.perf_counter() - began
 
 
-def _replay_sync(sim: Any, floor: _Floor) -> None:
+def _replay_sync(scene: Any, collision: Any, floor: _Floor) -> None:
     """The clearance watch's read of every pose, once a control step."""
-    scene = sim.scene
     c = scene.client
     began = time.perf_counter()
-    for body, _, moving, _, _, _ in sim.collision._link_tracks:
+    for body, _, moving, _, _, _ in collision._link_tracks:
         pb.getLinkStates(body, moving, computeForwardKinematics=1, physicsClientId=c)
         pb.getBasePositionAndOrientation(body, physicsClientId=c)
     for body in scene.object_ids.values():
@@ -126,20 +124,20 @@ def main() -> int:
         floor.relinearised += 1
         relinearise(self)
 
-    def advance(self: Any, dt: float) -> None:
-        steps = max(1, round(dt / self.scene.physics_dt))
-        for _ in range(steps):
-            self.scene.step(1)
-            self.monitor.after_physics_step()
-            _replay_step(self, floor)
-        self.collision.sync()
-        _replay_sync(self, floor)
-        self.monitor.after_control_step()
-        if self._unlocated:
-            self._locate_held()
+    watch = safety_monitor.SafetyMonitor
+    after_physics_step, after_control_step = watch.after_physics_step, watch.after_control_step
+
+    def physics_step_seen(self: Any) -> None:
+        after_physics_step(self)
+        _replay_step(self.scene, floor)
+
+    def control_step_seen(self: Any) -> None:
+        _replay_sync(self.scene, self.collision, floor)
+        after_control_step(self)
 
     control.DualArmImpedanceController._relinearise = counted  # type: ignore[method-assign]
-    sim_world.SimWorld.advance = advance  # type: ignore[method-assign]
+    watch.after_physics_step = physics_step_seen  # type: ignore[method-assign]
+    watch.after_control_step = control_step_seen  # type: ignore[method-assign]
     world = load_world(DEFAULT)
     payload = {
         "world": world.model_dump(mode="json"),
@@ -152,8 +150,11 @@ def main() -> int:
     run_trial((payload, args.seed, args.n))  # a warm-up: kernels loaded, caches filled
     floor.seconds, floor.relinearised = 0.0, 0
     records = [run_trial((payload, args.seed, t)) for t in range(args.n)]
-    with open(DEFAULT.parent.parent / "bench" / "results" / "trials_seed0_n1000.jsonl") as f:
-        recorded = {r["trial"]: r for r in map(json.loads, f)} if args.seed == 0 else {}
+    record = ROOT / "bench" / "results" / "trials_seed0_n1000.jsonl"
+    recorded: dict[int, Any] = {}
+    if args.seed == 0 and record.exists():
+        with open(record, encoding="utf-8") as f:
+            recorded = {r["trial"]: r for r in map(json.loads, f)}
     # The calls made again change nothing: the trials place as the recorded campaign did.
     same = sum(
         r["placement_error_m"] == recorded[r["trial"]]["placement_error_m"]
