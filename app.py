@@ -17,6 +17,7 @@ from typing import Any
 
 # isort: off
 from duet_robot.blas import pin_blas_kernel
+from duet_robot.text import printable
 
 pin_blas_kernel()  # before numpy loads OpenBLAS: one BLAS kernel on every x86-64 host
 import numpy as np  # noqa: E402
@@ -96,14 +97,6 @@ def _demo_command(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps(summary))
     return EXIT_OK
-
-
-def printable(text: object) -> str:
-    """``text`` safe to print on a terminal: control characters (newlines, ANSI escapes) are
-    written as escapes, so a name from a file cannot print a line of its own."""
-    import unicodedata
-
-    return "".join(repr(ch)[1:-1] if unicodedata.category(ch)[0] == "C" else ch for ch in str(text))
 
 
 def _out_folder_or_exit(out: Path) -> Path:

@@ -12,6 +12,7 @@ from collections import Counter
 from collections.abc import Iterable
 from typing import Any
 
+from duet_robot.text import printable
 from experiment.metrics import METRIC_LABELS
 
 #: The normal quantile of a two-sided 95 % interval.
@@ -220,13 +221,13 @@ def summary_lines(summary: dict[str, Any]) -> list[str]:
         f"(Wilson 95 %: {100 * lo:.1f}-{100 * hi:.1f} %)"
     )
     for reason, count in summary["failure_reasons"].items():
-        lines.append(f"  {_printable(reason)[:44]:<44} {count}")
+        lines.append(f"  {printable(reason)[:44]:<44} {count}")
     for axis, values in summary["by_condition"].items():
         lines.append(f"  {'by ' + axis:<44} successes")
         for value, rate in values.items():
             a, b = rate["success_interval_95"]
             lines.append(
-                f"  {'  ' + _printable(value)[:42]:<44} {rate['successes']} of {rate['trials']} "
+                f"  {'  ' + printable(value)[:42]:<44} {rate['successes']} of {rate['trials']} "
                 f"({100 * a:.1f}-{100 * b:.1f} %)"
             )
     measured = {k: m for k, m in summary.get("metrics", {}).items() if m["trials"]}
@@ -261,10 +262,3 @@ def contact_lines(summary: dict[str, Any]) -> list[str]:
             f"{summary['table_contacts']}"
         )
     return lines
-
-
-def _printable(text: object) -> str:
-    """Text safe for a terminal: control characters shown escaped."""
-    import unicodedata
-
-    return "".join(repr(ch)[1:-1] if unicodedata.category(ch)[0] == "C" else ch for ch in str(text))
