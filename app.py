@@ -372,7 +372,6 @@ _TEACH_OPTIONS = {
 def _run_command(args: argparse.Namespace) -> int:
     """Run a world's task in PyBullet, show progress, judge it and write what it shows."""
     from experiment.episode import run_episode
-    from experiment.judge import move_labels
     from planner.groot_publisher import GrootUnavailableError
     from planner.loader import TreeFileError
     from skills.library import LibraryFileError
@@ -414,52 +413,14 @@ def _run_command(args: argparse.Namespace) -> int:
     except OSError as err:  # an output the run cannot write (a folder named like it)
         print(f"--out {out}: {err}", file=sys.stderr)
         return EXIT_BAD_INPUT
-    s = report.summary()
-    verdict = "SUCCESS" if report.success else f"FAILURE ({printable(report.failure)})"
-    print(f"{printable(world.name)}: {verdict}")
-    for label, e, d in zip(
-        move_labels(report.placement_objects),
-        report.placement_error_m,
-        report.placement_error_deg,
-        strict=True,
-    ):
-        placed = "not placed" if e is None or d is None else f"{e * 1000:.1f} mm, {d:.1f} deg"
-        print(f"  {printable(label)}: {placed}")
-    dist = s["min_obstacle_distance_m"]
-    print(
-        f"  closest approach to an obstacle: "
-        f"{'no obstacle' if dist is None else f'{dist * 1000:.1f} mm'}"
-    )
-    forearm = s["min_forearm_distance_m"]
-    if forearm is not None or s["forearm_contacts"]:
-        print(
-            f"  forearms: {sum(s['forearm_contacts'].values())} physics steps touching an "
-            f"obstacle; closest approach {'n/a' if forearm is None else f'{forearm * 1000:.1f} mm'}"
-        )
-    for key, steps in s.get("table_contacts", {}).items():
-        print(f"  {printable(key)}: {steps} physics steps (a link other than the hand)")
-    if "disturbances" in s:
-        pushes = s["disturbances"]
-        print(f"  disturbances applied: {pushes['applied']} of {len(pushes['entries'])}")
-        for entry in pushes["entries"]:
-            steps = (
-                f"physics steps {entry['first_step']} to {entry['last_step']}"
-                if entry["steps"]
-                else "no physics step (none of the run started inside its window)"
-            )
-            print(f"    {printable(entry['object'])} at {entry['at_s']:g} s: {steps}")
-    print(
-        f"  simulated {report.sim_time_s:.1f} s in {report.wall_time_s:.1f} s wall "
-        f"({report.sim_time_s / max(report.wall_time_s, 1e-9):.1f}x real time)"
-    )
-    for key, path in report.outputs.items():
-        print(f"  {key}: {path}")
+    for line in report.lines(world.name):
+        print(line)
     if report.replaced_outputs:
         print(f"replaced the earlier run's {', '.join(report.replaced_outputs)} in {out}")
     for problem in report.output_errors:
         print(f"not written: {problem}", file=sys.stderr)
     if args.json:
-        print(json.dumps(s))
+        print(json.dumps(report.summary()))
     if report.output_errors:
         # The verdict is out; an output the run could not write (a full disk, a read-only
         # file) is still an input/output error the caller must see.

@@ -20,9 +20,10 @@ import numpy as np
 import py_trees
 
 import planner.leaves  # noqa: F401  (registers the leaves for the XML loader)
+from duet_robot.text import printable
 from experiment.figures import Animation, trajectory_figure
 from experiment.insertion import insertion_verdict
-from experiment.judge import judge
+from experiment.judge import judge, move_labels
 from experiment.metrics import GripMetrics
 from experiment.move_recorder import MoveRecorder
 from experiment.tray import tray_verdicts
@@ -146,6 +147,52 @@ class EpisodeReport:
             **extra,
             "outputs": self.outputs,
         }
+
+    def lines(self, name: str) -> list[str]:
+        """The run as ``app.py run`` prints it: the verdict for world ``name``, each move's
+        placement, the closest approaches, the table's and the disturbances' contacts, the
+        speed and what was written (text from files made safe for a terminal)."""
+        s = self.summary()
+        verdict = "SUCCESS" if self.success else f"FAILURE ({printable(self.failure)})"
+        out = [f"{printable(name)}: {verdict}"]
+        for label, e, d in zip(
+            move_labels(self.placement_objects),
+            self.placement_error_m,
+            self.placement_error_deg,
+            strict=True,
+        ):
+            placed = "not placed" if e is None or d is None else f"{e * 1000:.1f} mm, {d:.1f} deg"
+            out.append(f"  {printable(label)}: {placed}")
+        dist = s["min_obstacle_distance_m"]
+        out.append(
+            "  closest approach to an obstacle: "
+            f"{'no obstacle' if dist is None else f'{dist * 1000:.1f} mm'}"
+        )
+        forearm = s["min_forearm_distance_m"]
+        if forearm is not None or s["forearm_contacts"]:
+            out.append(
+                f"  forearms: {sum(s['forearm_contacts'].values())} physics steps touching an "
+                "obstacle; closest approach "
+                f"{'n/a' if forearm is None else f'{forearm * 1000:.1f} mm'}"
+            )
+        for key, steps in s.get("table_contacts", {}).items():
+            out.append(f"  {printable(key)}: {steps} physics steps (a link other than the hand)")
+        if "disturbances" in s:
+            pushes = s["disturbances"]
+            out.append(f"  disturbances applied: {pushes['applied']} of {len(pushes['entries'])}")
+            for entry in pushes["entries"]:
+                steps = (
+                    f"physics steps {entry['first_step']} to {entry['last_step']}"
+                    if entry["steps"]
+                    else "no physics step (none of the run started inside its window)"
+                )
+                out.append(f"    {printable(entry['object'])} at {entry['at_s']:g} s: {steps}")
+        out.append(
+            f"  simulated {self.sim_time_s:.1f} s in {self.wall_time_s:.1f} s wall "
+            f"({self.sim_time_s / max(self.wall_time_s, 1e-9):.1f}x real time)"
+        )
+        out += [f"  {key}: {path}" for key, path in self.outputs.items()]
+        return out
 
 
 def load_library(world: World) -> SkillLibrary:
