@@ -432,7 +432,7 @@ def _trials_command(args: argparse.Namespace) -> int:
     """The paper's experiment: N trials of three moves with new obstacles, judged, resumable."""
     from experiment.progress import Progress
     from experiment.results import ResultsFileError
-    from experiment.summary import contact_lines, split_line, summary_lines
+    from experiment.summary import campaign_lines
     from experiment.trials import campaign_of, campaign_results, reason_of, run_campaign, summarise
 
     world = _load_world_or_exit(args.world)
@@ -536,20 +536,8 @@ def _trials_command(args: argparse.Namespace) -> int:
         f"{summary['successes']} of {summary['trials']} {mode} succeeded{paper}; "
         f"results in {out / 'results.jsonl'}"
     )
-    for line in summary_lines(summary):
+    for line in campaign_lines(summary):
         print(line)
-    print(f"  {'moves placed with':<44} moves")
-    for label, count in summary["compositions"].items():
-        print(f"  {label[:44]:<44} {count}")
-    for line in contact_lines(summary):
-        print(line)
-    print(
-        f"  simulated {summary['sim_time_s']:.0f} s in {summary['wall_time_s']:.0f} s of "
-        f"worker time ({summary['realtime_factor']}x real time per worker)"
-    )
-    split = split_line(summary)
-    if split is not None:
-        print(split)
     if args.json:
         print(json.dumps(summary))
     return EXIT_OK if summary["successes"] == summary["trials"] else EXIT_FAILURE

@@ -262,3 +262,21 @@ def contact_lines(summary: dict[str, Any]) -> list[str]:
             f"{summary['table_contacts']}"
         )
     return lines
+
+
+def campaign_lines(summary: dict[str, Any]) -> list[str]:
+    """A campaign as ``app.py trials`` prints it under its verdict: :func:`summary_lines`, the
+    compositions its moves were placed with, :func:`contact_lines`, the simulated time over
+    the worker time, and :func:`split_line`."""
+    lines = summary_lines(summary)
+    lines.append(f"  {'moves placed with':<44} moves")
+    lines += [f"  {label[:44]:<44} {count}" for label, count in summary["compositions"].items()]
+    lines += contact_lines(summary)
+    lines.append(
+        f"  simulated {summary['sim_time_s']:.0f} s in {summary['wall_time_s']:.0f} s of "
+        f"worker time ({summary['realtime_factor']}x real time per worker)"
+    )
+    split = split_line(summary)
+    if split is not None:
+        lines.append(split)
+    return lines
