@@ -47,6 +47,7 @@ from worlds.scene import Scene
 from worlds.trays import riders
 from worlds.world_file import (
     BoxShape,
+    CylinderShape,
     GoalRegion,
     ObstacleKind,
     Region,
@@ -331,7 +332,8 @@ def _draw_trial(
     obj = base.objects[0]
     regions = layout.goal_regions()
     drawn = draw_object(layout, regions, object_size(base), seed, trial, redraw)
-    if obj.shape.type == "cylinder":
+    cylinder = isinstance(obj.shape, CylinderShape)
+    if cylinder:
         drawn.size[1] = drawn.size[0]  # a scaled cylinder stays round
     if isinstance(obj.shape, TrayShape) and layout.size_scale is not None:
         # Its walls stay as tall as the palms need (experiment.tray_draws).
@@ -397,7 +399,7 @@ def _draw_trial(
         prev, prev_yaw = goal, yaw
     data = base.model_dump(mode="json")
     data["objects"][0]["pose"]["position"] = start.tolist()
-    if layout.size_scale is not None and data["objects"][0]["shape"]["type"] == "cylinder":
+    if layout.size_scale is not None and cylinder:
         # Round still: its diameter scaled as its x extent was (the layout was drawn so).
         data["objects"][0]["shape"]["radius"] = float(drawn.size[0]) / 2.0
         data["objects"][0]["shape"]["height"] = float(drawn.size[2])
