@@ -306,16 +306,36 @@ def draw_move(ax: Any, tr: MoveTrace, view: View, demo_colour: str = "green") ->
 MARGINS_IN = {"left": 0.75, "right": 0.2, "top": 0.75, "bottom": 0.95, "across": 0.8, "down": 0.8}
 
 
-def trajectory_figure(traces: Sequence[MoveTrace], path: Path, title: str) -> Path:
-    """Write the top and side views of every move to ``path`` (PNG); see the module's doc."""
+def figure_style() -> Any:
+    """The figure's style, a context to draw and save it in: the grid from the start, not
+    ax.grid() after (that restyles every tick made so far)."""
     import matplotlib
 
-    # The grid from the start, not ax.grid() after: that restyles every tick made so far.
-    with matplotlib.rc_context({"axes.grid": True, "grid.alpha": 0.3}):
-        return _trajectory_figure(traces, path, title)
+    return matplotlib.rc_context({"axes.grid": True, "grid.alpha": 0.3})
 
 
-def _trajectory_figure(traces: Sequence[MoveTrace], path: Path, title: str) -> Path:
+#: The height of each line a long title wraps to beyond its first, inches (9 pt, spaced).
+TITLE_LINE_IN = 0.16
+
+
+def trajectory_figure(traces: Sequence[MoveTrace], path: Path, title: str) -> Path:
+    """Write the top and side views of every move to ``path`` (PNG); see the module's doc."""
+    fig = trajectory_drawing(traces, title)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    # Drawn in the same style it was made in (ticks the canvas makes as it draws take it).
+    with figure_style(), atomic_path(path) as temporary:
+        fig.savefig(temporary, dpi=110, format="png")
+    return path
+
+
+def trajectory_drawing(traces: Sequence[MoveTrace], title: str) -> Any:
+    """The figure :func:`trajectory_figure` writes (a matplotlib ``Figure`` on an Agg
+    canvas), drawn but not saved."""
+    with figure_style():
+        return _drawing(traces, title)
+
+
+def _drawing(traces: Sequence[MoveTrace], title: str) -> Any:
     # The object interface on an Agg canvas, not pyplot: no global figure to close.
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
@@ -323,8 +343,11 @@ def _trajectory_figure(traces: Sequence[MoveTrace], path: Path, title: str) -> P
     n = max(1, len(traces))
     cols = min(n, COLUMNS)
     rows = -(-n // cols)
-    width, height = 4.4 * cols, 7.8 * rows
-    m = MARGINS_IN
+    width = 4.4 * cols
+    text, size = fitted_title(title, width)
+    # A title wrapped to more lines takes room above the panels, not over their titles.
+    m = {**MARGINS_IN, "top": MARGINS_IN["top"] + TITLE_LINE_IN * text.count("\n")}
+    height = 7.8 * rows + m["top"] - MARGINS_IN["top"]
     panel_w = (width - m["left"] - m["right"] - (cols - 1) * m["across"]) / cols
     panel_h = (height - m["top"] - m["bottom"] - (2 * rows - 1) * m["down"]) / (2 * rows)
     fig = Figure(figsize=(width, height))
@@ -390,12 +413,8 @@ def _trajectory_figure(traces: Sequence[MoveTrace], path: Path, title: str) -> P
             fontsize=8,
             bbox_to_anchor=(0.5, 0.08 / height),
         )
-    text, size = fitted_title(title, width)
     fig.suptitle(text, y=1.0 - 0.25 / height, fontsize=size)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with atomic_path(path) as temporary:  # never half a figure under its name
-        fig.savefig(temporary, dpi=110, format="png")
-    return path
+    return fig
 
 
 def fitted_title(title: str, width_in: float) -> tuple[str, float]:

@@ -170,6 +170,7 @@ class MoveRecorder:
         """Every move of the task as the figure draws it."""
         spec = self.sim.spec
         shapes = {o.name: o.shape for o in spec.scene.objects}
+        initial = {o.name: (o.position, o.quaternion) for o in spec.scene.objects}
         obstacles = {o.name: o for o in spec.scene.obstacles}
         goals = {name: spec.moves_of(name) for name, _ in self.order}
         out = []
@@ -180,7 +181,18 @@ class MoveRecorder:
             goal = goals[key[0]][task_move if task_move is not None else key[1]]
             goal_q = np.asarray(goal.goal_quaternion, dtype=float)
             first = next((t.start for t in steps if t.start is not None), None)
-            start = first or (np.asarray(goal.goal_position, dtype=float), goal_q)
+            if first is None:
+                # Never started: it would have started where the object rests, at its last
+                # goal or where the world puts it.
+                at = task_move if task_move is not None else key[1]
+                before = goals[key[0]][at - 1] if at > 0 else None
+                pose = (
+                    initial[key[0]]
+                    if before is None
+                    else (before.goal_position, before.goal_quaternion)
+                )
+                first = (np.asarray(pose[0], dtype=float), np.asarray(pose[1], dtype=float))
+            start = first
             positions = [p for t in steps for p in t.positions]
             orientations = [q for t in steps for q in t.orientations]
             skill = (

@@ -26,6 +26,7 @@ from experiment.figures import (
     outline,
     side_view,
     top_view,
+    trajectory_drawing,
     trajectory_figure,
 )
 from planner.move_result import move_results
@@ -214,3 +215,23 @@ def test_a_long_title_is_wrapped_to_the_figures_width() -> None:
     assert max(len(line) for line in text.splitlines()) <= int(13.2 * 13.5)
     text, _ = fitted_title("word " * 200, 4.4)
     assert len(text.splitlines()) == 3 and text.endswith("[...]")
+
+
+def test_a_wrapped_title_stands_above_the_panels_titles() -> None:
+    # A long failure reason wraps to three lines: the figure grows above its panels for them.
+    start, goal = np.array([0.55, 0.0, 0.675]), np.array([0.65, 0.1, 0.675])
+    trace = MoveTrace("parcel move 1", start, goal, np.linspace(start, goal, 20), (), shape=PARCEL)
+    reason = "task.parcel.pick_and_place.move_centre.carry.grip_intact: not held: " * 4
+    short = trajectory_drawing([trace], "w: success")
+    fig = trajectory_drawing([trace], f"w: failure: {reason}")
+    renderer = fig.canvas.get_renderer()
+    title = fig._suptitle.get_window_extent(renderer)
+    assert len(fig._suptitle.get_text().splitlines()) == 3
+    for ax in fig.axes:
+        assert ax.title.get_window_extent(renderer).y1 < title.y0
+    # The panels keep their size: only the room above them grows.
+    assert fig.get_size_inches()[1] > short.get_size_inches()[1]
+    assert_allclose(
+        fig.axes[0].get_position().height * fig.get_size_inches()[1],
+        short.axes[0].get_position().height * short.get_size_inches()[1],
+    )

@@ -126,3 +126,27 @@ def test_a_tree_that_leaves_the_second_parcel_untouched_fails_naming_its_moves(
     assert report.failure == "not placed: parcel_right move 1, parcel_right move 2"
     assert all(e is not None and e < 0.02 for e in report.placement_error_m[:2])
     assert report.placement_error_m[2:] == [None, None]
+
+
+def test_a_move_never_carried_is_drawn_from_where_its_object_would_rest() -> None:
+    # A run stopped before any carry: each object's first move starts where the world puts
+    # it, each later move at the goal before it (not at its own goal, as if done already).
+    from experiment.episode import robot_moves
+    from experiment.move_recorder import MoveRecorder
+    from skills.default_library import build_default_library
+    from worlds.sim_world import SimWorld
+
+    world = load_world(TWO_PARCELS)
+    with SimWorld(world) as sim:
+        recorder = MoveRecorder(sim, move_keys(world), robot_moves(world), 1.0 / 60.0)
+        traces = recorder.traces(build_default_library())
+    objects = {o.name: o for o in world.objects}
+    goals = {s.object: [m.goal.position for m in s.moves] for s in world.task}
+    assert [t.label for t in traces] == move_labels(PLACED)
+    assert all(len(t.path) == 0 for t in traces)
+    for name in ("parcel_left", "parcel_right"):
+        first, second = (t for t in traces if t.label.startswith(name))
+        assert first.start == pytest.approx(objects[name].pose.position)
+        assert first.goal == pytest.approx(goals[name][0])
+        assert second.start == pytest.approx(goals[name][0])
+        assert second.goal == pytest.approx(goals[name][1])
