@@ -60,6 +60,9 @@ class MoveTrace:
         The learnt transport skill the move ran.
     fixtures : tuple of FixtureSpec
         The open fixtures on the table (their walls drawn grey).
+    others : tuple of OtherObject
+        The task's other objects where they lay as the move started (where they lay when the
+        run ended, for a move never started), drawn grey: what its arms had to keep off.
     demonstrated : ndarray, shape (K, 3), or None
         That skill alone from ``start`` to ``goal`` (:func:`demonstrated_path`); None when the
         move was never carried.
@@ -77,6 +80,18 @@ class MoveTrace:
     skill: str | None = None
     demonstrated: Array | None = None
     fixtures: tuple[FixtureSpec, ...] = ()
+    others: tuple[OtherObject, ...] = ()
+
+
+@dataclass(frozen=True)
+class OtherObject:
+    """One of the task's other objects as a move's figure draws it: its name, shape and pose
+    (position (3,) m, quaternion (4,) scalar-last, world frame)."""
+
+    name: str
+    shape: ShapeSpec
+    position: Array
+    quaternion: Array
 
 
 def demonstrated_path(
@@ -262,6 +277,11 @@ def draw_move(ax: Any, tr: MoveTrace, view: View, demo_colour: str = "green") ->
         if beside:
             side = "farther" if off > 0 else "nearer"
             ax.text(*c, f"{abs(off) * 100:.0f} cm\n{side}", ha="center", va="center", fontsize=6)
+    for other in tr.others:
+        poly = outline(other.shape, other.position, other.quaternion, view)
+        ax.add_patch(Polygon(poly, closed=True, color="0.6", alpha=0.35, label="other object"))
+        ax.text(*poly.mean(axis=0), other.name, ha="center", va="center", fontsize=6)
+        drawn.append(poly)
     if tr.shape is not None:
         for where, q, style, what in (
             (tr.start, tr.start_orientation, dict(ls="--", lw=1.0, ec="0.45"), "at the start"),

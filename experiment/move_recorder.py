@@ -14,7 +14,7 @@ import numpy as np
 import py_trees
 from py_trees.common import Status
 
-from experiment.figures import MoveTrace, demonstrated_path
+from experiment.figures import MoveTrace, OtherObject, demonstrated_path
 from experiment.grip_recorder import GripRecorder
 from experiment.judge import move_labels
 from planner.move_result import MoveResult, move_placements, move_results
@@ -33,6 +33,8 @@ class MoveTrack:
     orientations: list[np.ndarray] = field(default_factory=list)
     start: tuple[np.ndarray, np.ndarray] | None = None
     obstacles: tuple[str, ...] = ()
+    #: The other objects' poses (name, position, quaternion) as the move started.
+    others: tuple[tuple[str, np.ndarray, np.ndarray], ...] = ()
     error_m: float | None = None
     error_deg: float | None = None
     composition: dict[str, float] | None = None
@@ -92,6 +94,11 @@ class MoveRecorder:
                 if track.start is None:
                     track.start = (pose.position.copy(), pose.orientation.copy())
                     track.obstacles = tuple(o.name for o in self.sim.obstacles())
+                    track.others = tuple(
+                        (n, p.position.copy(), p.orientation.copy())
+                        for n, p in poses.items()
+                        if n != key[0]
+                    )
                 track.positions.append(pose.position.copy())
                 track.orientations.append(pose.orientation.copy())
                 self.current = key
@@ -193,6 +200,16 @@ class MoveRecorder:
                 )
                 first = (np.asarray(pose[0], dtype=float), np.asarray(pose[1], dtype=float))
             start = first
+            started = next((t for t in steps if t.start is not None), None)
+            others = (
+                started.others
+                if started is not None
+                else tuple(
+                    (n, self.sim.object_pose(n).position, self.sim.object_pose(n).orientation)
+                    for n in shapes
+                    if n != key[0]
+                )
+            )
             positions = [p for t in steps for p in t.positions]
             orientations = [q for t in steps for q in t.orientations]
             skill = (
@@ -213,6 +230,7 @@ class MoveRecorder:
                     shape=shapes[key[0]],
                     skill=track.skill,
                     fixtures=tuple(spec.scene.fixtures),
+                    others=tuple(OtherObject(n, shapes[n], p, q) for n, p, q in others),
                     demonstrated=(
                         demonstrated_path(skill, start[0], start[1], goal.goal_position, goal_q)
                         if skill is not None

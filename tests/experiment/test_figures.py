@@ -18,6 +18,7 @@ from matplotlib.patches import Circle, Polygon
 from experiment.figures import (
     SKILL_COLOURS,
     MoveTrace,
+    OtherObject,
     convex_hull_2d,
     demonstrated_path,
     draw_move,
@@ -235,3 +236,21 @@ def test_a_wrapped_title_stands_above_the_panels_titles() -> None:
         fig.axes[0].get_position().height * fig.get_size_inches()[1],
         short.axes[0].get_position().height * short.get_size_inches()[1],
     )
+
+
+def test_the_other_objects_are_drawn_where_they_lay() -> None:
+    start, goal = np.array([0.55, 0.0, 0.675]), np.array([0.65, 0.0, 0.675])
+    crate = OtherObject("crate", ShapeSpec.box([0.1, 0.1, 0.1]), np.array([0.6, 0.3, 0.65]),
+                        YAW_90)  # fmt: skip
+    trace = MoveTrace("parcel move 1", start, goal, np.empty((0, 3)), (), others=(crate,))
+    fig, ax = plt.subplots()
+    drawn = draw_move(ax, trace, top_view())
+    patches = [p for p in ax.patches if p.get_label() == "other object"]
+    texts = [t.get_text() for t in ax.texts]
+    plt.close(fig)
+    assert len(patches) == 1 and texts == ["crate"]
+    # Its footprint, seen from above (y across, x up): 10 cm square about (0.3, 0.6).
+    corners = patches[0].get_xy()
+    assert_allclose(corners.min(axis=0), [0.25, 0.55], atol=1e-9)
+    assert_allclose(corners.max(axis=0), [0.35, 0.65], atol=1e-9)
+    assert any(np.allclose(d, corners[: len(d)]) for d in drawn if len(d) >= 4)

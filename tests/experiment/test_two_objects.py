@@ -150,3 +150,8 @@ def test_a_move_never_carried_is_drawn_from_where_its_object_would_rest() -> Non
         assert first.goal == pytest.approx(goals[name][0])
         assert second.start == pytest.approx(goals[name][0])
         assert second.goal == pytest.approx(goals[name][1])
+    # The other object is drawn where it lay when the run ended (it never moved).
+    for trace, name in zip(traces, PLACED, strict=True):
+        (other,) = trace.others
+        assert other.name != name
+        assert other.position == pytest.approx(objects[other.name].pose.position, abs=1e-3)
