@@ -38,6 +38,10 @@ OVERLAP_TOLERANCE_M = 0.002
 #: Least gap between an obstacle and an object where the object stands when a move naming the
 #: obstacle starts, and at the move's goal, m: a touching obstacle is a contact.
 OBSTACLE_GAP_M = 0.001
+#: An object the task does not move that is within this of a moved one, m, with its centre
+#: over that object's footprint, rests on it (a ball on a tray): after that object's moves,
+#: where it lies is not known.
+LOADED_GAP_M = 0.005
 
 #: How far from resting on a face (a box's axis, or a cylinder's, vertical or a cylinder's
 #: level) an object may be turned at its start or goal, deg: tilted further it rests on an
@@ -100,7 +104,8 @@ def face_problem(obj: ObjectSpec, quaternion: Quat) -> tuple[str, str] | None:
 def start_problems(
     spec: WorldSpec, bad_goals: Collection[tuple[int, int]] = ()
 ) -> list[WorldFileProblem]:
-    """Every body that starts sunk into the table or inside another body.
+    """Every body that starts sunk into the table or inside another body, and every goal
+    inside another object where that object stands when the move ends.
 
     Parameters
     ----------
@@ -136,7 +141,9 @@ def start_problems(
             )
     for k, obj in enumerate(objects):
         for other in objects[:k]:
-            depth = _depth(obj, obj.position, obj.quaternion, other)
+            depth = _depth(
+                obj, obj.position, obj.quaternion, other, other.position, other.quaternion
+            )
             if depth > OVERLAP_TOLERANCE_M:
                 problems.append(
                     WorldFileProblem(
@@ -153,10 +160,35 @@ def start_problems(
     poses: dict[str, tuple[Vec3, Quat] | None] = {
         obj.name: (obj.position, obj.quaternion) for obj in objects
     }
+    task_objects = {step.object for step in spec.task}
+    done: set[str] = set()  # the objects moved so far
     for i, step in enumerate(spec.task):
+        carried = by_name[step.object]
         for j, move in enumerate(step.moves):
             good = (i, j) not in bad_goals
             goal = (move.goal_position, move.goal_quaternion)
+            here = poses[step.object]
+            for body, pose in list(poses.items()):
+                if body == step.object or pose is None:
+                    continue
+                if body not in task_objects and here is not None:
+                    if _rides_on(by_name[body], pose, carried, here):
+                        # It goes where the carry takes it, so where it ends is not known.
+                        poses[body] = None
+                        continue
+                if not good:
+                    continue
+                depth = _depth(carried, *goal, by_name[body], *pose)
+                if depth > OVERLAP_TOLERANCE_M:
+                    at = "where its last move put it" if body in done else "where it stands"
+                    problems.append(
+                        WorldFileProblem(
+                            f"task[{i}].moves[{j}].goal.position",
+                            f"a goal where {step.object} is clear of {body} ({at} then)",
+                            f"{vec(goal[0])}: {fmt(depth * 1000)} mm inside {body} at "
+                            f"{vec(pose[0])}",
+                        )
+                    )
             for name in move.obstacles:
                 o, obstacle = obstacles[name]
                 where: list[tuple[str, tuple[Vec3, Quat], str]] = []
@@ -185,6 +217,7 @@ def start_problems(
                             )
                         )
             poses[step.object] = goal if good else None
+            done.add(step.object)
     return problems
 
 
@@ -197,13 +230,51 @@ def _gap_words(gap: float) -> str:
 
 
 def _depth(
-    obj: ObjectSpec, position: tuple[float, float, float], quaternion: Quat, other: ObjectSpec
+    obj: ObjectSpec,
+    position: Vec3,
+    quaternion: Quat,
+    other: ObjectSpec,
+    other_position: Vec3,
+    other_quaternion: Quat,
 ) -> float:
-    # A tray is its floor and walls: a ball lying inside it is clear of it.
+    """How deep ``obj`` and ``other``, at the poses given, interpenetrate, m (negative: their
+    gap). A tray is its floor and walls: a ball lying inside it is clear of it."""
     return max(
         penetration_depth(a, pose_a, b, pose_b)
         for a, pose_a in _parts(obj.shape, position, quaternion)
-        for b, pose_b in _parts(other.shape, other.position, other.quaternion)
+        for b, pose_b in _parts(other.shape, other_position, other_quaternion)
+    )
+
+
+def _rides_on(
+    rider: ObjectSpec, pose: tuple[Vec3, Quat], carrier: ObjectSpec, at: tuple[Vec3, Quat]
+) -> bool:
+    """``rider`` at ``pose`` rests on ``carrier`` at ``at`` (a ball on a tray's floor, a box
+    on another): within :data:`LOADED_GAP_M` of it, its centre over the carrier's footprint
+    and above the carrier's centre. One standing beside the carrier does not ride on it."""
+    offset = quat.rotate(
+        quat.conjugate(np.asarray(at[1], dtype=float)),
+        np.asarray(pose[0], dtype=float) - np.asarray(at[0], dtype=float),
+    )
+    half = np.asarray(carrier.shape.extents(), dtype=float) / 2.0
+    over = bool(np.all(np.abs(offset[:2]) <= half[:2])) and offset[2] > 0.0
+    return over and _clearance(rider, *pose, carrier, *at) < LOADED_GAP_M
+
+
+def _clearance(
+    obj: ObjectSpec,
+    position: Vec3,
+    quaternion: Quat,
+    other: ObjectSpec,
+    other_position: Vec3,
+    other_quaternion: Quat,
+) -> float:
+    """The signed gap between ``obj`` and ``other`` at the poses given, m (as :func:`_depth`,
+    part by part)."""
+    return min(
+        shape_gap(a, pose_a, b, pose_b)
+        for a, pose_a in _parts(obj.shape, position, quaternion)
+        for b, pose_b in _parts(other.shape, other_position, other_quaternion)
     )
 
 

@@ -51,18 +51,32 @@ def test_a_parcel_turned_on_its_side_rests_higher() -> None:
 
 @pytest.mark.parametrize(("dx", "clear"), [(0.20, True), (0.19, False)])
 def test_two_objects_side_by_side_pass_and_overlapping_do_not(dx: float, clear: bool) -> None:
+    # The twin behind the parcel, where none of its goals reaches.
     def twin(d: dict[str, Any]) -> None:
         other = dict(d["objects"][0], name="twin")
-        other["pose"] = dict(other["pose"], position=[0.55 + dx, 0.0, 0.675])
+        other["pose"] = dict(other["pose"], position=[0.55 - dx, 0.0, 0.675])
         d["objects"].append(other)
 
     found = problems(DEFAULT, twin)
     assert found == [] if clear else found[0][0] == "objects[1].pose.position"
     if not clear:
         assert (
-            "expected twin clear of parcel at the start, got [0.74, 0, 0.675]: 10 mm"
+            "expected twin clear of parcel at the start, got [0.36, 0, 0.675]: 10 mm"
             in (found[0][1])
         )
+
+
+def test_an_object_beside_the_parcel_stays_there_in_the_way_of_its_goal() -> None:
+    # The twin face to face in front of the parcel does not ride with it: the centre goal,
+    # 10 cm on, runs 10 cm into it, and the right and left goals (x to 0.70) 5 cm.
+    def twin(d: dict[str, Any]) -> None:
+        other = dict(d["objects"][0], name="twin")
+        other["pose"] = dict(other["pose"], position=[0.75, 0.0, 0.675])
+        d["objects"].append(other)
+
+    found = problems(DEFAULT, twin)
+    assert [field for field, _ in found] == [f"task[0].moves[{j}].goal.position" for j in range(3)]
+    assert "parcel is clear of twin (where it stands then)" in found[0][1]
 
 
 def test_an_obstacle_in_the_way_of_any_object_when_its_move_starts() -> None:
@@ -115,3 +129,58 @@ def test_an_obstacle_where_the_object_is_set_down() -> None:
          "expected ball_left at least 1 mm clear of parcel at the goal of task[0].moves[2], "
          "got [0.48, 0.15, 0.7]: 20 mm inside parcel at [0.6, 0.15, 0.675]"),
     ]  # fmt: skip
+
+
+def test_a_goal_on_the_place_another_objects_last_move_put_it() -> None:
+    # parcel_right's first goal moved onto parcel_left's last goal (0.48, 0.18): 6 cm apart in
+    # x, the two 0.20 m deep boxes overlap by 14 cm.
+    def onto_the_other(d: dict[str, Any]) -> None:
+        d["task"][1]["moves"][0]["goal"]["position"] = [0.54, 0.18, 0.675]
+
+    assert problems(TWO, onto_the_other) == [
+        ("task[1].moves[0].goal.position",
+         "expected a goal where parcel_right is clear of parcel_left (where its last move put "
+         "it then), got [0.54, 0.18, 0.675]: 140 mm inside parcel_left at [0.48, 0.18, 0.675]"),
+    ]  # fmt: skip
+
+
+@pytest.mark.parametrize(("x", "clear"), [(0.80, True), (0.79, False)])
+def test_a_goal_on_an_object_the_task_leaves_where_it_stands(x: float, clear: bool) -> None:
+    # A 10 cm crate beyond the centre goal, whose parcel reaches x = 0.75 there: face to face
+    # passes, a centimetre into it does not.
+    def crate(d: dict[str, Any]) -> None:
+        other = dict(d["objects"][0], name="crate")
+        other["shape"] = {"type": "box", "size": [0.1, 0.1, 0.1]}
+        other["pose"] = {"position": [x, 0.0, 0.65], "rpy_deg": [0.0, 0.0, 0.0]}
+        d["objects"].append(other)
+
+    found = problems(DEFAULT, crate)
+    if clear:
+        assert found == []
+        return
+    assert found == [
+        ("task[0].moves[0].goal.position",
+         "expected a goal where parcel is clear of crate (where it stands then), got "
+         "[0.65, 0, 0.675]: 10 mm inside crate at [0.79, 0, 0.65]"),
+    ]  # fmt: skip
+
+
+def test_a_ball_on_a_tray_rides_with_it_and_is_not_in_its_way() -> None:
+    # The tray's first goal 14 cm on: where the ball started would cut through its back rim,
+    # but the ball lies on its floor and goes with it.
+    tray = ROOT / "worlds" / "tray_carry.yaml"
+
+    def further(d: dict[str, Any]) -> None:
+        d["task"][0]["moves"][0]["goal"]["position"] = [0.69, 0.0, 0.675]
+
+    assert problems(tray, further) == []
+
+    # The same ball standing on the table, not on the tray: in the way of that goal.
+    def on_the_table(d: dict[str, Any]) -> None:
+        further(d)
+        d["objects"][1]["pose"]["position"] = [0.55, -0.0, 0.625]
+        d["objects"][0]["pose"]["position"] = [0.55, 0.3, 0.675]
+
+    found = problems(tray, on_the_table)
+    assert [field for field, _ in found] == [f"task[0].moves[{j}].goal.position" for j in range(3)]
+    assert all("tray is clear of ball (where it stands then)" in m for _, m in found)
