@@ -12,9 +12,11 @@ from __future__ import annotations
 
 import os
 import sys
+from collections.abc import Sequence
 from pathlib import Path
 
 from planner.default_tree import PICK_AND_PLACE_XML, TaskStep, task_xml
+from planner.port import Move
 from planner.tree_dataflow import RUN_WRITES
 from planner.tree_objects import check_tree_objects
 from planner.tree_problems import TreeFileError
@@ -91,10 +93,32 @@ def tree_task_problems(world: World, doc: TreeDocument) -> list[str]:
     spec = world_spec(world)
     # The moves as the robot makes them (a turn its grip cannot make is several), which
     # is what a tree's move indices count.
-    moves = {step.object: len(task_moves(spec, step.object)) for step in spec.task}
-    lines = [str(p) for p in check_tree_moves(doc, moves, bound_object(world))]
+    stepped = {step.object: task_moves(spec, step.object) for step in spec.task}
+    moves = {name: len(made) for name, made in stepped.items()}
+    notes = {name: steps_note(made) for name, made in stepped.items()}
+    lines = [
+        str(p)
+        for p in check_tree_moves(
+            doc, moves, bound_object(world), {k: v for k, v in notes.items() if v}
+        )
+    ]
     names = [o.name for o in world.objects]
     return lines + [str(p) for p in check_tree_objects(doc, names)]
+
+
+def steps_note(made: Sequence[Move]) -> str:
+    """How the robot's moves of one object come from its world file's, where a turn the grip
+    cannot make is several: ``"the world file's move 2 is made in 2 steps, 2 and 3"``; empty
+    when each file move is one."""
+    indices: dict[int, list[int]] = {}
+    for k, move in enumerate(made):
+        indices.setdefault(move.task_move if move.task_move is not None else k, []).append(k)
+    split = [(m, ks) for m, ks in indices.items() if len(ks) > 1]
+    return "; ".join(
+        f"the world file's move {m} is made in {len(ks)} steps, "
+        f"{', '.join(str(k) for k in ks[:-1])} and {ks[-1]}"
+        for m, ks in split
+    )
 
 
 def move_skill_problems(world: World, world_file: str) -> list[str]:

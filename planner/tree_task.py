@@ -39,7 +39,10 @@ def _moves_phrase(name: str, count: int) -> str:
 
 
 def check_tree_moves(
-    doc: TreeDocument, moves: Mapping[str, int], bound_object: str | None
+    doc: TreeDocument,
+    moves: Mapping[str, int],
+    bound_object: str | None,
+    notes: Mapping[str, str] | None = None,
 ) -> list[TreeProblem]:
     """Problems of a tree's move indices against a world's task.
 
@@ -52,6 +55,9 @@ def check_tree_moves(
     bound_object : str or None
         The object a ``{...}`` object port is bound to when the tree runs; None if unknown
         (then indices on such nodes are not checked).
+    notes : mapping of str to str, optional
+        Per object, why its count differs from its world file's (a turn made in steps),
+        added where the count is given.
 
     Returns
     -------
@@ -60,6 +66,12 @@ def check_tree_moves(
     """
     problems: list[TreeProblem] = []
     named: dict[str, set[int]] = {}
+    notes = notes or {}
+
+    def phrase(name: str) -> str:
+        note = notes.get(name)
+        return _moves_phrase(name, moves[name]) + (f" ({note})" if note else "")
+
     for elem in doc.root.iter():
         raw = _literal(elem.attrib.get(MOVE_PORT))
         if raw is None:
@@ -81,9 +93,7 @@ def check_tree_moves(
             )
             continue
         if not 0 <= index < moves[name]:
-            problems.append(
-                TreeProblem(*where, f"move {index}, but {_moves_phrase(name, moves[name])}")
-            )
+            problems.append(TreeProblem(*where, f"move {index}, but {phrase(name)}"))
             continue
         named.setdefault(name, set()).add(index)
     for name, indices in named.items():
@@ -96,7 +106,7 @@ def check_tree_moves(
                     doc.file,
                     None,
                     "",
-                    f"names moves {listed} of {name}, but {_moves_phrase(name, moves[name])}: "
+                    f"names moves {listed} of {name}, but {phrase(name)}: "
                     f"move{'s' if len(missing) > 1 else ''} {left} would be left undone",
                 )
             )

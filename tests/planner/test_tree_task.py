@@ -2,13 +2,17 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
 import planner.leaves  # noqa: F401  (registers the leaves the trees use)
+from experiment.preflight import tree_task_problems
 from planner.default_tree import PICK_AND_PLACE_XML
 from planner.tree_reading import read_tree_document, read_tree_document_string
 from planner.tree_task import check_tree_moves, tree_grasps
 from skills.vocabulary import GraspType
+from worlds.world_file import load_world
 
 TWO_OBJECTS = """<root BTCPP_format="4">
   <BehaviorTree ID="Main">
@@ -93,3 +97,17 @@ def test_tree_grasps_are_what_its_select_skills_ask_for(
 
 def test_the_shipped_tree_makes_the_lateral_grasp() -> None:
     assert tree_grasps(read_tree_document(PICK_AND_PLACE_XML)) == {GraspType.TWO_PALM_LATERAL}
+
+
+def test_a_turn_made_in_steps_is_named_where_the_moves_are_counted() -> None:
+    # The world file has 3 moves; its last, a quarter turn, is made in two grasps: a tree
+    # written for 3 moves is told why the task has 4.
+    world = load_world(
+        Path(__file__).resolve().parents[1] / "data" / "worlds" / "turned_90_beside_a_sphere.yaml"
+    )
+    doc = read_tree_document(PICK_AND_PLACE_XML)
+    assert tree_task_problems(world, doc) == [
+        f"{PICK_AND_PLACE_XML}: names moves 0, 1, 2 of parcel, but the world's task has "
+        "4 moves for parcel (indices 0..3) (the world file's move 2 is made in 2 steps, 2 and "
+        "3): move 3 would be left undone"
+    ]
