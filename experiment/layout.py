@@ -43,6 +43,7 @@ from experiment.tray_draws import place_riders, tray_height, tray_layout_problem
 from skills.turns import move_holds
 from worlds.adapters import robot_capabilities
 from worlds.palm_poses import lateral_grasp_palm_poses
+from worlds.placement import start_problems
 from worlds.scene import Scene
 from worlds.trays import riders
 from worlds.world_file import (
@@ -56,6 +57,7 @@ from worlds.world_file import (
     World,
     as_world_spec,
     world_from_data,
+    world_spec,
 )
 
 #: Goal yaws drawn for a move before giving up on placing its sphere: the robot turning the
@@ -282,13 +284,22 @@ def draw_trial(
             return draw_trial(base, seed, trial, own)
     robot.restart()
     turning = any(_turns(region) for region in base.trials.goal_regions())
-    for redraw in range(TRIAL_REDRAWS if turning else 1):
+    # Objects that stand on the table through the trial (not the drawn one, nothing on it).
+    standing = len(base.objects) - 1 - len(riding(base))
+    again = TRIAL_REDRAWS if turning or standing else 1
+    for redraw in range(again):
         try:
-            return _draw_trial(base, seed, trial, robot, redraw)
+            drawn, kinds = _draw_trial(base, seed, trial, robot, redraw)
+            if standing:
+                # A start, goal or sphere drawn into an object standing there: drawn again.
+                problems = start_problems(world_spec(drawn))
+                if problems:
+                    raise RuntimeError(problems[0].format("trial"))
+            return drawn, kinds
         except RuntimeError:
             # A turn that leaves no room for the next move's sphere (the arms turned across
             # its way): the trial is drawn again from a stream of its own.
-            if redraw == TRIAL_REDRAWS - 1 or not turning:
+            if redraw == again - 1:
                 raise
     raise AssertionError("unreachable")
 
@@ -521,6 +532,13 @@ def check_trial_layout(base: World, seed: int, label: str) -> None:
     drawing one costs a fraction of a second, and tells before a campaign starts.
     """
     obj = base.objects[0]
+    others = sorted({step.object for step in base.task} - {obj.name})
+    if others:
+        raise TrialLayoutError(
+            f"{label}: task: expected a task that moves objects[0] ({obj.name!r}) alone for "
+            f"trials (each trial draws its start, goals and spheres; the other objects stand "
+            f"where the file puts them), got moves of {', '.join(repr(o) for o in others)} too"
+        )
     if obj.shape.type not in TRIAL_SHAPES:
         raise TrialLayoutError(
             f"{label}: objects[0].shape: expected a box, tray, mesh or cylinder object for "
