@@ -32,6 +32,7 @@ from worlds.actuators import (
     torque_loop_start,
     torque_loop_step,
 )
+from worlds.control_layout import body_layout
 from worlds.impedance import ImpedanceTerms, affine_law, impedance_terms, limit_posture
 from worlds.impedance_values import (
     GainArrays,
@@ -177,52 +178,17 @@ class DualArmImpedanceController:
         self.torque_loop = torque_loop if torque_loop is not None else robot.torque_loop
         self._loop = torque_loop_start(total)
         self._arm_body = [int(body_ids[spec.body]) for spec in self._specs]
-        # One law per body: its joints (all movable ones, which PyBullet's Jacobian and inverse
-        # dynamics take), their rows in the driven vector, and the arms whose palms it carries.
-        self._bodies: list[int] = []
-        self._body_joints: list[list[int]] = []
-        self._body_rows: list[slice] = []  # rows of the driven vector, per body
-        self._body_arms: list[list[int]] = []
-        start = 0
-        for index in dict.fromkeys(d.body for d in driven):
-            body = int(body_ids[index])
-            joints = [d.joint for d in driven if d.body == index]
-            movable = [
-                j
-                for j in range(pb.getNumJoints(body, physicsClientId=client))
-                if pb.getJointInfo(body, j, physicsClientId=client)[2] != pb.JOINT_FIXED
-            ]
-            if joints != movable:
-                raise ValueError(
-                    f"{name}: expected the arms and shared joints to own all movable joints "
-                    f"{movable} of body {body}, got {joints}"
-                )
-            self._bodies.append(body)
-            self._body_joints.append(joints)
-            self._body_rows.append(slice(start, start + len(joints)))
-            self._body_arms.append([i for i, spec in enumerate(self._specs) if spec.body == index])
-            start += len(joints)
-        # Each arm's joints' rows in the driven vector.
-        self._arm_rows = [
-            np.array([k for k, d in enumerate(driven) if d.arm is arm], dtype=np.intp)
-            for arm in self.ARMS
-        ]
-        # Bodies of the same shape (joints, palms) are linearised in one vectorised call.
-        batches: dict[tuple[int, int], list[int]] = {}
-        for g, joints in enumerate(self._body_joints):
-            batches.setdefault((len(joints), len(self._body_arms[g])), []).append(g)
-        self._batches = list(batches.values())
-        self._batch_tasks = [
-            np.array([self._body_arms[g] for g in batch], dtype=np.intp) for batch in self._batches
-        ]
-        # Each batch's rows of the driven vector, (k, n): a batch's joint values in one read.
-        self._batch_rows = [
-            np.array(
-                [np.arange(self._body_rows[g].start, self._body_rows[g].stop) for g in batch],
-                dtype=np.intp,
-            )
-            for batch in self._batches
-        ]
+        # One law per body, bodies of one shape linearised in one vectorised call.
+        layout = body_layout(driven, self._specs, self.ARMS, body_ids, client, name)
+        self._bodies = layout.bodies
+        self._body_joints = layout.body_joints
+        self._body_rows = layout.body_rows
+        self._body_arms = layout.body_arms
+        self._arm_rows = layout.arm_rows
+        self._batches = layout.batches
+        self._batch_tasks = layout.batch_tasks
+        self._batch_rows = layout.batch_rows
+        self._joint_arm = layout.joint_arm
         self._lower = np.array([d.lower for d in driven], dtype=float)
         self._upper = np.array([d.upper for d in driven], dtype=float)
         self._max_torque = np.array([d.max_torque for d in driven], dtype=float)
@@ -235,12 +201,6 @@ class DualArmImpedanceController:
             self._posture_weight = np.array(
                 [1.0 if d.arm is not None else shared.posture_weight for d in driven]
             )
-        # Whose gains act on each joint: its arm's; a shared joint, its body's first arm's.
-        first_arm = {self._specs[arms[0]].body: arms[0] for arms in self._body_arms}
-        self._joint_arm = np.array(
-            [self.ARMS.index(d.arm) if d.arm is not None else first_arm[d.body] for d in driven],
-            dtype=np.intp,
-        )
         self._gains: list[ImpedanceGains] = [gains or ImpedanceGains()] * 2
         self._commands: list[PalmCommand | None] = [None, None]
         self._target_position = np.zeros((2, 3))
