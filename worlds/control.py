@@ -217,6 +217,7 @@ class DualArmImpedanceController:
         self._applied = self._tau
         self._q_lin = np.zeros(total)
         self._terms: list[ImpedanceTerms] = []
+        self._jacobians: list[FloatArray] = []  # per batch, (k, 6t, n), as last linearised
         self._targets_changed = True
         self._gravity_world = np.array([0.0, 0.0, -9.81])
         self._gravity_world_xyz = self._gravity_world.tolist()
@@ -376,6 +377,7 @@ class DualArmImpedanceController:
         self._q_lin = self._q.copy()
         c = self.client
         self._terms = []
+        self._jacobians = []
         for batch, tasks, gains, batch_rows in zip(
             self._batches, self._batch_tasks, self._gain_arrays, self._batch_rows, strict=True
         ):
@@ -438,6 +440,7 @@ class DualArmImpedanceController:
                 self._b[rows, rows] = terms.b[j]
                 self._c[rows, rows] = terms.c[j]
             self._terms.append(terms)
+            self._jacobians.append(jacobian)
         # The anchor has moved along the feed-forward twist since the last target update.
         if self._steps_since_target:
             elapsed = self._steps_since_target * self.physics_dt
@@ -548,6 +551,28 @@ class DualArmImpedanceController:
             physicsClientId=self.client,
         )
         return np.asarray(link[4]), np.asarray(link[6])
+
+    def static_palm_stiffness(self) -> dict[Arm, FloatArray]:
+        """Each palm's translational stiffness against a load that holds it still, (3, 3) N/m,
+        world frame, as the law linearised last applies it (the other palms free).
+
+        It is not the gains' ``stiffness_linear``: the implicit damping
+        (:func:`worlds.impedance.impedance_terms`) multiplies the spring's torques by
+        ``G = M (M + dt D_q)^-1`` too, which assumes the joints free to accelerate; a load that
+        holds the palm still (an object's weight in the grip, a table under it) then meets
+        ``G``'s share of the spring. From the joint stiffness ``B`` of the law and the palm's
+        Jacobian ``J_p``: ``(J_p (-B)^-1 J_p^T)^-1``.
+        """
+        out: dict[Arm, FloatArray] = {}
+        for terms, jacobian, batch, tasks in zip(
+            self._terms, self._jacobians, self._batches, self._batch_tasks, strict=True
+        ):
+            for j in range(len(batch)):
+                for s, i in enumerate(tasks[j]):
+                    rows = jacobian[j, 6 * s : 6 * s + 3]
+                    compliance = rows @ np.linalg.solve(-terms.b[j], rows.T)
+                    out[self.ARMS[int(i)]] = np.asarray(np.linalg.inv(compliance), dtype=float)
+        return out
 
     def computed_torques(self) -> FloatArray:
         """Torques the law computed at the last tick, (N,) N m, in driven order."""

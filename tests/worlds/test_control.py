@@ -499,3 +499,37 @@ def test_a_wrist_near_its_limit_does_not_turn_the_palm(degrees_from_limit: float
         turned = np.linalg.norm(quat.rotation_error(quaternion, state.quaternion))
         assert np.degrees(turned) < 0.2
         assert np.linalg.norm(state.position - position) < 5e-4
+
+
+@pytest.mark.sim
+def test_a_palm_held_still_by_a_load_meets_the_static_stiffness_the_law_reports() -> None:
+    """Pushed up by 5 N (PyBullet's external force on the palm link, every physics step), a
+    palm holding its pose settles where ``static_palm_stiffness`` says: the stated 1000 N/m
+    scaled by the implicit damping, which assumes the joints free to accelerate."""
+    spec = SceneSpec(objects=())
+    with Scene(spec) as scene:
+        target = {
+            arm: (np.array([0.6, side * 0.2, 0.8]), np.array(LATERAL_PALM_QUATERNIONS[arm]))
+            for arm, side in ((Arm.LEFT, 1.0), (Arm.RIGHT, -1.0))
+        }
+        scene.place_palms(target)
+        scene.step(240)
+        controller = scene.controller
+        before = scene.palm_state(Arm.LEFT).position
+        stiffness = controller.static_palm_stiffness()[Arm.LEFT]
+        # The stated spring in the task space, less what the implicit damping takes from it.
+        assert stiffness.shape == (3, 3)
+        assert 500.0 < stiffness[2, 2] < 980.0
+        push = np.array([0.0, 0.0, 5.0])
+        spec_left = scene.robot.arms[Arm.LEFT]
+        body = scene.robot_ids[spec_left.body]
+        for _ in range(720):
+            at = pb.getLinkState(body, spec_left.palm_link, physicsClientId=scene.client)[0]
+            pb.applyExternalForce(
+                body, spec_left.palm_link, push, at, pb.WORLD_FRAME, physicsClientId=scene.client
+            )
+            scene.step(1)
+        moved = scene.palm_state(Arm.LEFT).position - before
+        expected = np.linalg.solve(controller.static_palm_stiffness()[Arm.LEFT], push)
+        np.testing.assert_allclose(moved, expected, atol=0.02 * np.linalg.norm(expected))
+        assert moved[2] > 1.05 * push[2] / 1000.0  # softer than the stated gain
