@@ -27,6 +27,7 @@ from affordances.context import Shape
 from skills import quaternion as quat
 from skills.flip import vertical_half_extent
 from worlds.fcl_shapes import penetration_depth, shape_gap
+from worlds.fixture_spec import FixtureSpec
 from worlds.spec import ObjectSpec, ObstacleSpec, ShapeSpec, WorldSpec
 from worlds.world_errors import WorldFileProblem
 
@@ -153,6 +154,34 @@ def start_problems(
                         f"at {vec(other.position)}",
                     )
                 )
+    for f, fixture in enumerate(spec.scene.fixtures):
+        walls = _fixture_walls(fixture)
+        for obj in objects:
+            depth = _wall_depth(obj, obj.position, obj.quaternion, walls)
+            if depth > OVERLAP_TOLERANCE_M:
+                problems.append(
+                    WorldFileProblem(
+                        f"fixtures[{f}].position",
+                        f"{fixture.name}'s walls clear of {obj.name} at its start",
+                        f"{vec(fixture.position[:2])}: a wall {fmt(depth * 1000)} mm inside "
+                        f"{obj.name} at {vec(obj.position)}",
+                    )
+                )
+        for i, step in enumerate(spec.task):
+            obj = next(o for o in objects if o.name == step.object)
+            for j, move in enumerate(step.moves):
+                if move.fixture == fixture.name or (i, j) in bad_goals:
+                    continue  # seated in it: inside its walls by their clearance
+                depth = _wall_depth(obj, move.goal_position, move.goal_quaternion, walls)
+                if depth > OVERLAP_TOLERANCE_M:
+                    problems.append(
+                        WorldFileProblem(
+                            f"task[{i}].moves[{j}].goal.position",
+                            f"a goal where {obj.name} is clear of {fixture.name}'s walls",
+                            f"{vec(move.goal_position)}: {fmt(depth * 1000)} mm inside a wall "
+                            f"of {fixture.name} at {vec(fixture.position[:2])}",
+                        )
+                    )
     obstacles = {o.name: (i, o) for i, o in enumerate(spec.scene.obstacles)}
     by_name = {obj.name: obj for obj in objects}
     # Where each object is as the task goes on: its start pose until its moves, then the
@@ -243,6 +272,33 @@ def _depth(
         penetration_depth(a, pose_a, b, pose_b)
         for a, pose_a in _parts(obj.shape, position, quaternion)
         for b, pose_b in _parts(other.shape, other_position, other_quaternion)
+    )
+
+
+def _fixture_walls(fixture: FixtureSpec) -> list[tuple[ShapeSpec, tuple[Vec3, Quat]]]:
+    """A fixture's four walls as boxes with their world poses."""
+    centres, halves = fixture.walls()
+    q = fixture.quaternion
+    rotation = quat.to_matrix(np.asarray(q, dtype=float))
+    origin = np.asarray(fixture.position, dtype=float)
+    walls = []
+    for centre, half in zip(centres, halves, strict=True):
+        x, y, z = (float(v) for v in origin + rotation @ centre)
+        walls.append((ShapeSpec.box(2.0 * half), ((x, y, z), q)))
+    return walls
+
+
+def _wall_depth(
+    obj: ObjectSpec,
+    position: Vec3,
+    quaternion: Quat,
+    walls: list[tuple[ShapeSpec, tuple[Vec3, Quat]]],
+) -> float:
+    """How deep ``obj`` at the pose given and a fixture's ``walls`` interpenetrate, m."""
+    return max(
+        penetration_depth(part, pose, wall, wall_pose)
+        for part, pose in _parts(obj.shape, position, quaternion)
+        for wall, wall_pose in walls
     )
 
 

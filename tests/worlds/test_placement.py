@@ -184,3 +184,43 @@ def test_a_ball_on_a_tray_rides_with_it_and_is_not_in_its_way() -> None:
     found = problems(tray, on_the_table)
     assert [field for field, _ in found] == [f"task[0].moves[{j}].goal.position" for j in range(3)]
     assert all("tray is clear of ball (where it stands then)" in m for _, m in found)
+
+
+SLOT = ROOT / "worlds" / "slot_insertion.yaml"
+
+
+def test_a_fixture_built_over_the_objects_start_is_refused() -> None:
+    # The slot moved next to the parcel's start (0.56, 0.18): its -x wall stands in the parcel.
+    def over_the_start(d: dict[str, Any]) -> None:
+        d["fixtures"][0]["position"] = [0.62, 0.16]
+        d["task"][0]["moves"][0]["goal"]["position"] = [0.62, 0.16, 0.675]
+
+    ((field, message),) = problems(SLOT, over_the_start)
+    assert field == "fixtures[0].position"
+    assert message.startswith(
+        "expected slot's walls clear of parcel at its start, got [0.62, 0.16]: a wall"
+    )
+
+
+def test_a_fixture_turned_into_the_objects_start_is_refused() -> None:
+    # Turned 30 degrees where it stands, the slot's corner reaches 4 mm into the parcel.
+    def turned(d: dict[str, Any]) -> None:
+        d["fixtures"][0]["yaw_deg"] = 30.0
+        d["task"][0]["moves"][0]["goal"]["rpy_deg"] = [0.0, 0.0, 30.0]
+
+    ((field, message),) = problems(SLOT, turned)
+    assert field == "fixtures[0].position"
+    assert "a wall 4.05 mm inside parcel at [0.56, 0.18, 0.675]" in message
+
+
+def test_a_goal_on_a_fixtures_wall_is_refused_unless_seated_in_it() -> None:
+    # A second move, carried back out of the slot onto its +y wall.
+    def onto_the_wall(d: dict[str, Any]) -> None:
+        d["task"][0]["moves"].append(
+            {"goal": {"position": [0.60, -0.04, 0.675], "rpy_deg": [0.0, 0.0, 0.0]}}
+        )
+
+    ((field, message),) = problems(SLOT, onto_the_wall)
+    assert field == "task[0].moves[1].goal.position"
+    assert message.startswith("expected a goal where parcel is clear of slot's walls, got")
+    assert problems(SLOT, lambda d: None) == []  # seated in it: inside its walls, clear
