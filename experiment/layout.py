@@ -40,6 +40,7 @@ from experiment.summary import composition_label as composition_label
 from experiment.summary import reason_of as reason_of
 from experiment.summary import summarise as summarise
 from experiment.tray_draws import place_riders, tray_height, tray_layout_problem
+from experiment.trial_regions import region_problems
 from skills.turns import move_holds
 from worlds.adapters import robot_capabilities
 from worlds.palm_poses import lateral_grasp_palm_poses
@@ -526,7 +527,8 @@ class TrialLayoutError(ValueError):
 def check_trial_layout(base: World, seed: int, label: str) -> None:
     """Raise :class:`TrialLayoutError` (naming ``label``, the world file) unless trials can be
     drawn from ``base``: a box object to grasp, and trial 0 of ``seed`` drawn as every trial
-    is (its obstacles placed clear of the box and of the robot holding it).
+    is (its obstacles placed clear of the box and of the robot holding it), and its regions
+    on the table and within the arms' reach (:func:`experiment.trial_regions.region_problems`).
 
     A layout that cannot place a sphere once (``clearance: 5``) cannot place it in any trial;
     drawing one costs a fraction of a second, and tells before a campaign starts.
@@ -561,6 +563,9 @@ def check_trial_layout(base: World, seed: int, label: str) -> None:
     problem = tray_layout_problem(base, riding(base))
     if problem is not None:
         raise TrialLayoutError(f"{label}: {problem}")
+    off = region_problems(base)
+    if off:
+        raise TrialLayoutError("\n".join(f"{label}: {line}" for line in off))
     try:
         draw_trial(base, seed, 0)
     except RuntimeError as err:

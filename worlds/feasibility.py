@@ -24,13 +24,15 @@ Problems name the world file's field (``task[0].moves[1].goal.position``, ``obje
 
 from __future__ import annotations
 
-from collections.abc import Collection, Mapping
+import math
+from collections.abc import Collection, Mapping, Sequence
 from dataclasses import replace
 
 import numpy as np
 
 from affordances.actions import GRASP_ORDER
 from affordances.config import ReasonerConfig
+from affordances.context import ObjectContext, RobotCapabilities
 from affordances.physics import GraspOption, HardAssessment, assess
 from skills import quaternion as quat
 from skills.vocabulary import Arm, GraspType
@@ -50,15 +52,14 @@ from worlds.world_file import World, as_world_spec
 REST_TOLERANCE_M = 0.01
 
 
-def _table_problem(obj: ObjectSpec, move: MoveSpec, table: TableSpec) -> tuple[str, str] | None:
-    """What the goal should be and what it is, if it is not where the object rests on the
-    table; else None."""
-    gx, gy, gz = move.goal_position
-    tx, ty, top = table.position
+def _off_table(position: Sequence[float], table: TableSpec) -> tuple[str, str] | None:
+    """What a centre should be and what it is, if ``position`` is not over the table top's
+    footprint; else None."""
+    tx, ty, _ = table.position
     half_x, half_y = table.size[0] / 2.0, table.size[1] / 2.0
     x_range, y_range = (tx - half_x, tx + half_x), (ty - half_y, ty + half_y)
     beyond = []
-    for axis, value, (low, high) in (("x", gx, x_range), ("y", gy, y_range)):
+    for axis, value, (low, high) in (("x", position[0], x_range), ("y", position[1], y_range)):
         if value < low:
             beyond.append(
                 f"{_fmt(low - value)} m beyond the table's edge at {axis} = {_fmt(low)} m"
@@ -71,8 +72,19 @@ def _table_problem(obj: ObjectSpec, move: MoveSpec, table: TableSpec) -> tuple[s
         return (
             f"a goal over the table top (x {_fmt(x_range[0])}..{_fmt(x_range[1])} m, "
             f"y {_fmt(y_range[0])}..{_fmt(y_range[1])} m)",
-            f"{_vec(move.goal_position)}: " + " and ".join(beyond),
+            f"{_vec(tuple(position))}: " + " and ".join(beyond),
         )
+    return None
+
+
+def _table_problem(obj: ObjectSpec, move: MoveSpec, table: TableSpec) -> tuple[str, str] | None:
+    """What the goal should be and what it is, if it is not where the object rests on the
+    table; else None."""
+    off = _off_table(move.goal_position, table)
+    if off is not None:
+        return off
+    top = table.position[2]
+    gz = move.goal_position[2]
     half = resting_half_height(obj, move.goal_quaternion)
     rest = top + half
     if abs(gz - rest) > REST_TOLERANCE_M:
@@ -243,16 +255,61 @@ def feasibility_problems(
                 continue
             if not graspable[obj.name]:
                 continue
-            at_goal = replace(
-                contexts[obj.name], position=move.goal_position, yaw=move.goal_yaw, goals=()
-            )
-            options = usable(assess(at_goal, robot, config).options)
-            misses = [_out_of_reach(o, reach) for o in options]
-            if options and all(m is not None for m in misses):
-                problems.append(
-                    WorldFileProblem(field, "a goal within the arms' reach", str(misses[0]))
-                )
+            miss = _reach_problem(contexts[obj.name], move, robot, reach, grasps)
+            if miss is not None:
+                problems.append(WorldFileProblem(field, *miss))
     return start_problems(spec, bad_goals) + problems
+
+
+def _reach_problem(
+    context: ObjectContext,
+    move: MoveSpec,
+    robot: RobotCapabilities,
+    reach: Mapping[Arm, ArmReach],
+    grasps: Collection[GraspType] | None,
+) -> tuple[str, str] | None:
+    """What the goal should be and what it is, if every grasp offered there (and made by the
+    tree: ``grasps``, any if None) puts a palm out of its arm's reach; else None."""
+    at_goal = replace(context, position=move.goal_position, yaw=move.goal_yaw, goals=())
+    options = [
+        o
+        for o in assess(at_goal, robot, ReasonerConfig()).options
+        if grasps is None or o.grasp in grasps
+    ]
+    misses = [_out_of_reach(o, reach) for o in options]
+    if options and all(m is not None for m in misses):
+        return "a goal within the arms' reach", str(misses[0])
+    return None
+
+
+def goal_problem(
+    spec: WorldSpec, name: str, xy: Sequence[float], yaw_deg: float
+) -> tuple[str, str] | None:
+    """What a goal of object ``name`` with its centre at ``xy`` (m, world frame), upright,
+    turned ``yaw_deg`` about z and resting on the table top, should be and what it is, if it
+    lies off the table top's footprint or every grasp there puts a palm out of its arm's reach
+    (the checks :func:`feasibility_problems` makes of each goal); else None."""
+    yaw = math.radians(yaw_deg)
+    qx, qy, qz, qw = (float(v) for v in quat.from_rpy(np.array([0.0, 0.0, yaw])))
+    quaternion = (qx, qy, qz, qw)
+    obj = next(o for o in spec.scene.objects if o.name == name)
+    z = spec.scene.table.position[2] + resting_half_height(obj, quaternion)
+    move = MoveSpec(
+        goal_position=(float(xy[0]), float(xy[1]), float(z)),
+        goal_quaternion=quaternion,
+        goal_yaw=yaw,
+    )
+    off = _off_table(move.goal_position, spec.scene.table)
+    if off is not None:
+        return off
+    context = next(c for c in object_contexts(spec) if c.name == name)
+    return _reach_problem(
+        context,
+        move,
+        robot_capabilities(spec),
+        arm_reach(robot_model_of(spec.scene.robot)),
+        None,
+    )
 
 
 def check_feasible(world: World | WorldSpec, file: str) -> None:
@@ -262,4 +319,10 @@ def check_feasible(world: World | WorldSpec, file: str) -> None:
         raise WorldFileError(file, problems)
 
 
-__all__ = ["REST_TOLERANCE_M", "check_feasible", "feasibility_problems", "resting_half_height"]
+__all__ = [
+    "REST_TOLERANCE_M",
+    "check_feasible",
+    "feasibility_problems",
+    "goal_problem",
+    "resting_half_height",
+]

@@ -33,6 +33,7 @@ from worlds.arm_prediction import (
 )
 from worlds.collision import CollisionWorld
 from worlds.scene import Scene
+from worlds.trays import riders
 from worlds.turn_choice import hold_poses
 
 #: Extra clearance asked of predicted arm-link poses (solved for the palms' path, not run
@@ -55,6 +56,9 @@ TURN_PLACE_MARGIN_M = 0.01
 #: Each such hold's arms solved to convergence (a lone pose, far from the measured joints):
 #: most steps and the pose error the solve stops at, m and rad.
 HOLD_SOLVE = (300, 1e-4)
+#: Where a grasp's way in ends, m outside the held faces: the shipped trees' ``Approach``
+#: stand-off (its ``standoff_m`` default), asked of such holds too.
+APPROACH_STANDOFF_M = 0.04
 #: The clearance a place other than the goal must leave, m: the object is set down there
 #: within a few millimetres of where it was sent, then carried on from where it lies.
 OTHER_PLACE_MARGIN_M = 0.02
@@ -118,10 +122,19 @@ class PathChecks:
         Its FCL mirror, kept in sync by the owner.
     extents : dict
         Each object's bounding-box extents (3,) in its own frame, m, by name.
+    carried : sequence of str
+        The objects the task moves (none of them rides loose on another).
     """
 
-    def __init__(self, scene: Scene, collision: CollisionWorld, extents: dict[str, Array]) -> None:
+    def __init__(
+        self,
+        scene: Scene,
+        collision: CollisionWorld,
+        extents: dict[str, Array],
+        carried: Sequence[str] = (),
+    ) -> None:
         self.scene = scene
+        self._carried = tuple(carried)
         self.collision = collision
         self._extents = extents
         self.palm_thickness = float(scene.spec.robot.palm_size[2])
@@ -150,7 +163,10 @@ class PathChecks:
         ``obstacles`` (with ``elsewhere``, :data:`OTHER_PLACE_MARGIN_M`, and its palms reached
         within :data:`HOLD_REACH_M`: the test of a place other than the goal);
         asked of the collision world and the kinematic copy alone: nothing moves in the
-        physics."""
+        physics. The arms' links are kept off the other objects standing on the table too
+        (not those riding on ``name``): a hold that puts a wrist on one is no place to turn."""
+        standing = self._standing(name)
+        margin = OTHER_PLACE_MARGIN_M if elsewhere else TURN_PLACE_MARGIN_M
         with self.collision.obstacles_present(obstacles):
             for hold in holds:
                 palms, palm_quats, object_quat = hold_poses(
@@ -159,7 +175,7 @@ class PathChecks:
                 check = self.check(
                     palms[None],
                     palm_quats[None],
-                    OTHER_PLACE_MARGIN_M if elsewhere else TURN_PLACE_MARGIN_M,
+                    margin,
                     (name, hold.position[None], object_quat[None]),
                     link_doubt=False,
                     solve=HOLD_SOLVE,
@@ -174,7 +190,32 @@ class PathChecks:
                         )
                     if max(self.predictor().last_palm_errors().values()) > HOLD_REACH_M:
                         return False
+                if standing and self._links_on(name, standing, hold, margin):
+                    return False
         return True
+
+    def _standing(self, name: str) -> tuple[str, ...]:
+        """The objects other than ``name`` and those riding loose on it (a tray's balls)."""
+        objects = self.scene.spec.objects
+        loose = {o.name for o in riders(objects, name, self._carried)}
+        return tuple(o.name for o in objects if o.name != name and o.name not in loose)
+
+    def _links_on(self, name: str, objects: tuple[str, ...], hold: Hold, margin: float) -> bool:
+        """Whether an arm link, solved to convergence, comes within ``margin`` m of one of
+        ``objects`` where it rests, with the palms holding ``name`` in ``hold`` or where a
+        grasp's way in to it ends (:data:`APPROACH_STANDOFF_M` outside the faces)."""
+        links = {arm: self.collision.arm_moving_links(arm) for arm in ARMS}
+        for gap in (0.0, APPROACH_STANDOFF_M):
+            palms, quats, _ = hold_poses(
+                hold, self._extents[name], self.palm_thickness, self._robot_yaw, gap
+            )
+            frames = self.predictor().link_frames(palms[None], quats[None], links, *HOLD_SOLVE)
+            for arm, f in frames.items():
+                if self.collision.check_link_frames(
+                    arm, f.links, f.positions, f.quaternions, 0.0, objects, margin, False, False
+                )[0]:
+                    return True
+        return False
 
     def hold_touches(self, name: str, obstacles: Sequence[str], hold: Hold) -> dict[str, str]:
         """What of the robot holding object ``name`` in ``hold`` touches each of ``obstacles``

@@ -9,6 +9,7 @@ starts nearer than asked (:func:`_start_allowance`, :func:`_object_allowance`).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -117,13 +118,16 @@ class PosedChecks(CollisionGeometry):
         avoided: Sequence[int] = (),
         avoid_margin: float = 0.0,
         obstacles: bool = True,
+        from_start: bool = True,
     ) -> None:
         """Mark in ``collides`` (N,) the waypoints where element ``row``, posed at ``rotations``
         (N, 3, 3) and ``positions`` (N, 3), comes within ``margins`` (N,) of an active
         obstacle (unless not ``obstacles``), or nearer than it starts
         (:func:`_start_allowance`), or within ``avoid_margin`` of an object in ``avoided``
-        (rows) that it does not touch at the start (:func:`_object_allowance`); bounding
-        spheres screen before FCL. Needs :meth:`_place` done."""
+        (rows) that it does not touch at the start (:func:`_object_allowance`); without
+        ``from_start``, the margins asked as they are, whatever the first pose touches (poses
+        that are not a way from it). Bounding spheres screen before FCL. Needs :meth:`_place`
+        done."""
         element = self._elements[row]
         active = self._active if obstacles else []
         against = [*active, *avoided]
@@ -140,7 +144,9 @@ class PosedChecks(CollisionGeometry):
             if collides[w]:
                 continue
             other = self._fcl(against[o])
-            if o not in allowed:
+            if not from_start:
+                allowed[o] = math.inf
+            elif o not in allowed:
                 start = _start_allowance(probe, rotations[0], positions[0], other)
                 allowed[o] = _object_allowance(start) if o >= len(active) else start
             asked = allowed[o]
@@ -158,6 +164,7 @@ class PosedChecks(CollisionGeometry):
         avoid: Sequence[str] = (),
         avoid_margin: float = 0.0,
         obstacles: bool = True,
+        from_start: bool = True,
     ) -> NDArray[np.bool_]:
         """Check ``arm``'s elements on ``links`` posed by predicted link frames.
 
@@ -176,6 +183,9 @@ class PosedChecks(CollisionGeometry):
             Objects to keep ``avoid_margin`` m clear of too, where they lie.
         obstacles : bool
             Check against the active obstacles (else against ``avoid`` alone).
+        from_start : bool
+            The frames are a way from the first: an element that starts nearer than a margin
+            is asked only not to come nearer. False: each frame asked the margins as they are.
 
         Returns
         -------
@@ -201,7 +211,9 @@ class PosedChecks(CollisionGeometry):
                 continue
             rot = r[:, k] @ local_r[i]
             pos = np.einsum("nij,j->ni", r[:, k], local_p[i]) + p[:, k]
-            self._check_posed(row, rot, pos, margins, collides, avoided, avoid_margin, obstacles)
+            self._check_posed(
+                row, rot, pos, margins, collides, avoided, avoid_margin, obstacles, from_start
+            )
         return collides
 
     def check_trajectory(

@@ -142,7 +142,7 @@ class SimWorld(Closing):
             o.name: np.asarray(o.shape.extents(), dtype=float) for o in self.scene.spec.objects
         }
         #: Predicted paths and holds checked against the obstacles (:mod:`worlds.path_checks`).
-        self.paths = PathChecks(self.scene, self.collision, self._extents)
+        self.paths = PathChecks(self.scene, self.collision, self._extents, task_objects)
         self._obstacle_info = {
             o.name: ObstacleInfo(o.name, np.asarray(o.position, float), o.shape.bounding_radius())
             for o in self.scene.spec.obstacles

@@ -52,14 +52,19 @@ _Z = np.array([0.0, 0.0, 1.0])
 
 
 def hold_poses(
-    hold: Hold, extents: np.ndarray, palm_thickness: float, robot_yaw: float = 0.0
+    hold: Hold,
+    extents: np.ndarray,
+    palm_thickness: float,
+    robot_yaw: float = 0.0,
+    gap: float = 0.0,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Palm positions (2, 3) and quaternions (2, 4), left then right, and the object's
-    quaternion (4,) of ``hold``: the palms on the held faces (:func:`lateral_grasp_palm_poses`),
-    the object upright at its yaw. ``extents`` (3,) is the box's size along its own axes, m."""
+    quaternion (4,) of ``hold``: the palms on the held faces, or ``gap`` m outside them (where
+    a grasp's way in ends; :func:`lateral_grasp_palm_poses`), the object upright at its yaw.
+    ``extents`` (3,) is the box's size along its own axes, m."""
     half_span = float(extents[1] if hold.quarter_turns % 2 == 0 else extents[0]) / 2.0
     palms = lateral_grasp_palm_poses(
-        hold.position, half_span, palm_thickness, grip_yaw=hold.grip_yaw + robot_yaw
+        hold.position, half_span, palm_thickness, gap, grip_yaw=hold.grip_yaw + robot_yaw
     )
     positions = np.array([palms[Arm.LEFT][0], palms[Arm.RIGHT][0]])
     quaternions = np.array([palms[Arm.LEFT][1], palms[Arm.RIGHT][1]])

@@ -12,11 +12,11 @@ import pytest
 from numpy.testing import assert_allclose
 
 from experiment.episode import run_episode
-from skills.turns import Hold
+from skills.turns import Hold, move_holds
 from worlds.sim_world import SimWorld
 from worlds.spec import WorldSpec
 from worlds.turn_choice import candidate_places, turn_places
-from worlds.world_file import as_world_spec, load_world
+from worlds.world_file import as_world_spec, load_world, world_from_data
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "worlds"
 TURNED = DATA / "turned_90_beside_a_sphere.yaml"
@@ -129,3 +129,36 @@ def test_a_quarter_turn_beside_a_sphere_is_placed_in_physics() -> None:
     assert report.success, report.failure
     assert max(report.placement_error_m) < 0.02
     assert not report.obstacle_contacts
+
+
+BESIDE_A_BOX = DATA / "turned_beside_a_standing_box.yaml"
+
+
+@pytest.mark.sim
+def test_a_hold_that_puts_a_wrist_on_a_standing_box_is_no_place_to_turn() -> None:
+    # The second grasp of the 63 degree turn, the box turned 45 degrees at the goal, puts the
+    # left palm on its far side and the wrist, reaching round, onto the small box.
+    world = load_world(BESIDE_A_BOX)
+    spec = as_world_spec(world)
+    start, goal = np.array(spec.scene.objects[0].position), np.array([0.623, 0.018, 0.70])
+    with SimWorld(world) as sim:
+        max_turn = sim.robot_capabilities().max_turn_rad
+        holds = move_holds(start, 0.0, goal, np.radians(63.0), max_turn)
+        assert len(holds) == 4  # two grasps: the middle two stand at the goal
+        assert not sim.paths.holds_clear("tall", (), holds[1:-1], False)
+        steps = sim.task_moves("tall")
+        assert [m.final for m in steps] == [False, True]
+        assert not np.allclose(steps[0].goal.position, goal)  # turned elsewhere
+    # without the small box the same holds are clear, and the turn is made at the goal
+    data = world.model_dump(mode="json")
+    data["objects"] = data["objects"][:1]
+    with SimWorld(world_from_data(data, world.source)) as sim:
+        assert sim.paths.holds_clear("tall", (), holds[1:-1], False)
+        assert_allclose(sim.task_moves("tall")[0].goal.position, goal)
+
+
+@pytest.mark.sim
+def test_the_turn_beside_a_standing_box_is_made_in_physics() -> None:
+    report = run_episode(load_world(BESIDE_A_BOX), None, out=None, animation=False)
+    assert report.success, report.failure
+    assert max(report.placement_error_m) < 0.02

@@ -1,0 +1,119 @@
+"""A world's trial regions checked before a campaign (experiment.trial_regions): on its table
+and within the arms' reach at every corner, or refused naming the region, the corner and why."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from experiment.layout import TrialLayoutError, check_trial_layout
+from experiment.trial_regions import region_problems
+from worlds.world_file import load_world, world_from_data
+
+ROOT = Path(__file__).resolve().parents[2]
+DEFAULT = ROOT / "worlds" / "parcel_pick_place.yaml"
+SHIPPED = sorted((ROOT / "worlds").glob("*.yaml")) + sorted(
+    (ROOT / "bench" / "worlds").glob("*.yaml")
+)
+
+
+def _default_with(**changes: Any) -> Any:
+    world = load_world(DEFAULT)
+    data = world.model_dump(mode="json", exclude_unset=False)
+    data.update(changes)
+    return world_from_data(data, world.source)
+
+
+def _turned_robot_without_trials() -> dict[str, Any]:
+    """The default world turned a quarter turn about (0, 0) to face +y and moved 1 m along
+    +x, its table and parcel with it, and no trials section."""
+    data = load_world(DEFAULT).model_dump(mode="json")
+    data.pop("trials")
+    data["robot"]["base"] = {"position": [1.0, 0.0, 0.0], "rpy_deg": [0.0, 0.0, 90.0]}
+    data["table"]["position"] = [1.0, 0.65, 0.6]
+    data["table"]["size"] = [1.0, 0.6, 0.6]
+    data["objects"][0]["pose"] = {"position": [1.0, 0.55, 0.675], "rpy_deg": [0.0, 0.0, 90.0]}
+    data["obstacles"] = []
+    data["task"] = [
+        {
+            "object": "parcel",
+            "moves": [
+                {"goal": {"position": [1.0, 0.65, 0.675], "rpy_deg": [0.0, 0.0, 90.0]}},
+            ],
+        }
+    ]
+    return data
+
+
+@pytest.mark.parametrize("path", SHIPPED, ids=lambda p: p.name)
+def test_every_shipped_world_has_its_regions_on_its_table_and_in_reach(path: Path) -> None:
+    assert region_problems(load_world(path)) == []
+
+
+def test_the_defaults_on_a_world_laid_out_elsewhere_are_refused_naming_each_region() -> None:
+    data = _turned_robot_without_trials()
+    world = world_from_data(data, DEFAULT)
+    problems = region_problems(world)
+    fields = [p.split(":")[0] for p in problems]
+    assert fields == ["trials.start", "trials.centre", "trials.right", "trials.left", "trials"]
+    # the table top spans x 0.5..1.5, y 0.35..0.95: the default start (x 0.50-0.60, y +-0.04)
+    # lies off its near edge
+    assert problems[0] == (
+        "trials.start: expected a region where parcel stands over the table and within the "
+        "arms' reach at every corner, got the corner [0.5, -0.04] at yaw 90 deg: "
+        "[0.5, -0.04, 0.675]: 0.39 m beyond the table's edge at y = 0.35 m"
+    )
+    assert "the defaults apply" in problems[-1]
+    with pytest.raises(TrialLayoutError) as err:
+        check_trial_layout(world, 0, "w.yaml")
+    assert str(err.value).splitlines()[0] == "w.yaml: " + problems[0]
+    # the same regions moved with the robot pass
+    data["trials"] = {
+        "start": {"x": [0.96, 1.04], "y": [0.50, 0.60]},
+        "centre": {"x": [0.97, 1.03], "y": [0.58, 0.68]},
+        "right": {"x": [1.12, 1.18], "y": [0.55, 0.65]},
+        "left": {"x": [0.82, 0.88], "y": [0.55, 0.65]},
+        "goal_yaw_deg": [0.0, 180.0],
+    }
+    assert region_problems(world_from_data(data, DEFAULT)) == []
+
+
+def test_a_region_out_of_reach_at_one_corner_is_refused_with_that_corner() -> None:
+    # the left goal region stretched 0.3 m further from the robot: its far corners stay on
+    # the table (x up to 0.95) but a palm there is beyond the iiwa's reach sphere
+    trials = load_world(DEFAULT).trials.model_dump(mode="json")
+    trials["left"] = {"x": [0.55, 0.94], "y": [0.12, 0.45]}
+    problems = region_problems(_default_with(trials=trials))
+    assert len(problems) == 1
+    assert problems[0].startswith("trials.left: expected a region where parcel stands over ")
+    assert "got the corner [0.94, 0.12] at yaw -90 deg" in problems[0]
+    assert "the arm reaches at most" in problems[0]
+
+
+def test_app_trials_refuses_such_a_world_with_exit_code_2(tmp_path: Path) -> None:
+    import yaml
+
+    path = tmp_path / "turned.yaml"
+    path.write_text(yaml.safe_dump(_turned_robot_without_trials()))
+    out = tmp_path / "out"
+    run = subprocess.run(
+        [sys.executable, str(ROOT / "app.py"), "trials", str(path), "--n", "2", "--out", str(out)],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        timeout=300,
+    )
+    assert run.returncode == 2, run.stderr
+    lines = [line for line in run.stderr.splitlines() if line.startswith(str(path))]
+    assert [line.split(": ")[1] for line in lines] == [
+        "trials.start",
+        "trials.centre",
+        "trials.right",
+        "trials.left",
+        "trials",
+    ]
+    assert not (out / "results.jsonl").exists()
