@@ -50,6 +50,10 @@ from worlds.world_file import (
 )
 
 
+class _NotDrawn(Exception):
+    """A trial whose layout could not be drawn: its message is the record's failure."""
+
+
 def run_trial(job: tuple[dict[str, Any], int, int]) -> dict[str, Any]:
     """Run one trial in this process; returns its JSON-ready record (never raises)."""
     from experiment.episode import run_episode
@@ -68,7 +72,14 @@ def run_trial(job: tuple[dict[str, Any], int, int]) -> dict[str, Any]:
         # The user's leaves the tree may use, registered in this process too (a spawned
         # worker starts without them; a forked one finds them registered already).
         register_leaves(base_data.get("leaves", ()))
-        world, kinds = draw_trial(base, seed, trial, _worker_clearance(base))
+        try:
+            world, kinds = draw_trial(base, seed, trial, _worker_clearance(base))
+        except RuntimeError as err:
+            # Not the robot's failure: the world's trials section left no room for this draw.
+            raise _NotDrawn(
+                f"layout not drawn: {err} (widen the trials regions or lower "
+                "trials.clearance or trials.robot_clearance)"
+            ) from None
         if base_data.get("hard"):
             hard = draw_hard(world, seed, trial)
             world = with_pushes(world, hard.pushes)
@@ -93,7 +104,7 @@ def run_trial(job: tuple[dict[str, Any], int, int]) -> dict[str, Any]:
     except Exception as err:  # a trial that crashes is a failed trial with its reason
         record = {"success": False, "sim_time_s": 0.0, "wall_time_s": 0.0}
         kinds, where = [], {}
-        failure = f"error: {type(err).__name__}: {err}"
+        failure = str(err) if isinstance(err, _NotDrawn) else f"error: {type(err).__name__}: {err}"
     record.update(
         {
             "trial": trial,

@@ -284,3 +284,25 @@ def test_a_tree_given_as_written_that_lacks_a_trials_moves_fails_it_at_once() ->
     assert record["failure"].startswith("tree does not fit this trial's task: ")
     assert "would be left undone" in record["failure"]
     assert "the world's tree field" in record["failure"]
+
+
+def test_a_trial_whose_layout_cannot_be_drawn_is_recorded_as_not_drawn() -> None:
+    from experiment.trials import campaign_of, run_trial
+
+    base = load_world(WORLDS / "parcel_pick_place.yaml")
+    data = base.model_dump(mode="json")
+    data["trials"]["clearance"] = 5.0  # no sphere is 5 m from the parcel and on its way
+    tight = world_from_data(data, base.source)
+    payload = {
+        "world": data,
+        "source": str(base.source),
+        "tree": None,
+        "key": campaign_of(tight, 0, None),
+    }
+    record = run_trial((payload, 0, 4))
+    assert not record["success"] and record["sim_time_s"] == 0.0
+    assert record["failure"] == (
+        "layout not drawn: ball_2: could not place a sphere clear of the start and goal (widen "
+        "the trials regions or lower trials.clearance or trials.robot_clearance)"
+    )
+    assert reason_of(record["failure"]) == "layout not drawn"
