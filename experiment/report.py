@@ -139,6 +139,8 @@ def report_figure(campaigns: list[Campaign], path: Path) -> None:
         why.xaxis.set_major_locator(MaxNLocator(integer=True))  # trials are counted whole
     else:
         why.text(0.5, 0.5, "no failures", ha="center", transform=why.transAxes)
+        why.set_xticks([])
+        why.set_yticks([])
     why.set(title="failure reasons", xlabel="trials")
     dist = [
         (1000.0 * float(r["min_obstacle_distance_m"]), bool(r.get("success")))
@@ -160,6 +162,7 @@ def report_figure(campaigns: list[Campaign], path: Path) -> None:
             label=[label for _, _, label in shown],
         )
         near.axvline(0.0, color="k", lw=0.8)
+        near.yaxis.set_major_locator(MaxNLocator(integer=True))  # trials are counted whole
         near.legend(fontsize=7)
     else:
         near.text(0.5, 0.5, "no distances recorded", ha="center", transform=near.transAxes)
