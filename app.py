@@ -17,16 +17,21 @@ from typing import Any
 
 # isort: off
 from duet_robot.blas import pin_blas_kernel
-from duet_robot.text import printable
 
 pin_blas_kernel()  # before numpy loads OpenBLAS: one BLAS kernel on every x86-64 host
 import numpy as np  # noqa: E402
 
 # isort: on
 
-EXIT_OK = 0
-EXIT_FAILURE = 1
-EXIT_BAD_INPUT = 2
+from experiment.campaign_commands import report_command, run_command, trials_command  # noqa: E402
+from experiment.cli_inputs import (  # noqa: E402
+    EXIT_BAD_INPUT,
+    EXIT_FAILURE,
+    EXIT_OK,
+    load_world_or_exit,
+    out_folder_or_exit,
+    register_leaves_or_none,
+)
 
 
 def _demo_command(args: argparse.Namespace) -> int:
@@ -61,7 +66,7 @@ def _demo_command(args: argparse.Namespace) -> int:
     for y0, g in goals:
         target = model.target(y0, quat.IDENTITY, g, quat.from_axis_angle([0, 0, 1], 0.3))
         rollouts.append(pose_rollout(model, target, PoseState.at_rest(y0), dt, int(3 * 2.0 / dt)))
-    out = _out_folder_or_exit(Path(args.out))
+    out = out_folder_or_exit(Path(args.out))
     fig, (top, side) = plt.subplots(1, 2, figsize=(11, 4.5))
     top.plot(positions[:, 1], positions[:, 0], color="green", lw=2.5, label="demonstration")
     side.plot(positions[:, 1], positions[:, 2], color="green", lw=2.5)
@@ -99,39 +104,11 @@ def _demo_command(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def _out_folder_or_exit(out: Path) -> Path:
-    """``--out`` as a folder this process can write into; exit 2 naming it otherwise."""
-    if out.exists() and not out.is_dir():
-        print(f"--out {out}: expected a folder, got a file", file=sys.stderr)
-        raise SystemExit(EXIT_BAD_INPUT)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as err:
-        print(f"--out {out}: cannot make the folder: {err.strerror or err}", file=sys.stderr)
-        raise SystemExit(EXIT_BAD_INPUT) from None
-    if not os.access(out, os.W_OK | os.X_OK):
-        print(f"--out {out}: expected a folder this user can write into", file=sys.stderr)
-        raise SystemExit(EXIT_BAD_INPUT)
-    return out
-
-
-def _register_leaves(args: argparse.Namespace) -> list[type] | None:
-    """Register the shipped leaves, ``--leaves`` and the installed ``duet.leaves`` entry points;
-    the user's leaf classes, or None (the problem on stderr) if one cannot be registered."""
-    from planner.user_leaves import LeafSourceError, register_leaves
-
-    try:
-        return list(register_leaves(getattr(args, "leaves", None) or ()))
-    except LeafSourceError as err:
-        print(err, file=sys.stderr)
-        return None
-
-
 def _validate_command(args: argparse.Namespace) -> int:
     """Check world files (YAML or JSON) and what they ask of the robot, optionally with the
     tree to run them (``--tree``), and behaviour trees (XML), one line each when fine; exit 2
     if any has a problem. ``--nodes`` adds stub nodes from TreeNodesModel files."""
-    if _register_leaves(args) is None:
+    if register_leaves_or_none(args) is None:
         return EXIT_BAD_INPUT
     trees = [f for f in args.files if f.lower().endswith(".xml")]
     if args.tree and trees:
@@ -176,21 +153,9 @@ def _validate_command(args: argparse.Namespace) -> int:
     return EXIT_BAD_INPUT if EXIT_BAD_INPUT in codes else max(codes)
 
 
-def _preflight_or_exit(
-    world: Any, world_file: str, tree: str | None, main_tree: str | None = None
-) -> None:
-    """Fail before simulating (exit 2) when the task cannot work: ``validate``'s checks."""
-    from experiment.preflight import preflight_problems
-
-    problems = preflight_problems(world, world_file, Path(tree) if tree else None, main_tree)
-    if problems:
-        print("\n".join(problems), file=sys.stderr)
-        raise SystemExit(EXIT_BAD_INPUT)
-
-
 def _nodes_command(args: argparse.Namespace) -> int:
     """Print (or write) a Groot2 TreeNodesModel of the registered leaves, the user's too."""
-    user = _register_leaves(args)
+    user = register_leaves_or_none(args)
     if user is None:
         return EXIT_BAD_INPUT
     from planner.nodes_model import nodes_model_xml
@@ -226,7 +191,7 @@ def _nodes_command(args: argparse.Namespace) -> int:
 
 def _render_tree_command(args: argparse.Namespace) -> int:
     """Render a tree file as ascii, dot or svg."""
-    if _register_leaves(args) is None:
+    if register_leaves_or_none(args) is None:
         return EXIT_BAD_INPUT
     from planner.render import render_cli
 
@@ -240,24 +205,13 @@ def _schema_command(args: argparse.Namespace) -> int:
     return world_cli_schema()
 
 
-def _load_world_or_exit(path: str) -> Any:
-    """Load a world file; on a bad file print the error and raise SystemExit(2)."""
-    from worlds.world_file import WorldFileError, load_world
-
-    try:
-        return load_world(path)
-    except WorldFileError as err:
-        print(err, file=sys.stderr)
-        raise SystemExit(EXIT_BAD_INPUT) from None
-
-
 def _affordances_command(args: argparse.Namespace) -> int:
     """Print the affordance reasoning for each object of a world."""
     from affordances import AffordanceReasoner, render_json, render_text
     from affordances.rule_file import RuleFileError, rule_set
     from worlds.adapters import object_contexts, robot_capabilities
 
-    world = _load_world_or_exit(args.world)
+    world = load_world_or_exit(args.world)
     try:
         rules = rule_set([Path(p) for p in args.rules], include_default=not args.no_default_rules)
     except (RuleFileError, OSError) as err:
@@ -367,222 +321,6 @@ _TEACH_OPTIONS = {
     "threshold": "--threshold",
     "force": "--force",
 }
-
-
-def _run_command(args: argparse.Namespace) -> int:
-    """Run a world's task in PyBullet, show progress, judge it and write what it shows."""
-    from experiment.episode import run_episode
-    from planner.groot_publisher import GrootUnavailableError
-    from planner.loader import TreeFileError
-    from skills.library import LibraryFileError
-    from worlds.scene import NoDisplayError
-
-    world = _load_world_or_exit(args.world)
-    if _register_leaves(args) is None:
-        return EXIT_BAD_INPUT
-    if args.groot is not None:
-        from planner.groot_publisher import groot_problem
-
-        problem = groot_problem(args.groot)
-        if problem:
-            print(problem, file=sys.stderr)
-            return EXIT_BAD_INPUT
-    _preflight_or_exit(world, args.world, args.tree, args.main_tree)
-    if args.seed is not None:
-        world = world.model_copy(update={"sim": world.sim.model_copy(update={"seed": args.seed})})
-    out = _out_folder_or_exit(Path(args.out))
-
-    def progress(t: float, leaf: str, feedback: str) -> None:
-        name = printable(leaf.split(".")[-1])
-        print(f"[{t:7.2f} s] {name:<18} {printable(feedback)}", file=sys.stderr, flush=True)
-
-    try:
-        report = run_episode(
-            world,
-            Path(args.tree) if args.tree else None,
-            out=out,
-            animation=not args.no_animation,
-            progress=progress,
-            gui=args.gui,
-            main_tree=args.main_tree,
-            groot_port=args.groot,
-        )
-    except (TreeFileError, LibraryFileError, NoDisplayError, GrootUnavailableError) as err:
-        print(err, file=sys.stderr)
-        return EXIT_BAD_INPUT
-    except OSError as err:  # an output the run cannot write (a folder named like it)
-        print(f"--out {out}: {err}", file=sys.stderr)
-        return EXIT_BAD_INPUT
-    for line in report.lines(world.name):
-        print(line)
-    if report.replaced_outputs:
-        print(f"replaced the earlier run's {', '.join(report.replaced_outputs)} in {out}")
-    for problem in report.output_errors:
-        print(f"not written: {problem}", file=sys.stderr)
-    if args.json:
-        print(json.dumps(report.summary()))
-    if report.output_errors:
-        # The verdict is out; an output the run could not write (a full disk, a read-only
-        # file) is still an input/output error the caller must see.
-        return EXIT_BAD_INPUT
-    return EXIT_OK if report.success else EXIT_FAILURE
-
-
-def _trials_command(args: argparse.Namespace) -> int:
-    """The paper's experiment: N trials of three moves with new obstacles, judged, resumable."""
-    from experiment.progress import Progress
-    from experiment.results import ResultsFileError
-    from experiment.summary import campaign_lines
-    from experiment.trials import campaign_of, campaign_results, reason_of, run_campaign, summarise
-
-    world = _load_world_or_exit(args.world)
-    if not (1 <= args.n <= 1_000_000 and 1 <= args.workers <= 1024):
-        print(
-            f"--n, --workers: expected whole numbers 1..1000000 and 1..1024, got {args.n} and "
-            f"{args.workers}",
-            file=sys.stderr,
-        )
-        return EXIT_BAD_INPUT
-    if args.address and args.backend != "ray":
-        print("--address: expected only with --backend ray", file=sys.stderr)
-        return EXIT_BAD_INPUT
-    if _register_leaves(args) is None:
-        return EXIT_BAD_INPUT
-    # one message now, not one per trial
-    _preflight_or_exit(world, args.world, args.tree, args.main_tree)
-    from experiment.layout import TrialLayoutError, check_trial_layout
-
-    try:
-        check_trial_layout(world, args.seed, args.world)
-    except TrialLayoutError as err:
-        print(err, file=sys.stderr)
-        return EXIT_BAD_INPUT
-    tree = Path(args.tree) if args.tree else None
-    if tree is not None:
-        from planner.loader import TreeFileError, load_tree
-        from planner.tree_dataflow import RUN_WRITES
-
-        try:
-            load_tree(tree, main_tree_id=args.main_tree, run_keys=RUN_WRITES)
-        except TreeFileError as err:
-            print(err, file=sys.stderr)
-            return EXIT_BAD_INPUT
-    out = _out_folder_or_exit(Path(args.out))
-    try:
-        key = campaign_of(world, args.seed, tree, args.leaves, args.main_tree, args.hard)
-        earlier = campaign_results(out / "results.jsonl", key).values()
-    except ResultsFileError as err:
-        print(err, file=sys.stderr)
-        return EXIT_BAD_INPUT
-    tally = {"ok": sum(1 for r in earlier if r.get("success"))}
-
-    bar = Progress(sys.stderr)
-
-    def progress(rec: dict[str, Any], finished: int, total: int) -> None:
-        tally["ok"] += int(bool(rec.get("success")))
-        what = "ok" if rec.get("success") else reason_of(rec.get("failure", ""))
-        bar.update(
-            finished,
-            total,
-            f"successes {tally['ok']}  (trial {rec['trial']}: {printable(what)})",
-        )
-
-    def notice(text: str) -> None:
-        print(text, file=sys.stderr)
-
-    try:
-        records = run_campaign(
-            world,
-            args.n,
-            args.seed,
-            out,
-            args.workers,
-            progress,
-            tree,
-            on_notice=notice,
-            leaves=args.leaves,
-            backend=args.backend,
-            address=args.address,
-            main_tree=args.main_tree,
-            hard=args.hard,
-        )
-    except ImportError as err:  # --backend ray without Ray installed
-        bar.close()
-        print(f"--backend ray: {err}; install it with pip install -e '.[cluster]'", file=sys.stderr)
-        return EXIT_BAD_INPUT
-    except RuntimeError as err:  # Ray gave up on a trial
-        bar.close()
-        print(printable(err), file=sys.stderr)
-        return EXIT_BAD_INPUT
-    except ResultsFileError as err:  # a folder that is not one, or another campaign in it
-        bar.close()
-        print(err, file=sys.stderr)
-        return EXIT_BAD_INPUT
-    except KeyboardInterrupt:
-        bar.close()
-        print(
-            f"interrupted: finished trials are in {out / 'results.jsonl'}; "
-            "run the same command again to resume",
-            file=sys.stderr,
-        )
-        return 130
-    bar.close()
-    summary = summarise(records)
-    # Only the paper's experiment (its three goal regions, Easy) compares with its 16 of 20:
-    # Hard trials and a world's own moves (the task suite) are other experiments.
-    mode = "Hard trials" if args.hard else "trials"
-    paper = " (the paper: 16 of 20)" if not (args.hard or world.trials.moves) else ""
-    print(
-        f"{summary['successes']} of {summary['trials']} {mode} succeeded{paper}; "
-        f"results in {out / 'results.jsonl'}"
-    )
-    for line in campaign_lines(summary):
-        print(line)
-    if args.json:
-        print(json.dumps(summary))
-    return EXIT_OK if summary["successes"] == summary["trials"] else EXIT_FAILURE
-
-
-def _report_command(args: argparse.Namespace) -> int:
-    """A campaign's outcome table with Wilson 95 % intervals, and its picture."""
-    from experiment.report import read_campaigns, report_figure, report_summaries
-    from experiment.results import ResultsFileError
-    from experiment.summary import contact_lines, split_line, summary_lines
-
-    out = Path(args.out)
-    try:
-        found = read_campaigns(out)
-    except ResultsFileError as err:
-        print(err, file=sys.stderr)
-        return EXIT_BAD_INPUT
-    if found.skipped:
-        print(
-            f"warning: {found.path}: skipped {found.skipped} line(s) that are not trial records",
-            file=sys.stderr,
-        )
-    summaries = report_summaries(found.campaigns)
-    for summary in summaries:
-        print(f"{printable(summary['campaign'])}: {summary['trials']} trials")
-        for line in summary_lines(summary):
-            print(line)
-        for line in contact_lines(summary):
-            print(line)
-        split = split_line(summary)
-        if split is not None:
-            print(split)
-    figure = out / "report.png" if out.is_dir() else out.with_name(f"{out.stem}_report.png")
-    try:
-        report_figure(found.campaigns, figure)
-        print(f"  picture: {figure}")
-    except OSError as err:
-        print(f"not written: {figure}: {err.strerror or err}", file=sys.stderr)
-    if args.json:
-        print(
-            json.dumps(
-                {"results": str(found.path), "skipped_lines": found.skipped, "campaigns": summaries}
-            )
-        )
-    return EXIT_OK
 
 
 def _actions() -> list[Any]:
@@ -697,7 +435,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     _add_main_tree_option(run)
     _add_leaves_option(run)
-    run.set_defaults(handler=_run_command)
+    run.set_defaults(handler=run_command)
     trials = sub.add_parser("trials", help="the paper's experiment: many randomised trials")
     trials.add_argument("world", help="world file (robot, table, object, settings)")
     trials.add_argument("--n", type=int, default=20, help="number of trials (default: 20)")
@@ -734,13 +472,13 @@ def build_parser() -> argparse.ArgumentParser:
     trials.add_argument("--json", action="store_true", help="print a JSON summary as the last line")
     _add_main_tree_option(trials)
     _add_leaves_option(trials)
-    trials.set_defaults(handler=_trials_command)
+    trials.set_defaults(handler=trials_command)
     report = sub.add_parser(
         "report", help="a campaign's outcomes with Wilson 95 %% intervals, and report.png"
     )
     report.add_argument("out", help="campaign folder (of results.jsonl) or a results .jsonl file")
     report.add_argument("--json", action="store_true", help="print a JSON summary as the last line")
-    report.set_defaults(handler=_report_command)
+    report.set_defaults(handler=report_command)
     skills = sub.add_parser("skills", help="list a skill library")
     skills.add_argument("--library", help="library folder (default: learnt from skills/demos)")
     skills.add_argument("--json", action="store_true", help="print JSON")
@@ -796,6 +534,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         sys.stdout = open(os.devnull, "w")
         return EXIT_OK
 
+
+__all__ = ["EXIT_BAD_INPUT", "EXIT_FAILURE", "EXIT_OK", "build_parser", "main"]
 
 if __name__ == "__main__":
     raise SystemExit(main())

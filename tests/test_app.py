@@ -8,6 +8,7 @@ from pathlib import Path
 import pytest
 
 import app
+from duet_robot.text import printable
 
 ROOT = Path(__file__).resolve().parents[1]
 DEFAULT = str(ROOT / "worlds" / "parcel_pick_place.yaml")
@@ -83,8 +84,8 @@ def test_names_from_a_file_cannot_print_lines_of_their_own(
     text = Path(DEFAULT).read_text(encoding="utf-8")
     spoofed = 'name: "x: SUCCESS\\n\\u001b[2Kparcel_pick_place"'
     world.write_text(text.replace("name: parcel_pick_place", spoofed, 1), encoding="utf-8")
-    assert app.printable("a\nb\x1b[2K") == "a\\nb\\x1b[2K"
-    assert app.printable("café") == "café"
+    assert printable("a\nb\x1b[2K") == "a\\nb\\x1b[2K"
+    assert printable("café") == "café"
     code = exit_code(["validate", str(world)])
     out = capsys.readouterr()
     assert code in (0, 2)  # the world may be refused for its name; it must not spoof lines
