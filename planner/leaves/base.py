@@ -10,6 +10,7 @@ from typing import Any, ClassVar
 import py_trees
 from py_trees.common import Status
 from py_trees.ports import BehaviourWithPorts, NoDataAvailable, PortInformation
+from py_trees.ports_utils import NOOP_LOGGER, LogLevel
 
 from affordances import SemanticAction
 from planner.composition import MovePlan, compose_move, squeeze_force
@@ -124,6 +125,24 @@ class WorldLeaf(BehaviourWithPorts):
         self._world: WorldPort | None = None
         self._library: SkillLibrary | None = None
         self.control_dt = DEFAULT_CONTROL_DT
+
+    def log(
+        self, level: LogLevel, msg: str, return_only: bool = False, print_name: bool = True
+    ) -> str:
+        """py_trees' port log, its DEBUG lines skipped where nothing would show them (the
+        XML parser's no-op logger, or py_trees' own above DEBUG).
+
+        ``setup_ports`` logs every key it registers at DEBUG, each line formatted (the node's
+        name stripped of its uuid by a regular expression) before the logger drops it: a
+        fifth of building a seven-move tree. A DEBUG line sets no feedback message, so
+        nothing but the dropped text is skipped."""
+        quiet = self._ports_logger is NOOP_LOGGER or (
+            isinstance(self._ports_logger, py_trees.logging.Logger)
+            and py_trees.logging.level != py_trees.logging.Level.DEBUG
+        )
+        if level is LogLevel.DEBUG and not return_only and quiet:
+            return ""
+        return super().log(level, msg, return_only, print_name)
 
     def setup(self, **kwargs: Any) -> None:
         """Receive the world port (``world``), the skill library (``library``) and

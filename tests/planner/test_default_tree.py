@@ -145,3 +145,26 @@ def test_a_task_move_made_in_steps_names_each_step_after_it() -> None:
     ]
     with pytest.raises(ValueError, match="one task move per move"):
         TaskStep("parcel", 2, task_moves=(0,))
+
+
+def test_a_leaf_skips_only_the_port_debug_lines_nothing_shows() -> None:
+    from py_trees.ports_utils import LogLevel
+
+    from planner.leaves.base import WorldLeaf
+
+    leaf = transports(default_tree())[0]
+    assert isinstance(leaf, WorldLeaf)
+    leaf.feedback_message = "before"
+    # built by the XML parser, its ports log to a logger that drops every line
+    assert leaf.log(LogLevel.DEBUG, "registered a key") == ""
+    assert leaf.log(LogLevel.DEBUG, "x", return_only=True).endswith(": x")
+    assert leaf.feedback_message == "before"
+    assert leaf.log(LogLevel.INFO, "shown").endswith(": shown")  # INFO sets the feedback
+    assert leaf.feedback_message.endswith(": shown")
+    previous = py_trees.logging.level
+    py_trees.logging.level = py_trees.logging.Level.DEBUG
+    try:
+        leaf._ports_logger = leaf.logger  # py_trees' own logger, at DEBUG: shown
+        assert leaf.log(LogLevel.DEBUG, "registered a key").endswith(": registered a key")
+    finally:
+        py_trees.logging.level = previous
