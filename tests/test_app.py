@@ -123,3 +123,25 @@ def test_a_run_whose_figure_cannot_be_written_prints_its_verdict_then_exits_2(
     summary = json.loads(out.splitlines()[-1])  # the verdict and the summary came first
     assert summary["success"] is True
     assert (tmp_path / "run.jsonl").is_file()
+
+
+def test_a_command_that_loads_pybullet_keeps_its_build_line_off_stderr() -> None:
+    import subprocess
+    import sys
+
+    done = subprocess.run(
+        [sys.executable, str(ROOT / "app.py"), "validate", DEFAULT],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        timeout=120,
+    )
+    assert done.returncode == 0, done.stderr
+    assert done.stderr == ""  # PyBullet's "pybullet build time: ..." is not the user's news
+    # and the simulator it loaded is PyBullet as ever
+    probe = (
+        "import worlds, pybullet as pb; c = pb.connect(pb.DIRECT); "
+        "print(pb.getNumBodies(physicsClientId=c))"
+    )
+    shown = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, cwd=ROOT)
+    assert shown.stdout.strip() == "0" and shown.stderr == "", shown.stderr
