@@ -2,19 +2,20 @@
 campaign.
 
 ``app.py trials`` draws each trial's start and goals from the world's ``trials`` regions
-(:mod:`worlds.trial_schema`), in the world frame. A world that gives none gets the defaults,
-which suit the default two-iiwa world (robot at the origin facing +x, table top at x
-0.35..0.95 m): on a world of its own layout they may lie off its table, and every trial would
-fail at its first approach. :func:`region_problems` runs the world's own checks
-(:func:`worlds.feasibility.feasibility_problems`: a goal over the table top and a grasp within
-the arms' reach) on the object placed at each corner of each region, at the ends and middle
-of its yaw range, so that a region fails here if any part of it could fail a trial.
+(:mod:`worlds.trial_schema`), in the world frame. A world that gives none gets the defaults
+placed where its robot stands (:func:`worlds.trial_schema.trials_in_robot_frame`), which suit
+a table laid out as the default world's (its top 0.35 to 0.95 m in front of the robot): on
+another table they may lie off it, and every trial would fail at its first approach.
+:func:`region_problems` runs the world's own checks (:func:`worlds.feasibility.goal_problem`:
+a goal over the table top and a grasp within the arms' reach) on the object placed at each
+corner of each region, at the ends and middle of its yaw range, so that a region fails here
+if any part of it could fail a trial.
 """
 
 from __future__ import annotations
 
 from worlds.feasibility import goal_problem
-from worlds.trial_schema import Region
+from worlds.trial_schema import Region, TrialSettings, trials_in_robot_frame
 from worlds.world_file import World, as_world_spec
 
 #: The paper's three goal regions, in the order of their moves.
@@ -68,13 +69,24 @@ def region_problems(world: World) -> list[str]:
                 f"arms' reach at every corner, got the corner [{x:g}, {y:g}] at yaw {yaw:g} "
                 f"deg: {received}"
             )
-    if problems and "trials" not in world.model_fields_set:
+    if problems and layout == _defaults_of(world):
         problems.append(
-            "trials: this world gives no trials section, so the defaults apply, which suit the "
-            "default two-iiwa world (robot at the origin facing +x, table top x 0.35..0.95 m); "
-            "give regions on this world's table (app.py schema shows the section)"
+            "trials: this world gives no trials section, so the defaults apply, placed where "
+            "its robot stands and turned with it (they suit the default world's table, 0.35 to "
+            "0.95 m in front of the robot); give regions on this world's table (app.py schema "
+            "shows the section)"
         )
     return problems
+
+
+def _defaults_of(world: World) -> TrialSettings:
+    """The trials section a world of this robot gets when it gives none
+    (:func:`worlds.trial_schema.trials_in_robot_frame`)."""
+    base = world.robot.base
+    x, y, _ = base.position
+    if (x, y) == (0.0, 0.0) and base.rpy_deg[2] % 360.0 == 0.0:
+        return TrialSettings()
+    return TrialSettings.model_validate(trials_in_robot_frame(base.position, base.rpy_deg[2]))
 
 
 __all__ = ["region_problems"]

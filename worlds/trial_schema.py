@@ -7,6 +7,8 @@ and the balls riding on a tray (:class:`RiderTrials`), gathered in :class:`Trial
 
 from __future__ import annotations
 
+import math
+from collections.abc import Sequence
 from typing import Annotated, Any
 
 from pydantic import (
@@ -388,6 +390,32 @@ class TrialSettings(FileModel):
 _PAPER_REGIONS = ("centre", "right", "left")
 
 
+def trials_in_robot_frame(position: Sequence[float], yaw_deg: float) -> dict[str, Any]:
+    """The default ``trials`` section (:class:`TrialSettings`'s, made for a robot at the
+    origin facing +x) for a robot standing at ``position`` (m, world frame) turned ``yaw_deg``
+    about z, as world-file data: each region turned and moved with the robot (the rectangle
+    that holds its corners: the same size for a quarter turn, larger between), the goals'
+    yaw turned with it. A world that gives no ``trials`` section gets these."""
+    defaults = TrialSettings()
+    c, s = math.cos(math.radians(yaw_deg)), math.sin(math.radians(yaw_deg))
+
+    def placed(region: Region) -> dict[str, list[float]]:
+        corners = [
+            (x * c - y * s + position[0], x * s + y * c + position[1])
+            for x in region.x
+            for y in region.y
+        ]
+        xs, ys = [round(p[0], 9) for p in corners], [round(p[1], 9) for p in corners]
+        return {"x": [min(xs), max(xs)], "y": [min(ys), max(ys)]}
+
+    low, high = defaults.goal_yaw_deg
+    turn = (yaw_deg + 180.0) % 360.0 - 180.0  # within a turn, as the file's yaws must be
+    return {
+        **{name: placed(getattr(defaults, name)) for name in ("start", *_PAPER_REGIONS)},
+        "goal_yaw_deg": [low + turn, high + turn],
+    }
+
+
 __all__ = [
     "FIXTURE_OFFSET_M",
     "OBSTACLE_KINDS",
@@ -396,4 +424,5 @@ __all__ = [
     "Region",
     "RiderTrials",
     "TrialSettings",
+    "trials_in_robot_frame",
 ]

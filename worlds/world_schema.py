@@ -48,7 +48,7 @@ from worlds.schema_types import (
     Vector3,
 )
 from worlds.spec import Fragility, ObjectState, RobotModelName, Shape
-from worlds.trial_schema import TrialSettings
+from worlds.trial_schema import TrialSettings, trials_in_robot_frame
 from worlds.world_errors import FieldProblems, Issue, Shown, field_problem, format_path, show_value
 
 WORLD_FILE_VERSION = 1
@@ -423,7 +423,11 @@ class World(FileModel):
     task: tuple[TaskStep, ...] = Field(min_length=1, description="at least 1 step")
     sim: SimSettings = Field(default_factory=SimSettings)
     skills: SkillSettings = Field(default_factory=SkillSettings)
-    trials: TrialSettings = Field(default_factory=TrialSettings)
+    trials: TrialSettings = Field(
+        default_factory=TrialSettings,
+        description="where app.py trials draws each trial; default: the default world's "
+        "regions placed where the robot stands and turned with it",
+    )
     disturbances: tuple[DisturbanceEntry, ...] = Field(
         default=(), description="scripted pushes on objects during a run; may be empty"
     )
@@ -438,6 +442,27 @@ class World(FileModel):
     fixtures: tuple[Fixture, ...] = Field(
         default=(), description="open fixtures on the table an object is inserted into"
     )
+
+    @model_validator(mode="before")
+    @classmethod
+    def _trials_with_the_robot(cls, data: Any) -> Any:
+        # Without a trials section, the defaults (made for a robot at the origin facing +x)
+        # stand where this robot stands, turned with it (trials_in_robot_frame): a world laid
+        # out elsewhere draws its trials in front of its robot. A base that does not read as
+        # numbers is left to the field checks.
+        if not isinstance(data, Mapping) or "trials" in data:
+            return data
+        try:
+            base = data["robot"]["base"]
+            position = [float(v) for v in base["position"]]
+            yaw = float(base.get("rpy_deg", (0.0, 0.0, 0.0))[2])
+        except (KeyError, TypeError, ValueError, IndexError):
+            return data
+        if len(position) != 3 or not all(math.isfinite(v) for v in (*position, yaw)):
+            return data
+        if position[:2] == [0.0, 0.0] and yaw % 360.0 == 0.0:
+            return data  # the defaults' own robot: the defaults as they are
+        return {**data, "trials": trials_in_robot_frame(position, yaw)}
 
     @field_validator("tree")
     @classmethod

@@ -54,30 +54,56 @@ def test_every_shipped_world_has_its_regions_on_its_table_and_in_reach(path: Pat
     assert region_problems(load_world(path)) == []
 
 
-def test_the_defaults_on_a_world_laid_out_elsewhere_are_refused_naming_each_region() -> None:
+def test_a_world_without_trials_draws_the_defaults_in_front_of_its_robot() -> None:
     data = _turned_robot_without_trials()
+    world = world_from_data(data, DEFAULT)
+    # the default regions turned a quarter turn with the robot and moved with it to (1, 0)
+    assert world.trials.model_dump(
+        mode="json", include={"start", "centre", "right", "left", "goal_yaw_deg"}
+    ) == {
+        "start": {"x": [0.96, 1.04], "y": [0.5, 0.6]},
+        "centre": {"x": [0.97, 1.03], "y": [0.58, 0.68]},
+        "right": {"x": [1.12, 1.18], "y": [0.55, 0.65]},
+        "left": {"x": [0.82, 0.88], "y": [0.55, 0.65]},
+        "goal_yaw_deg": [90.0, 90.0],
+    }
+    assert region_problems(world) == []
+    check_trial_layout(world, 0, "w.yaml")
+    # a robot at the origin facing +x keeps the defaults as they are
+    data = load_world(DEFAULT).model_dump(mode="json")
+    data.pop("trials")
+    assert world_from_data(data, DEFAULT).trials == load_world(DEFAULT).trials.model_copy(
+        update={"goal_yaw_deg": (0.0, 0.0)}
+    )
+
+
+def test_the_defaults_on_a_table_laid_out_elsewhere_are_refused_naming_each_region() -> None:
+    data = _turned_robot_without_trials()
+    # the table 25 cm further from the robot than the default world's
+    data["table"]["position"] = [1.0, 0.9, 0.6]
+    data["objects"][0]["pose"]["position"] = [1.0, 0.8, 0.675]
+    data["task"][0]["moves"][0]["goal"]["position"] = [1.0, 0.9, 0.675]
     world = world_from_data(data, DEFAULT)
     problems = region_problems(world)
     fields = [p.split(":")[0] for p in problems]
     assert fields == ["trials.start", "trials.centre", "trials.right", "trials.left", "trials"]
-    # the table top spans x 0.5..1.5, y 0.35..0.95: the default start (x 0.50-0.60, y +-0.04)
-    # lies off its near edge
+    # the table top spans y 0.6..1.2: the start region (y 0.50-0.60) lies off its near edge
     assert problems[0] == (
         "trials.start: expected a region where parcel stands over the table and within the "
-        "arms' reach at every corner, got the corner [0.5, -0.04] at yaw 90 deg: "
-        "[0.5, -0.04, 0.675]: 0.39 m beyond the table's edge at y = 0.35 m"
+        "arms' reach at every corner, got the corner [0.96, 0.5] at yaw 90 deg: "
+        "[0.96, 0.5, 0.675]: 0.1 m beyond the table's edge at y = 0.6 m"
     )
-    assert "the defaults apply" in problems[-1]
+    assert "the defaults apply, placed where its robot stands" in problems[-1]
     with pytest.raises(TrialLayoutError) as err:
         check_trial_layout(world, 0, "w.yaml")
     assert str(err.value).splitlines()[0] == "w.yaml: " + problems[0]
-    # the same regions moved with the robot pass
+    # the same regions written for this table pass, and the hint goes with the defaults
     data["trials"] = {
-        "start": {"x": [0.96, 1.04], "y": [0.50, 0.60]},
-        "centre": {"x": [0.97, 1.03], "y": [0.58, 0.68]},
-        "right": {"x": [1.12, 1.18], "y": [0.55, 0.65]},
-        "left": {"x": [0.82, 0.88], "y": [0.55, 0.65]},
-        "goal_yaw_deg": [0.0, 180.0],
+        "start": {"x": [0.96, 1.04], "y": [0.75, 0.85]},
+        "centre": {"x": [0.97, 1.03], "y": [0.83, 0.93]},
+        "right": {"x": [1.12, 1.18], "y": [0.8, 0.9]},
+        "left": {"x": [0.82, 0.88], "y": [0.8, 0.9]},
+        "goal_yaw_deg": [90.0, 90.0],
     }
     assert region_problems(world_from_data(data, DEFAULT)) == []
 
@@ -97,8 +123,12 @@ def test_a_region_out_of_reach_at_one_corner_is_refused_with_that_corner() -> No
 def test_app_trials_refuses_such_a_world_with_exit_code_2(tmp_path: Path) -> None:
     import yaml
 
+    data = _turned_robot_without_trials()
+    data["table"]["position"] = [1.0, 0.9, 0.6]
+    data["objects"][0]["pose"]["position"] = [1.0, 0.8, 0.675]
+    data["task"][0]["moves"][0]["goal"]["position"] = [1.0, 0.9, 0.675]
     path = tmp_path / "turned.yaml"
-    path.write_text(yaml.safe_dump(_turned_robot_without_trials()))
+    path.write_text(yaml.safe_dump(data))
     out = tmp_path / "out"
     run = subprocess.run(
         [sys.executable, str(ROOT / "app.py"), "trials", str(path), "--n", "2", "--out", str(out)],
