@@ -470,6 +470,14 @@ def build_parser() -> argparse.ArgumentParser:
         "world's trials.hard ranges; a campaign of its own",
     )
     trials.add_argument("--json", action="store_true", help="print a JSON summary as the last line")
+    trials.add_argument(
+        "--trial",
+        type=int,
+        metavar="K",
+        help="run trial K of this campaign alone, as the campaign runs it, writing what run "
+        "writes (trajectories.png, run.jsonl, run.btlog) and its drawn world, trial_K.yaml, "
+        "to --out",
+    )
     _add_main_tree_option(trials)
     _add_leaves_option(trials)
     trials.set_defaults(handler=trials_command)

@@ -49,17 +49,13 @@ def run_command(args: argparse.Namespace) -> int:
         world = world.model_copy(update={"sim": world.sim.model_copy(update={"seed": args.seed})})
     out = out_folder_or_exit(Path(args.out))
 
-    def progress(t: float, leaf: str, feedback: str) -> None:
-        name = printable(leaf.split(".")[-1])
-        print(f"[{t:7.2f} s] {name:<18} {printable(feedback)}", file=sys.stderr, flush=True)
-
     try:
         report = run_episode(
             world,
             Path(args.tree) if args.tree else None,
             out=out,
             animation=not args.no_animation,
-            progress=progress,
+            progress=_progress,
             gui=args.gui,
             main_tree=args.main_tree,
             groot_port=args.groot,
@@ -70,19 +66,91 @@ def run_command(args: argparse.Namespace) -> int:
     except OSError as err:  # an output the run cannot write (a folder named like it)
         print(f"--out {out}: {err}", file=sys.stderr)
         return EXIT_BAD_INPUT
-    for line in report.lines(world.name):
+    return _verdict(report, world.name, out, args.json)
+
+
+def _progress(t: float, leaf: str, feedback: str) -> None:
+    """A run's progress line on stderr: the simulated time, the leaf and its feedback."""
+    name = printable(leaf.split(".")[-1])
+    print(f"[{t:7.2f} s] {name:<18} {printable(feedback)}", file=sys.stderr, flush=True)
+
+
+def _verdict(report: Any, name: str, out: Path, as_json: bool) -> int:
+    """Print a run's summary (and JSON), what it replaced or could not write; its exit code."""
+    for line in report.lines(name):
         print(line)
     if report.replaced_outputs:
         print(f"replaced the earlier run's {', '.join(report.replaced_outputs)} in {out}")
     for problem in report.output_errors:
         print(f"not written: {problem}", file=sys.stderr)
-    if args.json:
+    if as_json:
         print(json.dumps(report.summary()))
     if report.output_errors:
         # The verdict is out; an output the run could not write (a full disk, a read-only
         # file) is still an input/output error the caller must see.
         return EXIT_BAD_INPUT
     return EXIT_OK if report.success else EXIT_FAILURE
+
+
+def _one_trial(args: argparse.Namespace, world: Any, tree: Path | None, out: Path) -> int:
+    """``trials --trial K``: trial K of the campaign alone, drawn and run as the campaign runs
+    it, with what ``run`` writes (figure, run log, Groot2 replay) and the drawn world as
+    ``trial_K.yaml`` in ``out``; no ``results.jsonl``."""
+    from experiment.episode import run_episode
+    from experiment.trials import TrialNotDrawn, tree_misfit, trial_world
+    from worlds.world_file import dump_world
+
+    try:
+        drawn, _, hard = trial_world(world, args.seed, args.trial, args.hard)
+    except TrialNotDrawn as err:
+        print(f"trial {args.trial}: {err}", file=sys.stderr)
+        return EXIT_FAILURE
+    path = out / f"trial_{args.trial}.yaml"
+    mode = " --hard" if args.hard else ""
+    header = [
+        f"# Trial {args.trial} of seed {args.seed} of {args.world}: app.py trials "
+        f"{args.world} --seed {args.seed}{mode} --trial {args.trial}",
+        "# Its paths are absolute; app.py run reads it from anywhere.",
+    ]
+    if hard is not None:
+        header.append(
+            "# Hard mode: the physics this trial ran (masses, frictions, table, actuators) "
+            "differs from this file; --trial runs it, app.py run on this file does not."
+        )
+    path.write_text("\n".join(header) + "\n" + dump_world(_absolute_paths(drawn)), "utf-8")
+    print(f"drawn world: {path}")
+    misfit = tree_misfit(drawn, tree, args.main_tree)
+    if misfit:
+        print(f"trial {args.trial}: {misfit}", file=sys.stderr)
+        return EXIT_FAILURE
+    report = run_episode(
+        drawn,
+        tree,
+        out=out,
+        animation=False,
+        progress=_progress,
+        main_tree=args.main_tree,
+        truth=None if hard is None else hard.truth,
+    )
+    return _verdict(report, drawn.name, out, args.json)
+
+
+def _absolute_paths(world: Any) -> Any:
+    """``world`` with the files it names (its tree, skill library and mesh shapes) given by
+    absolute path, so that a copy of it written elsewhere still finds them."""
+    from worlds.world_file import world_from_data
+
+    data = world.model_dump(mode="json")
+    if data.get("tree"):
+        data["tree"] = str(world.resolve_path(data["tree"]))
+    skills = data.get("skills") or {}
+    if skills.get("library") not in (None, "default"):
+        skills["library"] = str(world.resolve_path(skills["library"]))
+    for obj in data.get("objects", ()):
+        shape = obj.get("shape") or {}
+        if shape.get("type") == "mesh":
+            shape["file"] = str(world.resolve_path(shape["file"]))
+    return world_from_data(data, world.source)
 
 
 def trials_command(args: argparse.Namespace) -> int:
@@ -99,6 +167,9 @@ def trials_command(args: argparse.Namespace) -> int:
             f"{args.workers}",
             file=sys.stderr,
         )
+        return EXIT_BAD_INPUT
+    if args.trial is not None and not 0 <= args.trial < 1_000_000:
+        print(f"--trial: expected a trial number 0..999999, got {args.trial}", file=sys.stderr)
         return EXIT_BAD_INPUT
     if args.address and args.backend != "ray":
         print("--address: expected only with --backend ray", file=sys.stderr)
@@ -125,6 +196,8 @@ def trials_command(args: argparse.Namespace) -> int:
             print(err, file=sys.stderr)
             return EXIT_BAD_INPUT
     out = out_folder_or_exit(Path(args.out))
+    if args.trial is not None:
+        return _one_trial(args, world, tree, out)
     try:
         key = campaign_of(world, args.seed, tree, args.leaves, args.main_tree, args.hard)
         earlier = campaign_results(out / "results.jsonl", key).values()

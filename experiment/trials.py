@@ -50,10 +50,6 @@ from worlds.world_file import (
 )
 
 
-class _NotDrawn(Exception):
-    """A trial whose layout could not be drawn: its message is the record's failure."""
-
-
 def run_trial(job: tuple[dict[str, Any], int, int]) -> dict[str, Any]:
     """Run one trial in this process; returns its JSON-ready record (never raises)."""
     from experiment.episode import run_episode
@@ -72,19 +68,11 @@ def run_trial(job: tuple[dict[str, Any], int, int]) -> dict[str, Any]:
         # The user's leaves the tree may use, registered in this process too (a spawned
         # worker starts without them; a forked one finds them registered already).
         register_leaves(base_data.get("leaves", ()))
-        try:
-            world, kinds = draw_trial(base, seed, trial, _worker_clearance(base))
-        except RuntimeError as err:
-            # Not the robot's failure: the world's trials section left no room for this draw.
-            raise _NotDrawn(
-                f"layout not drawn: {err} (widen the trials regions or lower "
-                "trials.clearance or trials.robot_clearance)"
-            ) from None
-        if base_data.get("hard"):
-            hard = draw_hard(world, seed, trial)
-            world = with_pushes(world, hard.pushes)
+        world, kinds, hard = trial_world(
+            base, seed, trial, bool(base_data.get("hard")), _worker_clearance(base)
+        )
         where = _layout_of(world)
-        misfit = _tree_misfit(world, tree, base_data.get("main_tree"))
+        misfit = tree_misfit(world, tree, base_data.get("main_tree"))
         record: dict[str, Any]
         if misfit:
             record = {"success": False, "sim_time_s": 0.0, "wall_time_s": 0.0}
@@ -104,7 +92,9 @@ def run_trial(job: tuple[dict[str, Any], int, int]) -> dict[str, Any]:
     except Exception as err:  # a trial that crashes is a failed trial with its reason
         record = {"success": False, "sim_time_s": 0.0, "wall_time_s": 0.0}
         kinds, where = [], {}
-        failure = str(err) if isinstance(err, _NotDrawn) else f"error: {type(err).__name__}: {err}"
+        failure = (
+            str(err) if isinstance(err, TrialNotDrawn) else f"error: {type(err).__name__}: {err}"
+        )
     record.update(
         {
             "trial": trial,
@@ -121,7 +111,33 @@ def run_trial(job: tuple[dict[str, Any], int, int]) -> dict[str, Any]:
     return record
 
 
-def _tree_misfit(world: World, tree: Path | None, main_tree: str | None) -> str:
+class TrialNotDrawn(RuntimeError):
+    """A trial whose layout could not be drawn: its message is the record's failure."""
+
+
+def trial_world(
+    base: World, seed: int, trial: int, hard: bool, robot: RobotClearance | None = None
+) -> tuple[World, list[str], HardTrial | None]:
+    """Trial ``trial`` of campaign ``seed`` on ``base`` as a campaign runs it: the drawn world
+    (:func:`experiment.layout.draw_trial`, with Hard mode's pushes when ``hard``), the kind of
+    obstacle per move, and Hard mode's draws (None when not ``hard``). A layout that cannot
+    be drawn raises :class:`TrialNotDrawn`, saying what to change."""
+    try:
+        world, kinds = draw_trial(base, seed, trial, robot)
+    except RuntimeError as err:
+        # Not the robot's failure: the world's trials section left no room for this draw.
+        raise TrialNotDrawn(
+            f"layout not drawn: {err} (widen the trials regions or lower "
+            "trials.clearance or trials.robot_clearance)"
+        ) from None
+    drawn: HardTrial | None = None
+    if hard:
+        drawn = draw_hard(world, seed, trial)
+        world = with_pushes(world, drawn.pushes)
+    return world, kinds, drawn
+
+
+def tree_misfit(world: World, tree: Path | None, main_tree: str | None) -> str:
     """Why a tree given with ``--tree`` cannot make this trial's task ("" when it can).
 
     Such a tree runs as written, with the moves its file names; a trial's turned goals may

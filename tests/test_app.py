@@ -145,3 +145,31 @@ def test_a_command_that_loads_pybullet_keeps_its_build_line_off_stderr() -> None
     )
     shown = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, cwd=ROOT)
     assert shown.stdout.strip() == "0" and shown.stderr == "", shown.stderr
+
+
+@pytest.mark.sim
+def test_one_trial_of_a_campaign_runs_alone_as_the_campaign_ran_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "trial"
+    argv = ["trials", DEFAULT, "--seed", "0", "--trial", "0", "--out", str(out), "--json"]
+    assert exit_code(argv) == app.EXIT_OK
+    summary = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    record = json.loads((ROOT / "bench" / "results" / "trials_seed0_n1000.jsonl").open().readline())
+    assert record["trial"] == 0
+    # the campaign's own numbers, bit for bit
+    assert summary["placement_error_m"] == record["placement_error_m"]
+    assert summary["min_obstacle_distance_m"] == record["min_obstacle_distance_m"]
+    assert {p.name for p in out.iterdir()} >= {"trial_0.yaml", "run.jsonl", "trajectories.png"}
+    assert not (out / "results.jsonl").exists()
+    # the drawn world written is the trial's: app.py run on it makes the same placements
+    again = tmp_path / "again"
+    argv = ["run", str(out / "trial_0.yaml"), "--out", str(again), "--no-animation", "--json"]
+    assert exit_code(argv) == app.EXIT_OK
+    rerun = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert rerun["placement_error_m"] == record["placement_error_m"]
+
+
+def test_a_trial_number_below_zero_is_refused(capsys: pytest.CaptureFixture[str]) -> None:
+    assert exit_code(["trials", DEFAULT, "--trial", "-1"]) == app.EXIT_BAD_INPUT
+    assert "--trial: expected a trial number 0..999999, got -1" in capsys.readouterr().err
