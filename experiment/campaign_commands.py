@@ -139,17 +139,16 @@ def _absolute_paths(world: Any) -> Any:
     """``world`` with the files it names (its tree, skill library and mesh shapes) given by
     absolute path, so that a copy of it written elsewhere still finds them."""
     from worlds.world_file import world_from_data
+    from worlds.world_schema import DEFAULT_SKILL_LIBRARY
 
     data = world.model_dump(mode="json")
     if data.get("tree"):
         data["tree"] = str(world.resolve_path(data["tree"]))
-    skills = data.get("skills") or {}
-    if skills.get("library") not in (None, "default"):
-        skills["library"] = str(world.resolve_path(skills["library"]))
-    for obj in data.get("objects", ()):
-        shape = obj.get("shape") or {}
-        if shape.get("type") == "mesh":
-            shape["file"] = str(world.resolve_path(shape["file"]))
+    if data["skills"]["library"] != DEFAULT_SKILL_LIBRARY:
+        data["skills"]["library"] = str(world.resolve_path(data["skills"]["library"]))
+    for obj in data["objects"]:
+        if obj["shape"]["type"] == "mesh":
+            obj["shape"]["file"] = str(world.resolve_path(obj["shape"]["file"]))
     return world_from_data(data, world.source)
 
 

@@ -6,7 +6,7 @@ campaign.
 placed where its robot stands (:func:`worlds.trial_schema.trials_in_robot_frame`), which suit
 a table laid out as the default world's (its top 0.35 to 0.95 m in front of the robot): on
 another table they may lie off it, and every trial would fail at its first approach.
-:func:`region_problems` runs the world's own checks (:func:`worlds.feasibility.goal_problem`:
+:func:`region_problems` runs the world's own checks (:func:`worlds.feasibility.goal_checker`:
 a goal over the table top and a grasp within the arms' reach) on the object placed at each
 corner of each region, at the ends and middle of its yaw range, so that a region fails here
 if any part of it could fail a trial.
@@ -14,12 +14,9 @@ if any part of it could fail a trial.
 
 from __future__ import annotations
 
-from worlds.feasibility import goal_problem
-from worlds.trial_schema import Region, TrialSettings, trials_in_robot_frame
+from worlds.feasibility import goal_checker
+from worlds.trial_schema import PAPER_REGIONS, Region, TrialSettings, trials_in_robot_frame
 from worlds.world_file import World, as_world_spec
-
-#: The paper's three goal regions, in the order of their moves.
-_PAPER_GOALS = ("centre", "right", "left")
 
 
 def _region_fields(world: World) -> list[str]:
@@ -27,7 +24,7 @@ def _region_fields(world: World) -> list[str]:
     layout = world.trials
     if layout.moves:
         return [f"trials.moves[{j}]" for j in range(len(layout.moves))]
-    return [f"trials.{name}" for name in _PAPER_GOALS]
+    return [f"trials.{name}" for name in PAPER_REGIONS]
 
 
 def region_problems(world: World) -> list[str]:
@@ -41,8 +38,8 @@ def region_problems(world: World) -> list[str]:
     """
     layout = world.trials
     regions = layout.goal_regions()
-    spec = as_world_spec(world)
     name = world.objects[0].name
+    goal_problem = goal_checker(as_world_spec(world), name)
     start_yaw = float(world.objects[0].pose.rpy_deg[2])
     checked: list[tuple[str, Region, tuple[float, ...]]] = [
         ("trials.start", layout.start, (start_yaw,))
@@ -58,7 +55,7 @@ def region_problems(world: World) -> list[str]:
                 for x in region.x
                 for y in region.y
                 for yaw in yaws
-                if (problem := goal_problem(spec, name, (x, y), yaw)) is not None
+                if (problem := goal_problem((x, y), yaw)) is not None
             ),
             None,
         )
@@ -83,9 +80,6 @@ def _defaults_of(world: World) -> TrialSettings:
     """The trials section a world of this robot gets when it gives none
     (:func:`worlds.trial_schema.trials_in_robot_frame`)."""
     base = world.robot.base
-    x, y, _ = base.position
-    if (x, y) == (0.0, 0.0) and base.rpy_deg[2] % 360.0 == 0.0:
-        return TrialSettings()
     return TrialSettings.model_validate(trials_in_robot_frame(base.position, base.rpy_deg[2]))
 
 

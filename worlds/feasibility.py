@@ -25,7 +25,7 @@ Problems name the world file's field (``task[0].moves[1].goal.position``, ``obje
 from __future__ import annotations
 
 import math
-from collections.abc import Collection, Mapping, Sequence
+from collections.abc import Callable, Collection, Mapping, Sequence
 from dataclasses import replace
 
 import numpy as np
@@ -255,7 +255,7 @@ def feasibility_problems(
                 continue
             if not graspable[obj.name]:
                 continue
-            miss = _reach_problem(contexts[obj.name], move, robot, reach, grasps)
+            miss = _reach_problem(contexts[obj.name], move, robot, config, reach, grasps)
             if miss is not None:
                 problems.append(WorldFileProblem(field, *miss))
     return start_problems(spec, bad_goals) + problems
@@ -265,6 +265,7 @@ def _reach_problem(
     context: ObjectContext,
     move: MoveSpec,
     robot: RobotCapabilities,
+    config: ReasonerConfig,
     reach: Mapping[Arm, ArmReach],
     grasps: Collection[GraspType] | None,
 ) -> tuple[str, str] | None:
@@ -272,9 +273,7 @@ def _reach_problem(
     tree: ``grasps``, any if None) puts a palm out of its arm's reach; else None."""
     at_goal = replace(context, position=move.goal_position, yaw=move.goal_yaw, goals=())
     options = [
-        o
-        for o in assess(at_goal, robot, ReasonerConfig()).options
-        if grasps is None or o.grasp in grasps
+        o for o in assess(at_goal, robot, config).options if grasps is None or o.grasp in grasps
     ]
     misses = [_out_of_reach(o, reach) for o in options]
     if options and all(m is not None for m in misses):
@@ -282,34 +281,36 @@ def _reach_problem(
     return None
 
 
-def goal_problem(
-    spec: WorldSpec, name: str, xy: Sequence[float], yaw_deg: float
-) -> tuple[str, str] | None:
-    """What a goal of object ``name`` with its centre at ``xy`` (m, world frame), upright,
-    turned ``yaw_deg`` about z and resting on the table top, should be and what it is, if it
-    lies off the table top's footprint or every grasp there puts a palm out of its arm's reach
-    (the checks :func:`feasibility_problems` makes of each goal); else None."""
-    yaw = math.radians(yaw_deg)
-    qx, qy, qz, qw = (float(v) for v in quat.from_rpy(np.array([0.0, 0.0, yaw])))
-    quaternion = (qx, qy, qz, qw)
+def goal_checker(
+    spec: WorldSpec, name: str
+) -> Callable[[Sequence[float], float], tuple[str, str] | None]:
+    """The check :func:`feasibility_problems` makes of each goal of object ``name``, for goals
+    given by their centre ``xy`` (m, world frame) and yaw (degrees), upright and resting on the
+    table top: what the goal should be and what it is, if it lies off the table top's
+    footprint or every grasp there puts a palm out of its arm's reach; else None. The object,
+    robot and reach are read once, for every goal asked."""
     obj = next(o for o in spec.scene.objects if o.name == name)
-    z = spec.scene.table.position[2] + resting_half_height(obj, quaternion)
-    move = MoveSpec(
-        goal_position=(float(xy[0]), float(xy[1]), float(z)),
-        goal_quaternion=quaternion,
-        goal_yaw=yaw,
-    )
-    off = _off_table(move.goal_position, spec.scene.table)
-    if off is not None:
-        return off
     context = next(c for c in object_contexts(spec) if c.name == name)
-    return _reach_problem(
-        context,
-        move,
-        robot_capabilities(spec),
-        arm_reach(robot_model_of(spec.scene.robot)),
-        None,
-    )
+    robot = robot_capabilities(spec)
+    reach = arm_reach(robot_model_of(spec.scene.robot))
+    config = ReasonerConfig()
+
+    def check(xy: Sequence[float], yaw_deg: float) -> tuple[str, str] | None:
+        yaw = math.radians(yaw_deg)
+        qx, qy, qz, qw = (float(v) for v in quat.from_rpy(np.array([0.0, 0.0, yaw])))
+        quaternion = (qx, qy, qz, qw)
+        z = spec.scene.table.position[2] + resting_half_height(obj, quaternion)
+        move = MoveSpec(
+            goal_position=(float(xy[0]), float(xy[1]), float(z)),
+            goal_quaternion=quaternion,
+            goal_yaw=yaw,
+        )
+        off = _off_table(move.goal_position, spec.scene.table)
+        if off is not None:
+            return off
+        return _reach_problem(context, move, robot, config, reach, None)
+
+    return check
 
 
 def check_feasible(world: World | WorldSpec, file: str) -> None:
@@ -323,6 +324,6 @@ __all__ = [
     "REST_TOLERANCE_M",
     "check_feasible",
     "feasibility_problems",
-    "goal_problem",
+    "goal_checker",
     "resting_half_height",
 ]

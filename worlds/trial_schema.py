@@ -342,7 +342,7 @@ class TrialSettings(FileModel):
 
     @model_validator(mode="after")
     def _one_form_of_goals(self) -> TrialSettings:
-        named = [k for k in _PAPER_REGIONS if k in self.model_fields_set]
+        named = [k for k in PAPER_REGIONS if k in self.model_fields_set]
         if self.moves and named:
             raise field_problem(
                 "either moves or the regions centre, right and left, not both",
@@ -375,7 +375,7 @@ class TrialSettings(FileModel):
                 data.pop("insertion", None)
             if self.riders is None:
                 data.pop("riders", None)
-            for key in ("moves",) if not self.moves else _PAPER_REGIONS:
+            for key in ("moves",) if not self.moves else PAPER_REGIONS:
                 data.pop(key, None)
             for key in ("size_scale", "mass_kg"):
                 if data.get(key) is None:
@@ -387,7 +387,7 @@ class TrialSettings(FileModel):
 
 
 #: The paper's three goal regions, in the order of its moves.
-_PAPER_REGIONS = ("centre", "right", "left")
+PAPER_REGIONS = ("centre", "right", "left")
 
 
 def trials_in_robot_frame(position: Sequence[float], yaw_deg: float) -> dict[str, Any]:
@@ -395,7 +395,10 @@ def trials_in_robot_frame(position: Sequence[float], yaw_deg: float) -> dict[str
     origin facing +x) for a robot standing at ``position`` (m, world frame) turned ``yaw_deg``
     about z, as world-file data: each region turned and moved with the robot (the rectangle
     that holds its corners: the same size for a quarter turn, larger between), the goals'
-    yaw turned with it. A world that gives no ``trials`` section gets these."""
+    yaw turned with it; empty for a robot at the origin facing +x, whose defaults they are. A
+    world that gives no ``trials`` section gets these."""
+    if tuple(position[:2]) == (0.0, 0.0) and yaw_deg % 360.0 == 0.0:
+        return {}
     defaults = TrialSettings()
     c, s = math.cos(math.radians(yaw_deg)), math.sin(math.radians(yaw_deg))
 
@@ -411,7 +414,7 @@ def trials_in_robot_frame(position: Sequence[float], yaw_deg: float) -> dict[str
     low, high = defaults.goal_yaw_deg
     turn = (yaw_deg + 180.0) % 360.0 - 180.0  # within a turn, as the file's yaws must be
     return {
-        **{name: placed(getattr(defaults, name)) for name in ("start", *_PAPER_REGIONS)},
+        **{name: placed(getattr(defaults, name)) for name in ("start", *PAPER_REGIONS)},
         "goal_yaw_deg": [low + turn, high + turn],
     }
 
@@ -419,6 +422,7 @@ def trials_in_robot_frame(position: Sequence[float], yaw_deg: float) -> dict[str
 __all__ = [
     "FIXTURE_OFFSET_M",
     "OBSTACLE_KINDS",
+    "PAPER_REGIONS",
     "GoalRegion",
     "HardSettings",
     "Region",

@@ -460,9 +460,8 @@ class World(FileModel):
             return data
         if len(position) != 3 or not all(math.isfinite(v) for v in (*position, yaw)):
             return data
-        if position[:2] == [0.0, 0.0] and yaw % 360.0 == 0.0:
-            return data  # the defaults' own robot: the defaults as they are
-        return {**data, "trials": trials_in_robot_frame(position, yaw)}
+        placed = trials_in_robot_frame(position, yaw)
+        return {**data, "trials": placed} if placed else data  # empty: the defaults' own robot
 
     @field_validator("tree")
     @classmethod
