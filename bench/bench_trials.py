@@ -19,12 +19,17 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import sys
 import tempfile
 import time
 from pathlib import Path
 
+ROOT = Path(__file__).resolve().parents[1]
+if str(ROOT) not in sys.path:  # before bench/, whose worlds/ folder would shadow the package
+    sys.path.insert(0, str(ROOT))
+
 # isort: off
-from duet_robot.blas import pin_blas_kernel
+from duet_robot.blas import pin_blas_kernel  # noqa: E402
 
 pin_blas_kernel()  # as app.py does: one BLAS kernel on every x86-64 host
 from experiment.summary import split_line  # noqa: E402
@@ -33,7 +38,7 @@ from worlds.world_file import load_world  # noqa: E402
 
 # isort: on
 
-DEFAULT = Path(__file__).resolve().parents[1] / "worlds" / "parcel_pick_place.yaml"
+DEFAULT = ROOT / "worlds" / "parcel_pick_place.yaml"
 
 
 def main() -> int:

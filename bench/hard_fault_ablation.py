@@ -14,9 +14,14 @@ from __future__ import annotations
 import argparse
 import sys
 from dataclasses import replace
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+if str(ROOT) not in sys.path:  # before bench/, whose worlds/ folder would shadow the package
+    sys.path.insert(0, str(ROOT))
 
 # isort: off
-from duet_robot.blas import pin_blas_kernel
+from duet_robot.blas import pin_blas_kernel  # noqa: E402
 
 pin_blas_kernel()  # as app.py does: one BLAS kernel on every x86-64 host
 from experiment.episode import run_episode  # noqa: E402

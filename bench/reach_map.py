@@ -22,14 +22,19 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import sys
 from pathlib import Path
 
 import numpy as np
 
-from skills.vocabulary import Arm
-from worlds.palm_poses import lateral_grasp_palm_poses
-from worlds.scene import Scene
-from worlds.world_file import World, load_world, world_from_data
+ROOT = Path(__file__).resolve().parents[1]
+if str(ROOT) not in sys.path:  # before bench/, whose worlds/ folder would shadow the package
+    sys.path.insert(0, str(ROOT))
+
+from skills.vocabulary import Arm  # noqa: E402
+from worlds.palm_poses import lateral_grasp_palm_poses  # noqa: E402
+from worlds.scene import Scene  # noqa: E402
+from worlds.world_file import World, load_world, world_from_data  # noqa: E402
 
 
 def palm_error(

@@ -18,7 +18,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import pybullet as pb
 from numpy.typing import ArrayLike
 
 from planner.atomic_file import atomic_path
@@ -27,6 +26,7 @@ from skills.pose_dmp import pose_rollout
 from skills.skill import Skill, SkillKind
 from skills.state import PoseState
 from skills.types import Array
+from worlds.bullet import pb
 from worlds.fixture_spec import FixtureSpec
 from worlds.spec import ObstacleSpec, Shape, ShapeSpec
 

@@ -29,7 +29,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
-import pybullet as pb
 
 from duet_robot.closing import Closing
 from experiment.flip_draws import draw_object, goal_half_height, pitched_goal_postures
@@ -43,6 +42,7 @@ from experiment.tray_draws import place_riders, tray_height, tray_layout_problem
 from experiment.trial_regions import region_problems
 from skills.turns import move_holds
 from worlds.adapters import robot_capabilities
+from worlds.bullet import pb
 from worlds.palm_poses import lateral_grasp_palm_poses
 from worlds.placement import start_problems
 from worlds.scene import Scene

@@ -125,7 +125,7 @@ def test_a_run_whose_figure_cannot_be_written_prints_its_verdict_then_exits_2(
     assert (tmp_path / "run.jsonl").is_file()
 
 
-def test_a_command_that_loads_pybullet_keeps_its_build_line_off_stderr() -> None:
+def test_a_command_that_loads_pybullet_keeps_its_build_line_off_stderr(tmp_path: Path) -> None:
     import subprocess
     import sys
 
@@ -138,6 +138,21 @@ def test_a_command_that_loads_pybullet_keeps_its_build_line_off_stderr() -> None
     )
     assert done.returncode == 0, done.stderr
     assert done.stderr == ""  # PyBullet's "pybullet build time: ..." is not the user's news
+    # A run loads the figure's renderer before the world's modules: a parcel too small for
+    # the palms is refused after both are loaded, its one line the whole of stderr.
+    small = tmp_path / "small.yaml"
+    text = Path(DEFAULT).read_text()
+    small.write_text(text.replace("size: [0.20, 0.30, 0.15]", "size: [0.08, 0.08, 0.15]", 1))
+    refused = subprocess.run(
+        [sys.executable, str(ROOT / "app.py"), "run", str(small), "--out", str(tmp_path / "o")],
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+        timeout=120,
+    )
+    assert refused.returncode == 2
+    assert refused.stderr.startswith(f"{small}: objects[0]: expected a grasp"), refused.stderr
+    assert len(refused.stderr.splitlines()) == 1, refused.stderr
     # and the simulator it loaded is PyBullet as ever
     probe = (
         "import worlds, pybullet as pb; c = pb.connect(pb.DIRECT); "

@@ -78,6 +78,21 @@ def test_package_never_names_the_simulator(package: str) -> None:
     assert not bad, f"{package} imports the simulator:\n" + "\n".join(bad)
 
 
+def test_only_worlds_imports_pybullet_itself() -> None:
+    # worlds/__init__.py installs the finder that keeps pybullet's "build time" line off
+    # stderr; a module elsewhere importing pybullet before anything imported worlds printed
+    # it on every run. Others take it from worlds.bullet, which runs worlds first.
+    files = module_files()
+    bad = [
+        f"{imp.where()}: {imp.module} imports {imp.target}"
+        for module in files
+        if _top(module) != "worlds"
+        for imp in imports_of(module, files)
+        if _top(imp.target) == "pybullet"
+    ]
+    assert not bad, "import pybullet through worlds.bullet:\n" + "\n".join(bad)
+
+
 def test_the_rules_catch_a_late_import_of_the_planner() -> None:
     allowed, _ = LAYERS["worlds"]
     assert allowed("planner.port") and allowed("skills.vocabulary")
