@@ -426,6 +426,22 @@ def test_path_clear_sees_an_obstacle_on_the_straight_path(
     assert "predicted collision" in blocked.feedback_message
 
 
+@pytest.mark.parametrize(("lag_m", "status"), [(0.05, Status.SUCCESS), (0.2, Status.FAILURE)])
+def test_a_motion_arrives_only_where_the_palms_are(
+    library: SkillLibrary, lag_m: float, status: Status
+) -> None:
+    # A palm that settles 5 cm off its target (a biased actuator) has arrived; one held 20 cm
+    # short (an arm pinned) has not, and the leaf says which palm and how far.
+    world = FakeWorld(objects=[FakeObject("parcel", np.array([0.20, 0.30, 0.15]))])
+    world.bias_palm(Arm.LEFT, [0.0, lag_m, 0.0])
+    leaf = set_up(Approach("approach"), world, library, object="parcel", standoff_m=0.04)
+    log = tick_until(leaf, world, CONTROL_DT)
+    assert log.final == status
+    if status == Status.FAILURE:
+        assert re.search(r"the left palm stopped 20\d mm from its pose", log.feedback)
+        assert log.statuses[:-1] == (Status.RUNNING,) * (len(log.statuses) - 1)
+
+
 def test_release_then_retreat(fake_world: FakeWorld, library: SkillLibrary) -> None:
     grasp_object(fake_world, library)
     log = tick_until(
