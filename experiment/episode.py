@@ -377,7 +377,13 @@ def run_episode(
         objects = [name for name, _ in recorder.finals]
         errors_m, errors_deg = recorder.column("error_m"), recorder.column("error_deg")
         ok, failure = judge(
-            result, sim, objects, errors_m, errors_deg, recorder.moved_since_placed()
+            result,
+            sim,
+            objects,
+            errors_m,
+            errors_deg,
+            recorder.moved_since_placed(),
+            recorder.standing_moved(),
         )
         trays = tray_verdicts(sim.scene.spec.objects, sim.watched, recorder.grip)
         tray_failure = next((v.failure for v in trays if not v.ok), "")

@@ -2,10 +2,11 @@
 
 A run succeeds only if every move of the task is placed within :data:`PLACE_TOLERANCE_M` and
 :data:`PLACE_TOLERANCE_DEG` of its goal (the object's measured pose), each object still lies
-within the same of where its last move left it when the run ends, nothing touched an
-obstacle (PyBullet contacts every physics step, FCL clearance every control step), the arms
-never touched, and the tree succeeded. A dropped object fails the run unless the tree picked
-it up again and placed it.
+within the same of where its last move left it when the run ends, each object the task leaves
+standing lies within the same of where it stood, nothing touched an obstacle (PyBullet
+contacts every physics step, FCL clearance every control step), the arms never touched, and
+the tree succeeded. A dropped object fails the run unless the tree picked it up again and
+placed it.
 """
 
 from __future__ import annotations
@@ -20,6 +21,8 @@ from worlds.sim_world import SimWorld
 
 PLACE_TOLERANCE_M = 0.02
 PLACE_TOLERANCE_DEG = 10.0
+#: How a failure names an object the task leaves standing that the run shoved.
+STANDING_SUFFIX = "from where it stood (the task does not move it)"
 
 
 def move_labels(objects: list[str]) -> list[str]:
@@ -39,6 +42,7 @@ def judge(
     errors_m: list[float | None],
     errors_deg: list[float | None],
     moved: Sequence[tuple[str, float, float]] = (),
+    standing: Sequence[tuple[str, float, float]] = (),
 ) -> tuple[bool, str]:
     """Success and the first failure reason, in the order the paper's criteria are listed.
 
@@ -49,6 +53,9 @@ def judge(
     with nothing touched, is a recovery: the run succeeds and its record says ``dropped``.
     ``moved`` holds, per object, how far (m) and how much (deg) it lies at the end from where
     its last move placed it: a placed object knocked away afterwards fails the run.
+    ``standing`` holds the same for each object the task does not move (nor carries on
+    another), from where it stood at the start: a bystander shoved by an arm or by the carried
+    object fails the run too.
     """
     s = sim.safety
     if s.spawned_inside:
@@ -60,6 +67,10 @@ def judge(
         if ok and (metres > PLACE_TOLERANCE_M or degrees > PLACE_TOLERANCE_DEG):
             ok = False
             failure = f"{name} moved {metres * 100:.1f} cm, {degrees:.1f} deg after it was placed"
+    for name, metres, degrees in standing:
+        if ok and (metres > PLACE_TOLERANCE_M or degrees > PLACE_TOLERANCE_DEG):
+            ok = False
+            failure = f"{name} moved {metres * 100:.1f} cm, {degrees:.1f} deg {STANDING_SUFFIX}"
     if not ok and s.dropped:
         return False, f"dropped {s.dropped_object}" if s.dropped_object else "dropped"
     return ok, failure
@@ -101,4 +112,10 @@ def _task_outcome(
     return True, ""
 
 
-__all__ = ["PLACE_TOLERANCE_DEG", "PLACE_TOLERANCE_M", "judge", "move_labels"]
+__all__ = [
+    "PLACE_TOLERANCE_DEG",
+    "PLACE_TOLERANCE_M",
+    "STANDING_SUFFIX",
+    "judge",
+    "move_labels",
+]

@@ -22,6 +22,7 @@ from planner.port import Move
 from skills import quaternion as quat
 from skills.library import SkillLibrary
 from worlds.sim_world import SimWorld
+from worlds.trays import riders
 from worlds.truth import true_goal_position
 
 
@@ -73,6 +74,16 @@ class MoveRecorder:
         self.stepped = stepped
         #: The moves judged: the last step of each file move, in task order.
         self.finals = [k for k in moves if stepped[k[0]][k[1]].final]
+        #: Where the objects the task leaves standing stand at the start (true poses): not
+        #: the task's, nor riding loose on one of them (a tray's balls, judged with it).
+        spec_objects = sim.scene.spec.objects
+        tasked = {name for name, _ in moves}
+        riding = {o.name for t in tasked for o in riders(spec_objects, t, tuple(tasked))}
+        self.standing = {
+            o.name: sim.scene.object_pose(o.name)
+            for o in spec_objects
+            if o.name not in tasked and o.name not in riding
+        }
 
     def _steps_of(self, key: tuple[str, int]) -> list[tuple[str, int]]:
         """The robot's moves that make the file move whose last step is ``key``."""
@@ -167,6 +178,17 @@ class MoveRecorder:
             pose = self.sim.object_pose(name)
             turn = float(np.degrees(quat.angle_between(pose.orientation, orientation)))
             out.append((name, float(np.linalg.norm(pose.position - position)), turn))
+        return out
+
+    def standing_moved(self) -> list[tuple[str, float, float]]:
+        """Per object the task leaves standing (:attr:`standing`): how far (m) and how much
+        (deg) it lies now from where it stood at the start (an arm or the carried object may
+        shove it on the way)."""
+        out = []
+        for name, (position, orientation) in self.standing.items():
+            now, turned = self.sim.scene.object_pose(name)
+            turn = float(np.degrees(quat.angle_between(turned, orientation)))
+            out.append((name, float(np.linalg.norm(now - position)), turn))
         return out
 
     def column(self, what: str) -> list[Any]:

@@ -13,6 +13,7 @@ from collections.abc import Iterable
 from typing import Any
 
 from duet_robot.text import printable
+from experiment.judge import STANDING_SUFFIX
 from experiment.metrics import METRIC_LABELS
 
 #: The normal quantile of a two-sided 95 % interval.
@@ -49,6 +50,8 @@ def reason_of(failure: str) -> str:
         return "obstacle contact: " + "/".join(sorted(parts))
     if failure.endswith("after it was placed"):  # "<object> moved 4.0 cm, 16.9 deg after ..."
         return failure.split(" moved ")[0] + " moved after it was placed"
+    if failure.endswith(STANDING_SUFFIX):  # "<object> moved 12.0 cm, 3.1 deg from where ..."
+        return failure.split(" moved ")[0] + " moved " + STANDING_SUFFIX
     head = failure.split(":")[0]
     # "parcel move 1 placed 2.3 cm, ..." is its move's; "not placed: ..." stays itself.
     return head if head == "not placed" else head.split(" placed")[0]

@@ -32,6 +32,13 @@ def _literal(value: str | None) -> str | None:
     return value
 
 
+def _port_default(reg: Registry, tag: str) -> object:
+    """The default of node ``tag``'s ``move`` port, where it is a registered node with one."""
+    cls = registry_class(reg[tag]) if tag in reg else None
+    port = getattr(cls, "INPUT_PORTS", {}).get(MOVE_PORT) if cls is not None else None
+    return None if port is None else port.default_value
+
+
 def _moves_phrase(name: str, count: int) -> str:
     plural = "move" if count == 1 else "moves"
     span = f" (indices 0..{count - 1})" if count else ""
@@ -67,6 +74,7 @@ def check_tree_moves(
     problems: list[TreeProblem] = []
     named: dict[str, set[int]] = {}
     notes = notes or {}
+    reg = effective_registry(None)
 
     def phrase(name: str) -> str:
         note = notes.get(name)
@@ -84,6 +92,8 @@ def check_tree_moves(
             index = int(raw)
         except ValueError:
             continue  # not a whole number: the port checks report it
+        if index < 0 and index == _port_default(reg, elem.tag):
+            continue  # the node's own "no move" (Approach's -1), as Groot2 writes defaults out
         if name not in moves:
             known = ", ".join(sorted(moves)) or "none"
             problems.append(

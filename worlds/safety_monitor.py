@@ -4,8 +4,8 @@ Every physics step: contacts between an obstacle and any robot link or object, a
 them were a forearm's (PyBullet's contact points); a robot link other than a hand on the
 table; the two arms touching; the fixtures' walls' forces and any robot body on them. Every
 control step: the smallest FCL distance from the arms and the objects to the active
-obstacles (and the forearms' and fixtures' own), and an object falling. The counts are a
-:class:`SafetyRecord`, which the judge reads (:func:`experiment.judge.judge`).
+obstacles (and the forearms' and fixtures' own), and an object the palms held falling. The
+counts are a :class:`SafetyRecord`, which the judge reads (:func:`experiment.judge.judge`).
 """
 
 from __future__ import annotations
@@ -22,6 +22,9 @@ from skills.vocabulary import ARMS
 from worlds.collision import FIXTURES, CollisionWorld, arm_group, welded_links
 from worlds.fixtures import FixtureLog, wall_forces
 from worlds.scene import Scene
+
+#: A palm on an object, for the drop watch: a contact force over this, N.
+DROP_TOUCH_N = 0.5
 
 
 def touching(points: Sequence[Sequence[Any]]) -> bool:
@@ -156,6 +159,8 @@ class SafetyMonitor:
             self.table_links[f"{a.value}_arm"] = (body, frozenset(arm_links - hand - {-1}))
         #: The fixtures' walls' forces and the robot's touches, every physics step.
         self.fixture_log = FixtureLog(self.scene.physics_dt)
+        #: The watched objects both palms have held off their support (see watch_drop).
+        self._held_lifted: set[str] = set()
         self._rest_z = {
             o.name: float(o.position[2]) for o in self.scene.physical.objects
         }  # resting centre height, on the true table
@@ -263,20 +268,27 @@ class SafetyMonitor:
                 self.record.forearm_closest = f"{forearm.element_a} ~ {forearm.element_b}"
 
     def watch_drop(self) -> None:
+        """A drop: an object the palms have held off its support, in the air and falling with
+        neither palm on it. One shoved or tipped up without having been held (a palm or a
+        wrist knocking it as it stands) is not dropped: where that leaves it is judged."""
         for name in self.watched:
             pos, _ = self.scene.object_pose(name)
-            vel, _ = self.scene.object_velocity(name)
             lifted = pos[2] > self._rest_z[name] + 0.01
-            # The contact forces are read only for a lifted object falling (reads, no effect).
-            if (
-                lifted
-                and vel[2] < -0.2
-                and not self.record.dropped
-                and not any(self.scene.palm_contact_force(a, name) > 0.5 for a in ARMS)
+            if not lifted or self.record.dropped:
+                continue
+            # The contact forces are read only for a lifted object (reads, no effect): once
+            # to see it held, then only as it falls.
+            if name not in self._held_lifted:
+                if all(self.scene.palm_contact_force(a, name) > DROP_TOUCH_N for a in ARMS):
+                    self._held_lifted.add(name)
+                continue
+            vel, _ = self.scene.object_velocity(name)
+            if vel[2] < -0.2 and not any(
+                self.scene.palm_contact_force(a, name) > DROP_TOUCH_N for a in ARMS
             ):
                 self.record.dropped = True
                 self.record.drop_time = self.scene.time
                 self.record.dropped_object = name
 
 
-__all__ = ["SafetyMonitor", "SafetyRecord", "touching"]
+__all__ = ["DROP_TOUCH_N", "SafetyMonitor", "SafetyRecord", "touching"]

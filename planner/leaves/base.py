@@ -13,6 +13,7 @@ from py_trees.ports import BehaviourWithPorts, NoDataAvailable, PortInformation
 from py_trees.ports_utils import NOOP_LOGGER, LogLevel
 
 from affordances import SemanticAction
+from planner.bt_leaves import StringPorts
 from planner.composition import MovePlan, compose_move, squeeze_force
 from planner.leaves.set_down import table_found_dz
 from planner.port import Move, WorldPort
@@ -98,8 +99,11 @@ def _failing_softly(hook: Callable[..., Any], name: str) -> Callable[..., Any]:
     return guarded
 
 
-class WorldLeaf(BehaviourWithPorts):
+class WorldLeaf(StringPorts, BehaviourWithPorts):
     """A leaf that talks to the world through :class:`~planner.port.WorldPort`.
+
+    A string on the blackboard is read as its port's type, as BT.CPP reads it
+    (``SetBlackboard value="0.05"`` feeding ``standoff_m="{standoff}"``).
 
     ``__init__`` only configures, so a tree builds and renders offline; ``setup(world=...,
     library=..., control_dt=...)`` connects it. A leaf used before ``setup`` fails with an

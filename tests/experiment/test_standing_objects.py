@@ -51,3 +51,34 @@ def test_the_drawn_trials_keep_out_of_a_crate_standing_in_a_goal_region() -> Non
         first, _ = draw_trial(load_world(DEFAULT), 0, trial)
         redrawn += first.task[0].moves[1].goal.position != world.task[0].moves[1].goal.position
     assert redrawn > 0  # the crate was in the way of some draws, and they were drawn again
+
+
+@pytest.mark.sim
+def test_a_standing_crate_shoved_in_physics_is_measured_from_where_it_stood() -> None:
+    # What the judge reads of a bystander (experiment.judge, ``standing``): the crate, not the
+    # task's parcel, measured from its start; a tray's loose ball is the tray's to judge.
+    import pybullet as pb
+
+    from experiment.episode import move_keys, robot_moves
+    from experiment.move_recorder import MoveRecorder
+    from worlds.sim_world import SimWorld
+
+    world = with_crate([0.62, -0.36, 0.65])
+    with SimWorld(world) as sim:
+        recorder = MoveRecorder(sim, move_keys(world), robot_moves(world), 1 / 60)
+        assert set(recorder.standing) == {"crate"}
+        assert recorder.standing_moved() == [("crate", 0.0, 0.0)]
+        crate, c = sim.scene.object_ids["crate"], sim.scene.client
+        for _ in range(60):  # a quarter second's sideways shove at its centre
+            pb.applyExternalForce(
+                crate, -1, [0.0, 8.0, 0.0], [0, 0, 0], pb.LINK_FRAME, physicsClientId=c
+            )
+            sim.scene.step(1)
+        for _ in range(120):
+            sim.scene.step(1)
+        ((name, metres, _),) = recorder.standing_moved()
+        assert name == "crate" and 0.03 < metres < 0.3, metres
+    with SimWorld(load_world(ROOT / "worlds" / "tray_carry.yaml")) as sim:
+        tray = load_world(ROOT / "worlds" / "tray_carry.yaml")
+        recorder = MoveRecorder(sim, move_keys(tray), robot_moves(tray), 1 / 60)
+        assert recorder.standing == {}  # the ball rides on the tray

@@ -12,6 +12,7 @@ from py_trees.common import Status
 
 from experiment.episode import move_keys, run_episode, task_steps
 from experiment.judge import judge, move_labels
+from experiment.summary import reason_of
 from planner.default_tree import TaskStep, pick_and_place_xml
 from planner.runner import RunResult
 from worlds.safety_monitor import SafetyRecord
@@ -71,6 +72,22 @@ def test_a_placed_object_knocked_away_afterwards_fails_the_run() -> None:
     sim.safety.dropped = True
     sim.safety.dropped_object = "parcel_left"
     assert judge(tree_ok, sim, PLACED, *placed, knocked) == (False, "dropped parcel_left")
+
+
+def test_an_object_the_task_leaves_standing_shoved_away_fails_the_run() -> None:
+    tree_ok = RunResult(Status.SUCCESS, 10.0, 1.0, 600, "")
+    sim: Any = SimpleNamespace(safety=SafetyRecord())
+    placed = [0.001] * 4, [0.1] * 4
+    nudged = [("crate", 0.004, 1.0)]  # a bystander grazed by a wrist: within the tolerance
+    assert judge(tree_ok, sim, PLACED, *placed, (), nudged) == (True, "")
+    shoved = [("crate", 0.118, 16.4)]
+    failure = "crate moved 11.8 cm, 16.4 deg from where it stood (the task does not move it)"
+    assert judge(tree_ok, sim, PLACED, *placed, (), shoved) == (False, failure)
+    assert reason_of(failure) == "crate moved from where it stood (the task does not move it)"
+    # A task that already failed keeps its own reason.
+    assert judge(tree_ok, sim, PLACED, [0.001, 0.002, None, None], [0.1] * 4, (), shoved)[1] == (
+        "not placed: parcel_right move 1, parcel_right move 2"
+    )
 
 
 @pytest.fixture(scope="module")

@@ -53,6 +53,28 @@ def test_a_move_no_node_names_would_be_left_undone() -> None:
     )
 
 
+def test_a_grasps_own_no_move_default_written_out_as_groot2_saves_it_is_not_a_move() -> None:
+    # Groot2 writes every port's default into the file it saves: Approach's and Grasp's
+    # move="-1" ("the faces nearest the robot's y axis") is not an index of the task's moves.
+    xml = """<root BTCPP_format="4">
+  <BehaviorTree ID="Main">
+    <Sequence>
+      <Approach object="parcel" move="-1"/>
+      <Grasp object="parcel" move="-1" plan="{plan}" state="{state}"/>
+      <AtGoal object="parcel" move="0"/>
+      <AtGoal object="parcel" move="-1"/>
+    </Sequence>
+  </BehaviorTree>
+</root>
+"""
+    doc = read_tree_document_string(xml, "saved.xml")
+    [problem] = check_tree_moves(doc, {"parcel": 1}, None)
+    # AtGoal has no such default: its -1 is still a move the task lacks.
+    assert str(problem) == (
+        'saved.xml:7: <AtGoal>: move -1, but the world\'s task has 1 move for parcel (indices 0..0)'
+    )
+
+
 def test_the_shipped_tree_matches_a_three_move_task() -> None:
     doc = read_tree_document(PICK_AND_PLACE_XML)
     assert check_tree_moves(doc, {"parcel": 3}, "parcel") == []

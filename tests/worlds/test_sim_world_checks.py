@@ -347,3 +347,37 @@ def test_a_refused_path_names_the_arm_link_and_the_obstacle_it_comes_near() -> N
         assert not check.clear
         assert "the right arm's lbr_iiwa_link_" in check.detail
         assert "within 0.010 m of ball_right at step 0" in check.detail
+
+
+@pytest.mark.sim
+def test_a_parcel_tipped_up_where_it_stands_is_not_a_drop() -> None:
+    # An arm shoving a standing box can tip it up off the table and let it fall back: the
+    # same lifted and falling object a drop is, but no palm ever held it. Where that leaves
+    # it is judged (experiment.judge); calling it a drop named the wrong failure.
+    from worlds.sim_world import SimWorld
+    from worlds.testing import DEFAULT_WORLD
+    from worlds.world_file import load_world
+
+    with SimWorld(load_world(DEFAULT_WORLD)) as sim:
+        scene, c = sim.scene, sim.scene.client
+        body = scene.object_ids["parcel"]
+        rest = sim.object_pose("parcel").position.copy()
+        half = 0.5 * sim.object_extents("parcel")
+        edge = (rest + [half[0], 0.0, -half[2]]).tolist()  # its far bottom edge
+        substeps = scene.spec.physics_hz // scene.spec.control_hz
+        lifted_and_falling = False
+        for tick in range(120):
+            for _ in range(substeps):
+                if tick < 6:  # a short upward shove under one edge: it tips up
+                    pb.applyExternalForce(
+                        body, -1, [0.0, 0.0, 60.0], edge, pb.WORLD_FRAME, physicsClientId=c
+                    )
+                scene.step(1)
+                sim.monitor.after_physics_step()
+            sim.collision.sync()
+            sim.monitor.after_control_step()
+            position = sim.object_pose("parcel").position
+            linear, _ = scene.object_velocity("parcel")
+            lifted_and_falling |= bool(position[2] > rest[2] + 0.01 and linear[2] < -0.2)
+        assert lifted_and_falling  # what the watch saw as a drop before it asked for a hold
+        assert not sim.safety.dropped
