@@ -41,7 +41,10 @@ class StringPorts(PortsMixin, register=False):
             if not isinstance(raw, str):
                 raise
             data_type = self.input_ports()[port_name].data_type
-            ok, value = convert_str_to_type(raw, data_type)
+            try:
+                ok, value = convert_str_to_type(raw, data_type)
+            except ValueError:  # py_trees raises for some types where it answers for others
+                ok = False
             if not ok:
                 raise TypeError(
                     f"{self.name}: port '{port_name}': cannot convert {raw!r} to "

@@ -72,3 +72,24 @@ def test_set_blackboard_copies_another_key_and_unset_removes_it() -> None:
     t.run(("s", "a", "b", "u"), [(S, S, S, S)])
     assert py_trees.blackboard.Blackboard.get("/dst") == "7"
     assert not py_trees.blackboard.Blackboard.exists("/src")
+
+
+def test_a_robot_leaf_reads_a_set_blackboard_string_as_its_ports_type() -> None:
+    # BT.CPP converts a string entry when a port of another type reads it; the robot's leaves
+    # did not, and a tree the checks accepted failed mid-run (TypeError on Approach).
+    import planner.leaves  # noqa: F401  (registers the robot's leaves)
+    from planner.loader import load_tree_string
+
+    root = load_tree_string(
+        '<root BTCPP_format="4"><BehaviorTree ID="M"><Sequence>'
+        '<SetBlackboard value="0.05" output_key="standoff"/>'
+        '<Approach name="in" object="parcel" standoff_m="{standoff}"/>'
+        "</Sequence></BehaviorTree></root>"
+    )
+    approach = next(n for n in root.iterate() if n.name == "in")
+    py_trees.blackboard.Blackboard.set("/standoff", "0.05")
+    assert approach.get_input("standoff_m") == pytest.approx(0.05)
+    assert isinstance(approach.get_input("standoff_m"), float)
+    py_trees.blackboard.Blackboard.set("/standoff", "near")
+    with pytest.raises(TypeError, match="port 'standoff_m': cannot convert 'near' to float"):
+        approach.get_input("standoff_m")
