@@ -471,6 +471,8 @@ def _translate(elem: ET.Element, registry: Registry, problems: list[TreeProblem]
             elem.tag = "TimeoutFromKey"  # read from the blackboard when entered
             return
         msec = _drop_attribute(elem, "msec")
+        if msec is None and "duration" not in elem.attrib:
+            problem("missing required attribute 'msec': the time allowed, ms (BT.CPP's Timeout)")
         if msec is not None:
             ms: int | None
             try:

@@ -62,6 +62,7 @@ def test_good_trees_have_no_problems(name: str) -> None:
         (
             "bad_decorator.xml",
             [
+                (8, '<Timeout name="none">', "missing required attribute 'msec'"),
                 (4, '<Inverter name="two">', "exactly 1 child, found 2"),
                 (8, '<Timeout name="none">', "exactly 1 child, found 0"),
             ],
