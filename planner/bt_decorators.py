@@ -17,7 +17,14 @@ from py_trees.ports import PortInformation
 from planner.bt_leaves import StringPorts
 from planner.decorators import Clock, SimTimeout, clock_from_setup
 
-__all__ = ["BUILTIN_DECORATORS", "Delay", "KeepRunningUntilFailure", "RetryForever", "RunOnce"]
+__all__ = [
+    "BUILTIN_DECORATORS",
+    "Delay",
+    "KeepRunningUntilFailure",
+    "RetryForever",
+    "RunOnce",
+    "propagate_skips",
+]
 
 Behaviour = py_trees.behaviour.Behaviour
 
@@ -43,6 +50,8 @@ class RunOnce(StringPorts, py_trees.decorators.Decorator, register=False):
     without ticking it (``then_skip="false"``). BT.CPP's default ``then_skip="true"`` returns
     SKIPPED, which py_trees has no status for: it is given as the status that makes the
     parent move on (FAILURE under a Selector/Fallback, SUCCESS elsewhere)."""
+
+    bt_can_skip = True  # see propagate_skips
 
     INPUT_PORTS = {
         "then_skip": PortInformation(data_type=bool, default_value=True, description="skip"),
@@ -82,6 +91,42 @@ def skipped_status(node: Behaviour) -> Status:
     if isinstance(node.parent, py_trees.composites.Selector):
         return Status.FAILURE
     return Status.SUCCESS
+
+
+def propagate_skips(root: Behaviour) -> None:
+    """BT.CPP v4's rule that a control node or decorator all of whose children were skipped
+    is skipped itself (its parent carries on as past any skipped child), in place.
+
+    Only the nodes above one that can skip (``bt_can_skip``: a ``_skipIf`` or ``_while``
+    condition, ``RunOnce``, ``SkipUnlessUpdated``) are wrapped: no other can find all its
+    children skipped, and the others' ticks stay as py_trees makes them."""
+    above: dict[int, Behaviour] = {}
+    for node in root.iterate():
+        if getattr(node, "bt_can_skip", False):
+            parent = node.parent
+            while parent is not None and id(parent) not in above:
+                above[id(parent)] = parent
+                parent = parent.parent
+    for node in above.values():
+        _skip_when_children_are(node)
+
+
+def _skip_when_children_are(node: Behaviour) -> None:
+    original_tick = node.tick
+
+    def tick():  # type: ignore[no-untyped-def]
+        mark_ticked(node)
+        for ticked in original_tick():
+            if (
+                ticked is node
+                and node.status in (Status.SUCCESS, Status.FAILURE)
+                and node.children
+                and all(was_skipped(child) for child in node.children)
+            ):
+                node.status = skipped_status(node)
+            yield ticked
+
+    setattr(node, "tick", tick)  # noqa: B010 - per instance, as the conditions are
 
 
 def mark_ticked(node: Behaviour) -> None:
@@ -139,9 +184,10 @@ class Delay(StringPorts, py_trees.decorators.Decorator, register=False):
 
 
 class RetryForever(StringPorts, py_trees.decorators.Decorator, register=False):
-    """BT.CPP ``RetryUntilSuccessful`` whose ``num_attempts`` is -1 (retry forever) or a
-    ``{key}``: SUCCESS when the child succeeds; after a failure, RUNNING and the child is
-    restarted, until ``num_attempts`` attempts have failed (then FAILURE)."""
+    """BT.CPP ``RetryUntilSuccessful`` whose ``num_attempts`` is -1 (retry forever), 0 (no
+    attempt: FAILURE) or a ``{key}``: SUCCESS when the child succeeds; after a failure,
+    RUNNING and the child is restarted, until ``num_attempts`` attempts have failed (then
+    FAILURE)."""
 
     INPUT_PORTS = {
         "num_attempts": PortInformation(data_type=int, required=True, description="-1: forever"),
@@ -157,6 +203,15 @@ class RetryForever(StringPorts, py_trees.decorators.Decorator, register=False):
         """A fresh entry: read the limit, count from zero."""
         self.failures = 0
         self.limit = int(self.get_input("num_attempts"))
+
+    def tick(self):  # type: ignore[no-untyped-def]
+        """As BT.CPP: no attempt to make (``num_attempts`` 0) is FAILURE, the child unticked."""
+        if self.status != Status.RUNNING and int(self.get_input("num_attempts")) == 0:
+            self.feedback_message = "num_attempts is 0: no attempt made"
+            self.status = Status.FAILURE
+            yield self
+            return
+        yield from super().tick()
 
     def update(self) -> Status:
         """Count the child's failures."""
@@ -197,9 +252,10 @@ class TimeoutFromKey(StringPorts, SimTimeout, register=False):
 
 
 class RepeatFromKey(StringPorts, py_trees.decorators.Decorator, register=False):
-    """BT.CPP ``Repeat num_cycles="{key}"`` (or ``-1``, for ever): restart the child after each
-    success until it has succeeded ``num_cycles`` times (SUCCESS); a failure is FAILURE. The
-    count is read when the node is entered; between cycles it returns RUNNING."""
+    """BT.CPP ``Repeat num_cycles="{key}"`` (or ``-1``, for ever; or ``0``, never): restart the
+    child after each success until it has succeeded ``num_cycles`` times (SUCCESS); a failure
+    is FAILURE. The count is read when the node is entered; between cycles it returns
+    RUNNING."""
 
     INPUT_PORTS = {
         "num_cycles": PortInformation(data_type=int, required=True, description="-1: forever"),
@@ -215,6 +271,15 @@ class RepeatFromKey(StringPorts, py_trees.decorators.Decorator, register=False):
         """Read the count, start from zero."""
         self.successes = 0
         self.cycles = int(self.get_input("num_cycles"))
+
+    def tick(self):  # type: ignore[no-untyped-def]
+        """As BT.CPP: no cycle to run (``num_cycles`` 0) is SUCCESS, the child unticked."""
+        if self.status != Status.RUNNING and int(self.get_input("num_cycles")) == 0:
+            self.feedback_message = "num_cycles is 0: nothing repeated"
+            self.status = Status.SUCCESS
+            yield self
+            return
+        yield from super().tick()
 
     def update(self) -> Status:
         """Count the child's successes."""

@@ -190,6 +190,8 @@ def install_conditions(
     remap: Mapping[str, Binding] | None = None,
 ) -> None:
     """Give ``node`` BT.CPP's pre/post conditions (see the module's notes), in place."""
+    if "_skipIf" in conditions or "_while" in conditions:
+        node.bt_can_skip = True  # type: ignore[attr-defined]  # see propagate_skips
     original_tick = node.tick
     original_stop = node.stop
 

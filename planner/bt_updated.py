@@ -77,6 +77,8 @@ class WasEntryUpdated(_Watcher, py_trees.behaviour.Behaviour, register=False):
 class SkipUnlessUpdated(_Watcher, py_trees.decorators.Decorator, register=False):
     """Tick the child only if ``entry`` was written since the last look; else SKIPPED."""
 
+    bt_can_skip = True  # see planner.bt_decorators.propagate_skips
+
     INPUT_PORTS = _ENTRY
     OUTPUT_PORTS: dict[str, PortInformation] = {}
 

@@ -34,6 +34,7 @@ import py_trees
 import py_trees.ports_utils
 from py_trees.parsers.behaviour_tree_xml import parse_behaviour_tree_xml
 
+from planner.bt_decorators import propagate_skips
 from planner.bt_scripting import attach_conditions
 from planner.tree_checks import check_tree_document
 from planner.tree_ports import Registry, effective_registry
@@ -169,6 +170,7 @@ def _load(
     _SUBTREE_IDS[root] = {name: next(iter(i)) for name, i in ids.items() if len(i) == 1}
     trees = doc.behaviour_trees()
     attach_conditions(trees[doc.main_tree_id], root, trees, "/")
+    propagate_skips(root)
     return root
 
 

@@ -31,6 +31,7 @@ from planner.tree_bindings import Binding, resolve, subtree_bindings
 from planner.tree_ports import Registry, effective_registry, key_problem, registry_class
 from planner.tree_problems import TreeProblem
 from planner.tree_reading import TreeDocument, describe, source_file, source_line
+from planner.tree_syntax import ROOT_PREFIX
 
 #: The blackboard key a run writes before the first tick: the task's object, which
 #: :func:`experiment.episode.run_episode` seeds (a tree's ``{object}`` at its top level).
@@ -77,7 +78,11 @@ def port_uses(doc: TreeDocument, registry: Registry | None = None) -> list[PortU
     uses: list[PortUse] = []
     unnamed = 0
     Frame = tuple[ET.Element, str, dict[str, Binding], tuple[str, ...]]
-    stack: list[Frame] = [(trees[doc.main_tree_id], "/", {}, (doc.main_tree_id,))]
+    main = trees[doc.main_tree_id]
+    # The main tree's own attributes are its defaults, as a subtree's are (the parser's
+    # rule): ``{@key}``'s ``ROOT__key="{key}"`` among them binds the root's ``/key``.
+    top = subtree_bindings(ET.Element("SubTree"), main, "/", {})
+    stack: list[Frame] = [(main, "/", top, (doc.main_tree_id,))]
     while stack:
         elem, ns, remap, chain = stack.pop()
         children = list(elem)
@@ -166,11 +171,15 @@ def dataflow_problems(
         if use.direction != "read" or key is None or key in written:
             continue
         seeded = ", ".join("{" + k.lstrip("/") + "}" for k in sorted(run_keys)) or "none"
+        # A {@key} is passed down under another name (planner.tree_syntax): say it as written.
+        name = use.name
+        if name.startswith(ROOT_PREFIX):
+            name = "@" + name[len(ROOT_PREFIX) :]
         problem = TreeProblem(
             source_file(use.elem, doc.file),
             source_line(use.elem),
             describe(use.elem),
-            f"port '{use.port}' reads {{{use.name}}} (blackboard key {key}), which nothing "
+            f"port '{use.port}' reads {{{name}}} (blackboard key {key}), which nothing "
             "writes: expected a node's output port, a SetBlackboard or a script to write it, "
             f"or a key the run sets before the first tick ({seeded} at the top level)",
         )

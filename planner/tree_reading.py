@@ -459,7 +459,7 @@ def _translate(elem: ET.Element, registry: Registry, problems: list[TreeProblem]
     elif lower in ("retry", "retryuntilsuccessful"):
         elem.tag = "Retry"
         attempts = elem.attrib.get("num_attempts")
-        if attempts is not None and (attempts.strip() == "-1" or attempts.startswith("{")):
+        if attempts is not None and (attempts.strip() in ("-1", "0") or attempts.startswith("{")):
             elem.tag = "RetryForever"  # BT.CPP semantics, the count read when entered
             return
         attempts = _drop_attribute(elem, "num_attempts")
@@ -489,7 +489,7 @@ def _translate(elem: ET.Element, registry: Registry, problems: list[TreeProblem]
     elif lower == "repeat":
         elem.tag = "Repeat"
         count = elem.attrib.get("num_cycles", "")
-        if count.startswith("{") or count.strip() == "-1":
+        if count.startswith("{") or count.strip() in ("-1", "0"):
             elem.tag = "RepeatFromKey"
             return
         cycles = _drop_attribute(elem, "num_cycles")

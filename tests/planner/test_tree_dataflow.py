@@ -59,6 +59,37 @@ def test_a_key_nothing_writes_is_a_problem() -> None:
     ]  # fmt: skip
 
 
+ROOT_KEY_TREE = """<root BTCPP_format="4" main_tree_to_execute="Task">
+  <BehaviorTree ID="Task">
+    <Sequence>
+      <Script code="{writes} := 'parcel'"/>
+      <SubTree ID="Inner"/>
+    </Sequence>
+  </BehaviorTree>
+  <BehaviorTree ID="Inner">
+    <Sequence>
+      <StubCheck value="{{@target}}"/>
+      <StubCheck value="{{@object}}"/>
+    </Sequence>
+  </BehaviorTree>
+</root>
+"""
+
+
+def test_a_root_key_read_in_a_subtree_is_the_root_blackboards() -> None:
+    # {@target} in a subtree reads the root's /target, which the main tree's script writes;
+    # {@object} is the key the run seeds. Both had been refused as /ROOT__target unwritten.
+    doc = read_tree_document_string(ROOT_KEY_TREE.format(writes="target"), "t.xml")
+    assert dataflow_problems(doc) == []
+    reads = {u.binding.key for u in port_uses(doc) if u.elem.tag == "StubCheck"}
+    assert reads == {"/target", "/object"}
+    doc = read_tree_document_string(ROOT_KEY_TREE.format(writes="other"), "t.xml")
+    [problem] = dataflow_problems(doc)
+    assert problem.message.startswith(
+        "port 'value' reads {@target} (blackboard key /target), which nothing writes"
+    )
+
+
 def test_transport_reading_a_state_nothing_writes_is_refused() -> None:
     text = (
         '<root main_tree_to_execute="M"><BehaviorTree ID="M"><Sequence name="s">'

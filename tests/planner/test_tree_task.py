@@ -71,7 +71,7 @@ def test_a_grasps_own_no_move_default_written_out_as_groot2_saves_it_is_not_a_mo
     [problem] = check_tree_moves(doc, {"parcel": 1}, None)
     # AtGoal has no such default: its -1 is still a move the task lacks.
     assert str(problem) == (
-        'saved.xml:7: <AtGoal>: move -1, but the world\'s task has 1 move for parcel (indices 0..0)'
+        "saved.xml:7: <AtGoal>: move -1, but the world's task has 1 move for parcel (indices 0..0)"
     )
 
 

@@ -3,6 +3,8 @@ RetryUntilSuccessful with num_attempts="-1" and "{key}"."""
 
 from __future__ import annotations
 
+import pytest
+
 from tests.planner.bt_conformance.conftest import INV, F, R, S, Ticker
 
 
@@ -84,3 +86,22 @@ def test_repeat_cycles_from_the_blackboard_and_for_ever() -> None:
     t.run(("r",), [(R,), (R,), (S,)])
     t2 = Ticker(f'<Repeat name="r" num_cycles="-1">{leaf("a", "S,S,S,F")}</Repeat>')
     t2.run(("r",), [(R,), (R,), (R,), (F,)])
+
+
+@pytest.mark.parametrize("count", ['"0"', '"{n}"'])
+def test_zero_cycles_or_attempts_tick_nothing(count: str) -> None:
+    # BT.CPP: Repeat of 0 cycles succeeds and Retry of 0 attempts fails, the child unticked
+    # (a literal 0 had repeated for ever, a key holding 0 ticked the child once).
+    zero = '<SetBlackboard name="w" value="0" output_key="n"/>'
+    t = Ticker(
+        f'<Sequence name="s">{zero}<Repeat name="r" num_cycles={count}>{leaf("a", "S")}'
+        "</Repeat></Sequence>"
+    )
+    t.run(("s", "r"), [(S, S)])
+    assert t.nodes["a"].ticks == 0
+    t2 = Ticker(
+        f'<Sequence name="s">{zero}<RetryUntilSuccessful name="r" num_attempts={count}>'
+        f"{leaf('a', 'S')}</RetryUntilSuccessful></Sequence>"
+    )
+    t2.run(("s", "r"), [(F, F)])
+    assert t2.nodes["a"].ticks == 0

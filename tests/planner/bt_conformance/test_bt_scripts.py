@@ -78,6 +78,28 @@ def test_skip_if_lets_a_sequence_and_a_fallback_carry_on() -> None:
     t2.run(("f",), [(F,)])
 
 
+def test_a_control_node_whose_children_are_all_skipped_is_skipped_itself() -> None:
+    # BT.CPP v4: a Fallback of optional branches, each skipped, is SKIPPED, and the Sequence
+    # above carries on (it had failed the Sequence: a Fallback of failures).
+    optional = '<Fallback name="f">' + leaf("a", "S", SKIP) + leaf("b", "S", SKIP) + "</Fallback>"
+    t = Ticker('<Sequence name="s">' + optional + leaf("c", "S") + "</Sequence>")
+    t.run(("s", "f", "c"), [(S, S, S)])
+    assert t.nodes["a"].ticks == t.nodes["b"].ticks == 0
+    # A Sequence of skipped children in a Fallback is skipped there: the Fallback moves on.
+    inner = '<Sequence name="q">' + leaf("a", "F", SKIP) + "</Sequence>"
+    t2 = Ticker('<Fallback name="f">' + inner + leaf("b", "S") + "</Fallback>")
+    t2.run(("f", "q", "b"), [(S, F, S)])
+    # An Inverter over a skipped child is skipped, not inverted.
+    t3 = Ticker(
+        '<Sequence name="s"><Inverter name="i">' + leaf("a", "S", SKIP) + "</Inverter>"
+        + leaf("b", "S") + "</Sequence>"
+    )  # fmt: skip
+    t3.run(("s", "i", "b"), [(S, S, S)])
+    # One child that ran decides as before.
+    t4 = Ticker('<Fallback name="f">' + leaf("a", "S", SKIP) + leaf("b", "F") + "</Fallback>")
+    t4.run(("f",), [(F,)])
+
+
 def test_while_halts_a_running_node_when_it_turns_false() -> None:
     t = Ticker(
         '<Sequence name="s"><Script name="w" code="on := true"/>'
