@@ -532,8 +532,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     handler: Callable[[argparse.Namespace], int] = args.handler
+    from planner.tree_problems import LeafCodeError
+
     try:
         return handler(args)
+    except LeafCodeError as err:  # a user's leaf's bug: its line, not Duet's traceback
+        print(f"error: {err}", file=sys.stderr)
+        return EXIT_BAD_INPUT
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130

@@ -53,3 +53,9 @@ class TreeFileError(ValueError):
             raise ValueError("TreeFileError: expected at least one problem")
         self.problems: tuple[TreeProblem, ...] = tuple(problems)
         super().__init__("\n".join(str(p) for p in self.problems))
+
+
+class LeafCodeError(RuntimeError):
+    """A user's leaf raised other than an impossible value (a bug in its code), or its
+    ``update`` returned no status (:mod:`planner.leaves.base`): the message names the file and
+    line, the leaf and its class. ``app.py`` reports it as bad input, exit code 2."""

@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import functools
+import inspect
 import re
+import traceback
 from collections.abc import Callable, Sequence
 from typing import Any, ClassVar
 
@@ -17,6 +19,8 @@ from planner.bt_leaves import StringPorts
 from planner.composition import MovePlan, compose_move, squeeze_force
 from planner.leaves.set_down import table_found_dz
 from planner.port import Move, WorldPort
+from planner.runner import readable
+from planner.tree_problems import LeafCodeError
 from skills.library import SkillLibrary
 
 #: Control period used when ``setup()`` is not given one, s.
@@ -77,8 +81,31 @@ def _no_data_hint(leaf: py_trees.behaviour.Behaviour, err: Exception) -> str:
     return f"; written by {named} in this tree, none of which has yet"
 
 
+#: The packages whose leaves are Duet's own: an error in them is Duet's bug, a traceback.
+OWN_PACKAGES = frozenset({"planner", "skills", "worlds", "experiment", "affordances"})
+
+
+def _user_leaf(leaf: WorldLeaf) -> bool:
+    return type(leaf).__module__.split(".")[0] not in OWN_PACKAGES
+
+
+def _code_error(leaf: WorldLeaf, hook: str, err: Exception) -> LeafCodeError:
+    """What a user's leaf's bug says: where in its file it raised, which leaf, what."""
+    frames = traceback.extract_tb(err.__traceback__)
+    source = inspect.getsourcefile(type(leaf)) or ""
+    own = [f for f in frames if f.filename == source] or frames[-1:]
+    where = f"{own[-1].filename}:{own[-1].lineno}: " if own else ""
+    kind = type(leaf).__name__
+    return LeafCodeError(
+        f"{where}leaf '{readable(leaf.name)}' ({kind}) raised {type(err).__name__} in {hook}(): "
+        f"{err}; a bug in the leaf's code (its own failures are self.fail(...))"
+    )
+
+
 def _failing_softly(hook: Callable[..., Any], name: str) -> Callable[..., Any]:
-    """``hook`` (a leaf's ``initialise`` or ``update``), failing the leaf on an impossible value."""
+    """``hook`` (a leaf's ``initialise`` or ``update``), failing the leaf on an impossible value;
+    a user's leaf's other errors, and an ``update`` that returns no status, are a
+    :class:`LeafCodeError` naming it."""
 
     @functools.wraps(hook)
     def guarded(self: WorldLeaf) -> Any:
@@ -86,7 +113,7 @@ def _failing_softly(hook: Callable[..., Any], name: str) -> Callable[..., Any]:
             message, self._impossible = self._impossible, None
             return self.fail(message)
         try:
-            return hook(self)
+            result = hook(self)
         except IMPOSSIBLE_VALUE_ERRORS as err:
             hint = _no_data_hint(self, err) if isinstance(err, NoDataAvailable) else ""
             text = str(err).rstrip(".") if hint else str(err)
@@ -95,6 +122,18 @@ def _failing_softly(hook: Callable[..., Any], name: str) -> Callable[..., Any]:
                 return self.fail(message)
             self._impossible = message  # the tick's update reports it
             return None
+        except Exception as err:
+            if not _user_leaf(self):
+                raise
+            raise _code_error(self, name, err) from err
+        if name == "update" and not isinstance(result, Status):
+            where = inspect.getsourcefile(type(self)) or type(self).__module__
+            raise LeafCodeError(
+                f"{where}: leaf '{readable(self.name)}' ({type(self).__name__}) update() returned "
+                f"{result!r}: expected a py_trees Status (SUCCESS, FAILURE or RUNNING; "
+                "return self.succeed(...), self.fail(...) or self.running(...))"
+            )
+        return result
 
     return guarded
 

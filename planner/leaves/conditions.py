@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from typing import ClassVar
 
 import numpy as np
@@ -11,7 +12,7 @@ from py_trees.ports import PortInformation
 from affordances import SemanticAction
 from planner.composition import MovePlan, goal_error
 from planner.leaves.base import WorldLeaf, composed_move, composition_ports
-from planner.move_result import move_placements
+from planner.move_result import move_placements, move_results, publish_move_result
 from planner.port import ObjectSensing, ObstacleScene, PalmControl, Pose
 from planner.skill_choice import SkillChoiceError
 from skills.composer import DualArmState, relative_from_world
@@ -87,7 +88,11 @@ class AtGoal(WorldLeaf):
     """The object is within tolerance of a move's goal pose (at the height its last
     successful Transport set it down at, when it felt the surface elsewhere:
     :attr:`~planner.move_result.MoveResult.rested_z`; at the place its Insert seated it, when
-    it found the fixture elsewhere: :attr:`~planner.move_result.MoveResult.found_xy`)."""
+    it found the fixture elsewhere: :attr:`~planner.move_result.MoveResult.found_xy`).
+
+    A move whose carry is running or was halted, with no placement yet, is placed where this
+    finds it: the move's result is published as SUCCESS with the
+    errors measured here, as the judge and the records read placements."""
 
     WORLD_ROLES: ClassVar[tuple[type, ...]] = (ObjectSensing,)
 
@@ -127,8 +132,23 @@ class AtGoal(WorldLeaf):
             float(self.get_input("tolerance_deg")),
         )
         if err_m <= tol_m and deg <= tol_deg:
+            self._place_halted_carry(name, index, err_m, err_rad)
             return self.succeed(text)
         return self.fail(text)
+
+    def _place_halted_carry(self, name: str, index: int, err_m: float, err_rad: float) -> None:
+        """A carry found at the goal while it runs (a reactive parent then halts it:
+        ``ReactiveFallback(AtGoal, Transport)``) or after it was halted is the move's
+        placement, measured here: publish it as the Transport would have, unless the move was
+        placed before."""
+        latest = move_results().get((name, index))
+        halted = latest is not None and latest.status in (Status.RUNNING, Status.INVALID)
+        if latest is None or not halted or (name, index) in move_placements():
+            return
+        placed = dataclasses.replace(
+            latest, status=Status.SUCCESS, placement_error_m=err_m, placement_error_rad=err_rad
+        )
+        publish_move_result(placed, self.name)
 
 
 class PathClear(WorldLeaf):

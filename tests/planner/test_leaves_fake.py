@@ -27,7 +27,7 @@ from planner.leaves import (
 )
 from planner.leaves.base import SQUEEZE_FORCE_N
 from planner.leaves.release import MAX_REOPENINGS
-from planner.move_result import MoveResult, move_results
+from planner.move_result import MoveResult, move_placements, move_results, publish_move_result
 from planner.port import Pose
 from planner.testing import (
     CONTROL_DT,
@@ -387,6 +387,28 @@ def test_at_goal_reports_the_errors(fake_world: FakeWorld, library: SkillLibrary
     bad = set_up(AtGoal("bad"), fake_world, library, object="parcel", move=7)
     bad.tick_once()
     assert "expected an index below 3" in bad.feedback_message
+
+
+def test_at_goal_places_a_carry_it_finds_there_running_or_halted(
+    fake_world: FakeWorld, library: SkillLibrary
+) -> None:
+    # ReactiveFallback(AtGoal, carry): AtGoal succeeds while the carry runs and the parent
+    # halts it, so no Transport ever publishes the move's placement; the judge read none.
+    goal = fake_world.task_moves("parcel")[0].goal
+    fake_world.object_pose = lambda name: goal  # type: ignore[method-assign]
+    leaf = set_up(AtGoal("at_goal"), fake_world, library, object="parcel", move=0)
+    leaf.tick_once()
+    assert leaf.status == Status.SUCCESS and move_placements() == {}  # no carry of it: nothing
+    carrying = MoveResult("parcel", 0, 1.0, 0.0, Status.RUNNING, skill="pick_and_place")
+    publish_move_result(carrying, "carry")
+    leaf.tick_once()
+    placed = move_placements()[("parcel", 0)]
+    assert placed.status == Status.SUCCESS and placed.skill == "pick_and_place"
+    assert placed.placement_error_m == pytest.approx(0.0, abs=1e-9)
+    # A move placed before keeps its placement (a correction halted there changes nothing).
+    publish_move_result(dataclasses.replace(carrying, status=Status.INVALID), "carry")
+    leaf.tick_once()
+    assert move_placements()[("parcel", 0)] is placed
 
 
 def _plan_without_avoidance(plan: SemanticAction) -> SemanticAction:

@@ -126,6 +126,73 @@ def test_app_validate_and_nodes_take_leaves(
     assert "--> check.high" in capsys.readouterr().out
 
 
+BUGGY = """
+from py_trees.common import Status
+from py_trees.ports import PortInformation
+
+from planner.leaves import WorldLeaf
+
+
+class Misspelt(WorldLeaf):
+    NODE_TYPE = "Condition"
+    INPUT_PORTS = {"object": PortInformation(str, description="the object")}
+    OUTPUT_PORTS = {}
+
+    def update(self) -> Status:
+        return self.world.objct_pose(self.get_input("object"))
+
+
+class Silent(WorldLeaf):
+    NODE_TYPE = "Condition"
+    INPUT_PORTS = {"object": PortInformation(str, description="the object")}
+    OUTPUT_PORTS = {}
+
+    def update(self) -> Status:
+        self.succeed("looked")
+"""
+
+
+@pytest.mark.parametrize(
+    ("leaf", "says"),
+    [
+        (
+            "Misspelt",
+            "buggy_leaves.py:14: leaf 'check.Misspelt' (Misspelt) raised AttributeError in update(): "
+            "'FakeWorld' object has no attribute 'objct_pose'",
+        ),
+        (
+            "Silent",
+            "leaf 'check.Silent' (Silent) update() returned None: expected a py_trees Status",
+        ),
+    ],
+)
+def test_a_bug_in_a_users_leaf_names_its_line_and_the_leaf(
+    tmp_path: Path, registry_restored: None, library: SkillLibrary, leaf: str, says: str
+) -> None:
+    # An AttributeError in a user's update() had ended the run in Duet's traceback (exit 1);
+    # an update() without a return, in 7200 "invalid status" lines until the time limit.
+    from planner.tree_problems import LeafCodeError
+
+    path = tmp_path / "buggy_leaves.py"
+    path.write_text(BUGGY, encoding="utf-8")
+    register_leaves([str(path)])
+    tree = tmp_path / "t.xml"
+    tree.write_text(
+        TREE.replace(
+            '<HeightAtLeast name="high" object="parcel" min_height_m="{low}" height_m="{z}"/>',
+            f'<{leaf} object="parcel"/>',
+        ),
+        encoding="utf-8",
+    )
+    world = FakeWorld(objects=[FakeObject("parcel", np.array([0.20, 0.30, 0.15]))])
+    bt = py_trees.trees.BehaviourTree(load_tree(tree))
+    bt.setup(world=world, library=library)
+    with pytest.raises(LeafCodeError) as err:
+        bt.tick()
+    assert says in str(err.value)
+    assert str(err.value).startswith(str(path))
+
+
 def test_a_module_path_registers_its_leaves(
     tmp_path: Path, registry_restored: None, monkeypatch: pytest.MonkeyPatch
 ) -> None:
