@@ -31,6 +31,13 @@ from planner.tree_reading import TreeDocument, describe, source_file, source_lin
 from planner.tree_syntax import script_keys
 
 COMPOSITES = ("Sequence", "Selector", "Parallel")
+#: Per translated tag, py_trees' parameter -> the BT.CPP attribute the file wrote
+#: (:mod:`planner.tree_reading` renames them): what a problem names.
+BT_SPELLINGS: dict[str, dict[str, str]] = {
+    "Retry": {"num_failures": "num_attempts"},
+    "Repeat": {"num_success": "num_cycles"},
+    "Timeout": {"duration": "msec"},
+}
 #: Parallel policies the py_trees parser can build (``success_on_selected`` needs a child list).
 PARALLEL_POLICIES = ("success_on_all", "success_on_one")
 _BUILTIN_DECORATORS: dict[str, type[py_trees.decorators.Decorator]] = {
@@ -156,15 +163,17 @@ class _Checker:
     def check_params(self, elem: ET.Element, entry: Any, allow_keys: bool) -> set[str]:
         """Check constructor-argument attributes; return the names accepted."""
         params = constructor_params(entry)
+        # The reader gave BT.CPP's spellings py_trees' names: say them as the file has them.
+        spelt = BT_SPELLINGS.get(elem.tag, {})
         for pname, param in params.items():
             if param.required and pname not in elem.attrib:
-                self.add(elem, f"missing required attribute '{pname}'")
+                self.add(elem, f"missing required attribute '{spelt.get(pname, pname)}'")
         for key, value in elem.attrib.items():
             if key not in params:
                 continue
             is_key, bad = key_problem(value)
             if bad:
-                self.add(elem, f"attribute '{key}': {bad}")
+                self.add(elem, f"attribute '{spelt.get(key, key)}': {bad}")
             elif is_key and not allow_keys:
                 self.add(
                     elem,
@@ -174,11 +183,12 @@ class _Checker:
             elif not is_key:
                 bad = literal_problem(value, params[key].annotation, key)
                 if bad:
-                    self.add(elem, f"attribute '{key}': {bad}")
+                    self.add(elem, f"attribute '{spelt.get(key, key)}': {bad}")
         unknown = [k for k in elem.attrib if k not in params and k != "name"]
         if registry_class(entry) in _BUILTIN_DECORATORS.values():
+            names = {spelt.get(p, p) for p in params}
             for key in unknown:
-                self.add(elem, f"unknown attribute '{key}'; expected one of {one_of(set(params))}")
+                self.add(elem, f"unknown attribute '{key}'; expected one of {one_of(names)}")
         return set(params)
 
     def check_ports_node(self, elem: ET.Element, entry: Any) -> None:
@@ -194,7 +204,9 @@ class _Checker:
             if key == "name" or key in params:
                 continue
             if key not in inputs and key not in outputs:
-                self.add(elem, f"unknown port '{key}'; expected one of {one_of(accepted)}")
+                spelt = BT_SPELLINGS.get(elem.tag, {})
+                names = {spelt.get(a, a) for a in accepted}
+                self.add(elem, f"unknown port '{key}'; expected one of {one_of(names)}")
                 continue
             is_key, bad = key_problem(value)
             if bad:

@@ -157,8 +157,8 @@ class Silent(WorldLeaf):
     [
         (
             "Misspelt",
-            "buggy_leaves.py:14: leaf 'check.Misspelt' (Misspelt) raised AttributeError in update(): "
-            "'FakeWorld' object has no attribute 'objct_pose'",
+            "buggy_leaves.py:14: leaf 'check.Misspelt' (Misspelt) raised AttributeError in "
+            "update(): 'FakeWorld' object has no attribute 'objct_pose'",
         ),
         (
             "Silent",

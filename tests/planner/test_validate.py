@@ -136,9 +136,9 @@ def test_decorator_and_parallel_attributes() -> None:
             "attribute 'msec': expected a whole number of milliseconds from 1 to 86400000, "
             "got 'soon'",
         ),
-        (4, "attribute 'num_failures': cannot convert 'many' to int"),
-        (7, "missing required attribute 'num_failures'"),
-        (8, "unknown attribute 'speed'; expected one of num_success"),
+        (4, "attribute 'num_attempts': cannot convert 'many' to int"),
+        (7, "missing required attribute 'num_attempts'"),
+        (8, "unknown attribute 'speed'; expected one of num_cycles"),
     ]  # fmt: skip
 
 
@@ -245,3 +245,22 @@ def test_values_that_would_crash_a_run_are_refused_at_validate(tmp_path: Path) -
     assert "port 'standoff_m': expected a finite float within 1e+06, got 'nan'" in messages
     assert "port 'segment_s': expected a duration greater than 0 s, got '0'" in messages
     assert sum("attribute 'msec': expected a whole number" in m for m in messages) == 2
+
+
+def test_decorator_problems_name_the_attributes_as_bt_cpp_spells_them() -> None:
+    # The reader renames them for py_trees (num_attempts -> num_failures, num_cycles ->
+    # num_success, msec -> duration); the problems had named py_trees' spellings.
+    body = """    <Sequence name="s">
+      <RetryUntilSuccessful name="r" num_attemps="3"><AlwaysSuccess/></RetryUntilSuccessful>
+      <Repeat name="p" num_cycle="2"><AlwaysSuccess/></Repeat>
+      <Timeout name="t" msecs="100"><AlwaysSuccess/></Timeout>
+      <RetryUntilSuccessful name="q" num_attempts="abc"><AlwaysSuccess/></RetryUntilSuccessful>
+    </Sequence>"""
+    messages = [m for _, m in problems_of(wrap(body))]
+    assert "missing required attribute 'num_attempts'" in messages
+    assert "unknown attribute 'num_attemps'; expected one of num_attempts" in messages
+    assert "missing required attribute 'num_cycles'" in messages
+    assert "unknown attribute 'num_cycle'; expected one of num_cycles" in messages
+    assert "unknown port 'msecs'; expected one of msec" in messages
+    assert "attribute 'num_attempts': cannot convert 'abc' to int" in messages
+    assert not [m for m in messages if "num_failures" in m or "num_success" in m]
