@@ -15,7 +15,7 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-from planner.default_tree import PICK_AND_PLACE_XML, TaskStep, task_xml
+from planner.default_tree import PICK_AND_PLACE_XML, TaskStep, task_xml, template_main_tree
 from planner.port import Move
 from planner.tree_dataflow import RUN_WRITES
 from planner.tree_objects import check_tree_objects
@@ -63,9 +63,11 @@ def preflight_problems(
     # Without --tree, the world's own tree template (its ``tree``) or the shipped one.
     template = world.tree_path() if tree is None else None
     checked = tree if tree is not None else template
+    # A template saved by Groot2 names no main tree: its structure does.
+    template_main = template_main_tree(template) if template is not None else None
     if checked is not None:
         tree_problems = validate_tree(
-            checked, main_tree_id=main_tree if tree else None, run_keys=RUN_WRITES
+            checked, main_tree_id=main_tree if tree else template_main, run_keys=RUN_WRITES
         )
         if tree_problems:
             return [str(p) for p in tree_problems]
@@ -75,7 +77,7 @@ def preflight_problems(
         if tree is not None:
             doc = read_tree_document(tree, main_tree_id=main_tree)
         else:
-            doc = read_tree_document(template or PICK_AND_PLACE_XML)
+            doc = read_tree_document(template or PICK_AND_PLACE_XML, main_tree_id=template_main)
     except TreeFileError as err:
         return [str(p) for p in err.problems]
     lines = [p.format(world_file) for p in feasibility_problems(world, tree_grasps(doc))]

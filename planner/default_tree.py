@@ -42,7 +42,14 @@ from planner.loader import load_tree, load_tree_string
 from planner.tree_dataflow import RUN_WRITES
 from planner.tree_problems import TreeFileError, TreeProblem
 
-__all__ = ["PICK_AND_PLACE_XML", "TaskStep", "default_tree", "pick_and_place_xml", "task_xml"]
+__all__ = [
+    "PICK_AND_PLACE_XML",
+    "TaskStep",
+    "default_tree",
+    "pick_and_place_xml",
+    "task_xml",
+    "template_main_tree",
+]
 
 #: The shipped tree of the paper's task.
 PICK_AND_PLACE_XML = Path(__file__).resolve().parent / "trees" / "pick_and_place.xml"
@@ -125,7 +132,10 @@ def _shipped(
         root = ET.parse(template).getroot()
     except (ET.ParseError, OSError) as err:
         raise _template_problem(template, f"expected a readable XML file ({err})") from None
-    main = root.find(f"BehaviorTree[@ID='{root.get('main_tree_to_execute')}']")
+    main_id = root.get("main_tree_to_execute") or _main_by_structure(root)
+    if main_id is not None:
+        root.set("main_tree_to_execute", main_id)
+    main = root.find(f"BehaviorTree[@ID='{main_id}']")
     sequence = main[0] if main is not None and len(main) else None
     if sequence is None or sequence.tag != "Sequence":
         raise _template_problem(
@@ -146,6 +156,30 @@ def _shipped(
             "(one is made per move of the task)",
         )
     return root, sequence, instance, definition
+
+
+def _main_by_structure(root: ET.Element) -> str | None:
+    """In a template saved without ``main_tree_to_execute`` (Groot2 writes none), the one
+    tree whose root Sequence holds ``<SubTree ID="PickAndPlace">``; None if not just one."""
+    found = [
+        bt.get("ID")
+        for bt in root.findall("BehaviorTree")
+        if len(bt)
+        and bt[0].tag == "Sequence"
+        and any(e.tag == "SubTree" and e.get("ID") == _STEP_TREE for e in bt[0])
+    ]
+    return found[0] if len(found) == 1 else None
+
+
+def template_main_tree(template: Path) -> str | None:
+    """The main tree of a world's tree template: its ``main_tree_to_execute``, or in a file
+    saved by Groot2 without one, the one tree whose root Sequence holds the PickAndPlace
+    subtree (None if the file cannot tell: the reader then says so)."""
+    try:
+        root = ET.parse(template).getroot()
+    except (ET.ParseError, OSError):
+        return None
+    return root.get("main_tree_to_execute") or _main_by_structure(root)
 
 
 def _with_moves(definition: ET.Element, tree_id: str, step: TaskStep) -> ET.Element:

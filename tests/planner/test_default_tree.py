@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import re
+from pathlib import Path
+
 import py_trees
 import pytest
 
@@ -11,8 +14,9 @@ from planner.default_tree import (
     default_tree,
     pick_and_place_xml,
     task_xml,
+    template_main_tree,
 )
-from planner.loader import load_tree
+from planner.loader import load_tree, load_tree_string
 
 
 def outline(root: py_trees.behaviour.Behaviour) -> list[tuple[str, str]]:
@@ -168,3 +172,18 @@ def test_a_leaf_skips_only_the_port_debug_lines_nothing_shows() -> None:
         assert leaf.log(LogLevel.DEBUG, "registered a key").endswith(": registered a key")
     finally:
         py_trees.logging.level = previous
+
+
+def test_a_template_saved_by_groot2_without_a_main_tree_is_read_by_its_structure(
+    tmp_path: Path,
+) -> None:
+    # Groot2 saves no main_tree_to_execute: a world's `tree:` of such a file had been refused
+    # ("cannot tell the main tree"), and --main-tree does not reach a world's template.
+    text = PICK_AND_PLACE_XML.read_text(encoding="utf-8")
+    saved = tmp_path / "saved.xml"
+    saved.write_text(re.sub(r'\s+main_tree_to_execute="[^"]*"', "", text, count=1), "utf-8")
+    assert 'main_tree_to_execute="' not in saved.read_text(encoding="utf-8")
+    assert template_main_tree(saved) == template_main_tree(PICK_AND_PLACE_XML)
+    made = load_tree_string(task_xml([TaskStep("{object}", 2)], saved))
+    shipped = load_tree_string(task_xml([TaskStep("{object}", 2)], PICK_AND_PLACE_XML))
+    assert outline(made) == outline(shipped)
