@@ -349,13 +349,32 @@ def _add_main_tree_option(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def _path_text(text: str) -> str:
+    """An argument naming a file or folder: not empty (an empty ``--out`` had meant the current
+    folder, and a campaign wrote its results there)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("expected a path, got an empty string")
+    return text
+
+
+def _seed(text: str) -> int:
+    """A seed: a whole number from 0 (numpy's generators take no negative seed)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 0, got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 0, got {value}")
+    return value
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser with one sub-command per job."""
     # prog: how the user ran it (app.py, duet-robot, python -m duet_robot).
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     demo = sub.add_parser("demo", help="learn a DMP from a synthetic demo and plot generalisations")
-    demo.add_argument("--out", default="out", help="output folder (default: out)")
+    demo.add_argument("--out", type=_path_text, default="out", help="output folder (default: out)")
     demo.add_argument("--json", action="store_true", help="print a JSON summary as the last line")
     demo.set_defaults(handler=_demo_command)
     validate = sub.add_parser(
@@ -380,7 +399,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_leaves_option(validate)
     validate.set_defaults(handler=_validate_command)
     nodes = sub.add_parser("nodes", help="export a Groot2 TreeNodesModel of our leaves")
-    nodes.add_argument("--out", help="write to this file instead of printing")
+    nodes.add_argument("--out", type=_path_text, help="write to this file instead of printing")
     nodes.add_argument(
         "--embed",
         metavar="TREE.xml",
@@ -392,7 +411,7 @@ def build_parser() -> argparse.ArgumentParser:
     render = sub.add_parser("render-tree", help="draw a tree file")
     render.add_argument("tree", help="tree XML")
     render.add_argument("--format", choices=["ascii", "dot", "svg"], default="ascii")
-    render.add_argument("--out", help="write to this file instead of printing")
+    render.add_argument("--out", type=_path_text, help="write to this file instead of printing")
     _add_main_tree_option(render)
     _add_leaves_option(render)
     render.set_defaults(handler=_render_tree_command)
@@ -417,12 +436,12 @@ def build_parser() -> argparse.ArgumentParser:
     )
     run.add_argument(
         "--seed",
-        type=int,
+        type=_seed,
         help="override the world's sim.seed; a run makes no random choice today (physics, "
         "skills and tree are deterministic), so the same world gives the same run whatever "
         "the seed; trials draw their worlds from trials --seed",
     )
-    run.add_argument("--out", default="out", help="output folder (default: out)")
+    run.add_argument("--out", type=_path_text, default="out", help="output folder (default: out)")
     run.add_argument("--gui", action="store_true", help="show PyBullet's window (needs a display)")
     run.add_argument("--no-animation", action="store_true", help="skip the GIF (faster)")
     run.add_argument("--json", action="store_true", help="print a JSON summary as the last line")
@@ -439,7 +458,7 @@ def build_parser() -> argparse.ArgumentParser:
     trials = sub.add_parser("trials", help="the paper's experiment: many randomised trials")
     trials.add_argument("world", help="world file (robot, table, object, settings)")
     trials.add_argument("--n", type=int, default=20, help="number of trials (default: 20)")
-    trials.add_argument("--seed", type=int, default=0, help="campaign seed (default: 0)")
+    trials.add_argument("--seed", type=_seed, default=0, help="campaign seed (default: 0)")
     trials.add_argument(
         "--tree",
         help="behaviour tree XML every trial runs (default: planner/trees/pick_and_place.xml)",
@@ -461,7 +480,9 @@ def build_parser() -> argparse.ArgumentParser:
         help="with --backend ray: the cluster's address (ray start --head prints it); "
         "default: a local Ray of --workers CPUs",
     )
-    trials.add_argument("--out", default="out/trials", help="folder of results.jsonl")
+    trials.add_argument(
+        "--out", type=_path_text, default="out/trials", help="folder of results.jsonl"
+    )
     trials.add_argument(
         "--hard",
         action="store_true",
@@ -484,7 +505,9 @@ def build_parser() -> argparse.ArgumentParser:
     report = sub.add_parser(
         "report", help="a campaign's outcomes with Wilson 95 %% intervals, and report.png"
     )
-    report.add_argument("out", help="campaign folder (of results.jsonl) or a results .jsonl file")
+    report.add_argument(
+        "out", type=_path_text, help="campaign folder (of results.jsonl) or a results .jsonl file"
+    )
     report.add_argument("--json", action="store_true", help="print a JSON summary as the last line")
     report.set_defaults(handler=report_command)
     skills = sub.add_parser("skills", help="list a skill library")

@@ -61,6 +61,27 @@ def test_trials_refuse_nonpositive_counts(tmp_path: Path) -> None:
     assert exit_code(["trials", DEFAULT, "--n", "0", "--out", str(tmp_path)]) == 2
 
 
+@pytest.mark.parametrize(
+    ("argv", "says"),
+    [
+        (["trials", DEFAULT, "--seed", "-1"], "argument --seed: expected a whole number >= 0"),
+        (["run", DEFAULT, "--seed", "-1"], "argument --seed: expected a whole number >= 0"),
+        (["trials", DEFAULT, "--out", ""], "argument --out: expected a path, got an empty"),
+        (["run", DEFAULT, "--out", " "], "argument --out: expected a path, got an empty"),
+        (["report", ""], "argument out: expected a path, got an empty string"),
+    ],
+)
+def test_a_negative_seed_or_an_empty_path_is_refused_before_anything_runs(
+    argv: list[str], says: str, capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    # --seed -1 had ended a campaign in numpy's traceback; an empty --out wrote the campaign
+    # into the current folder.
+    with pytest.raises(SystemExit) as stop:
+        app.main(argv)
+    assert stop.value.code == app.EXIT_BAD_INPUT
+    assert says in capsys.readouterr().err
+
+
 def test_affordances_json_is_the_last_line(capsys: pytest.CaptureFixture[str]) -> None:
     assert app.main(["affordances", DEFAULT, "--json"]) == app.EXIT_OK
     last = capsys.readouterr().out.strip().splitlines()[-1]
