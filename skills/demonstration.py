@@ -12,6 +12,9 @@ from skills.types import Array
 
 #: Second-order finite differences need at least three samples.
 MIN_SAMPLES = 3
+#: How far a recorded quaternion's norm may be from 1 (rounding in a CSV export): more is
+#: not a unit quaternion (a scaled one, or angles written into its fields), refused.
+UNIT_NORM_TOLERANCE = 0.01
 
 
 @dataclass(frozen=True)
@@ -47,8 +50,9 @@ class Demonstration:
         Raises
         ------
         ValueError
-            On mismatched lengths, non-increasing time, NaN or inf, zero-norm quaternions
-            or fewer than three samples. The message names the argument.
+            On mismatched lengths, non-increasing time, NaN or inf, quaternions whose norm
+            is not 1 (within :data:`UNIT_NORM_TOLERANCE`) or fewer than three samples. The
+            message names the argument.
         """
         t_arr = np.asarray(t, dtype=float)
         if t_arr.ndim != 1:
@@ -90,6 +94,22 @@ class Demonstration:
                 raise ValueError(
                     f"{name}: orientations: expected shape ({n}, 4) scalar-last (x, y, z, w) "
                     f"to match t, got {q_raw.shape}"
+                )
+            if not np.all(np.isfinite(q_raw)):
+                i, j = (int(k) for k in np.argwhere(~np.isfinite(q_raw))[0])
+                raise ValueError(
+                    f"{name}: orientations: expected finite values, got {q_raw[i, j]} at "
+                    f"[{i}, {j}] (sample {i}, {'xyzw'[j]})"
+                )
+            norms = np.linalg.norm(q_raw, axis=1)
+            off = np.abs(norms - 1.0) > UNIT_NORM_TOLERANCE
+            if np.any(off):
+                i = int(np.flatnonzero(off)[0])
+                raise ValueError(
+                    f"{name}: orientations: expected unit quaternions (norm 1 within "
+                    f"{UNIT_NORM_TOLERANCE:g}), got norm {norms[i]:.4g} at sample {i} "
+                    f"({int(off.sum())} of {n} samples off): scalar-last (x, y, z, w), not "
+                    "angles"
                 )
             q = quat.make_continuous(quat.as_quaternions(q_raw, f"{name}: orientations"))
         return Demonstration(t=t_arr, positions=y, orientations=q, name=name)

@@ -33,10 +33,24 @@ def test_nan_in_positions_and_time() -> None:
         Demonstration.create([0.0, np.nan, 2.0], np.zeros((3, 3)))
 
 
-def test_zero_norm_quaternion() -> None:
+def test_a_quaternion_that_is_not_unit_is_refused_naming_the_sample() -> None:
+    # A zero one, one scaled by 2, a yaw in radians written into qz with qw = 1: each had been
+    # normalised and learnt (the last as another angle than the one meant).
     q = np.tile([0.0, 0.0, 0.0, 1.0], (5, 1))
     q[3] = 0.0
-    with pytest.raises(ValueError, match="orientations: expected a non-zero quaternion"):
+    with pytest.raises(ValueError, match=r"got norm 0 at sample 3 \(1 of 5 samples off\)"):
+        Demonstration.create(np.arange(5.0), np.zeros((5, 3)), q)
+    q[3] = [0.0, 0.0, 0.0, 2.0]
+    with pytest.raises(ValueError, match=r"orientations: expected unit quaternions .*norm 2 at"):
+        Demonstration.create(np.arange(5.0), np.zeros((5, 3)), q)
+    yaw = np.linspace(0.0, np.pi / 2, 5)
+    angles = np.stack([np.zeros(5), np.zeros(5), yaw, np.ones(5)], axis=1)
+    with pytest.raises(ValueError, match=r"at sample 1 \(4 of 5 samples off\)"):
+        Demonstration.create(np.arange(5.0), np.zeros((5, 3)), angles)
+    q[3] = [0.0, 0.0, 0.0, 1.004]  # a CSV's rounding is fine
+    Demonstration.create(np.arange(5.0), np.zeros((5, 3)), q)
+    q[2, 1] = np.nan
+    with pytest.raises(ValueError, match=r"got nan at \[2, 1\] \(sample 2, y\)"):
         Demonstration.create(np.arange(5.0), np.zeros((5, 3)), q)
 
 
