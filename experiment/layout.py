@@ -27,6 +27,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 
@@ -430,18 +431,20 @@ def _draw_trial(
         for s in spheres
         if s is not None
     ]
-    data["task"] = [
+    moves: list[dict[str, Any]] = [
         {
-            "object": obj.name,
-            "moves": [
-                {
-                    "goal": {"position": g.tolist(), "rpy_deg": [0.0, pitch, yaw]},
-                    "obstacles": [] if s is None else [s.name],
-                }
-                for g, yaw, pitch, s in zip(goals, goal_yaws, drawn.pitches, spheres, strict=True)
-            ],
+            "goal": {"position": g.tolist(), "rpy_deg": [0.0, pitch, yaw]},
+            "obstacles": [] if s is None else [s.name],
         }
+        for g, yaw, pitch, s in zip(goals, goal_yaws, drawn.pitches, spheres, strict=True)
     ]
+    # A move the world's task carries with a skill of its own (a taught one) is carried with
+    # it in every trial too: move i of a trial is the task's move i.
+    told = [m.skill for step in base.task if step.object == obj.name for m in step.moves]
+    for move, skill in zip(moves, told, strict=False):
+        if skill is not None:
+            move["skill"] = skill
+    data["task"] = [{"object": obj.name, "moves": moves}]
     if layout.insertion is not None:
         # From a stream of its own: the draws above stay those of a world without it.
         data = place_fixture(data, np.random.default_rng([seed, trial, 3, redraw]))

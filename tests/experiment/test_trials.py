@@ -306,3 +306,17 @@ def test_a_trial_whose_layout_cannot_be_drawn_is_recorded_as_not_drawn() -> None
         "the trials regions or lower trials.clearance or trials.robot_clearance)"
     )
     assert reason_of(record["failure"]) == "layout not drawn"
+
+
+def test_a_move_the_world_carries_with_its_own_skill_keeps_it_in_every_trial() -> None:
+    # A campaign of a world whose move 1 names a taught skill had run every trial with the
+    # plan's transport skill instead, silently (the drawn task dropped `skill`).
+    base = load_world(WORLDS / "parcel_pick_place.yaml")
+    data = base.model_dump(mode="json")
+    data["task"][0]["moves"][1]["skill"] = "pick_and_place"
+    world = world_from_data(data, base.source)
+    for trial in range(3):
+        drawn, _ = draw_trial(world, 0, trial)
+        assert [m.skill for m in drawn.task[0].moves] == [None, "pick_and_place", None]
+        plain, _ = draw_trial(base, 0, trial)
+        assert [m.goal for m in drawn.task[0].moves] == [m.goal for m in plain.task[0].moves]
