@@ -204,6 +204,14 @@ def trials_command(args: argparse.Namespace) -> int:
         print(err, file=sys.stderr)
         return EXIT_BAD_INPUT
     tally = {"ok": sum(1 for r in earlier if r.get("success"))}
+    done = sum(1 for r in earlier if int(r.get("trial", -1)) < args.n)
+    if done:
+        left = args.n - done
+        print(
+            f"resuming: {done} of {args.n} trials already in {out / 'results.jsonl'}, "
+            + (f"{left} to run" if left else "none left to run"),
+            file=sys.stderr,
+        )
 
     bar = Progress(sys.stderr)
 
@@ -290,8 +298,11 @@ def report_command(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
     summaries = report_summaries(found.campaigns)
-    for summary in summaries:
-        print(f"{printable(summary['campaign'])}: {summary['trials']} trials")
+    stem = out / "report" if out.is_dir() else out.with_name(f"{out.stem}_report")
+    several = len(found.campaigns) > 1
+    for k, (campaign, summary) in enumerate(zip(found.campaigns, summaries, strict=True), 1):
+        count = summary["trials"]
+        print(f"{printable(summary['campaign'])}: {count} trial{'s' * (count != 1)}")
         for line in summary_lines(summary):
             print(line)
         for line in contact_lines(summary):
@@ -299,12 +310,13 @@ def report_command(args: argparse.Namespace) -> int:
         split = split_line(summary)
         if split is not None:
             print(split)
-    figure = out / "report.png" if out.is_dir() else out.with_name(f"{out.stem}_report.png")
-    try:
-        report_figure(found.campaigns, figure)
-        print(f"  picture: {figure}")
-    except OSError as err:
-        print(f"not written: {figure}: {err.strerror or err}", file=sys.stderr)
+        # One picture per campaign: report.png, or report_1.png, report_2.png ... in order.
+        figure = stem.with_name(f"{stem.name}_{k}.png" if several else f"{stem.name}.png")
+        try:
+            report_figure(campaign, figure)
+            print(f"  picture: {figure}")
+        except OSError as err:
+            print(f"not written: {figure}: {err.strerror or err}", file=sys.stderr)
     if args.json:
         print(
             json.dumps(

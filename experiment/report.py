@@ -86,8 +86,9 @@ def read_campaigns(out: Path) -> CampaignFile:
     return CampaignFile(path, campaigns, read.skipped)
 
 
-def report_figure(campaigns: list[Campaign], path: Path) -> None:
-    """Write the picture of ``campaigns`` to ``path`` (PNG)."""
+def report_figure(campaign: Campaign, path: Path) -> None:
+    """Write the picture of one campaign to ``path`` (PNG), titled with its label (two
+    campaigns of one folder, two worlds say, are two pictures: one would mix their boxes)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -95,10 +96,12 @@ def report_figure(campaigns: list[Campaign], path: Path) -> None:
     import numpy as np
     from matplotlib.ticker import MaxNLocator
 
-    records = [r for c in campaigns for r in c.records]
-    fig, (where, why, near) = plt.subplots(1, 3, figsize=(15, 4.5))
+    records = campaign.records
+    fig, (where, why, near) = plt.subplots(1, 3, figsize=(15, 4.8))
+    fig.suptitle(f"{campaign.label}: {len(records)} trial{'s' * (len(records) != 1)}", fontsize=10)
     placed = [r for r in records if isinstance(r.get("start"), list)]
-    for ok, colour, mark, label in ((True, "0.6", "o", "success"), (False, "red", "x", "failed")):
+    # Colour says the outcome, the marker what was drawn: a start (circle), a goal (triangle).
+    for ok, colour, label in ((True, "0.6", "success"), (False, "red", "failed")):
         rows = [r for r in placed if bool(r.get("success")) == ok]
         if not rows:
             continue
@@ -106,7 +109,7 @@ def report_figure(campaigns: list[Campaign], path: Path) -> None:
             [r["start"][1] for r in rows],
             [r["start"][0] for r in rows],
             c=colour,
-            marker=mark,
+            marker="o",
             s=18,
             label=f"start, {label}",
         )
@@ -115,11 +118,11 @@ def report_figure(campaigns: list[Campaign], path: Path) -> None:
             [g[1] for g in goals],
             [g[0] for g in goals],
             c=colour,
-            marker=mark,
-            s=18,
+            marker="^",
+            s=20,
             alpha=0.5 if ok else 1.0,
             label=f"goals, {label}",
-            edgecolors="none" if ok else None,
+            edgecolors="none",
         )
     if placed:
         where.invert_xaxis()  # +y to the robot's left, drawn on the left

@@ -289,7 +289,11 @@ def _learn(
             return model, METHOD + TRANSPORT_METHOD
         return fit_pose(smoothed), METHOD
     except ValueError as err:
-        raise TeachingError(f"{demo}: {err}") from None
+        text = str(err)
+        # The recording's own name (its file's) may already open the message: once is enough.
+        if text.startswith(f"{smoothed.name}: "):
+            text = text[len(smoothed.name) + 2 :]
+        raise TeachingError(f"{demo}: {text}") from None
 
 
 def _unsettled(

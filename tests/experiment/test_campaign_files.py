@@ -87,6 +87,7 @@ def test_a_resumed_campaign_appends_after_a_torn_line(tmp_path: Path) -> None:
     _, err = proc.communicate(timeout=300)
     assert proc.returncode in (0, 1), err
     assert "cut a torn last line" in err and "Traceback" not in err
+    assert "resuming: 2 of 3 trials already in" in err and "1 to run" in err
     read = read_results(path)
     assert [r["trial"] for r in read.records] == [0, 1, 2] and read.skipped == 0
 

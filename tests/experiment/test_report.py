@@ -130,9 +130,28 @@ def test_failures_a_fraction_of_a_millimetre_apart_still_show_in_the_histogram(
     ]
     figures: list[Any] = []
     monkeypatch.setattr(plt, "close", figures.append)
-    report_figure([Campaign("test", records)], tmp_path / "report.png")
+    report_figure(Campaign("test", records), tmp_path / "report.png")
     near = figures[0].axes[2]
     red = [p for p in near.patches if p.get_facecolor()[:3] == to_rgb("red")]
     assert sum(p.get_height() for p in red) == 2
     # As wide as a bin of the whole range (30 bins over -0.5..80 mm), not of the failures'.
     assert max(p.get_width() for p in red) > 80.0 / 40
+
+
+def test_two_campaigns_in_one_folder_are_two_pictures(tmp_path: Path) -> None:
+    # The text had told them apart and report.png had drawn both worlds' trials as one.
+    records = [
+        json.loads(line) for line in (ROOT / "bench" / "results" / "trials_seed0_n100.jsonl").open()
+    ][:6]
+    other = [dict(r, world="another_world", world_sha256="0" * 64) for r in records[:3]]
+    with open(tmp_path / "results.jsonl", "w", encoding="utf-8") as fh:
+        for r in records + other:
+            fh.write(json.dumps(r) + "\n")
+    done = app("report", str(tmp_path))
+    assert done.returncode == 0, done.stderr
+    pictures = [
+        line.split("picture: ")[1] for line in done.stdout.splitlines() if "picture: " in line
+    ]
+    assert pictures == [str(tmp_path / "report_1.png"), str(tmp_path / "report_2.png")]
+    assert not (tmp_path / "report.png").exists()
+    assert all(Path(p).stat().st_size > 10_000 for p in pictures)

@@ -79,6 +79,22 @@ def test_teach_errors_name_the_argument_and_write_nothing(wave_csv: Path, tmp_pa
     assert not folder.exists()
 
 
+def test_a_recording_too_short_to_fit_names_its_file_once(tmp_path: Path) -> None:
+    # Three samples that move: the file had been named twice, and the advice named an option
+    # teach does not have ("lower n_basis").
+    demo = waved_carry(0.03, seed=1)
+    assert demo.orientations is not None
+    keep = np.array([0, len(demo.t) // 2, len(demo.t) - 1])
+    short = write_demo_csv(
+        tmp_path / "short.csv", demo.t[keep], demo.positions[keep], demo.orientations[keep]
+    )
+    with pytest.raises(TeachingError) as raised:
+        teach(short, tmp_path / "lib", "my_wave", Space.ABSOLUTE)
+    said = str(raised.value)
+    assert said.startswith(f"{short}: t: expected at least") and said.count("short.csv") == 1
+    assert "record at a higher rate" in said and "lower n_basis" not in said
+
+
 def test_teaching_action_follows_the_label_then_the_space() -> None:
     assert teaching_action("rotate_z", Space.RELATIVE) is Action.ROTATE_Z
     assert teaching_action("my_wave", Space.ABSOLUTE) is Action.TRANSPORT
