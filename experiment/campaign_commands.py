@@ -156,7 +156,7 @@ def trials_command(args: argparse.Namespace) -> int:
     """The paper's experiment: N trials of three moves with new obstacles, judged, resumable."""
     from experiment.progress import Progress
     from experiment.results import ResultsFileError
-    from experiment.summary import campaign_lines
+    from experiment.summary import campaign_lines, undrawn_kinds
     from experiment.trials import campaign_of, campaign_results, reason_of, run_campaign, summarise
 
     world = load_world_or_exit(args.world)
@@ -275,6 +275,9 @@ def trials_command(args: argparse.Namespace) -> int:
     )
     for line in campaign_lines(summary):
         print(line)
+    listed = [region.obstacles for region in world.trials.goal_regions()]
+    for line in undrawn_kinds(listed, records):
+        print(line, file=sys.stderr)
     if args.json:
         print(json.dumps(summary))
     return EXIT_OK if summary["successes"] == summary["trials"] else EXIT_FAILURE

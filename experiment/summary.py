@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 import statistics
 from collections import Counter
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from typing import Any
 
 from duet_robot.text import printable
@@ -112,6 +112,33 @@ def metric_summary(records: Iterable[dict[str, Any]]) -> dict[str, dict[str, Any
             "trials": len(values),
         }
     return out
+
+
+#: Fewest trials of a campaign before a kind of sphere never drawn is worth a warning: each
+#: listed kind stands on a move in about two trials of five, so ten without one is a chance
+#: of under 1 %.
+UNDRAWN_AFTER_TRIALS = 10
+
+
+def undrawn_kinds(listed: Sequence[Sequence[str]], records: Iterable[dict[str, Any]]) -> list[str]:
+    """One line per kind of sphere a move's region lists (``listed[i]``: move i's
+    ``obstacles``) that none of ``records`` drew on that move, once there are
+    :data:`UNDRAWN_AFTER_TRIALS` records: a kind that cannot be placed in the world's layout
+    is redrawn away, and the campaign would report only the others without a word."""
+    recs = [r for r in records if isinstance(r.get("obstacles"), list)]
+    if len(recs) < UNDRAWN_AFTER_TRIALS:
+        return []
+    lines = []
+    for i, kinds in enumerate(listed):
+        drawn = Counter(str(r["obstacles"][i]) for r in recs if len(r["obstacles"]) > i)
+        for kind in kinds:
+            if not drawn.get(kind):
+                lines.append(
+                    f"warning: move {i + 1}'s '{kind}' sphere (trials: its region's obstacles) "
+                    f"was drawn in none of {len(recs)} trials: it finds no place in this "
+                    "world's layout, and these results hold without it"
+                )
+    return lines
 
 
 def summarise(records: Iterable[dict[str, Any]]) -> dict[str, Any]:

@@ -238,7 +238,7 @@ def test_trials_hard_is_a_campaign_of_its_own(
     assert "mode" not in easy and easy["settings"] == {}
     assert app.main(["report", out]) == app.EXIT_OK
     report = capsys.readouterr().out
-    assert "seed 0, Hard: 1 trials" in report and "seed 0: 1 trials" in report
+    assert "seed 0, Hard: 1 trial\n" in report and "seed 0: 1 trial\n" in report
 
 
 @pytest.mark.sim

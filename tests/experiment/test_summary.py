@@ -14,6 +14,7 @@ from experiment.summary import (
     split_line,
     summarise,
     summary_lines,
+    undrawn_kinds,
     wilson_interval,
 )
 
@@ -171,3 +172,16 @@ def test_worker_time_splits_into_physics_control_watch_and_tree() -> None:
     old = summarise(records[2:])
     assert old["worker_time_split"] is None
     assert split_line(old) is None
+
+
+def test_a_sphere_kind_never_drawn_over_a_campaign_is_said() -> None:
+    # A world whose layout leaves no room for move 2's 'line' sphere: every draw that tried it
+    # was drawn again, and the campaign reported its other kinds alone, without a word.
+    listed = [("line", "ahead"), ("line", "ahead")]
+    records = [{"obstacles": ["line" if k % 2 else "ahead", "ahead"]} for k in range(12)]
+    (line,) = undrawn_kinds(listed, records)
+    assert line.startswith("warning: move 2's 'line' sphere") and "none of 12 trials" in line
+    assert undrawn_kinds(listed, records[:9]) == []  # too few trials to tell
+    both = [{"obstacles": ["line", "ahead" if k % 2 else "line"]} for k in range(12)]
+    (line,) = undrawn_kinds(listed, both)
+    assert line.startswith("warning: move 1's 'ahead' sphere")
