@@ -98,6 +98,42 @@ def test_the_default_robot_waits_above_the_table_s_near_edge() -> None:
         assert_allclose(poses[arm][1], LATERAL_PALM_QUATERNIONS[arm], atol=1e-12)
 
 
+ICUB = ROOT / "worlds" / "icub_parcel_pick_place.yaml"
+
+
+def _icub_parcel_at(y: float) -> World:
+    """The iCub's world with its parcel starting ``y`` m to the side (its goals' y), carried to
+    the centre in one move."""
+    world = load_world(ICUB)
+    data = world.model_dump(mode="json")
+    start = data["objects"][0]["pose"]["position"]
+    data["objects"][0]["pose"]["position"] = [start[0], y, start[2]]
+    data["task"] = [
+        {"object": data["objects"][0]["name"], "moves": [dict(data["task"][0]["moves"][0])]}
+    ]
+    return world_from_data(data, world.source)
+
+
+def test_a_palm_waits_above_an_object_that_stands_where_it_would_wait() -> None:
+    # The iCub's palms wait 14 cm to the side, 10 cm over the table: inside a parcel put at
+    # its own world's left or right goal, which they knocked off the table.
+    rest = (0.08, 0.14, 0.10)
+    shipped = rest_palm_poses(as_world_spec(load_world(ICUB)).scene, rest)
+    moved = as_world_spec(_icub_parcel_at(0.12)).scene
+    waiting = rest_palm_poses(moved, rest)
+    parcel = moved.objects[0]
+    top = parcel.position[2] + 0.5 * parcel.shape.extents()[2]
+    assert waiting[Arm.LEFT][0][2] > top + 0.03  # above it, with room
+    assert_allclose(waiting[Arm.LEFT][0][:2], shipped[Arm.LEFT][0][:2])  # only raised
+    assert_allclose(waiting[Arm.RIGHT][0], shipped[Arm.RIGHT][0])  # the other palm is clear
+
+
+@pytest.mark.sim
+def test_the_icub_carries_a_parcel_from_where_its_palm_waits() -> None:
+    report = run_episode(_icub_parcel_at(-0.12), None, out=None, animation=False)
+    assert report.success, report.failure
+
+
 @pytest.mark.parametrize("quarter_turns", [1, 2, 3])
 def test_the_waiting_palms_turn_with_the_world(quarter_turns: int) -> None:
     world = load_world(DEFAULT)
