@@ -102,28 +102,28 @@ def rest_palm_poses(
     for arm, side in ((Arm.LEFT, 1.0), (Arm.RIGHT, -1.0)):
         xy = base + (near + inset) * forward + side * half_width * left
         orientation = quat.multiply(turn, np.array(LATERAL_PALM_QUATERNIONS[arm]))
-        position = np.array([xy[0], xy[1], _above_objects(spec, xy, z)])
+        position = np.array([xy[0], xy[1], _above_objects(spec, xy, z, orientation)])
         poses[arm] = (position, np.asarray(orientation, dtype=float))
     return poses
 
 
-#: Clearance a waiting palm keeps above an object it would otherwise stand in, m.
-REST_CLEARANCE_M = 0.03
+#: Clearance a waiting palm keeps from the objects, m: nearer, it waits above them.
+REST_CLEARANCE_M = 0.01
 
 
-def _above_objects(spec: SceneSpec, xy: FloatArray, z: float) -> float:
-    """The height a palm waits at over ``xy``: ``z``, or above the objects standing where it
-    would be (their bounding boxes, :data:`REST_CLEARANCE_M` and the palm's own reach more):
-    an object put where a robot's palm waits (the iCub's, 14 cm to the side and 10 cm over the
-    table) had been knocked off the table by the palm placed inside it."""
-    reach = 0.5 * float(np.linalg.norm(spec.robot.palm_size)) + REST_CLEARANCE_M
+def _above_objects(spec: SceneSpec, xy: FloatArray, z: float, orientation: FloatArray) -> float:
+    """The height a palm turned ``orientation`` waits at over ``xy``: ``z``, or, where its box
+    would come within :data:`REST_CLEARANCE_M` of an object's bounding box, that much above the
+    highest such object: an object put where a robot's palm waits (the iCub's, 14 cm to the
+    side and 10 cm over the table) had been knocked off the table by the palm placed in it."""
+    palm = 0.5 * np.abs(quat.to_matrix(orientation)) @ np.asarray(spec.robot.palm_size, float)
     for obj in spec.objects:
         rotation = np.abs(quat.to_matrix(np.asarray(obj.quaternion, dtype=float)))
         half = 0.5 * rotation @ np.asarray(obj.shape.extents(), dtype=float)
         centre = np.asarray(obj.position, dtype=float)
-        gap = np.maximum(np.abs(np.array([*xy, z]) - centre) - half, 0.0)
-        if float(np.linalg.norm(gap)) < reach:
-            z = max(z, float(centre[2] + half[2]) + reach)
+        gap = np.maximum(np.abs(np.array([*xy, z]) - centre) - half - palm, 0.0)
+        if float(np.linalg.norm(gap)) < REST_CLEARANCE_M:
+            z = max(z, float(centre[2] + half[2] + palm[2]) + REST_CLEARANCE_M)
     return z
 
 
