@@ -30,6 +30,7 @@ from experiment.tray import tray_verdicts
 from planner.atomic_file import atomic_open, stale_temporaries
 from planner.btlog import BtLog
 from planner.default_tree import TaskStep, default_tree
+from planner.leaves.approach import off_the_table
 from planner.leaves.conditions import IsHeld
 from planner.loader import load_tree
 from planner.port import Move
@@ -384,6 +385,7 @@ def run_episode(
             errors_deg,
             recorder.moved_since_placed(),
             recorder.standing_moved(),
+            [why for name in dict.fromkeys(objects) if (why := off_the_table(sim, name))],
         )
         trays = tray_verdicts(sim.scene.spec.objects, sim.watched, recorder.grip)
         tray_failure = next((v.failure for v in trays if not v.ok), "")

@@ -43,6 +43,7 @@ def judge(
     errors_deg: list[float | None],
     moved: Sequence[tuple[str, float, float]] = (),
     standing: Sequence[tuple[str, float, float]] = (),
+    off_table: Sequence[str] = (),
 ) -> tuple[bool, str]:
     """Success and the first failure reason, in the order the paper's criteria are listed.
 
@@ -55,7 +56,9 @@ def judge(
     its last move placed it: a placed object knocked away afterwards fails the run.
     ``standing`` holds the same for each object the task does not move (nor carries on
     another), from where it stood at the start: a bystander shoved by an arm or by the carried
-    object fails the run too.
+    object fails the run too. ``off_table`` says, per object, that it ends off the table (a
+    fall no palm caused by letting go: knocked off): a failed run gives it as its reason
+    after a drop, as what the rest follows from.
     """
     s = sim.safety
     if s.spawned_inside:
@@ -73,6 +76,8 @@ def judge(
             failure = f"{name} moved {metres * 100:.1f} cm, {degrees:.1f} deg {STANDING_SUFFIX}"
     if not ok and s.dropped:
         return False, f"dropped {s.dropped_object}" if s.dropped_object else "dropped"
+    if not ok and off_table:
+        return False, off_table[0]
     return ok, failure
 
 

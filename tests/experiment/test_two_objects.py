@@ -74,6 +74,20 @@ def test_a_placed_object_knocked_away_afterwards_fails_the_run() -> None:
     assert judge(tree_ok, sim, PLACED, *placed, knocked) == (False, "dropped parcel_left")
 
 
+def test_an_object_knocked_off_the_table_is_the_reason_a_failed_run_gives() -> None:
+    # An iCub palm placed inside a parcel knocked it to the floor before any grasp: the run
+    # had failed "arms touched", the parcel's fall unsaid (no palm had held it: no drop).
+    tree_failed = RunResult(Status.FAILURE, 10.0, 1.0, 600, "approach: timed out")
+    sim: Any = SimpleNamespace(safety=SafetyRecord(arm_contacts=3))
+    fell = "parcel_left lies off the table, out of reach: at (0.76, -0.28, 0.06) m, 0.60 m below"
+    placed = [0.001] * 4, [0.1] * 4
+    assert judge(tree_failed, sim, PLACED, *placed, (), (), [fell]) == (False, fell)
+    assert judge(tree_failed, sim, PLACED, *placed)[1] == "arms touched"
+    # A drop stays the first reason: the fall follows from it.
+    sim.safety.dropped, sim.safety.dropped_object = True, "parcel_left"
+    assert judge(tree_failed, sim, PLACED, *placed, (), (), [fell])[1] == "dropped parcel_left"
+
+
 def test_an_object_the_task_leaves_standing_shoved_away_fails_the_run() -> None:
     tree_ok = RunResult(Status.SUCCESS, 10.0, 1.0, 600, "")
     sim: Any = SimpleNamespace(safety=SafetyRecord())
