@@ -28,8 +28,26 @@ def temporary_beside(path: Path) -> Path:
     fd, name = tempfile.mkstemp(
         dir=path.parent, prefix=f".{path.name}.", suffix=f"{PART}{path.suffix}"
     )
+    # mkstemp makes it 0600; the file it becomes gets a new file's mode under the umask, as
+    # open() would have given it (run.jsonl and the figures had been unreadable to the group).
+    os.fchmod(fd, 0o666 & ~_umask())
     os.close(fd)
     return Path(name)
+
+
+def _umask() -> int:
+    """The process's umask: from ``/proc/self/status`` where Linux gives it (reading it by
+    setting it would leave it 0 for a moment to another thread), else set and set back."""
+    try:
+        with open("/proc/self/status", encoding="ascii") as status:
+            for line in status:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    except (OSError, ValueError):
+        pass
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
 
 
 def commit(temporary: Path, path: Path) -> None:

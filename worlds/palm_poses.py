@@ -101,9 +101,11 @@ def rest_palm_poses(
     poses: dict[Arm, tuple[FloatArray, FloatArray]] = {}
     for arm, side in ((Arm.LEFT, 1.0), (Arm.RIGHT, -1.0)):
         xy = base + (near + inset) * forward + side * half_width * left
-        orientation = quat.multiply(turn, np.array(LATERAL_PALM_QUATERNIONS[arm]))
+        orientation = np.asarray(
+            quat.multiply(turn, np.array(LATERAL_PALM_QUATERNIONS[arm])), dtype=float
+        )
         position = np.array([xy[0], xy[1], _above_objects(spec, xy, z, orientation)])
-        poses[arm] = (position, np.asarray(orientation, dtype=float))
+        poses[arm] = (position, orientation)
     return poses
 
 

@@ -34,6 +34,11 @@ class RobotModelName(StrEnum):
     ICUB = "icub"
 
 
+#: Models whose arms stand a fixed distance apart, m: a world's ``robot.arm_separation`` only
+#: restates it (the iCub's shoulders).
+FIXED_ARM_SEPARATION_M: dict[RobotModelName, float] = {RobotModelName.ICUB: 0.24}
+
+
 class ObstacleKind(StrEnum):
     """Where a trial's obstacle sphere is drawn for a move (``app.py trials``)."""
 

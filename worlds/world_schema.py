@@ -47,7 +47,7 @@ from worlds.schema_types import (
     Text,
     Vector3,
 )
-from worlds.spec import Fragility, ObjectState, RobotModelName, Shape
+from worlds.spec import FIXED_ARM_SEPARATION_M, Fragility, ObjectState, RobotModelName, Shape
 from worlds.trial_schema import TrialSettings, trials_in_robot_frame
 from worlds.world_errors import FieldProblems, Issue, Shown, field_problem, format_path, show_value
 
@@ -216,6 +216,20 @@ class Robot(FileModel):
     payload_kg: Positive = Field(description="payload per arm, kg, > 0")
     squeeze_force_n: Positive = Field(description="largest steady squeeze per palm, N, > 0")
     palm_size: PositiveVector3 = Field(description="flat palm box extents [x, y, z], m")
+
+    @model_validator(mode="after")
+    def _separation_the_model_has(self) -> Robot:
+        # A model whose arms are fixed apart ignores the field: another value would be a
+        # setting that silently does nothing (a user's iCub world of 0.5 m validated).
+        fixed = FIXED_ARM_SEPARATION_M.get(self.model)
+        if fixed is not None and not math.isclose(self.arm_separation, fixed, abs_tol=0.005):
+            raise field_problem(
+                f"{fixed} for model {self.model.value} (its arms stand that far apart; the "
+                "field restates it)",
+                self.arm_separation,
+                "arm_separation",
+            )
+        return self
 
 
 class Table(FileModel):

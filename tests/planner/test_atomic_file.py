@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import errno
+import os
+import stat
 from pathlib import Path
 from typing import Any
 
@@ -78,3 +80,22 @@ def test_teach_on_a_full_disk_is_exit_2_and_keeps_the_library(
     err = capsys.readouterr().err
     assert f"{tmp_path / 'lib'}: expected to save the library, got No space left on device" in err
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_file_written_whole_gets_a_new_files_mode(tmp_path: Path) -> None:
+    # Through mkstemp's 0600 temporary, run.jsonl and the figures had been unreadable to the
+    # group and others, beside results.jsonl and run.btlog at 0644.
+    old = os.umask(0o022)
+    try:
+        with atomic_open(tmp_path / "a.txt") as fh:
+            fh.write("x")
+        with atomic_path(tmp_path / "b.png") as temporary:
+            temporary.write_bytes(b"png")
+        os.umask(0o077)
+        with atomic_open(tmp_path / "c.txt") as fh:
+            fh.write("x")
+    finally:
+        os.umask(old)
+    assert stat.S_IMODE((tmp_path / "a.txt").stat().st_mode) == 0o644
+    assert stat.S_IMODE((tmp_path / "b.png").stat().st_mode) == 0o644
+    assert stat.S_IMODE((tmp_path / "c.txt").stat().st_mode) == 0o600

@@ -593,3 +593,19 @@ def test_numbers_are_bounded_to_what_the_physics_can_mean(
     path.write_text(text.replace(old, new, 1), encoding="utf-8")
     with pytest.raises(WorldFileError, match=re.escape(message)):
         load_world(path)
+
+
+def test_an_icub_arm_separation_it_does_not_have_is_refused(tmp_path: Path) -> None:
+    # The iCub's shoulders stand 0.24 m apart whatever the file says: 0.5 had validated and
+    # done nothing.
+    text = (REPO / "worlds" / "icub_parcel_pick_place.yaml").read_text(encoding="utf-8")
+    path = tmp_path / "icub.yaml"
+    path.write_text(re.sub(r"arm_separation: 0\.24", "arm_separation: 0.5", text), "utf-8")
+    error = _error(path)
+    assert error.field == "robot.arm_separation"
+    assert str(error) == (
+        f"{path}: robot.arm_separation: expected 0.24 for model icub (its arms stand that far "
+        "apart; the field restates it), got 0.5"
+    )
+    path.write_text(re.sub(r"arm_separation: 0\.24", "arm_separation: 0.242", text), "utf-8")
+    load_world(path)  # a restatement to the millimetre is fine
