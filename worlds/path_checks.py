@@ -109,6 +109,9 @@ class LinkHits(NamedTuple):
     #: links), e.g. ("the right arm's lbr_iiwa_link_5", "ball_left"); None if no one link does
     #: alone.
     who: Callable[[int, float], tuple[str, str] | None] | None = None
+    #: ``who_on_object(i)``: the first arm link, and the object where it rests, that come
+    #: within the objects' margin of each other at waypoint ``i``; None if no one link does.
+    who_on_object: Callable[[int], tuple[str, str] | None] | None = None
 
 
 class PathChecks:
@@ -306,7 +309,12 @@ class PathChecks:
                     "" if held else f" of an obstacle, or {object_margin_m:g} m of an object"
                 )
             elif arms_on_objects[first]:
-                what = f"an arm link within {object_margin_m:g} m of an object"
+                on = hits.who_on_object(first) if hits.who_on_object is not None else None
+                what = (
+                    f"{on[0]} within {object_margin_m:g} m of {on[1]}"
+                    if on
+                    else f"an arm link within {object_margin_m:g} m of an object"
+                )
             else:
                 margin = margin_m + doubt[first]
                 who = hits.who(first, margin) if hits.who is not None else None
@@ -413,7 +421,12 @@ class PathChecks:
         def who(i: int, margin: float) -> tuple[str, str] | None:
             return self._touching_link(frames, int(nearest[i]), margin)
 
-        return LinkHits(on_obstacles[nearest], on_objects[nearest], at_end, end_objects, who)
+        def who_on_object(i: int) -> tuple[str, str] | None:
+            return self._link_on_object(frames, int(nearest[i]), avoid_margin, avoid)
+
+        return LinkHits(
+            on_obstacles[nearest], on_objects[nearest], at_end, end_objects, who, who_on_object
+        )
 
     def _touching_link(
         self, frames: dict[Arm, LinkFrames], i: int, margin: float
@@ -437,6 +450,28 @@ class PathChecks:
                         )[-1]:
                             name = self.collision.link_name(arm, link)
                             return f"the {arm.value} arm's {name}", obstacle
+        return None
+
+    def _link_on_object(
+        self, frames: dict[Arm, LinkFrames], i: int, margin: float, objects: Sequence[str]
+    ) -> tuple[str, str] | None:
+        """As :meth:`_touching_link`, for the objects where they rest: the first arm link
+        within ``margin`` of one of ``objects`` in solved pose ``i``, named, with the object."""
+        for obj in objects:
+            for arm in ARMS:
+                f = frames[arm]
+                for k, link in enumerate(f.links):
+                    if self.collision.check_link_frames(
+                        arm,
+                        (link,),
+                        f.positions[: i + 1, k : k + 1],
+                        f.quaternions[: i + 1, k : k + 1],
+                        margin,
+                        [obj],
+                        margin,
+                        obstacles=False,
+                    )[-1]:
+                        return f"the {arm.value} arm's {self.collision.link_name(arm, link)}", obj
         return None
 
 

@@ -4,6 +4,7 @@ sphere made in physics."""
 from __future__ import annotations
 
 import dataclasses
+import re
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -180,3 +181,17 @@ def test_the_turn_beside_a_standing_box_is_made_in_physics(beside_a_box_run: Any
 )
 def test_the_standing_box_is_left_where_it_stood(beside_a_box_run: Any) -> None:
     assert beside_a_box_run.success, beside_a_box_run.failure
+
+
+@pytest.mark.sim
+def test_a_way_in_refused_for_a_standing_object_names_the_link_and_the_object() -> None:
+    # Known to fail (README, Status: a turn near a standing box); what is tested is that the
+    # refusal says which link comes onto what (it had said "an arm link ... of an object").
+    report = run_episode(
+        load_world(DATA / "turned_90_near_a_standing_tote.yaml"), None, out=None, animation=False
+    )
+    assert not report.success
+    assert "every way ends with an arm link on tote" in report.failure
+    assert re.search(
+        r"the left arm's lbr_iiwa_link_\d within 0 m of tote at step \d+", report.failure
+    )
