@@ -315,4 +315,7 @@ def take_clear_route(
             f"{choice.note}"
         )
     else:
-        leaf.route_note = f"no way predicted clear, by {choice.route.name}: {choice.note}"
+        leaf.route_note = (
+            f"no way predicted clear, by {choice.route.name} (every way predicted to touch "
+            f"somewhere along it); refused {choice.note}"
+        )
