@@ -66,14 +66,11 @@ def judge(
         where = "; ".join(f"{o} inside {', '.join(b)}" for o, b in sorted(s.spawned_inside.items()))
         return False, f"obstacle spawned inside a body: {where}"
     ok, failure = _task_outcome(result, s, objects, errors_m, errors_deg)
-    for name, metres, degrees in moved:
-        if ok and (metres > PLACE_TOLERANCE_M or degrees > PLACE_TOLERANCE_DEG):
-            ok = False
-            failure = f"{name} moved {metres * 100:.1f} cm, {degrees:.1f} deg after it was placed"
-    for name, metres, degrees in standing:
-        if ok and (metres > PLACE_TOLERANCE_M or degrees > PLACE_TOLERANCE_DEG):
-            ok = False
-            failure = f"{name} moved {metres * 100:.1f} cm, {degrees:.1f} deg {STANDING_SUFFIX}"
+    for rows, said in ((moved, "after it was placed"), (standing, STANDING_SUFFIX)):
+        for name, metres, degrees in rows:
+            if ok and (metres > PLACE_TOLERANCE_M or degrees > PLACE_TOLERANCE_DEG):
+                ok = False
+                failure = f"{name} moved {metres * 100:.1f} cm, {degrees:.1f} deg {said}"
     if not ok and s.dropped:
         return False, f"dropped {s.dropped_object}" if s.dropped_object else "dropped"
     if not ok and off_table:

@@ -176,20 +176,17 @@ class MoveRecorder:
         out = []
         for name, (position, orientation) in last.items():
             pose = self.sim.object_pose(name)
-            turn = float(np.degrees(quat.angle_between(pose.orientation, orientation)))
-            out.append((name, float(np.linalg.norm(pose.position - position)), turn))
+            out.append((name, *_offset(pose.position, pose.orientation, position, orientation)))
         return out
 
     def standing_moved(self) -> list[tuple[str, float, float]]:
         """Per object the task leaves standing (:attr:`standing`): how far (m) and how much
         (deg) it lies now from where it stood at the start (an arm or the carried object may
         shove it on the way)."""
-        out = []
-        for name, (position, orientation) in self.standing.items():
-            now, turned = self.sim.scene.object_pose(name)
-            turn = float(np.degrees(quat.angle_between(turned, orientation)))
-            out.append((name, float(np.linalg.norm(now - position)), turn))
-        return out
+        return [
+            (name, *_offset(*self.sim.scene.object_pose(name), position, orientation))
+            for name, (position, orientation) in self.standing.items()
+        ]
 
     def column(self, what: str) -> list[Any]:
         """One attribute of every judged move's track (its last step's), in task order."""
@@ -264,3 +261,11 @@ class MoveRecorder:
 
 
 __all__ = ["MoveRecorder", "MoveTrack"]
+
+
+def _offset(
+    position: np.ndarray, orientation: np.ndarray, was: np.ndarray, was_turned: np.ndarray
+) -> tuple[float, float]:
+    """How far (m) and how much (deg) a pose lies from another."""
+    turn = float(np.degrees(quat.angle_between(orientation, was_turned)))
+    return float(np.linalg.norm(np.asarray(position) - was)), turn

@@ -183,6 +183,16 @@ class Delay(StringPorts, py_trees.decorators.Decorator, register=False):
         return self.decorated.status
 
 
+def _none_to_count(node: StringPorts, port: str, status: Status) -> bool:
+    """Whether a loop entered afresh has a count of 0 on ``port``: then, as BT.CPP, it is
+    given ``status`` without ticking its child."""
+    if node.status == Status.RUNNING or int(node.get_input(port)) != 0:
+        return False
+    node.feedback_message = f"{port} is 0: the child is not ticked"
+    node.status = status
+    return True
+
+
 class RetryForever(StringPorts, py_trees.decorators.Decorator, register=False):
     """BT.CPP ``RetryUntilSuccessful`` whose ``num_attempts`` is -1 (retry forever), 0 (no
     attempt: FAILURE) or a ``{key}``: SUCCESS when the child succeeds; after a failure,
@@ -206,9 +216,7 @@ class RetryForever(StringPorts, py_trees.decorators.Decorator, register=False):
 
     def tick(self):  # type: ignore[no-untyped-def]
         """As BT.CPP: no attempt to make (``num_attempts`` 0) is FAILURE, the child unticked."""
-        if self.status != Status.RUNNING and int(self.get_input("num_attempts")) == 0:
-            self.feedback_message = "num_attempts is 0: no attempt made"
-            self.status = Status.FAILURE
+        if _none_to_count(self, "num_attempts", Status.FAILURE):
             yield self
             return
         yield from super().tick()
@@ -274,9 +282,7 @@ class RepeatFromKey(StringPorts, py_trees.decorators.Decorator, register=False):
 
     def tick(self):  # type: ignore[no-untyped-def]
         """As BT.CPP: no cycle to run (``num_cycles`` 0) is SUCCESS, the child unticked."""
-        if self.status != Status.RUNNING and int(self.get_input("num_cycles")) == 0:
-            self.feedback_message = "num_cycles is 0: nothing repeated"
-            self.status = Status.SUCCESS
+        if _none_to_count(self, "num_cycles", Status.SUCCESS):
             yield self
             return
         yield from super().tick()

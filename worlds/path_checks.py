@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
+from functools import partial
 from typing import NamedTuple
 
 import numpy as np
@@ -438,18 +439,11 @@ class PathChecks:
         refused."""
         for obstacle in self.collision.active_obstacle_names():
             with self.collision.obstacles_present((obstacle,)):
-                for arm in ARMS:
-                    f = frames[arm]
-                    for k, link in enumerate(f.links):
-                        if self.collision.check_link_frames(
-                            arm,
-                            (link,),
-                            f.positions[: i + 1, k : k + 1],
-                            f.quaternions[: i + 1, k : k + 1],
-                            margin,
-                        )[-1]:
-                            name = self.collision.link_name(arm, link)
-                            return f"the {arm.value} arm's {name}", obstacle
+                link = self._first_link(
+                    frames, i, partial(self.collision.check_link_frames, margin=margin)
+                )
+            if link is not None:
+                return link, obstacle
         return None
 
     def _link_on_object(
@@ -458,20 +452,32 @@ class PathChecks:
         """As :meth:`_touching_link`, for the objects where they rest: the first arm link
         within ``margin`` of one of ``objects`` in solved pose ``i``, named, with the object."""
         for obj in objects:
-            for arm in ARMS:
-                f = frames[arm]
-                for k, link in enumerate(f.links):
-                    if self.collision.check_link_frames(
-                        arm,
-                        (link,),
-                        f.positions[: i + 1, k : k + 1],
-                        f.quaternions[: i + 1, k : k + 1],
-                        margin,
-                        [obj],
-                        margin,
-                        obstacles=False,
-                    )[-1]:
-                        return f"the {arm.value} arm's {self.collision.link_name(arm, link)}", obj
+            near = partial(
+                self.collision.check_link_frames,
+                margin=margin,
+                avoid=(obj,),
+                avoid_margin=margin,
+                obstacles=False,
+            )
+            link = self._first_link(frames, i, near)
+            if link is not None:
+                return link, obj
+        return None
+
+    def _first_link(
+        self,
+        frames: dict[Arm, LinkFrames],
+        i: int,
+        hits: Callable[[Arm, tuple[int, ...], Array, Array], NDArray[np.bool_]],
+    ) -> str | None:
+        """The first arm link (left arm first, base to palm) that ``hits`` (a link check over
+        the way up to solved pose ``i``) finds near at ``i``, named; None if none."""
+        for arm in ARMS:
+            f = frames[arm]
+            for k, link in enumerate(f.links):
+                at = (f.positions[: i + 1, k : k + 1], f.quaternions[: i + 1, k : k + 1])
+                if hits(arm, (link,), *at)[-1]:
+                    return f"the {arm.value} arm's {self.collision.link_name(arm, link)}"
         return None
 
 
