@@ -555,11 +555,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     handler: Callable[[argparse.Namespace], int] = args.handler
-    from planner.tree_problems import LeafCodeError
+    from planner.tree_problems import LeafCodeError, PortValueError
 
     try:
         return handler(args)
-    except LeafCodeError as err:  # a user's leaf's bug: its line, not Duet's traceback
+    except (LeafCodeError, PortValueError) as err:  # a user's leaf's bug, a tree's bad value
         print(f"error: {err}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:

@@ -17,6 +17,7 @@ from py_trees.ports import PortInformation, PortsMixin
 from py_trees.ports_utils import convert_str_to_type
 
 from planner.decorators import Clock, clock_from_setup
+from planner.tree_problems import PortValueError
 
 __all__ = [
     "BUILTIN_LEAVES",
@@ -29,28 +30,49 @@ __all__ = [
 
 
 class StringPorts(PortsMixin, register=False):
-    """Ports that, as BT.CPP's, convert a string on the blackboard to the port's type when
-    read (``SetBlackboard value="100"`` feeding ``Sleep msec="{t}"``)."""
+    """Ports that, as BT.CPP's, convert what is on the blackboard to the port's type when read:
+    a string (``SetBlackboard value="100"`` feeding ``Sleep msec="{t}"``), and a number of the
+    other kind (a script's ``t := 1000 / 4`` is 250.0, as BT.CPP's scripts make every number a
+    double; an integer port takes it where it is a whole number)."""
 
     def get_input(self, port_name: str, default: Any = None) -> Any:
-        """As :meth:`PortsMixin.get_input`, a string converted to the port's type."""
+        """As :meth:`PortsMixin.get_input`, a string or a number converted to the port's type.
+
+        Raises
+        ------
+        PortValueError
+            If the value cannot be: it names the node, the port, the value and the type.
+        """
         try:
             return super().get_input(port_name, default)
         except TypeError:
             raw = self.blackboard_client.get(port_name)
-            if not isinstance(raw, str):
-                raise
             data_type = self.input_ports()[port_name].data_type
-            try:
-                ok, value = convert_str_to_type(raw, data_type)
-            except ValueError:  # py_trees raises for some types where it answers for others
-                ok = False
+            ok, value = _converted(raw, data_type)
             if not ok:
-                raise TypeError(
-                    f"{self.name}: port '{port_name}': cannot convert {raw!r} to "
+                kind = "" if isinstance(raw, str) else f" ({type(raw).__name__})"
+                raise PortValueError(
+                    f"{self.name}: port '{port_name}': cannot convert {raw!r}{kind} to "
                     f"{getattr(data_type, '__name__', data_type)}"
                 ) from None
             return value
+
+
+def _converted(raw: Any, data_type: Any) -> tuple[bool, Any]:
+    """``raw`` as ``data_type`` the way BT.CPP converts a port's entry: a string parsed, an
+    integral float to an integer, an integer to a float; (False, None) where it cannot be."""
+    if isinstance(raw, str):
+        try:
+            return convert_str_to_type(raw, data_type)
+        except ValueError:  # py_trees raises for some types where it answers for others
+            return False, None
+    if isinstance(raw, bool) or not isinstance(raw, int | float):
+        return False, None
+    if data_type is int and float(raw).is_integer():
+        return True, int(raw)
+    if data_type is float:
+        return True, float(raw)
+    return False, None
 
 
 class AlwaysSuccess(PortsMixin, py_trees.behaviour.Behaviour, register=False):
@@ -127,8 +149,16 @@ class SetBlackboard(PortsMixin, py_trees.behaviour.Behaviour, register=False):
 
     def update(self) -> Status:
         """Copy the value and succeed."""
-        self._set_output("output_key", self.get_input("value"))
+        self._set_output("output_key", self._value())
         return Status.SUCCESS
+
+    def _value(self) -> Any:
+        """The literal, or the entry of ``value="{key}"`` whatever its type: BT.CPP copies the
+        "type and content" of the key (a script's number stays a number)."""
+        try:
+            return self.get_input("value")
+        except TypeError:
+            return self.blackboard_client.get("value")
 
 
 class UnsetBlackboard(PortsMixin, py_trees.behaviour.Behaviour, register=False):

@@ -59,3 +59,10 @@ class LeafCodeError(RuntimeError):
     """A user's leaf raised other than an impossible value (a bug in its code), or its
     ``update`` returned no status (:mod:`planner.leaves.base`): the message names the file and
     line, the leaf and its class. ``app.py`` reports it as bad input, exit code 2."""
+
+
+class PortValueError(TypeError):
+    """A port's value, read as a node runs, that cannot be converted to the port's type (a
+    tree's data, as BT.CPP's ``getInput`` refuses it): the message names the node, the port, the
+    value and the type. ``app.py`` reports it as bad input, exit code 2; a
+    :class:`planner.leaves.WorldLeaf` fails with it instead (a TypeError)."""

@@ -122,6 +122,8 @@ def _failing_softly(hook: Callable[..., Any], name: str) -> Callable[..., Any]:
                 return self.fail(message)
             self._impossible = message  # the tick's update reports it
             return None
+        except LeafCodeError:
+            raise  # a user's leaf's super() call that met the bug first
         except Exception as err:
             if not _user_leaf(self):
                 raise
@@ -134,6 +136,24 @@ def _failing_softly(hook: Callable[..., Any], name: str) -> Callable[..., Any]:
                 "return self.succeed(...), self.fail(...) or self.running(...))"
             )
         return result
+
+    return guarded
+
+
+def _naming_bugs(hook: Callable[..., Any], name: str) -> Callable[..., Any]:
+    """``hook`` (a leaf's ``setup`` or ``terminate``), a user's leaf's error in it a
+    :class:`LeafCodeError` naming it (these hooks return nothing a leaf could fail with)."""
+
+    @functools.wraps(hook)
+    def guarded(self: WorldLeaf, *args: Any, **kwargs: Any) -> Any:
+        try:
+            return hook(self, *args, **kwargs)
+        except LeafCodeError:
+            raise  # a user's leaf's super() call that met the bug first
+        except Exception as err:
+            if not _user_leaf(self):
+                raise
+            raise _code_error(self, name, err) from err
 
     return guarded
 
@@ -161,6 +181,9 @@ class WorldLeaf(StringPorts, BehaviourWithPorts):
         for hook in ("initialise", "update"):
             if hook in cls.__dict__:
                 setattr(cls, hook, _failing_softly(cls.__dict__[hook], hook))
+        for hook in ("setup", "terminate"):
+            if hook in cls.__dict__:
+                setattr(cls, hook, _naming_bugs(cls.__dict__[hook], hook))
 
     def __init__(self, name: str, **kwargs: Any) -> None:
         super().__init__(name=name, **kwargs)

@@ -182,3 +182,23 @@ def test_run_groot_without_pyzmq_or_with_a_bad_port_is_bad_input(
     if real("zmq") is not None:
         assert app.main([*argv, "--groot", "65535"]) == app.EXIT_BAD_INPUT
         assert "expected a port 1..65534" in capsys.readouterr().err
+
+
+def test_run_of_a_tree_whose_count_is_a_fraction_is_bad_input(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    # BT.CPP's getInput<int> refuses 0.333...; here it had been a TypeError's traceback, exit 1.
+    tree = tmp_path / "fraction.xml"
+    tree.write_text(
+        '<root BTCPP_format="4"><BehaviorTree ID="Main"><Sequence>'
+        '<Script code="t := 1 / 3"/><Sleep name="wait" msec="{t}"/>'
+        "</Sequence></BehaviorTree></root>",
+        encoding="utf-8",
+    )
+    out = tmp_path / "out"
+    argv = ["run", str(WORLD), "--tree", str(tree), "--no-animation", "--out", str(out)]
+    assert app.main(argv) == app.EXIT_BAD_INPUT
+    err = capsys.readouterr().err
+    assert "port 'msec': cannot convert 0.333" in err and "(float) to int" in err
+    assert "Traceback" not in err
+    assert (out / "run.jsonl").is_file()  # what was written is kept

@@ -149,6 +149,31 @@ class Silent(WorldLeaf):
 
     def update(self) -> Status:
         self.succeed("looked")
+
+
+class BadSetup(WorldLeaf):
+    NODE_TYPE = "Condition"
+    INPUT_PORTS = {"object": PortInformation(str, description="the object")}
+    OUTPUT_PORTS = {}
+
+    def setup(self, **kwargs) -> None:
+        super().setup(**kwargs)
+        self.camera = kwargs["camera"]
+
+    def update(self) -> Status:
+        return self.succeed("looked")
+
+
+class BadTerminate(WorldLeaf):
+    NODE_TYPE = "Condition"
+    INPUT_PORTS = {"object": PortInformation(str, description="the object")}
+    OUTPUT_PORTS = {}
+
+    def update(self) -> Status:
+        return self.running("looking")
+
+    def terminate(self, new_status: Status) -> None:
+        self.recording.stop()
 """
 
 
@@ -377,3 +402,42 @@ def test_a_leaves_module_declares_the_enum_names_its_scripts_use(
         LeafSourceError, match=r"other.py: SCRIPT_ENUMS: RED: expected one value, got 1 and 5$"
     ):
         register_leaves([str(other)])
+
+
+@pytest.mark.parametrize(
+    ("leaf", "says"),
+    [
+        ("BadSetup", "leaf 'check.BadSetup' (BadSetup) raised KeyError in setup(): 'camera'"),
+        (
+            "BadTerminate",
+            "leaf 'check.BadTerminate' (BadTerminate) raised AttributeError in terminate(): "
+            "'BadTerminate' object has no attribute 'recording'",
+        ),
+    ],
+)
+def test_a_bug_in_a_users_setup_or_terminate_names_its_line_and_the_leaf(
+    tmp_path: Path, registry_restored: None, library: SkillLibrary, leaf: str, says: str
+) -> None:
+    # Only initialise() and update() had been guarded: a bug in setup() or terminate() ended
+    # the run in Duet's traceback, exit 1.
+    from planner.tree_problems import LeafCodeError
+
+    path = tmp_path / "buggy_leaves.py"
+    path.write_text(BUGGY, encoding="utf-8")
+    register_leaves([str(path)])
+    tree = tmp_path / "t.xml"
+    tree.write_text(
+        TREE.replace(
+            '<HeightAtLeast name="high" object="parcel" min_height_m="{low}" height_m="{z}"/>',
+            f'<{leaf} object="parcel"/>',
+        ),
+        encoding="utf-8",
+    )
+    world = FakeWorld(objects=[FakeObject("parcel", np.array([0.20, 0.30, 0.15]))])
+    bt = py_trees.trees.BehaviourTree(load_tree(tree))
+    with pytest.raises(LeafCodeError) as err:
+        bt.setup(world=world, library=library)
+        bt.tick()
+        bt.root.stop(Status.INVALID)  # halted while running, as a time limit halts it
+    assert says in str(err.value)
+    assert str(err.value).startswith(str(path))

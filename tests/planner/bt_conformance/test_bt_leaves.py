@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import py_trees
 import pytest
+from py_trees.common import Status
 
 from planner.loader import TreeFileError
 from tests.planner.bt_conformance.conftest import INV, F, R, S, Ticker
@@ -93,3 +94,60 @@ def test_a_robot_leaf_reads_a_set_blackboard_string_as_its_ports_type() -> None:
     py_trees.blackboard.Blackboard.set("/standoff", "near")
     with pytest.raises(TypeError, match="port 'standoff_m': cannot convert 'near' to float"):
         approach.get_input("standoff_m")
+
+
+def test_set_blackboard_copies_a_non_string_entry_as_it_is() -> None:
+    # BT.CPP: value="{src}" copies the entry's type and content. The port had been typed str,
+    # and a script's number copied so raised a TypeError out of the tick (exit 1, a traceback).
+    t = Ticker(
+        '<Sequence name="s"><Script name="a" code="n := 42"/>'
+        '<SetBlackboard name="b" value="{n}" output_key="m"/></Sequence>'
+    )
+    t.run(("s", "b"), [(S, S)])
+    assert py_trees.blackboard.Blackboard.get("/m") == 42
+
+
+@pytest.mark.parametrize(
+    ("script", "node"),
+    [
+        ("t := 1000 / 4", '<Sleep name="z" msec="{t}"/>'),  # 250.0: a script's / is a double
+        ("t := 250", '<Sleep name="z" msec="{t}"/>'),
+        ("t := 500 / 2", '<Delay name="z" delay_msec="{t}"><AlwaysSuccess/></Delay>'),
+        ("t := 600 / 2", '<Timeout name="z" msec="{t}"><Sleep msec="1000"/></Timeout>'),
+    ],
+)
+def test_a_scripts_whole_double_times_a_node_as_bt_cpp_reads_it(script: str, node: str) -> None:
+    t = Ticker(f'<Sequence name="s"><Script name="a" code="{script}"/>{node}</Sequence>', dt=0.1)
+    statuses = [t.tick("z")[0] for _ in range(5)]
+    # Sleep 250 ms and Delay 250 ms succeed at the fourth tick (t = 0.3 s); Timeout 300 ms
+    # fails its child there.
+    assert statuses[:3] == [R, R, R] and statuses[3] in (S, F)
+
+
+@pytest.mark.parametrize(
+    ("script", "node", "done"),
+    [
+        ("n := 4 / 2", '<Repeat name="z" num_cycles="{n}"><AlwaysSuccess/></Repeat>', S),
+        (
+            "n := 2.0",
+            '<RetryUntilSuccessful name="z" num_attempts="{n}"><AlwaysFailure/>'
+            "</RetryUntilSuccessful>",
+            F,
+        ),
+    ],
+)
+def test_a_scripts_whole_double_counts_a_loop(script: str, node: str, done: Status) -> None:
+    t = Ticker(f'<Sequence name="s"><Script name="a" code="{script}"/>{node}</Sequence>')
+    t.run(("z",), [(R,), (done,)])  # a cycle, an attempt a tick: two of them
+
+
+def test_a_fraction_where_a_count_is_read_names_the_node_port_and_value() -> None:
+    from planner.tree_problems import PortValueError
+
+    t = Ticker(
+        '<Sequence name="s"><Script name="a" code="t := 1 / 3"/>'
+        '<Sleep name="z" msec="{t}"/></Sequence>'
+    )
+    says = r"port 'msec': cannot convert 0\.333\d* \(float\) to int"
+    with pytest.raises(PortValueError, match=says):
+        t.tick("z")
