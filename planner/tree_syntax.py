@@ -117,12 +117,28 @@ def rewrite_port_syntax(root: ET.Element, main_id: str | None) -> None:
                 continue
             for key in sorted(needs[target]):
                 sub.attrib.setdefault(ROOT_PREFIX + key, "{" + ROOT_PREFIX + key + "}")
-            if getattr(sub, "autoremap", False):
-                for key in sorted(_keys_used(trees[target])):
-                    sub.attrib.setdefault(key, "{" + key + "}")
+    _autoremap(trees)
     if main_id in trees and root_keys:
         for key in sorted(needs[str(main_id)]):
             trees[str(main_id)].attrib.setdefault(ROOT_PREFIX + key, "{" + key + "}")
+
+
+def _autoremap(trees: dict[str, ET.Element]) -> None:
+    """Give every ``_autoremap`` ``<SubTree>`` each key its tree uses as the caller's key of the
+    same name, through nested subtrees: a key an inner tree reads is passed by an autoremapped
+    middle tree that never names it (BT.CPP looks a key up through every autoremapping parent).
+    A key passed on becomes one the passing tree uses, so this runs to a fixed point."""
+    changed = True
+    while changed:
+        changed = False
+        for bt in trees.values():
+            for sub in bt.iter("SubTree"):
+                target = trees.get(sub.attrib.get("ID", ""))
+                if target is None or not getattr(sub, "autoremap", False):
+                    continue
+                for key in sorted(_keys_used(target) - sub.attrib.keys()):
+                    sub.attrib[key] = "{" + key + "}"
+                    changed = True
 
 
 def _model_defaults(root: ET.Element, trees: dict[str, ET.Element]) -> None:

@@ -76,6 +76,25 @@ def test_autoremap_shares_every_key_of_the_subtree() -> None:
     assert py_trees.blackboard.Blackboard.get("/b/n") == 1  # not remapped: the subtree's own
 
 
+def test_autoremap_passes_keys_through_a_middle_tree_that_never_names_them() -> None:
+    # BT.CPP looks a key up through every autoremapping parent. The middle tree's keys alone
+    # had been remapped: the inner script failed, 'x' not found, and the checker refused the
+    # tree's ports as written by nothing.
+    root = _load(
+        '<root BTCPP_format="4" main_tree_to_execute="T">'
+        '<BehaviorTree ID="T"><Sequence name="s"><Script name="v" code="x := 1"/>'
+        '<SubTree ID="Outer" name="o" _autoremap="true"/></Sequence></BehaviorTree>'
+        '<BehaviorTree ID="Outer"><SubTree ID="Inner" name="i" _autoremap="true"/></BehaviorTree>'
+        '<BehaviorTree ID="Inner"><Sequence name="q"><Script name="w" code="x := x + 1"/>'
+        '<StubCounter name="c" ticks="1" count="{n}"/></Sequence></BehaviorTree>'
+        "</root>"
+    )
+    root.tick_once()
+    assert root.status == S
+    assert py_trees.blackboard.Blackboard.get("/x") == 2
+    assert py_trees.blackboard.Blackboard.get("/n") == 1
+
+
 def test_subtree_port_default_from_the_tree_nodes_model() -> None:
     root = _load(
         '<root BTCPP_format="4" main_tree_to_execute="T">'
