@@ -164,7 +164,10 @@ def embed_nodes_model(
     ``packages``), so Groot2 opens it with its nodes' kinds and ports.
 
     The rest of the text (comments, layout) is kept; a model already there is replaced, else
-    the new one goes last in ``<root>``. The file itself is not written.
+    the new one goes last in ``<root>``. Of the model there, what the leaves' models do not
+    say is kept: its ``<SubTree>`` entries (their ports and defaults are the trees' meaning)
+    and those of nodes the trees use that no registered leaf models (another robot's, for
+    stubs). The file itself is not written.
 
     Raises
     ------
@@ -177,9 +180,17 @@ def embed_nodes_model(
     }
     reg = get_ports_registry() if registry is None else registry
     model = ET.Element("TreeNodesModel")
+    made = set()
     for tag, cls in _selected(reg, False, packages):
         if tag in used:
             add_node_model(model, tag, cls)
+            made.add(tag)
+    for old in doc.root.findall("TreeNodesModel"):
+        for entry in old:
+            tag = entry.attrib.get("ID")
+            if entry.tag == "SubTree" or (tag in used and tag not in made):
+                entry.tail = None
+                model.append(entry)
     ET.indent(model, level=1)
     block = "\n\n  " + ET.tostring(model, encoding="unicode")
     with open(path, encoding="utf-8") as handle:

@@ -148,3 +148,33 @@ def test_embed_replaces_a_model_and_keeps_the_rest(tmp_path: Path) -> None:
     embedded = ET.fromstring(text).find("TreeNodesModel")
     assert embedded is not None
     assert [(n.tag, n.attrib["ID"]) for n in embedded] == [("Condition", "StubCheck")]
+
+
+def test_embed_keeps_the_subtree_ports_and_the_models_of_nodes_it_cannot_model(
+    tmp_path: Path,
+) -> None:
+    # The model had been made anew from the registered leaves alone: a SubTree's port
+    # defaults (what the tree means) and another robot's node were lost, and a tree that
+    # validated was refused once embedded.
+    from planner.nodes_model import embed_nodes_model
+
+    path = tmp_path / "t.xml"
+    path.write_text(
+        '<root BTCPP_format="4" main_tree_to_execute="M">\n'
+        '  <BehaviorTree ID="M"><Sequence><SubTree ID="C"/><Wave/></Sequence></BehaviorTree>\n'
+        '  <BehaviorTree ID="C"><StubCheck value="{ok}"/></BehaviorTree>\n'
+        "  <TreeNodesModel>\n"
+        '    <SubTree ID="C"><input_port name="ok" default="true"/></SubTree>\n'
+        '    <Action ID="Wave"><input_port name="hand"/></Action>\n'
+        '    <Action ID="Unused"/>\n'
+        "  </TreeNodesModel>\n</root>\n",
+        encoding="utf-8",
+    )
+    embedded = ET.fromstring(embed_nodes_model(path, packages=("tests.planner",)))
+    model_there = embedded.find("TreeNodesModel")
+    assert model_there is not None
+    entries = {n.attrib["ID"]: n for n in model_there}
+    assert sorted(entries) == ["C", "StubCheck", "Wave"]
+    port = entries["C"].find("input_port")
+    assert port is not None and port.attrib == {"name": "ok", "default": "true"}
+    assert entries["Wave"].tag == "Action"
