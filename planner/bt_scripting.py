@@ -17,11 +17,12 @@ tick that ends in SUCCESS ``_onSuccess`` runs, after FAILURE ``_onFailure``, aft
 
 from __future__ import annotations
 
+import uuid
 from collections.abc import Iterator, Mapping
 from typing import Any
 
 import py_trees
-from py_trees.blackboard import Blackboard
+from py_trees.blackboard import ActivityItem, ActivityType, Blackboard
 from py_trees.common import Status
 from py_trees.ports import PortInformation
 
@@ -34,6 +35,8 @@ from planner.tree_bindings import Binding, subtree_bindings
 __all__ = ["BUILTIN_SCRIPT_NODES", "BlackboardEnv", "install_conditions"]
 
 Behaviour = py_trees.behaviour.Behaviour
+#: The client id the scripts' writes carry in the blackboard's activity stream.
+_SCRIPTS = uuid.uuid5(uuid.NAMESPACE_URL, "duet:bt-scripts")
 
 
 class BlackboardEnv:
@@ -45,9 +48,13 @@ class BlackboardEnv:
     writes its own value, which stays in the subtree.
     """
 
-    def __init__(self, namespace: str = "/", remap: Mapping[str, Binding] | None = None) -> None:
+    def __init__(
+        self, namespace: str = "/", remap: Mapping[str, Binding] | None = None, writer: str = ""
+    ) -> None:
         self.namespace = namespace or "/"
         self.remap: Mapping[str, Binding] = remap or {}
+        #: The node whose script writes, as the blackboard's activity stream names a client.
+        self.writer = writer
 
     def key(self, key: str) -> str:
         """The absolute blackboard key a script key names."""
@@ -72,7 +79,27 @@ class BlackboardEnv:
             return literal
 
     def write(self, key: str, value: Any) -> None:
-        Blackboard.set(self.key(key), value)
+        """Write the key, into the blackboard's activity stream too where one is kept (the run
+        log records every write from it, as a client's write is recorded)."""
+        absolute = self.key(key)
+        stream = Blackboard.activity_stream
+        if stream is not None:
+            before = Blackboard.storage.get(absolute)
+            stream.push(
+                ActivityItem(
+                    key=absolute,
+                    client_name=self.writer,
+                    client_id=_SCRIPTS,
+                    activity_type=(
+                        ActivityType.WRITE
+                        if absolute in Blackboard.storage
+                        else ActivityType.INITIALISED
+                    ).value,
+                    previous_value=before,
+                    current_value=value,
+                )
+            )
+        Blackboard.set(absolute, value)
 
     def exists(self, key: str) -> bool:
         return Blackboard.exists(self.key(key)) or self._literal(key) is not None
@@ -82,11 +109,11 @@ class BlackboardEnv:
 
 
 def run_script(
-    script: Script, namespace: str, remap: Mapping[str, Binding] | None = None
+    script: Script, namespace: str, remap: Mapping[str, Binding] | None = None, writer: str = ""
 ) -> tuple[Any, str]:
-    """Evaluate; return (value, "") or (None, the reason it failed)."""
+    """Evaluate as node ``writer``; return (value, "") or (None, the reason it failed)."""
     try:
-        return script.evaluate(BlackboardEnv(namespace, remap)), ""
+        return script.evaluate(BlackboardEnv(namespace, remap, writer)), ""
     except (ScriptRuntimeError, KeyError) as exc:
         return None, f"script {script.source!r}: {exc}"
 
@@ -97,7 +124,7 @@ def _namespace(node: Behaviour) -> str:
 
 def _run(node: Behaviour, script: Script) -> tuple[Any, str]:
     """Run a script node's script in its subtree instance (namespace and table)."""
-    return run_script(script, _namespace(node), getattr(node, "script_remap", None))
+    return run_script(script, _namespace(node), getattr(node, "script_remap", None), node.name)
 
 
 class ScriptNode(StringPorts, py_trees.behaviour.Behaviour, register=False):
@@ -196,7 +223,7 @@ def install_conditions(
     original_stop = node.stop
 
     def run(attr: str) -> tuple[Any, str]:
-        return run_script(conditions[attr], namespace, remap)
+        return run_script(conditions[attr], namespace, remap, f"{node.name} {attr}")
 
     def check(attr: str) -> tuple[bool, str]:
         value, error = run(attr)

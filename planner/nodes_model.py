@@ -187,8 +187,8 @@ def embed_nodes_model(
             made.add(tag)
     for old in doc.root.findall("TreeNodesModel"):
         for entry in old:
-            tag = entry.attrib.get("ID")
-            if entry.tag == "SubTree" or (tag in used and tag not in made):
+            entry_id = entry.attrib.get("ID")
+            if entry.tag == "SubTree" or (entry_id in used and entry_id not in made):
                 entry.tail = None
                 model.append(entry)
     ET.indent(model, level=1)

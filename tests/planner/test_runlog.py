@@ -148,3 +148,33 @@ def test_node_labels_are_names_or_paths_where_names_repeat() -> None:
         "root/try[1]",
         "root",
     ]
+
+
+def test_script_and_condition_writes_are_logged_as_a_clients_are(tmp_path: Path) -> None:
+    # A script wrote the blackboard past its activity stream: run.jsonl, which says it holds
+    # every write, had none of a Script's, a _post's or an _onSuccess's.
+    import tests.planner.stub_leaves  # noqa: F401
+
+    tree = py_trees.trees.BehaviourTree(
+        load_tree_string(
+            '<root BTCPP_format="4"><BehaviorTree ID="Main"><Sequence name="seq">'
+            '<Script name="sc" code="m := 3; m += 1"/>'
+            '<StubCheck name="check" value="true" _onSuccess="done := true"/>'
+            "</Sequence></BehaviorTree></root>"
+        )
+    )
+    tree.setup(clock=FakeClock())
+    path = tmp_path / "run.jsonl"
+    with RunLog(path, clock=lambda: 0.0) as log:
+        log.attach(tree)
+        tree.tick()
+    writes = [
+        (r["key"], r["client"], r["activity"], r["value"])
+        for r in read(path)
+        if r["event"] == "write"
+    ]
+    assert writes == [
+        ("/m", "seq.sc", "INITIALISED", 3),
+        ("/m", "seq.sc", "WRITE", 4),
+        ("/done", "seq.check _onSuccess", "INITIALISED", True),
+    ]
