@@ -88,6 +88,28 @@ def status_chain(root: py_trees.behaviour.Behaviour) -> list[py_trees.behaviour.
     return chain
 
 
+def working_leaf(root: py_trees.behaviour.Behaviour) -> py_trees.behaviour.Behaviour | None:
+    """The running leaf a progress line names: the first, in tree order, of the running leaves
+    that says what it is doing, else the first running one; None if nothing runs.
+
+    py_trees' ``tip`` follows a parallel's last running child: a transport beside a watch
+    (``Parallel(Timeout(Transport), KeepRunningUntilFailure(IsHeld))``) read as the watch's
+    decorator, saying nothing.
+    """
+    first = None
+    stack = [root]
+    while stack:
+        node = stack.pop()
+        if node.status != Status.RUNNING:
+            continue
+        if not node.children:
+            if node.feedback_message:
+                return node
+            first = first or node
+        stack.extend(reversed(node.children))
+    return first
+
+
 #: The suffix py_trees gives a node the file does not name (``Transport_<uuid4>``), and the
 #: bare uuid4 it names an unnamed composite above it by (``<uuid4>.``).
 _UUID = r"[0-9a-f]{8}-[0-9a-f]{4}-4[0-9a-f]{3}-[89ab][0-9a-f]{3}-[0-9a-f]{12}"

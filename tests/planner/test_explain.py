@@ -150,3 +150,25 @@ def test_a_port_with_nothing_on_it_names_the_nodes_that_write_its_key(
         "(mapped to '/state') has no data available; written by Transport.to_state, "
         "Grasp.state in this tree, none of which has yet"
     )
+
+
+def test_progress_names_the_running_leaf_that_says_what_it_does_beside_a_watch() -> None:
+    # py_trees' tip follows a parallel's last running child: a carry beside a watch had been
+    # shown as the watch's KeepRunningUntilFailure, saying nothing.
+    from planner.runner import working_leaf
+
+    root = load_tree_string(
+        '<root BTCPP_format="4" main_tree_to_execute="T"><BehaviorTree ID="T">'
+        '<Parallel name="p" success_count="1" failure_count="1">'
+        '<StubCounter name="carry" ticks="10"/>'
+        '<KeepRunningUntilFailure name="watch"><StubCheck name="held" value="true"/>'
+        "</KeepRunningUntilFailure></Parallel></BehaviorTree></root>"
+    )
+    tree = py_trees.trees.BehaviourTree(root)
+    tree.setup(clock=FakeClock())
+    tree.tick()
+    assert tree.tip() is not None and tree.tip().name.endswith("watch")
+    leaf = working_leaf(root)
+    assert leaf is not None and leaf.name == "p.carry" and leaf.feedback_message == "tick 1"
+    root.stop(Status.INVALID)
+    assert working_leaf(root) is None
