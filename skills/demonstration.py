@@ -84,8 +84,10 @@ class Demonstration:
             )
         if not np.all(np.isfinite(y)):
             i, j = (int(k) for k in np.argwhere(~np.isfinite(y))[0])
+            axis = "xyz"[j] if y.shape[1] <= 3 else f"dimension {j}"
             raise ValueError(
-                f"{name}: positions: expected finite values, got {y[i, j]} at [{i}, {j}]"
+                f"{name}: positions: expected finite values, got {y[i, j]} at [{i}, {j}] "
+                f"(sample {i}, {axis})"
             )
         q: Array | None = None
         if orientations is not None:

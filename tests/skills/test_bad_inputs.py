@@ -27,7 +27,8 @@ def test_non_increasing_time() -> None:
 def test_nan_in_positions_and_time() -> None:
     y = np.zeros((5, 3))
     y[2, 1] = np.nan
-    with pytest.raises(ValueError, match=r"positions: expected finite values, got nan at \[2, 1\]"):
+    says = r"positions: expected finite values, got nan at \[2, 1\] \(sample 2, y\)"
+    with pytest.raises(ValueError, match=says):
         Demonstration.create(np.arange(5.0), y)
     with pytest.raises(ValueError, match=r"t: expected finite time stamps"):
         Demonstration.create([0.0, np.nan, 2.0], np.zeros((3, 3)))
