@@ -305,7 +305,11 @@ class PathChecks:
         first = int(hit[0]) if hit.size else None
         what = "clear"
         if first is not None:
-            if check.collides[first]:
+            if check.collides[first] and check.first_pair is not None:
+                near, far = check.first_pair
+                resting = far in self.scene.object_ids
+                what = f"{near} within {object_margin_m if resting else margin_m:g} m of {far}"
+            elif check.collides[first]:
                 what = f"{'palm or object' if held else 'a palm'} within {margin_m:g} m" + (
                     "" if held else f" of an obstacle, or {object_margin_m:g} m of an object"
                 )

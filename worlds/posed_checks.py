@@ -35,10 +35,14 @@ class TrajectoryCheck:
         (N,) True where some palm or the held object is within ``margin`` of an obstacle.
     first_collision : int
         Index of the first such waypoint, -1 if none.
+    first_pair : tuple of str, optional
+        What is near what there: ("the left palm" or "the right palm" or the held object's
+        name, the obstacle's or resting object's name); None if no waypoint collides.
     """
 
     collides: NDArray[np.bool_]
     first_collision: int
+    first_pair: tuple[str, str] | None = None
 
     @property
     def collision_free(self) -> bool:
@@ -294,6 +298,7 @@ class PosedChecks(CollisionGeometry):
             body_p.append(op)
             body_q.append(oq)
         collides = np.zeros(n, dtype=bool)
+        first_pair: tuple[str, str] | None = None
         avoided = self.avoided_rows([a for a in avoid if a != object_name])
         against = [*self._active, *avoided]
         if against and n:
@@ -328,8 +333,11 @@ class PosedChecks(CollisionGeometry):
                         continue
                     asked = min(free, avoid_margin)
                 collides[w] = _hit(probes[b], r_all[w, b], p_all[w, b], obstacles[o], asked)
+                if collides[w] and first_pair is None:  # candidates come waypoint by waypoint
+                    near = ("the left palm", "the right palm", object_name)[b]
+                    first_pair = (str(near), self._elements[against[o]].name)
         hits = np.flatnonzero(collides)
-        return TrajectoryCheck(collides, int(hits[0]) if len(hits) else -1)
+        return TrajectoryCheck(collides, int(hits[0]) if len(hits) else -1, first_pair)
 
 
 #: How much nearer than it is now a link already inside the margin may be carried, m: the

@@ -142,11 +142,13 @@ def test_trajectory_check_finds_the_first_collision(world: CollisionWorld) -> No
     assert abs(result.first_collision - 250) <= 1
     assert not result.collision_free
     assert result.collides[: result.first_collision].sum() == 0
+    assert result.first_pair == ("parcel", "ball")  # what met what, for a refusal to name
     with_margin = world.check_trajectory(palms, quaternions, "parcel", centre, parcel_q, 0.02)
     # 2 cm earlier: s = 0.2.
     assert abs(with_margin.first_collision - 200) <= 1
     # Without the parcel, the palms alone pass beside the ball.
-    assert world.check_trajectory(palms, quaternions).collision_free
+    beside = world.check_trajectory(palms, quaternions)
+    assert beside.collision_free and beside.first_pair is None
 
 
 def test_trajectory_check_ignores_inactive_obstacles(world: CollisionWorld) -> None:
@@ -202,6 +204,7 @@ def test_a_path_keeps_clear_of_a_resting_object_it_is_asked_to_avoid(
         first = through.first_collision
         assert 170 <= first <= 190, first
         assert not through.collides[:first].any()
+        assert through.first_pair == ("the left palm", "parcel")
         # Asked only not to touch it: 1 cm later, 6 or 7 steps on.
         touching = world.check_trajectory(palms, quaternions, avoid=["parcel"])
         assert 5 <= touching.first_collision - first <= 8, (touching.first_collision, first)
