@@ -277,10 +277,20 @@ def draw_move(ax: Any, tr: MoveTrace, view: View, demo_colour: str = "green") ->
         if beside:
             side = "farther" if off > 0 else "nearer"
             ax.text(*c, f"{abs(off) * 100:.0f} cm\n{side}", ha="center", va="center", fontsize=6)
+    carried = 0.5 * float(max(tr.shape.extents())) if tr.shape is not None else 0.0
     for other in tr.others:
         poly = outline(other.shape, other.position, other.quaternion, view)
-        ax.add_patch(Polygon(poly, closed=True, color="0.6", alpha=0.35, label="other object"))
-        ax.text(*poly.mean(axis=0), other.name, ha="center", va="center", fontsize=6)
+        # As an obstacle: an object wholly beside the carried one's plane is drawn paler, with
+        # how far beside, so the carried object is not read as inside it.
+        off = view.depth(other.position)
+        beside = view.marks_depth and abs(off) > 0.5 * float(max(other.shape.extents())) + carried
+        ax.add_patch(
+            Polygon(
+                poly, closed=True, color="0.6", alpha=0.15 if beside else 0.35, label="other object"
+            )
+        )
+        side = f"\n{abs(off) * 100:.0f} cm {'farther' if off > 0 else 'nearer'}" if beside else ""
+        ax.text(*poly.mean(axis=0), other.name + side, ha="center", va="center", fontsize=6)
         drawn.append(poly)
     if tr.shape is not None:
         for where, q, style, what in (

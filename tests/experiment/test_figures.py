@@ -254,3 +254,25 @@ def test_the_other_objects_are_drawn_where_they_lay() -> None:
     assert_allclose(corners.min(axis=0), [0.25, 0.55], atol=1e-9)
     assert_allclose(corners.max(axis=0), [0.35, 0.65], atol=1e-9)
     assert any(np.allclose(d, corners[: len(d)]) for d in drawn if len(d) >= 4)
+
+
+def test_a_side_view_marks_an_other_object_wholly_beside_the_move_as_an_obstacle_is() -> None:
+    # Flattened onto the move's plane, a crate 30 cm beside it had been drawn over the carried
+    # parcel as if the parcel were inside it.
+    start, goal = np.array([0.55, 0.0, 0.675]), np.array([0.65, 0.0, 0.675])
+    shape = ShapeSpec.box([0.2, 0.3, 0.15])
+    beside = OtherObject("crate", ShapeSpec.box([0.1, 0.1, 0.1]), np.array([0.6, 0.3, 0.65]),
+                         quat.IDENTITY)  # fmt: skip
+    touching = OtherObject("tote", ShapeSpec.box([0.1, 0.1, 0.1]), np.array([0.8, 0.05, 0.65]),
+                           quat.IDENTITY)  # fmt: skip
+    trace = MoveTrace(
+        "parcel move 1", start, goal, np.empty((0, 3)), (), others=(beside, touching),
+        shape=shape,
+    )  # fmt: skip
+    fig, ax = plt.subplots()
+    draw_move(ax, trace, side_view(start, goal))
+    patches = [p for p in ax.patches if p.get_label() == "other object"]
+    alphas = {t.get_text(): p.get_alpha() for p, t in zip(patches, ax.texts, strict=True)}
+    plt.close(fig)
+    # Seen from the move's right (heading 0): +y is farther.
+    assert alphas == {"crate\n30 cm farther": 0.15, "tote": 0.35}
