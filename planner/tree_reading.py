@@ -237,7 +237,14 @@ def read_tree_document(
         data = read_tree_bytes(Path(source))
     except OSError as exc:
         raise TreeFileError(
-            [TreeProblem(source, None, "", f"cannot read: {exc.strerror or exc}")]
+            [
+                TreeProblem(
+                    source,
+                    None,
+                    "",
+                    _unreadable(exc),
+                )
+            ]
         ) from None
     return _read(data, source, os.path.dirname(os.path.abspath(source)), registry, main_tree_id)
 
@@ -317,6 +324,14 @@ UNNAMED_TREE_ID = "MainTree"
 MAX_TIMEOUT_MS = 86_400_000
 #: Largest tree file read, bytes (the shipped trees are 5-10 KB).
 MAX_TREE_BYTES = 1 << 20
+
+
+def _unreadable(exc: OSError) -> str:
+    """What a tree file that cannot be read is, against what was expected."""
+    why = str(exc.strerror or exc)
+    if why.startswith("expected"):  # read_tree_bytes says it so already
+        return why
+    return f"expected a readable BehaviorTree.CPP XML file, got {why[:1].lower()}{why[1:]}"
 
 
 def read_tree_bytes(path: Path) -> bytes:

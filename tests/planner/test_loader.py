@@ -165,7 +165,10 @@ def test_main_tree_can_be_chosen_and_a_single_tree_needs_no_main() -> None:
         ),
         ("bad_main.xml", r"bad_main\.xml:1: <root>: main tree 'Mian' not found"),
         ("include_bad.xml", r"include_bad_grip\.xml:4: <StubGrasp name=\"squeeze\">: unknown port"),
-        ("no_such_file.xml", r"no_such_file\.xml: cannot read: No such file"),
+        (
+            "no_such_file.xml",
+            r"no_such_file\.xml: expected a readable BehaviorTree\.CPP XML file, got no such file",
+        ),
     ],
 )
 def test_errors_name_file_line_node_and_expectation(name: str, pattern: str) -> None:
