@@ -36,7 +36,7 @@ from planner.loader import load_tree
 from planner.port import Move
 from planner.render import render_tree
 from planner.runlog import RunLog
-from planner.runner import readable, run_tree, working_leaf
+from planner.runner import progress_node, readable, run_tree
 from planner.tree_dataflow import RUN_WRITES, TASK_OBJECT_KEY
 from skills.default_library import default_library
 from skills.library import SkillLibrary
@@ -351,7 +351,7 @@ def run_episode(
         def on_tick(tree: py_trees.trees.BehaviourTree) -> None:
             if anim is not None:
                 anim.maybe_capture(sim.time())
-            tip = working_leaf(tree.root) if progress is not None else None
+            tip = progress_node(tree) if progress is not None else None
             if progress is not None and tip is not None and tip.name != last[0]:
                 last[0] = tip.name
                 progress(sim.time(), readable(tip.name), readable(tip.feedback_message))

@@ -88,14 +88,22 @@ def status_chain(root: py_trees.behaviour.Behaviour) -> list[py_trees.behaviour.
     return chain
 
 
-def working_leaf(root: py_trees.behaviour.Behaviour) -> py_trees.behaviour.Behaviour | None:
-    """The running leaf a progress line names: the first, in tree order, of the running leaves
-    that says what it is doing, else the first running one; None if nothing runs.
+def progress_node(tree: py_trees.trees.BehaviourTree) -> py_trees.behaviour.Behaviour | None:
+    """The node a progress line names after a tick: py_trees' ``tip`` (the deepest node the
+    tick reached: a running leaf, or a node that just failed, a Timeout saying it timed out),
+    unless that is a control node or decorator still running with no running leaf under it;
+    then the :func:`working_leaf` of the tree. py_trees' tip follows a parallel's last running
+    child: a transport beside a watch (``Parallel(Timeout(Transport),
+    KeepRunningUntilFailure(IsHeld))``) had read as the watch's decorator, saying nothing."""
+    tip = tree.tip()
+    if tip is None or tip.status != Status.RUNNING or not tip.children:
+        return tip
+    return working_leaf(tree.root) or tip
 
-    py_trees' ``tip`` follows a parallel's last running child: a transport beside a watch
-    (``Parallel(Timeout(Transport), KeepRunningUntilFailure(IsHeld))``) read as the watch's
-    decorator, saying nothing.
-    """
+
+def working_leaf(root: py_trees.behaviour.Behaviour) -> py_trees.behaviour.Behaviour | None:
+    """The first, in tree order, of the running leaves under ``root`` that says what it is
+    doing, else the first running one; None if nothing runs."""
     first = None
     stack = [root]
     while stack:

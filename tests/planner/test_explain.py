@@ -155,7 +155,7 @@ def test_a_port_with_nothing_on_it_names_the_nodes_that_write_its_key(
 def test_progress_names_the_running_leaf_that_says_what_it_does_beside_a_watch() -> None:
     # py_trees' tip follows a parallel's last running child: a carry beside a watch had been
     # shown as the watch's KeepRunningUntilFailure, saying nothing.
-    from planner.runner import working_leaf
+    from planner.runner import progress_node, working_leaf
 
     root = load_tree_string(
         '<root BTCPP_format="4" main_tree_to_execute="T"><BehaviorTree ID="T">'
@@ -168,7 +168,26 @@ def test_progress_names_the_running_leaf_that_says_what_it_does_beside_a_watch()
     tree.setup(clock=FakeClock())
     tree.tick()
     assert tree.tip() is not None and tree.tip().name.endswith("watch")
-    leaf = working_leaf(root)
+    leaf = progress_node(tree)
     assert leaf is not None and leaf.name == "p.carry" and leaf.feedback_message == "tick 1"
+    assert working_leaf(root) is leaf
     root.stop(Status.INVALID)
     assert working_leaf(root) is None
+
+
+def test_progress_names_a_timeout_that_just_failed_with_what_it_said() -> None:
+    from planner.runner import progress_node
+
+    root = load_tree_string(
+        '<root BTCPP_format="4" main_tree_to_execute="T"><BehaviorTree ID="T">'
+        '<Timeout name="guard" msec="150"><StubCounter name="count" ticks="100"/></Timeout>'
+        "</BehaviorTree></root>"
+    )
+    tree = py_trees.trees.BehaviourTree(root)
+    clock = FakeClock(dt=0.1)
+    tree.setup(clock=clock)
+    for _ in range(3):
+        tree.tick()
+        clock.advance()
+    node = progress_node(tree)
+    assert node is not None and node.name == "guard" and "timed out" in node.feedback_message

@@ -110,7 +110,7 @@ def test_empty_palms_keep_off_the_objects_where_they_rest_a_carry_does_not_ask_i
         quaternions = np.repeat(q[None], n, axis=0)
         check = sim.check_palm_path(path, quaternions, 0.01)
         assert not check.clear and not check.doubtful
-        assert "0.01 m of an object" in check.detail
+        assert "the left palm within 0.01 m of parcel at step" in check.detail
         # Stopping short of it, with no obstacle about, is clear.
         short = path.copy()
         short[:, 0] = start[0] + np.linspace(0.0, 0.3, n)[:, None] * (parcel.position - start[0])
@@ -135,7 +135,7 @@ def test_empty_palms_keep_off_the_objects_where_they_rest_a_carry_does_not_ask_i
         near = ending_at(touching - 0.003 / float(np.linalg.norm(parcel.position - start[0])))
         assert sim.check_palm_path(near, quaternions, 0.01, 0.0).clear
         refused = sim.check_palm_path(near, quaternions, 0.01)
-        assert not refused.clear and "0.01 m of an object" in refused.detail
+        assert not refused.clear and "the left palm within 0.01 m of parcel" in refused.detail
         # Held, the parcel is not its own obstacle, nor are the palms kept off it.
         held = sim.check_trajectory(
             "parcel",
