@@ -296,10 +296,7 @@ def report_command(args: argparse.Namespace) -> int:
         print(err, file=sys.stderr)
         return EXIT_BAD_INPUT
     if found.skipped:
-        print(
-            f"warning: {found.path}: skipped {found.skipped} line(s) that are not trial records",
-            file=sys.stderr,
-        )
+        print(f"warning: {found.path}: {found.skipped_text}", file=sys.stderr)
     summaries = report_summaries(found.campaigns)
     stem = out / "report" if out.is_dir() else out.with_name(f"{out.stem}_report")
     several = len(found.campaigns) > 1

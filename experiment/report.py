@@ -7,13 +7,14 @@ failure reasons, and each trial's closest approach to an obstacle.
 
 from __future__ import annotations
 
+import json
 import math
 from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from experiment.records import group_of
+from experiment.records import KEY_FIELDS, group_of
 from experiment.results import ResultsFileError, read_results
 from experiment.summary import reason_of, summarise
 
@@ -23,19 +24,24 @@ _OUTCOMES = ((True, "0.6", "success"), (False, "red", "failed"))
 
 @dataclass(frozen=True)
 class Campaign:
-    """One campaign's records in a results file (a trial run twice counts once, the last)."""
+    """One campaign's records in a results file (a trial run twice counts once, the last),
+    and its key (:data:`experiment.records.KEY_FIELDS`: world and tree with their hashes,
+    seed, settings) where its records have one."""
 
     label: str
     records: list[dict[str, Any]]
+    key: dict[str, Any] | None = None
 
 
 @dataclass(frozen=True)
 class CampaignFile:
-    """The campaigns of a results file and how many of its lines were not records."""
+    """The campaigns of a results file and how many of its lines were not records (and why,
+    :meth:`experiment.results.Results.skipped_text`)."""
 
     path: Path
     campaigns: list[Campaign]
     skipped: int
+    skipped_text: str = ""
 
 
 def results_path(out: Path) -> Path:
@@ -69,21 +75,39 @@ def read_campaigns(out: Path) -> CampaignFile:
     if not read.records:
         raise ResultsFileError(
             f"{path}: expected trial records (JSON lines with trial, seed, success), found none"
-            + (f" ({read.skipped} line(s) were not records)" if read.skipped else "")
+            + (f"; {read.skipped_text()}" if read.skipped else "")
         )
     groups: dict[tuple[str, ...], dict[int, dict[str, Any]]] = {}
     for rec in read.records:
         groups.setdefault(group_of(rec), {})[rec["trial"]] = rec
+    firsts = [next(iter(by_trial.values())) for by_trial in groups.values()]
+    labels = [_label(first) for first in firsts]
     campaigns = []
-    for by_trial in groups.values():
-        first = next(iter(by_trial.values()))
-        world = first.get("world") or "(world not recorded)"
-        tree = first.get("tree") or "default tree"
-        label = f"{world}, {tree}, seed {first.get('seed')}"
-        if first.get("mode") == "hard":
-            label += ", Hard"
-        campaigns.append(Campaign(label, [by_trial[t] for t in sorted(by_trial)]))
-    return CampaignFile(path, campaigns, read.skipped)
+    for first, label, by_trial in zip(firsts, labels, groups.values(), strict=True):
+        if labels.count(label) > 1:  # a world copied under its name, edited: say which
+            label += _told_apart(first)
+        key = {f: first[f] for f in KEY_FIELDS if f in first} or None
+        campaigns.append(Campaign(label, [by_trial[t] for t in sorted(by_trial)], key))
+    return CampaignFile(path, campaigns, read.skipped, read.skipped_text() if read.skipped else "")
+
+
+def _label(first: dict[str, Any]) -> str:
+    world = first.get("world") or "(world not recorded)"
+    tree = first.get("tree") or "default tree"
+    label = f"{world}, {tree}, seed {first.get('seed')}"
+    return label + (", Hard" if first.get("mode") == "hard" else "")
+
+
+def _told_apart(first: dict[str, Any]) -> str:
+    """What tells a campaign from another of the same label: its world's and tree's hashes
+    (their first 8 hex digits) and its settings."""
+    parts = [f"world {str(first.get('world_sha256', ''))[:8] or '?'}"]
+    if first.get("tree_sha256"):
+        parts.append(f"tree {str(first['tree_sha256'])[:8]}")
+    settings = first.get("settings")
+    if settings:
+        parts.append(json.dumps(settings, sort_keys=True, separators=(",", ":"))[:60])
+    return f" ({', '.join(parts)})"
 
 
 def report_figure(campaign: Campaign, path: Path) -> None:
@@ -176,5 +200,6 @@ def report_figure(campaign: Campaign, path: Path) -> None:
 
 
 def report_summaries(campaigns: list[Campaign]) -> list[dict[str, Any]]:
-    """:func:`experiment.summary.summarise` of each campaign, with its label."""
-    return [{"campaign": c.label, **summarise(c.records)} for c in campaigns]
+    """:func:`experiment.summary.summarise` of each campaign, with its label and its key
+    (``"key"``: world and tree with their hashes, seed, settings; None for old records)."""
+    return [{"campaign": c.label, "key": c.key, **summarise(c.records)} for c in campaigns]

@@ -4,7 +4,8 @@
 campaign resumes where it stopped. What a kill, a full disk or a careless edit can leave:
 
 * a torn last line (a kill mid-write): :func:`repair_tail` cuts it before anything is
-  appended, so the next record starts on a line of its own;
+  appended, so the next record starts on a line of its own, and keeps it beside the file; a
+  whole record without its newline gets one;
 * lines that are not records (bytes that are not UTF-8, not JSON, a record whose fields have
   the wrong types): :func:`read_results` skips them and counts them, so that the caller can
   warn; those trials are run again;
@@ -47,32 +48,132 @@ class Results:
     ----------
     records : list of dict
         In file order; each has an integer ``trial``, an integer ``seed`` and a bool
-        ``success``.
+        ``success``, and every field the summaries read of the type they read.
     skipped : int
         Lines that were not records (not UTF-8, not JSON, or fields of the wrong type).
+    problems : tuple of str
+        Why, for the first of them: ``line 7: field 'failure': expected a string, got 5``.
     """
 
     records: list[dict[str, Any]]
     skipped: int
+    problems: tuple[str, ...] = ()
+
+    def skipped_text(self, most: int = 3) -> str:
+        """The skipped lines' count and the first reasons, for a warning."""
+        shown = "; ".join(self.problems[:most])
+        more = f"; {self.skipped - most} more" if self.skipped > most else ""
+        return f"skipped {self.skipped} line(s) that are not trial records ({shown}{more})"
 
 
 def _is_int(value: object) -> bool:
     return isinstance(value, int) and not isinstance(value, bool)
 
 
+def _is_number(value: object) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool)
+
+
+def _numbers(value: object, least: int = 0) -> bool:
+    return isinstance(value, list) and len(value) >= least and all(map(_is_number, value))
+
+
+def _counts(value: object) -> bool:
+    return isinstance(value, dict) and all(_is_number(v) for v in value.values())
+
+
+#: What the summaries, the report and its picture read of a record, by field: a check and
+#: what it expects. A field a record lacks is not checked (older records lack some).
+FIELD_TYPES: dict[str, tuple[Any, str]] = {
+    **{
+        name: (lambda v: isinstance(v, str), "a string")
+        for name in ("failure", "reason", "tree_status", "mode", "world", "backend", "host")
+    },
+    **{
+        name: (lambda v: v is None or _is_number(v), "a number or null")
+        for name in (
+            "sim_time_s",
+            "wall_time_s",
+            "physics_wall_s",
+            "control_wall_s",
+            "watch_wall_s",
+            "min_obstacle_distance_m",
+            "min_forearm_distance_m",
+            "slip_mm",
+            "peak_tilt_deg",
+            "palm_velocity_mismatch_mps",
+            "peak_jerk_mps3",
+            "peak_squeeze_n",
+            "arm_contacts",
+            "contact_count",
+            "regrasp_count",
+        )
+    },
+    **{
+        name: (
+            lambda v: isinstance(v, list) and all(x is None or _is_number(x) for x in v),
+            "a list of numbers or nulls",
+        )
+        for name in ("placement_error_m", "placement_error_deg")
+    },
+    **{
+        name: (_counts, "a mapping of names to counts")
+        for name in ("obstacle_contacts", "forearm_contacts", "table_contacts")
+    },
+    "dropped": (lambda v: isinstance(v, bool), "true or false"),
+    "start": (lambda v: _numbers(v, 2), "a list of at least 2 numbers"),
+    "goals": (
+        lambda v: isinstance(v, list) and all(_numbers(g, 2) for g in v),
+        "a list of lists of at least 2 numbers",
+    ),
+    "obstacles": (lambda v: isinstance(v, list), "a list"),
+    "compositions": (
+        lambda v: (
+            isinstance(v, list)
+            and all(
+                c is None
+                or (isinstance(c, dict) and all(x is None or _is_number(x) for x in c.values()))
+                for c in v
+            )
+        ),
+        "a list of mappings of names to numbers (or nulls)",
+    ),
+}
+
+
 def _record(line: bytes) -> dict[str, Any] | None:
     """The record on one line, or None when the line is not one."""
+    return _read_record(line)[0]
+
+
+def _read_record(line: bytes) -> tuple[dict[str, Any] | None, str]:
+    """The record on one line, or None and why it is not one."""
     try:
         rec = json.loads(line.decode("utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError, RecursionError):
-        return None
+    except UnicodeDecodeError:
+        return None, "not UTF-8 text"
+    except (json.JSONDecodeError, RecursionError):
+        return None, "not JSON"
     if not isinstance(rec, dict):
-        return None
-    if not (_is_int(rec.get("trial")) and rec["trial"] >= 0 and _is_int(rec.get("seed"))):
-        return None
-    if not isinstance(rec.get("success"), bool) or not isinstance(rec.get("tree", ""), str):
-        return None
-    return rec
+        return None, f"expected a JSON object, got {type(rec).__name__}"
+    for name, ok, expected in (
+        ("trial", lambda v: _is_int(v) and v >= 0, "a whole number >= 0"),
+        ("seed", _is_int, "a whole number"),
+        ("success", lambda v: isinstance(v, bool), "true or false"),
+    ):
+        if not ok(rec.get(name)):
+            return None, f"field '{name}': expected {expected}, got {_shown(rec.get(name))}"
+    if not isinstance(rec.get("tree", ""), str):
+        return None, f"field 'tree': expected a string, got {_shown(rec['tree'])}"
+    for name, (check, expected) in FIELD_TYPES.items():
+        if name in rec and not check(rec[name]):
+            return None, f"field '{name}': expected {expected}, got {_shown(rec[name])}"
+    return rec, ""
+
+
+def _shown(value: object) -> str:
+    text = json.dumps(value)
+    return text if len(text) <= 40 else text[:37] + "..."
 
 
 def _check_file(path: Path) -> None:
@@ -97,54 +198,77 @@ def read_results(path: Path) -> Results:
         data = path.read_bytes()
     except OSError as err:
         raise ResultsFileError(f"{path}: cannot read it: {err.strerror or err}") from None
-    records, skipped = [], 0
-    for line in data.splitlines():
+    records, problems = [], []
+    for number, line in enumerate(data.splitlines(), 1):
         if not line.strip():
             continue
-        rec = _record(line)
+        rec, why = _read_record(line)
         if rec is None:
-            skipped += 1
+            problems.append(f"line {number}: {why}")
         else:
             records.append(rec)
-    return Results(records, skipped)
+    return Results(records, len(problems), tuple(problems))
 
 
 def repair_tail(path: Path) -> int:
-    """Cut a torn last line (one without its newline) off ``path``; the bytes cut.
+    """Make ``path`` end on a whole line before anything is appended; the bytes cut.
+
+    A last line without its newline that is a whole record (a file another tool wrote, or
+    two joined with ``cat``) gets its newline and stays. One that is not (a kill mid-write)
+    is cut off and kept beside the file, in ``results.jsonl.torn``, so nothing is lost. A
+    file that already ends a line is only read.
 
     Raises
     ------
     ResultsFileError
-        As :func:`read_results`, or if the file cannot be written.
+        As :func:`read_results`, or if the file must be changed and cannot be written.
     """
     _check_file(path)
     if not path.exists():
         return 0
     try:
-        with open(path, "rb+") as fh:
+        with open(path, "rb") as fh:
             size = fh.seek(0, os.SEEK_END)
             if size == 0:
                 return 0
             fh.seek(size - 1)
             if fh.read(1) == b"\n":
                 return 0
-            # Find the last newline: everything after it is the torn record.
-            keep, step = 0, 1 << 16
-            end = size
-            while end > 0:
-                start = max(0, end - step)
-                fh.seek(start)
-                at = fh.read(end - start).rfind(b"\n")
-                if at >= 0:
-                    keep = start + at + 1
-                    break
-                end = start
-            fh.truncate(keep)
+            keep = _last_line_start(fh, size)
+            fh.seek(keep)
+            tail = fh.read()
+    except OSError as err:
+        raise ResultsFileError(f"{path}: cannot read it: {err.strerror or err}") from None
+    try:
+        with open(path, "rb+") as fh:
+            if _record(tail) is not None:
+                fh.seek(size)
+                fh.write(b"\n")
+                cut = 0
+            else:
+                with open(path.with_name(path.name + ".torn"), "ab") as aside:
+                    aside.write(tail + b"\n")
+                fh.truncate(keep)
+                cut = size - keep
             fh.flush()
             os.fsync(fh.fileno())
-            return size - keep
+            return cut
     except OSError as err:
         raise ResultsFileError(f"{path}: cannot repair it: {err.strerror or err}") from None
+
+
+def _last_line_start(fh: Any, size: int) -> int:
+    """Where the last line of the open file ``fh`` of ``size`` bytes starts."""
+    step = 1 << 16
+    end = size
+    while end > 0:
+        start = max(0, end - step)
+        fh.seek(start)
+        at = fh.read(end - start).rfind(b"\n")
+        if at >= 0:
+            return start + at + 1
+        end = start
+    return 0
 
 
 @contextmanager

@@ -499,10 +499,7 @@ def _run_locked(
         on_notice(f"{results}: cut a torn last line ({cut} bytes) before appending")
     earlier = read_results(results)
     if earlier.skipped:
-        on_notice(
-            f"{results}: skipped {earlier.skipped} line(s) that are not trial records; "
-            "their trials run again"
-        )
+        on_notice(f"{results}: {earlier.skipped_text()}; their trials run again")
     key = campaign_of(base, seed, tree, leaves, main_tree, hard)
     done = campaign_results(results, key)
     pending = [t for t in range(n) if t not in done]

@@ -50,6 +50,39 @@ def test_a_torn_tail_is_cut_and_bad_lines_are_counted(tmp_path: Path) -> None:
     read = read_results(path)
     assert [r["trial"] for r in read.records] == [0, 2] and read.skipped == 2
     assert repair_tail(path) == 0  # whole already
+    assert (tmp_path / "results.jsonl.torn").read_bytes() == b'{"trial": 3, "se\n'  # kept
+
+
+def test_a_whole_last_record_without_its_newline_is_kept(tmp_path: Path) -> None:
+    # A file that another tool wrote, or two joined with cat: its last record had been cut
+    # as torn, and that trial of that campaign was lost for good.
+    path = tmp_path / "results.jsonl"
+    path.write_text(record(0) + record(1).rstrip("\n"), encoding="utf-8")
+    assert repair_tail(path) == 0
+    assert path.read_text(encoding="utf-8") == record(0) + record(1)
+    assert [r["trial"] for r in read_results(path).records] == [0, 1]
+    assert not (tmp_path / "results.jsonl.torn").exists()
+
+
+def test_a_whole_file_is_only_read(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    # A finished campaign's file that cannot be written had been opened for writing, to
+    # repair nothing, and the campaign refused: "cannot repair it: Operation not permitted".
+    import builtins
+
+    import experiment.results as results
+
+    def read_only(file: object, mode: str = "r", *args: object, **kwargs: object) -> object:
+        if "+" in mode or "w" in mode or "a" in mode:
+            raise PermissionError(1, "Operation not permitted")
+        return builtins.open(file, mode, *args, **kwargs)  # type: ignore[call-overload]
+
+    path = tmp_path / "results.jsonl"
+    path.write_text(record(0), encoding="utf-8")
+    monkeypatch.setattr(results, "open", read_only, raising=False)
+    assert repair_tail(path) == 0
+    path.write_text(record(0) + '{"trial": 1', encoding="utf-8")
+    with pytest.raises(results.ResultsFileError, match="cannot repair it"):
+        repair_tail(path)
 
 
 def test_a_folder_where_the_results_belong_is_one_message(tmp_path: Path) -> None:

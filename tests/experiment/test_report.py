@@ -50,7 +50,11 @@ def test_report_reads_old_records_and_draws_them(tmp_path: Path) -> None:
     [
         (None, "no such campaign folder or results file"),
         ("", "expected trial records"),
-        ("{\n[1, 2]\n", r"found none \(2 line\(s\) were not records\)"),
+        (
+            "{\n[1, 2]\n",
+            r"found none; skipped 2 line\(s\) that are not trial records \(line 1: not JSON; "
+            r"line 2: expected a JSON object, got list\)",
+        ),
     ],
 )
 def test_report_refuses_what_holds_no_campaign(
@@ -155,3 +159,71 @@ def test_two_campaigns_in_one_folder_are_two_pictures(tmp_path: Path) -> None:
     assert pictures == [str(tmp_path / "report_1.png"), str(tmp_path / "report_2.png")]
     assert not (tmp_path / "report.png").exists()
     assert all(Path(p).stat().st_size > 10_000 for p in pictures)
+
+
+def _shipped_records(n: int) -> list[dict[str, Any]]:
+    with (ROOT / "bench" / "results" / "trials_seed0_n1000.jsonl").open() as fh:
+        return [json.loads(next(fh)) for _ in range(n)]
+
+
+@pytest.mark.parametrize(
+    ("field", "value", "expected"),
+    [
+        ("failure", 5, "expected a string, got 5"),
+        ("start", [0.5], "expected a list of at least 2 numbers, got [0.5]"),
+        ("min_obstacle_distance_m", "n/a", 'expected a number or null, got "n/a"'),
+        ("sim_time_s", "20 s", 'expected a number or null, got "20 s"'),
+        ("compositions", [[1, 2]], "expected a list of mappings of names to numbers"),
+        ("compositions", [{"transport_weight": "a"}], "expected a list of mappings of names"),
+    ],
+)
+def test_a_record_with_a_field_of_the_wrong_type_is_skipped_saying_which(
+    tmp_path: Path, field: str, value: object, expected: str
+) -> None:
+    # Each had been a traceback out of the summary or the picture, exit 1, in `report` and in
+    # `trials` after all of a campaign's trials had run.
+    from experiment.report import read_campaigns, report_figure, report_summaries
+
+    records = _shipped_records(3)
+    records[1][field] = value
+    path = tmp_path / "results.jsonl"
+    path.write_text("".join(json.dumps(r) + "\n" for r in records), encoding="utf-8")
+    found = read_campaigns(tmp_path)
+    assert found.skipped == 1
+    assert found.skipped_text.startswith(
+        f"skipped 1 line(s) that are not trial records (line 2: field '{field}': {expected}"
+    )
+    (campaign,) = found.campaigns
+    assert [r["trial"] for r in campaign.records] == sorted(r["trial"] for r in records[::2])
+    assert report_summaries(found.campaigns)[0]["trials"] == 2
+    report_figure(campaign, tmp_path / "report.png")
+
+
+def test_campaigns_of_one_label_are_told_apart_by_their_hashes_and_settings(
+    tmp_path: Path,
+) -> None:
+    # A world copied under its name and edited: three campaigns had been printed, pictured
+    # and given in --json as "parcel_pick_place, default tree, seed 0", all alike.
+    from experiment.report import read_campaigns, report_summaries
+
+    records = _shipped_records(2)
+    edited = [dict(r, world_sha256="ab" * 32) for r in records]
+    hard = [dict(r, world_sha256="cd" * 32, settings={"size_scale": [0.9, 1.1]}) for r in records]
+    path = tmp_path / "results.jsonl"
+    path.write_text(
+        "".join(json.dumps(r) + "\n" for r in records + edited + hard), encoding="utf-8"
+    )
+    found = read_campaigns(tmp_path)
+    labels = [c.label for c in found.campaigns]
+    shipped = records[0]["world_sha256"][:8]
+    assert labels == [
+        f"parcel_pick_place, default tree, seed 0 (world {shipped})",
+        "parcel_pick_place, default tree, seed 0 (world abababab)",
+        'parcel_pick_place, default tree, seed 0 (world cdcdcdcd, {"size_scale":[0.9,1.1]})',
+    ]
+    keys = [s["key"] for s in report_summaries(found.campaigns)]
+    assert [k["world_sha256"] for k in keys] == [
+        records[0]["world_sha256"],
+        "ab" * 32,
+        "cd" * 32,
+    ]
