@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 from pathlib import Path
 from typing import Any
@@ -160,13 +161,10 @@ def trials_command(args: argparse.Namespace) -> int:
     from experiment.trials import campaign_of, campaign_results, reason_of, run_campaign, summarise
 
     world = load_world_or_exit(args.world)
-    if not (1 <= args.n <= 1_000_000 and 1 <= args.workers <= 1024):
-        print(
-            f"--n, --workers: expected whole numbers 1..1000000 and 1..1024, got {args.n} and "
-            f"{args.workers}",
-            file=sys.stderr,
-        )
-        return EXIT_BAD_INPUT
+    for option, value, most in (("--n", args.n, 1_000_000), ("--workers", args.workers, 1024)):
+        if not 1 <= value <= most:
+            print(f"{option}: expected a whole number 1..{most}, got {value}", file=sys.stderr)
+            return EXIT_BAD_INPUT
     if args.trial is not None and not 0 <= args.trial < 1_000_000:
         print(f"--trial: expected a trial number 0..999999, got {args.trial}", file=sys.stderr)
         return EXIT_BAD_INPUT
@@ -203,8 +201,10 @@ def trials_command(args: argparse.Namespace) -> int:
     except ResultsFileError as err:
         print(err, file=sys.stderr)
         return EXIT_BAD_INPUT
-    tally = {"ok": sum(1 for r in earlier if r.get("success"))}
-    done = sum(1 for r in earlier if int(r.get("trial", -1)) < args.n)
+    # Only this campaign's trials 0..n-1 count: a longer one's records stay in the file.
+    within = [r for r in earlier if int(r.get("trial", -1)) < args.n]
+    tally = {"ok": sum(1 for r in within if r.get("success"))}
+    done = len(within)
     if done:
         left = args.n - done
         print(
@@ -279,7 +279,7 @@ def trials_command(args: argparse.Namespace) -> int:
     for line in undrawn_kinds(listed, records):
         print(line, file=sys.stderr)
     if args.json:
-        print(json.dumps(summary))
+        print(strict_json(summary))
     return EXIT_OK if summary["successes"] == summary["trials"] else EXIT_FAILURE
 
 
@@ -300,6 +300,12 @@ def report_command(args: argparse.Namespace) -> int:
     summaries = report_summaries(found.campaigns)
     stem = out / "report" if out.is_dir() else out.with_name(f"{out.stem}_report")
     several = len(found.campaigns) > 1
+    # The pictures of this report alone: an earlier report's, of other campaigns, would stay
+    # beside them and be taken for this one's.
+    for old in stem.parent.glob(f"{stem.name}*.png"):
+        if old.name == f"{stem.name}.png" or old.stem[len(stem.name) + 1 :].isdigit():
+            old.unlink(missing_ok=True)
+    unwritten = False
     for k, (campaign, summary) in enumerate(zip(found.campaigns, summaries, strict=True), 1):
         count = summary["trials"]
         print(f"{printable(summary['campaign'])}: {count} trial{'s' * (count != 1)}")
@@ -317,13 +323,30 @@ def report_command(args: argparse.Namespace) -> int:
             print(f"  picture: {figure}")
         except OSError as err:
             print(f"not written: {figure}: {err.strerror or err}", file=sys.stderr)
+            unwritten = True
     if args.json:
         print(
-            json.dumps(
+            strict_json(
                 {"results": str(found.path), "skipped_lines": found.skipped, "campaigns": summaries}
             )
         )
-    return EXIT_OK
+    return EXIT_BAD_INPUT if unwritten else EXIT_OK
+
+
+def strict_json(value: Any) -> str:
+    """``value`` as JSON that strict parsers read: a NaN or infinity (a speed of no wall
+    time, say) is null."""
+
+    def clean(x: Any) -> Any:
+        if isinstance(x, float) and not math.isfinite(x):
+            return None
+        if isinstance(x, dict):
+            return {k: clean(v) for k, v in x.items()}
+        if isinstance(x, list | tuple):
+            return [clean(v) for v in x]
+        return x
+
+    return json.dumps(clean(value), allow_nan=False)
 
 
 __all__ = ["report_command", "run_command", "trials_command"]

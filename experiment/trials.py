@@ -244,6 +244,37 @@ BACKENDS = ("local", "ray")
 RAY_RETRIES = 3
 
 
+_NO_CLUSTER = (
+    "no Ray cluster answers there; start one with `ray start --head` and give the address "
+    "it prints (HOST:PORT), or leave --address out for a local Ray"
+)
+#: How long to wait for a cluster's address to answer before ``ray.init``, s (Ray itself
+#: retries an address where nothing listens for minutes).
+CONNECT_TIMEOUT_S = 5.0
+
+
+def _reachable(address: str) -> None:
+    """Refuse an address (``HOST:PORT`` or ``ray://HOST:PORT``) where nothing listens.
+
+    Raises
+    ------
+    RuntimeError
+        Naming the address, if a TCP connection to it fails within :data:`CONNECT_TIMEOUT_S`.
+    """
+    import socket
+
+    where = address.split("://", 1)[-1]
+    host, _, port = where.rpartition(":")
+    if not host or not port.isdigit():
+        if address in ("auto", "local"):
+            return  # Ray finds (or refuses) its own
+        raise RuntimeError(f"--address {address}: expected HOST:PORT or ray://HOST:PORT")
+    try:
+        socket.create_connection((host.strip("[]"), int(port)), CONNECT_TIMEOUT_S).close()
+    except OSError as err:
+        raise RuntimeError(f"--address {address}: {_NO_CLUSTER} ({err.strerror or err})") from None
+
+
 def _run_on_ray(
     jobs: list[tuple[dict[str, Any], int, int]],
     workers: int,
@@ -267,7 +298,11 @@ def _run_on_ray(
     started = not ray.is_initialized()
     if started:
         if address:
-            ray.init(address=address, log_to_driver=False, runtime_env={"env_vars": blas})
+            _reachable(address)
+            try:
+                ray.init(address=address, log_to_driver=False, runtime_env={"env_vars": blas})
+            except ConnectionError as err:
+                raise RuntimeError(f"--address {address}: {_NO_CLUSTER} ({err})") from None
         else:
             ray.init(
                 num_cpus=workers,

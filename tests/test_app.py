@@ -121,7 +121,9 @@ def test_out_naming_a_file_and_absurd_campaigns_are_one_line_and_exit_2(
     assert exit_code(["run", DEFAULT, "--out", str(a_file)]) == app.EXIT_BAD_INPUT
     assert f"--out {a_file}: expected a folder, got a file" in capsys.readouterr().err
     assert exit_code(["trials", DEFAULT, "--n", str(10**12), "--out", str(tmp_path / "t")]) == 2
-    assert "--n, --workers: expected whole numbers 1..1000000" in capsys.readouterr().err
+    assert f"--n: expected a whole number 1..1000000, got {10**12}" in capsys.readouterr().err
+    assert exit_code(["trials", DEFAULT, "--workers", "0", "--out", str(tmp_path / "t")]) == 2
+    assert "--workers: expected a whole number 1..1024, got 0" in capsys.readouterr().err
     assert a_file.read_text(encoding="utf-8") == "not a folder"  # nothing lost
 
 
@@ -209,3 +211,46 @@ def test_one_trial_of_a_campaign_runs_alone_as_the_campaign_ran_it(
 def test_a_trial_number_below_zero_is_refused(capsys: pytest.CaptureFixture[str]) -> None:
     assert exit_code(["trials", DEFAULT, "--trial", "-1"]) == app.EXIT_BAD_INPUT
     assert "--trial: expected a trial number 0..999999, got -1" in capsys.readouterr().err
+
+
+@pytest.mark.sim
+def test_a_shorter_campaign_counts_only_its_own_trials_successes(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # Trials 0, 1, 4 and 5 recorded, --n 3 runs trial 2: the progress had said "successes 5".
+    shipped = ROOT / "bench" / "results" / "trials_seed0_n1000.jsonl"
+    kept = [line for line in shipped.open() if json.loads(line)["trial"] in (0, 1, 4, 5)]
+    out = tmp_path / "c"
+    out.mkdir()
+    (out / "results.jsonl").write_text("".join(kept), encoding="utf-8")
+    assert exit_code(["trials", DEFAULT, "--n", "3", "--workers", "1", "--out", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert "resuming: 2 of 3 trials" in err
+    assert "successes 3  (trial 2: ok)" in err and "successes 5" not in err
+
+
+def test_report_json_is_strict_and_an_unwritten_picture_exits_2(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # A campaign of no wall time had printed "realtime_factor": NaN, which strict parsers
+    # refuse; a picture that could not be written had exited 0.
+    import experiment.report as report
+
+    shipped = ROOT / "bench" / "results" / "trials_seed0_n1000.jsonl"
+    lines = [json.loads(line) for _, line in zip(range(3), shipped.open(), strict=False)]
+    (tmp_path / "results.jsonl").write_text(
+        "".join(json.dumps(dict(r, wall_time_s=0.0)) + "\n" for r in lines), encoding="utf-8"
+    )
+    (tmp_path / "report_2.png").write_bytes(b"an earlier report's picture")
+    assert exit_code(["report", str(tmp_path), "--json"]) == app.EXIT_OK
+    last = capsys.readouterr().out.splitlines()[-1]
+    summary = json.loads(last, parse_constant=lambda c: pytest.fail(f"not strict JSON: {c}"))
+    assert summary["campaigns"][0]["realtime_factor"] is None
+    assert sorted(p.name for p in tmp_path.glob("*.png")) == ["report.png"]  # its own alone
+
+    def refused(campaign: object, path: Path) -> None:
+        raise PermissionError(1, "Operation not permitted")
+
+    monkeypatch.setattr(report, "report_figure", refused)
+    assert exit_code(["report", str(tmp_path)]) == app.EXIT_BAD_INPUT
+    assert "not written: " in capsys.readouterr().err

@@ -518,7 +518,7 @@ CASES: dict[str, Case] = {
         12,
         lambda tmp: ["trials", str(WORLD), "--n", str(10**12), "--out", str(tmp / "c")],
         2,
-        r"--n, --workers: expected whole numbers 1\.\.1000000",
+        r"--n: expected a whole number 1\.\.1000000, got 1000000000000",
     ),
     # 15: a name that would print lines of its own.
     "world_name_spoofs_output": Case(

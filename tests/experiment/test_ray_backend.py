@@ -55,3 +55,25 @@ def test_ray_records_match_the_local_pool_resume_and_survive_a_killed_worker(
     grown = run_campaign(world, 3, 0, local, workers=2, backend="ray")
     assert [r["backend"] for r in grown] == ["local", "local", "ray"]
     assert len(read_results(local / "results.jsonl").records) == 3
+
+
+def test_an_address_where_no_cluster_answers_is_refused_at_once() -> None:
+    # Ray retried such an address for minutes (and "auto" without a cluster raised a
+    # traceback): the campaign is refused, exit 2, naming the address.
+    import socket
+
+    from experiment.trials import _reachable
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]  # closed when the block ends: nothing listens there
+    with pytest.raises(RuntimeError, match=rf"--address 127.0.0.1:{port}: no Ray cluster"):
+        _reachable(f"127.0.0.1:{port}")
+    with pytest.raises(RuntimeError, match=rf"--address ray://127.0.0.1:{port}: no Ray"):
+        _reachable(f"ray://127.0.0.1:{port}")
+    with pytest.raises(RuntimeError, match="expected HOST:PORT or ray://HOST:PORT"):
+        _reachable("headnode")
+    with socket.socket() as listening:
+        listening.bind(("127.0.0.1", 0))
+        listening.listen()
+        _reachable(f"127.0.0.1:{listening.getsockname()[1]}")  # something answers: Ray's turn
