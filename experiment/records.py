@@ -1,7 +1,7 @@
 """What a trial record says about the campaign it belongs to, so that results files merge.
 
 A record names its world (``world``: name, ``world_sha256``: a hash of its content as read),
-its tree (``tree``: the path relative to the project, or as given when outside it, "" for the
+its tree (``tree``: the path relative to the project, or its file name outside it, "" for the
 default; ``tree_sha256``: a hash of the file's bytes), its ``seed``, and where it ran
 (``backend``, ``host``). :func:`campaign_key` is what changes a trial's outcome: a campaign
 owns only the records whose key is its own; others in the same ``results.jsonl`` are kept,
@@ -41,13 +41,15 @@ def content_hash(data: Any) -> str:
 
 
 def tree_name(tree: Path | None) -> str:
-    """How records name a tree: relative to the project when inside it, else as given."""
+    """How records name a tree: relative to the project when inside it, else its file name
+    (``tree_sha256`` tells two of one name apart): a tree given by another path, from
+    another folder or another machine, is the same campaign's."""
     if tree is None:
         return ""
     try:
         return tree.resolve().relative_to(PROJECT).as_posix()
     except ValueError:
-        return str(tree)
+        return tree.name
 
 
 def tree_hash(tree: Path | None) -> str:

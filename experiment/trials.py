@@ -16,6 +16,7 @@ campaign resumes where it stopped; campaigns run on a local pool of processes or
 from __future__ import annotations
 
 import ctypes
+import hashlib
 import json
 import os
 import signal
@@ -44,6 +45,7 @@ from planner.tree_reading import read_tree_document
 from planner.user_leaves import register_leaves
 from worlds.bodies import build_robot
 from worlds.world_file import (
+    DEFAULT_SKILL_LIBRARY,
     World,
     as_world_spec,
     world_from_data,
@@ -203,6 +205,9 @@ def campaign_of(
     ranges out, so an Easy campaign's key does not depend on them.
     """
     settings: dict[str, Any] = {"leaves": [_leaf_source(s) for s in leaves]} if leaves else {}
+    files = _files_read(base, leaves)
+    if files:  # what the world's file names do not say: the content of what they name
+        settings["files_sha256"] = files
     if main_tree:
         settings["main_tree"] = main_tree
     if hard:
@@ -215,6 +220,55 @@ def campaign_of(
     data = base.model_dump(mode="json")
     data["trials"].pop("hard", None)
     return campaign_key(base.name, data, tree, seed, settings)
+
+
+def _files_read(base: World, leaves: Sequence[str]) -> dict[str, str]:
+    """SHA-256 of each file a trial reads besides the world and the tree, by the name the
+    world file (or ``--leaves``) gives it: the meshes of its shapes, its own skill library's
+    files, the leaves' Python files. A mesh or a leaf edited under the same name is then
+    another campaign, not the old one's records reused. Empty for a world of none."""
+    found: dict[str, str] = {}
+
+    def meshes(value: Any) -> None:
+        if isinstance(value, dict):
+            if value.get("type") == "mesh" and isinstance(value.get("file"), str):
+                found[value["file"]] = _file_hash(base.resolve_path(value["file"]))
+            for v in value.values():
+                meshes(v)
+        elif isinstance(value, list):
+            for v in value:
+                meshes(v)
+
+    meshes(base.model_dump(mode="json"))
+    library = base.skills.library
+    if library != DEFAULT_SKILL_LIBRARY:
+        folder = base.resolve_path(library)
+        for path in sorted(p for p in folder.rglob("*") if p.is_file()):
+            found[f"{library}/{path.relative_to(folder).as_posix()}"] = _file_hash(path)
+    for source in leaves:
+        module = Path(source) if source.endswith(".py") else _module_file(source)
+        if module is not None:
+            found[source] = _file_hash(module)
+    return found
+
+
+def _file_hash(path: Path) -> str:
+    try:
+        return hashlib.sha256(path.read_bytes()).hexdigest()
+    except OSError:
+        return ""  # the run refuses it, naming it; the key need not
+
+
+def _module_file(name: str) -> Path | None:
+    """The file an importable module's leaves are read from, if it has one."""
+    import importlib.util
+
+    try:
+        spec = importlib.util.find_spec(name)
+    except (ImportError, ValueError):
+        return None
+    origin = spec.origin if spec is not None else None
+    return Path(origin) if origin and origin.endswith(".py") else None
 
 
 def _leaf_source(source: str) -> str:
@@ -261,8 +315,6 @@ def _reachable(address: str) -> None:
     RuntimeError
         Naming the address, if a TCP connection to it fails within :data:`CONNECT_TIMEOUT_S`.
     """
-    import socket
-
     where = address.split("://", 1)[-1]
     host, _, port = where.rpartition(":")
     if not host or not port.isdigit():

@@ -178,3 +178,30 @@ def test_a_killed_parent_leaves_no_worker_running(tmp_path: Path) -> None:
     while _group_alive(proc.pid) and time.monotonic() < deadline:
         time.sleep(0.2)
     assert not _group_alive(proc.pid)
+
+
+def test_a_mesh_or_a_leaf_edited_under_its_name_is_another_campaign(tmp_path: Path) -> None:
+    # The key had hashed the world file alone: a narrower box.obj, or an edited leaf file,
+    # resumed the old campaign's records as the new one's.
+    from experiment.records import campaign_key, tree_name
+    from tests.worlds.test_adapters import write_mesh_world
+
+    world_file = write_mesh_world(tmp_path / "w", parcel_mesh=True)
+    leaves = tmp_path / "my_leaves.py"
+    leaves.write_text("DEFAULT = 0.5\n", encoding="utf-8")
+    key = campaign_of(load_world(world_file), 0, None, [str(leaves)])
+    files = key["settings"]["files_sha256"]
+    assert set(files) == {"meshes/box.obj", str(leaves)}
+    mesh = tmp_path / "w" / "meshes" / "box.obj"
+    mesh.write_text(mesh.read_text(encoding="utf-8").replace("0.1 ", "0.07 "), encoding="utf-8")
+    narrower = campaign_of(load_world(world_file), 0, None, [str(leaves)])
+    assert narrower["world_sha256"] == key["world_sha256"]  # the world file is the same
+    assert narrower != key
+    leaves.write_text("DEFAULT = 0.9\n", encoding="utf-8")
+    assert campaign_of(load_world(world_file), 0, None, [str(leaves)]) != narrower
+    # The shipped world names no file: its key, and its recorded campaigns', are as before.
+    assert "files_sha256" not in campaign_of(load_world(WORLD), 0, None)["settings"]
+    # A tree outside the project is named by its file name, whatever path it was given by.
+    tree = tmp_path / "mine.xml"
+    assert tree_name(tree) == tree_name(Path(os.path.relpath(tree))) == "mine.xml"
+    assert campaign_key("w", {}, None, 0)["tree"] == ""
