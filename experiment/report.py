@@ -137,7 +137,13 @@ def report_figure(campaign: Campaign, path: Path) -> None:
             s=18,
             label=f"start, {label}",
         )
-        goals = [g for r in rows for g in r.get("goals") or () if len(g) >= 2]
+        if ok:
+            goals = [g for r in rows for g in r.get("goals") or () if len(g) >= 2]
+            others: list[list[float]] = []
+        else:  # the goal each failed at, filled; its other goals (reached, or never tried) open
+            split = [_failed_goal(r) for r in rows]
+            goals = [g for at, _ in split for g in at]
+            others = [g for _, rest in split for g in rest]
         where.scatter(
             [g[1] for g in goals],
             [g[0] for g in goals],
@@ -145,9 +151,20 @@ def report_figure(campaign: Campaign, path: Path) -> None:
             marker="^",
             s=20,
             alpha=0.5 if ok else 1.0,
-            label=f"goals, {label}",
+            label=f"goals, {label}" if ok else "goal failed at",
             edgecolors="none",
         )
+        if others:
+            where.scatter(
+                [g[1] for g in others],
+                [g[0] for g in others],
+                marker="^",
+                s=20,
+                facecolors="none",
+                edgecolors=colour,
+                linewidths=0.8,
+                label="other goals of failed trials",
+            )
     if placed:
         where.invert_xaxis()  # +y to the robot's left, drawn on the left
         where.set_aspect("equal", adjustable="datalim")
@@ -197,6 +214,18 @@ def report_figure(campaign: Campaign, path: Path) -> None:
     fig.tight_layout()
     fig.savefig(path, dpi=90)
     plt.close(fig)
+
+
+def _failed_goal(record: dict[str, Any]) -> tuple[list[list[float]], list[list[float]]]:
+    """A failed trial's goals: ([the one it failed at], the others). That is the first goal
+    not placed (``placement_error_m`` null), or its last when every one was placed (an
+    object knocked away after); every goal when the record does not say."""
+    goals = [g for g in record.get("goals") or () if len(g) >= 2]
+    placed = record.get("placement_error_m")
+    if not isinstance(placed, list) or len(placed) != len(goals) or not goals:
+        return goals, []
+    at = next((k for k, e in enumerate(placed) if e is None), len(goals) - 1)
+    return [goals[at]], goals[:at] + goals[at + 1 :]
 
 
 def report_summaries(campaigns: list[Campaign]) -> list[dict[str, Any]]:

@@ -227,3 +227,15 @@ def test_campaigns_of_one_label_are_told_apart_by_their_hashes_and_settings(
         "ab" * 32,
         "cd" * 32,
     ]
+
+
+def test_a_failed_trial_marks_the_goal_it_failed_at_not_the_ones_it_never_tried() -> None:
+    # Every goal of a failed trial had been drawn as a failed goal, those it never reached too.
+    from experiment.report import _failed_goal
+
+    goals = [[0.5, 0.0, 0.7], [0.6, -0.1, 0.7], [0.6, 0.1, 0.7]]
+    stopped = {"goals": goals, "placement_error_m": [0.001, None, None]}
+    assert _failed_goal(stopped) == ([goals[1]], [goals[0], goals[2]])
+    knocked = {"goals": goals, "placement_error_m": [0.001, 0.002, 0.003]}
+    assert _failed_goal(knocked) == ([goals[2]], goals[:2])
+    assert _failed_goal({"goals": goals}) == (goals, [])  # an old record: it does not say
