@@ -309,7 +309,9 @@ CASES: dict[str, Case] = {
         4,
         results_file(b'\xff\xfe not json\n{"trial": "one", "seed": []}\n'),
         0,
-        r"results\.jsonl: skipped 2 line\(s\) that are not trial records; their trials run again",
+        r"results\.jsonl: skipped 2 line\(s\) that are not trial records \(line 2: not UTF-8 "
+        r"text; line 3: field 'trial': expected a whole number >= 0, got \"one\"\); their "
+        r"trials run again",
     ),
     "results_a_folder": Case(
         4, results_file(None), 2, r"results\.jsonl: expected a results file, got a folder"
