@@ -417,6 +417,10 @@ class SkillSettings(FileModel):
         return library
 
 
+#: The world file's sections that may be left out, and so left empty (null in YAML).
+OPTIONAL_SECTIONS = ("obstacles", "sim", "skills", "trials", "disturbances", "fixtures")
+
+
 class World(FileModel):
     """A whole world file.
 
@@ -460,6 +464,10 @@ class World(FileModel):
     @model_validator(mode="before")
     @classmethod
     def _trials_with_the_robot(cls, data: Any) -> Any:
+        # An optional section left empty (`trials:` with its lines commented out, which YAML
+        # reads as null) is that section left out: its defaults.
+        if isinstance(data, Mapping) and any(data.get(k, ()) is None for k in OPTIONAL_SECTIONS):
+            data = {k: v for k, v in data.items() if not (k in OPTIONAL_SECTIONS and v is None)}
         # Without a trials section, the defaults (made for a robot at the origin facing +x)
         # stand where this robot stands, turned with it (trials_in_robot_frame): a world laid
         # out elsewhere draws its trials in front of its robot. A base that does not read as

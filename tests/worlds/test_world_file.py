@@ -609,3 +609,23 @@ def test_an_icub_arm_separation_it_does_not_have_is_refused(tmp_path: Path) -> N
     )
     path.write_text(re.sub(r"arm_separation: 0\.24", "arm_separation: 0.242", text), "utf-8")
     load_world(path)  # a restatement to the millimetre is fine
+
+
+def test_an_optional_section_left_empty_is_left_out_a_required_one_is_not(
+    default_data: dict[str, Any], tmp_path: Path
+) -> None:
+    # `trials:` with its lines commented out reads as null: it had been refused ("trials:
+    # expected a mapping of keys to values, got None") where leaving it out is fine.
+    data = copy.deepcopy(default_data)
+    for section in ("trials", "obstacles", "disturbances", "fixtures", "sim", "skills"):
+        data[section] = None
+    data["task"][0]["moves"] = [{**m, "obstacles": []} for m in data["task"][0]["moves"]]
+    path = tmp_path / "empty_sections.yaml"
+    path.write_text(yaml.safe_dump(data), encoding="utf-8")
+    world = load_world(path)
+    bare = {k: v for k, v in data.items() if v is not None}
+    (tmp_path / "bare.yaml").write_text(yaml.safe_dump(bare), encoding="utf-8")
+    assert world.model_dump() == load_world(tmp_path / "bare.yaml").model_dump()
+    data["objects"] = None
+    path.write_text(yaml.safe_dump(data), encoding="utf-8")
+    assert "objects: expected a list, got None" in str(_error(path))
