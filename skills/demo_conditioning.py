@@ -44,6 +44,8 @@ MAX_SETTLE_DEG = 5.0
 
 #: Samples within this many standard deviations weigh in a smoothed one.
 _REACH = 4.0
+#: Most values (samples x window x dimensions) one block of smoothing holds: 32 MB of floats.
+_BLOCK_VALUES = 1 << 22
 
 
 def _gaussian_means(t: Array, values: Array, sigma: float) -> Array:
@@ -60,12 +62,22 @@ def _gaussian_means(t: Array, values: Array, sigma: float) -> Array:
     )
     lo = np.searchsorted(times, t - reach, side="left")
     hi = np.searchsorted(times, t + reach, side="right")
-    # Every sample's window at once: (N, K) indices into the padded samples, K the widest.
-    index = lo[:, None] + np.arange(int(np.max(hi - lo)))
-    inside = index < hi[:, None]
-    index = np.minimum(index, times.size - 1)
-    weight = np.where(inside, np.exp(-0.5 * ((times[index] - t[:, None]) / sigma) ** 2), 0.0)
-    return np.einsum("nk,nkd->nd", weight, padded[index]) / weight.sum(axis=1)[:, None]
+    # The samples' windows, block by block: (B, K) indices into the padded samples, K the
+    # widest. A window holds rate x 8 sigma samples, so all N at once would take memory as the
+    # rate squared (20000 samples over 3 s: 3 GB); a block holds about _BLOCK_VALUES values.
+    width = np.arange(int(np.max(hi - lo)))
+    rows = max(1, _BLOCK_VALUES // max(1, width.size * values.shape[1]))
+    out = np.empty((t.size, values.shape[1]))
+    for start in range(0, t.size, rows):
+        block = slice(start, start + rows)
+        index = lo[block, None] + width
+        inside = index < hi[block, None]
+        index = np.minimum(index, times.size - 1)
+        weight = np.where(
+            inside, np.exp(-0.5 * ((times[index] - t[block, None]) / sigma) ** 2), 0.0
+        )
+        out[block] = np.einsum("nk,nkd->nd", weight, padded[index]) / weight.sum(axis=1)[:, None]
+    return out
 
 
 def low_pass(demo: Demonstration, sigma_s: float = DEFAULT_SMOOTHING_S) -> Demonstration:

@@ -97,3 +97,29 @@ def test_a_recording_cut_before_the_motion_stopped_is_told_from_a_noisy_one() ->
     final, peak = end_speed(cut)
     assert final == pytest.approx(0.152, abs=0.002)  # the carry's speed at 2.6 s
     assert end_speed(low_pass(cut))[0] > 0.1 * peak  # smoothed, still moving at the end
+
+
+def test_smoothing_a_long_fast_recording_takes_memory_as_its_length_not_its_rate_squared(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # Every sample's window at once had taken N x (rate x 8 sigma) x D floats: 3.2 GB for a
+    # 20000-sample, 3 s recording; a faster logger would have been killed without a word.
+    import tracemalloc
+
+    import skills.demo_conditioning as conditioning
+
+    t = np.linspace(0.0, 3.0, 20_000)
+    values = np.stack([np.sin(t), np.cos(2.0 * t), t**2, t, -t, t * t * t, np.ones_like(t)], 1)
+    tracemalloc.start()
+    smooth = conditioning._gaussian_means(t, values, 0.04)
+    peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    assert peak < 300e6, peak
+    # Block by block, bit for bit what all at once gives (a block of one sample here).
+    monkeypatch.setattr(conditioning, "_BLOCK_VALUES", 1)
+    short = slice(0, 400)
+    whole = conditioning._gaussian_means(t[short], values[short], 0.04)
+    monkeypatch.setattr(conditioning, "_BLOCK_VALUES", 1 << 40)
+    assert np.array_equal(whole, conditioning._gaussian_means(t[short], values[short], 0.04))
+    middle = slice(2000, -2000)  # beyond 4 sigma of the held ends
+    assert np.allclose(smooth[middle, :2], values[middle, :2], atol=5e-3)
