@@ -181,13 +181,20 @@ class EpisodeReport:
         if "disturbances" in s:
             pushes = s["disturbances"]
             out.append(f"  disturbances applied: {pushes['applied']} of {len(pushes['entries'])}")
+            later = 0
             for entry in pushes["entries"]:
-                steps = (
-                    f"physics steps {entry['first_step']} to {entry['last_step']}"
-                    if entry["steps"]
-                    else "no physics step (none of the run started inside its window)"
-                )
+                if entry["steps"]:
+                    steps = f"physics steps {entry['first_step']} to {entry['last_step']}"
+                elif entry.get("skipped"):
+                    steps = "skipped: the object was not held when its window opened"
+                elif entry["at_s"] >= self.sim_time_s:
+                    later += 1  # drawn for a run that ended before them: one line for all
+                    continue
+                else:
+                    steps = "no physics step (none of the run started inside its window)"
                 out.append(f"    {printable(entry['object'])} at {entry['at_s']:g} s: {steps}")
+            if later:
+                out.append(f"    {later} more drawn for after the run ended")
         out.append(
             f"  simulated {self.sim_time_s:.1f} s in {self.wall_time_s:.1f} s wall "
             f"({self.sim_time_s / max(self.wall_time_s, 1e-9):.1f}x real time)"

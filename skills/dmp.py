@@ -160,8 +160,8 @@ def check_demonstrations(demos: Sequence[Demonstration], n_basis: int) -> None:
         if d.n_samples < n_basis:
             raise ValueError(
                 f"{d.name}: t: expected at least n_basis={n_basis} samples to fit "
-                f"{n_basis} basis functions, got {d.n_samples} (record at a higher rate, or "
-                "fit fewer basis functions)"
+                f"{n_basis} basis functions, got {d.n_samples} (record at a higher rate or "
+                "for longer; in Python, a model's n_basis argument fits fewer)"
             )
 
 

@@ -70,3 +70,23 @@ def test_run_json_lists_each_disturbance_and_its_steps(
     assert pushes["entries"][0]["force_n"] == [0.0, 1.0, 0.0]
     assert "disturbances applied: 1 of 2" in out
     assert "parcel at 0.1 s: physics steps 24 to 35" in out
+    assert "1 more drawn for after the run ended" in out and "at 5 s" not in out
+
+
+def test_a_push_skipped_for_an_object_not_held_says_so() -> None:
+    # It had said "no physics step (none of the run started inside its window)" of a push at
+    # 1.1 s of a 25.8 s run, skipped because the parcel was not held then.
+    from experiment.episode import EpisodeReport
+
+    def entry(at_s: float, **more: object) -> dict[str, object]:
+        return {"object": "parcel", "at_s": at_s, "steps": 0, "first_step": None,
+                "last_step": None, **more}  # fmt: skip
+
+    report = EpisodeReport(
+        True, "SUCCESS", "", [0.001], [0.1], 0.05, {}, 0, False, 25.8, 2.0,
+        placement_objects=["parcel"],
+        disturbances=[entry(1.1, while_held=True, skipped=True), entry(30.0), entry(31.0)],
+    )  # fmt: skip
+    lines = report.lines("w")
+    assert "    parcel at 1.1 s: skipped: the object was not held when its window opened" in lines
+    assert "    2 more drawn for after the run ended" in lines
