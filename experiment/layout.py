@@ -519,7 +519,10 @@ def _draw_sphere(
         if any(robot.distance(p, centre, radius, clearance) < clearance for p in grasps):
             continue
         return Sphere(name, (float(centre[0]), float(centre[1]), float(centre[2])), radius, kind)
-    raise RuntimeError(f"{name}: could not place a sphere clear of the start and goal")
+    raise RuntimeError(
+        f"the sphere drawn for a move ({name}): none of {SPHERE_ATTEMPTS} drawn kept clear of "
+        "the object and the robot at the move's start and goal"
+    )
 
 
 class TrialLayoutError(ValueError):
@@ -575,6 +578,13 @@ def check_trial_layout(base: World, seed: int, label: str) -> None:
         layout = base.trials
         raise TrialLayoutError(
             f"{label}: trials: expected a layout whose obstacles can be drawn, got none for "
-            f"trial 0 ({err}); lower trials.clearance ({layout.clearance:g} m) or "
-            f"trials.robot_clearance ({layout.robot_clearance:g} m), or move the regions apart"
+            f"trial 0 ({err}); draw smaller or farther spheres (trials.sphere_radius "
+            f"{_range(layout.sphere_radius)} m, trials.line_gap {_range(layout.line_gap)} m, "
+            f"trials.ahead_gap {_range(layout.ahead_gap)} m: the defaults are the iiwas'), lower "
+            f"trials.clearance ({layout.clearance:g} m) or trials.robot_clearance "
+            f"({layout.robot_clearance:g} m), or move the regions apart"
         ) from None
+
+
+def _range(bounds: tuple[float, float]) -> str:
+    return f"[{bounds[0]:g}, {bounds[1]:g}]"

@@ -129,8 +129,9 @@ def trial_world(
     except RuntimeError as err:
         # Not the robot's failure: the world's trials section left no room for this draw.
         raise TrialNotDrawn(
-            f"layout not drawn: {err} (widen the trials regions or lower "
-            "trials.clearance or trials.robot_clearance)"
+            f"layout not drawn: {err} (widen the trials regions, draw smaller or farther "
+            "spheres: trials.sphere_radius, line_gap, ahead_gap, or lower trials.clearance or "
+            "trials.robot_clearance)"
         ) from None
     drawn: HardTrial | None = None
     if hard:

@@ -302,8 +302,10 @@ def test_a_trial_whose_layout_cannot_be_drawn_is_recorded_as_not_drawn() -> None
     record = run_trial((payload, 0, 4))
     assert not record["success"] and record["sim_time_s"] == 0.0
     assert record["failure"] == (
-        "layout not drawn: ball_2: could not place a sphere clear of the start and goal (widen "
-        "the trials regions or lower trials.clearance or trials.robot_clearance)"
+        "layout not drawn: the sphere drawn for a move (ball_2): none of 200 drawn kept clear "
+        "of the object and the robot at the move's start and goal (widen the trials regions, "
+        "draw smaller or farther spheres: trials.sphere_radius, line_gap, ahead_gap, or lower "
+        "trials.clearance or trials.robot_clearance)"
     )
     assert reason_of(record["failure"]) == "layout not drawn"
 
