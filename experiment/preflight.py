@@ -85,7 +85,7 @@ def preflight_problems(
         lines = [p.format(world_file) for p in obstacle_hold_problems(world)]
     if tree is not None:
         lines += tree_task_problems(world, doc)
-    return lines + move_skill_problems(world, world_file)
+    return lines + move_skill_problems(world, world_file) + tree_skill_problems(world, doc)
 
 
 def tree_task_problems(world: World, doc: TreeDocument) -> list[str]:
@@ -121,6 +121,41 @@ def steps_note(made: Sequence[Move]) -> str:
         f"{', '.join(str(k) for k in ks[:-1])} and {ks[-1]}"
         for m, ks in split
     )
+
+
+def tree_skill_problems(world: World, doc: TreeDocument) -> list[str]:
+    """One line per node of the tree (the ``--tree``, or the world's own) whose ``skill`` port
+    names, as a literal (on the node, or on a ``<SubTree>`` feeding it), a skill the world's
+    library cannot carry a move with: it had validated, and failed the run at its first carry."""
+    from experiment.episode import load_library
+    from planner.skill_choice import SkillChoiceError, transport_skill
+    from planner.tree_dataflow import port_uses
+    from planner.tree_reading import describe, source_file, source_line
+    from skills.library import LibraryFileError
+
+    named = [
+        (use, use.binding.literal)
+        for use in port_uses(doc)
+        if use.port == "skill" and use.direction == "read" and use.binding.literal is not None
+    ]
+    if not named:
+        return []
+    try:
+        library = load_library(world)
+    except LibraryFileError as err:
+        return [str(err)]
+    problems: dict[tuple[int, str], str] = {}
+    for use, key in named:
+        where = use.binding.origin if use.binding.origin is not None else use.elem
+        try:
+            transport_skill(library, str(key))
+        except SkillChoiceError as err:
+            problems.setdefault(
+                (id(where), str(key)),
+                f"{source_file(where, doc.file)}:{source_line(where)}: {describe(where)}: "
+                f"port 'skill': {err}",
+            )
+    return list(problems.values())
 
 
 def move_skill_problems(world: World, world_file: str) -> list[str]:

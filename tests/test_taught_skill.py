@@ -131,6 +131,29 @@ def test_validate_checks_the_moves_skills_against_the_worlds_library(
     assert "task[0].moves[1].skill: expected a skill name or label" in capsys.readouterr().err
 
 
+def test_validate_checks_a_trees_skill_ports_against_the_worlds_library(
+    taught: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # A world's own tree (or --tree) naming a skill its library lacks had validated, then
+    # failed its run at the first carry, after 18 s of simulation.
+    shipped = (ROOT / "planner" / "trees" / "pick_and_place.xml").read_text(encoding="utf-8")
+    text = (ROOT / "worlds" / "parcel_pick_place.yaml").read_text(encoding="utf-8")
+    text = text.replace("library: default", f"library: {taught}")
+    for skill, code in (("my_wave", 0), ("my_wav", 2)):
+        tree = tmp_path / f"{skill}.xml"
+        tree.write_text(
+            shipped.replace("<Transport name=", f'<Transport skill="{skill}" name='),
+            encoding="utf-8",
+        )
+        world = tmp_path / f"{skill}.yaml"
+        world.write_text(text.replace("\ntree: null", f"\ntree: {tree.name}"), encoding="utf-8")
+        assert app.main(["validate", str(world)]) == code, skill
+        assert app.main(["validate", str(world), "--tree", str(tree)]) == code, skill
+    err = capsys.readouterr().err
+    assert f"{tmp_path / 'my_wav.xml'}:" in err
+    assert ": <Transport name=\"transport\">: port 'skill': skill 'my_wav': expected" in err
+
+
 @pytest.mark.sim
 def test_a_taught_wave_carries_the_parcel_in_physics(taught: Path, tmp_path: Path) -> None:
     from experiment.episode import run_episode
