@@ -81,6 +81,14 @@ def off_the_table(world: WorldPort, name: str) -> str | None:
     if below <= OFF_TABLE_M and beyond <= OFF_TABLE_M:
         return None
     where = ", ".join(f"{v:.2f}" for v in pose.position)
+    if beyond <= OFF_TABLE_M and below < 0.5 * top:
+        # Over the table, lower than its top but far above the floor: a table lower than the
+        # world states (Hard mode's table_dz_m, a world file's error), or the object under it.
+        return (
+            f"{name} lies {below:.2f} m below the table top the world states, over the table: "
+            f"the table is lower than stated (or the object beneath it); out of reach: at "
+            f"({where}) m"
+        )
     if below > OFF_TABLE_M:
         side = f"{below:.2f} m below the table top"
     else:

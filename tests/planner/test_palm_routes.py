@@ -399,3 +399,17 @@ def test_a_way_in_asks_only_not_touching_objects_a_way_out_the_margin(tick_leaf:
     world = _Recording(objects=[FakeObject("parcel", BOX)])
     assert tick_leaf(Retreat("retreat"), world, back_m=0.04).final == Status.SUCCESS
     assert world.asked == [(0.01, None)]
+
+
+def test_an_object_over_a_table_lower_than_stated_is_not_said_to_lie_off_it(
+    tick_leaf: Tick,
+) -> None:
+    # Hard mode's table_dz_m of -0.08 put the parcel 8 cm below the stated top, on the table:
+    # the reason had said it lay off the table.
+    lowered = FakeObject("parcel", BOX, pose=Pose.of([0.6, 0.0, 0.595]))
+    log = tick_leaf(Approach("approach"), FakeWorld(objects=[lowered]), object="parcel")
+    assert log.final == Status.FAILURE
+    assert log.feedback.startswith(
+        "parcel lies 0.08 m below the table top the world states, over the table: the table is "
+        "lower than stated (or the object beneath it); out of reach"
+    )
