@@ -54,8 +54,9 @@ def test_default_settings_dump_as_before_and_others_are_kept(
         ({"torque_scale": [1.2, 0.8]}, r"trials\.hard\.torque_scale: expected low <= high"),
         ({"push_duration_s": [0, 0.1]}, r"trials\.hard\.push_duration_s: expected values > 0"),
         (
-            {"table_dz_m": [-0.7, 0.0]},
-            r"trials\.hard\.table_dz_m: expected a low end above -0\.6 m \(the table's height\)",
+            {"table_dz_m": [-0.08, 0.0]},
+            r"trials\.hard\.table_dz_m: expected heights within \[-0\.05, 0\.05\] m \(an "
+            r"object more than 5 cm below where the file puts it reads to the robot as fallen",
         ),
         ({"table_dz_m": [0.0, 2.0]}, r"trials\.hard\.table_dz_m: expected heights within"),
         ({"pose_sigma_m": -0.001}, r"trials\.hard\.pose_sigma_m: expected a number greater"),
