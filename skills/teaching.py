@@ -262,6 +262,15 @@ def teach(
             f"{folder}: expected to save the library, got {err.strerror or err}"
         ) from None
     say(f"added skill {new_name!r} labelled {label!r} ({kind.value}, {space.value}) to {folder}")
+    winner = skills.named(label, space)
+    if winner.name != new_name:
+        # A label names one skill to a move or a tree: the skill so named, else the first so
+        # labelled. A re-recorded skill under the old label would never run, without a word.
+        say(
+            f"note: {label!r} names {winner.name!r} to a move or a tree that gives it "
+            f"({'its name' if winner.name == label else 'labelled so before'}); give "
+            f"{new_name!r} to run this one"
+        )
     return Lesson(match, smoothing_s, folder, shown, skill)
 
 

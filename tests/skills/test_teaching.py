@@ -101,3 +101,24 @@ def test_teaching_action_follows_the_label_then_the_space() -> None:
     assert teaching_action("my_wave", Space.RELATIVE, Action.HOLD_LATERAL) is Action.HOLD_LATERAL
     with pytest.raises(TeachingError, match="for the relative skill 'my_wave'"):
         teaching_action("my_wave", Space.RELATIVE)
+
+
+def test_a_label_another_skill_answers_to_says_which_one_a_move_gets(
+    wave_csv: Path, tmp_path: Path
+) -> None:
+    # A re-recorded skill under its old label was added without a word, and a world naming
+    # the label kept running the old one.
+    folder = tmp_path / "lib"
+    teach(wave_csv, folder, "my_wave", Space.ABSOLUTE)
+    lines: list[str] = []
+    teach(wave_csv, folder, "my_wave", Space.ABSOLUTE, name="wave2", force=True,
+          report=lines.append)  # fmt: skip
+    assert lines[-1] == (
+        "note: 'my_wave' names 'wave' to a move or a tree that gives it (labelled so before); "
+        "give 'wave2' to run this one"
+    )
+    assert SkillLibrary.load(folder).named("my_wave").name == "wave"
+    lines.clear()
+    teach(wave_csv, folder, "wave", Space.ABSOLUTE, name="wave3", force=True,
+          report=lines.append)  # fmt: skip
+    assert lines[-1].startswith("note: 'wave' names 'wave' to a move or a tree that gives it (its")
