@@ -44,6 +44,8 @@ MAX_SETTLE_DEG = 5.0
 
 #: Samples within this many standard deviations weigh in a smoothed one.
 _REACH = 4.0
+#: Stamps whose gaps all lie within this fraction of their median are even.
+_EVEN_TOLERANCE = 1e-3
 #: Most values (samples x window x dimensions) one block of smoothing holds: 32 MB of floats.
 _BLOCK_VALUES = 1 << 22
 
@@ -60,6 +62,13 @@ def _gaussian_means(t: Array, values: Array, sigma: float) -> Array:
     padded = np.concatenate(
         (np.repeat(values[:1], count, 0), values, np.repeat(values[-1:], count, 0))
     )
+    # Unevenly stamped, each sample also weighs as the time it stands for (half the gaps to
+    # its neighbours): a plain kernel mean leans towards where samples crowd (2.5 mm off a
+    # curve the even stamps give within 0.5). Evenly stamped, every sample stands for the
+    # same time: left as it was, bit for bit.
+    gaps = np.diff(times)
+    uneven = bool(np.max(np.abs(gaps - step)) > _EVEN_TOLERANCE * step)
+    span = np.concatenate(([gaps[0]], 0.5 * (gaps[:-1] + gaps[1:]), [gaps[-1]]))
     lo = np.searchsorted(times, t - reach, side="left")
     hi = np.searchsorted(times, t + reach, side="right")
     # The samples' windows, block by block: (B, K) indices into the padded samples, K the
@@ -76,6 +85,8 @@ def _gaussian_means(t: Array, values: Array, sigma: float) -> Array:
         weight = np.where(
             inside, np.exp(-0.5 * ((times[index] - t[block, None]) / sigma) ** 2), 0.0
         )
+        if uneven:
+            weight *= span[index]
         out[block] = np.einsum("nk,nkd->nd", weight, padded[index]) / weight.sum(axis=1)[:, None]
     return out
 
