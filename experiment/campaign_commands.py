@@ -76,8 +76,11 @@ def _progress(t: float, leaf: str, feedback: str) -> None:
     print(f"[{t:7.2f} s] {name:<18} {printable(feedback)}", file=sys.stderr, flush=True)
 
 
-def _verdict(report: Any, name: str, out: Path, as_json: bool) -> int:
-    """Print a run's summary (and JSON), what it replaced or could not write; its exit code."""
+def _verdict(
+    report: Any, name: str, out: Path, as_json: bool, record: dict[str, Any] | None = None
+) -> int:
+    """Print a run's summary (and JSON, with ``record``'s fields: a trial's as its campaign
+    records them), what it replaced or could not write; its exit code."""
     for line in report.lines(name):
         print(line)
     if report.replaced_outputs:
@@ -85,7 +88,7 @@ def _verdict(report: Any, name: str, out: Path, as_json: bool) -> int:
     for problem in report.output_errors:
         print(f"not written: {problem}", file=sys.stderr)
     if as_json:
-        print(json.dumps(report.summary()))
+        print(strict_json({**report.summary(), **(record or {})}))
     if report.output_errors:
         # The verdict is out; an output the run could not write (a full disk, a read-only
         # file) is still an input/output error the caller must see.
@@ -98,11 +101,11 @@ def _one_trial(args: argparse.Namespace, world: Any, tree: Path | None, out: Pat
     it, with what ``run`` writes (figure, run log, Groot2 replay) and the drawn world as
     ``trial_K.yaml`` in ``out``; no ``results.jsonl``."""
     from experiment.episode import run_episode
-    from experiment.trials import TrialNotDrawn, tree_misfit, trial_world
+    from experiment.trials import TrialNotDrawn, campaign_of, layout_of, tree_misfit, trial_world
     from worlds.world_file import dump_world
 
     try:
-        drawn, _, hard = trial_world(world, args.seed, args.trial, args.hard)
+        drawn, kinds, hard = trial_world(world, args.seed, args.trial, args.hard)
     except TrialNotDrawn as err:
         print(f"trial {args.trial}: {err}", file=sys.stderr)
         return EXIT_FAILURE
@@ -133,7 +136,17 @@ def _one_trial(args: argparse.Namespace, world: Any, tree: Path | None, out: Pat
         main_tree=args.main_tree,
         truth=None if hard is None else hard.truth,
     )
-    return _verdict(report, drawn.name, out, args.json)
+    # The campaign's record of trial K, so that the two compare field by field (wall-clock
+    # fields and where it ran aside).
+    record: dict[str, Any] = {
+        "trial": args.trial,
+        **campaign_of(world, args.seed, tree, args.leaves, args.main_tree, args.hard),
+        "obstacles": kinds,
+        **layout_of(drawn),
+    }
+    if hard is not None:
+        record.update({"mode": "hard", "hard": hard.summary()})
+    return _verdict(report, drawn.name, out, args.json, record)
 
 
 def _absolute_paths(world: Any) -> Any:

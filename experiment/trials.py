@@ -73,7 +73,7 @@ def run_trial(job: tuple[dict[str, Any], int, int]) -> dict[str, Any]:
         world, kinds, hard = trial_world(
             base, seed, trial, bool(base_data.get("hard")), _worker_clearance(base)
         )
-        where = _layout_of(world)
+        where = layout_of(world)
         misfit = tree_misfit(world, tree, base_data.get("main_tree"))
         record: dict[str, Any]
         if misfit:
@@ -183,7 +183,7 @@ def _close_worker_clearance() -> None:
     _CLEARANCE.clear()
 
 
-def _layout_of(world: World) -> dict[str, Any]:
+def layout_of(world: World) -> dict[str, Any]:
     """Where a trial's object started and its moves' goals were (m), for reports."""
     start = world.objects[0].pose.position
     goals = [list(m.goal.position) for step in world.task for m in step.moves]
