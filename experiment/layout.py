@@ -45,7 +45,7 @@ from skills.turns import move_holds
 from worlds.adapters import robot_capabilities
 from worlds.bullet import pb
 from worlds.palm_poses import lateral_grasp_palm_poses
-from worlds.placement import start_problems
+from worlds.placement import start_problems, vec
 from worlds.scene import Scene
 from worlds.trays import riders
 from worlds.world_file import (
@@ -579,12 +579,8 @@ def check_trial_layout(base: World, seed: int, label: str) -> None:
         raise TrialLayoutError(
             f"{label}: trials: expected a layout whose obstacles can be drawn, got none for "
             f"trial 0 ({err}); draw smaller or farther spheres (trials.sphere_radius "
-            f"{_range(layout.sphere_radius)} m, trials.line_gap {_range(layout.line_gap)} m, "
-            f"trials.ahead_gap {_range(layout.ahead_gap)} m: the defaults are the iiwas'), lower "
+            f"{vec(layout.sphere_radius)} m, trials.line_gap {vec(layout.line_gap)} m, "
+            f"trials.ahead_gap {vec(layout.ahead_gap)} m: the defaults are the iiwas'), lower "
             f"trials.clearance ({layout.clearance:g} m) or trials.robot_clearance "
             f"({layout.robot_clearance:g} m), or move the regions apart"
         ) from None
-
-
-def _range(bounds: tuple[float, float]) -> str:
-    return f"[{bounds[0]:g}, {bounds[1]:g}]"

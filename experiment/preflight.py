@@ -85,7 +85,7 @@ def preflight_problems(
         lines = [p.format(world_file) for p in obstacle_hold_problems(world)]
     if tree is not None:
         lines += tree_task_problems(world, doc)
-    return lines + move_skill_problems(world, world_file) + tree_skill_problems(world, doc)
+    return lines + skill_problems(world, world_file, doc)
 
 
 def tree_task_problems(world: World, doc: TreeDocument) -> list[str]:
@@ -123,53 +123,28 @@ def steps_note(made: Sequence[Move]) -> str:
     )
 
 
-def tree_skill_problems(world: World, doc: TreeDocument) -> list[str]:
-    """One line per node of the tree (the ``--tree``, or the world's own) whose ``skill`` port
-    names, as a literal (on the node, or on a ``<SubTree>`` feeding it), a skill the world's
-    library cannot carry a move with: it had validated, and failed the run at its first carry."""
+def skill_problems(world: World, world_file: str, doc: TreeDocument) -> list[str]:
+    """One line per skill the world's library cannot carry a move with, named by a move's
+    ``skill`` field, then by a node's literal ``skill`` port of the tree that runs (on the
+    node, or on a ``<SubTree>`` feeding it: it had validated, and failed the run at its first
+    carry). The library is read once, and only when something names a skill."""
     from experiment.episode import load_library
     from planner.skill_choice import SkillChoiceError, transport_skill
     from planner.tree_dataflow import port_uses
     from planner.tree_reading import describe, source_file, source_line
     from skills.library import LibraryFileError
 
-    named = [
-        (use, use.binding.literal)
-        for use in port_uses(doc)
-        if use.port == "skill" and use.direction == "read" and use.binding.literal is not None
-    ]
-    if not named:
-        return []
-    try:
-        library = load_library(world)
-    except LibraryFileError as err:
-        return [str(err)]
-    problems: dict[tuple[int, str], str] = {}
-    for use, key in named:
-        where = use.binding.origin if use.binding.origin is not None else use.elem
-        try:
-            transport_skill(library, str(key))
-        except SkillChoiceError as err:
-            problems.setdefault(
-                (id(where), str(key)),
-                f"{source_file(where, doc.file)}:{source_line(where)}: {describe(where)}: "
-                f"port 'skill': {err}",
-            )
-    return list(problems.values())
-
-
-def move_skill_problems(world: World, world_file: str) -> list[str]:
-    """One line per move whose ``skill`` the world's library cannot carry it with."""
-    from experiment.episode import load_library
-    from planner.skill_choice import SkillChoiceError, transport_skill
-    from skills.library import LibraryFileError
-
-    named = [
-        (i, j, move.skill)
+    named = {
+        (f"{world_file}: task[{i}].moves[{j}].skill", move.skill): None
         for i, step in enumerate(world.task)
         for j, move in enumerate(step.moves)
         if move.skill is not None
-    ]
+    }
+    for use in port_uses(doc):
+        if use.port == "skill" and use.direction == "read" and use.binding.literal is not None:
+            where = use.binding.origin if use.binding.origin is not None else use.elem
+            node = f"{source_file(where, doc.file)}:{source_line(where)}: {describe(where)}"
+            named[(f"{node}: port 'skill'", str(use.binding.literal))] = None
     if not named:
         return []
     try:
@@ -177,11 +152,11 @@ def move_skill_problems(world: World, world_file: str) -> list[str]:
     except LibraryFileError as err:
         return [str(err)]
     problems = []
-    for i, j, key in named:
+    for field, key in named:
         try:
             transport_skill(library, key)
         except SkillChoiceError as err:
-            problems.append(f"{world_file}: task[{i}].moves[{j}].skill: {err}")
+            problems.append(f"{field}: {err}")
     return problems
 
 
@@ -211,4 +186,4 @@ def validate_cli(world_file: str, tree: str | None = None, main_tree: str | None
     return 0
 
 
-__all__ = ["bound_object", "move_skill_problems", "preflight_problems", "validate_cli"]
+__all__ = ["bound_object", "preflight_problems", "skill_problems", "validate_cli"]

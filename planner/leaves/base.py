@@ -102,6 +102,14 @@ def _code_error(leaf: WorldLeaf, hook: str, err: Exception) -> LeafCodeError:
     )
 
 
+def _raise_if_user_bug(leaf: WorldLeaf, hook: str, err: Exception) -> None:
+    """Raise the :class:`LeafCodeError` naming ``err`` when it is a bug in a user's leaf's
+    ``hook``; return (for the caller to re-raise it) when it is Duet's own leaf's, or already
+    named (a user's leaf's ``super()`` call that met the bug first)."""
+    if _user_leaf(leaf) and not isinstance(err, LeafCodeError):
+        raise _code_error(leaf, hook, err) from err
+
+
 def _failing_softly(hook: Callable[..., Any], name: str) -> Callable[..., Any]:
     """``hook`` (a leaf's ``initialise`` or ``update``), failing the leaf on an impossible value;
     a user's leaf's other errors, and an ``update`` that returns no status, are a
@@ -122,12 +130,9 @@ def _failing_softly(hook: Callable[..., Any], name: str) -> Callable[..., Any]:
                 return self.fail(message)
             self._impossible = message  # the tick's update reports it
             return None
-        except LeafCodeError:
-            raise  # a user's leaf's super() call that met the bug first
         except Exception as err:
-            if not _user_leaf(self):
-                raise
-            raise _code_error(self, name, err) from err
+            _raise_if_user_bug(self, name, err)
+            raise
         if name == "update" and not isinstance(result, Status):
             where = inspect.getsourcefile(type(self)) or type(self).__module__
             raise LeafCodeError(
@@ -148,12 +153,9 @@ def _naming_bugs(hook: Callable[..., Any], name: str) -> Callable[..., Any]:
     def guarded(self: WorldLeaf, *args: Any, **kwargs: Any) -> Any:
         try:
             return hook(self, *args, **kwargs)
-        except LeafCodeError:
-            raise  # a user's leaf's super() call that met the bug first
         except Exception as err:
-            if not _user_leaf(self):
-                raise
-            raise _code_error(self, name, err) from err
+            _raise_if_user_bug(self, name, err)
+            raise
 
     return guarded
 

@@ -177,6 +177,24 @@ class BadTerminate(WorldLeaf):
 """
 
 
+def _buggy_tree(tmp_path: Path, leaf: str) -> tuple[Path, py_trees.trees.BehaviourTree, FakeWorld]:
+    """The leaf file BUGGY registered, a tree of its ``leaf`` alone, and a world of a parcel:
+    (the file, the tree, the world)."""
+    path = tmp_path / "buggy_leaves.py"
+    path.write_text(BUGGY, encoding="utf-8")
+    register_leaves([str(path)])
+    tree = tmp_path / "t.xml"
+    tree.write_text(
+        TREE.replace(
+            '<HeightAtLeast name="high" object="parcel" min_height_m="{low}" height_m="{z}"/>',
+            f'<{leaf} object="parcel"/>',
+        ),
+        encoding="utf-8",
+    )
+    world = FakeWorld(objects=[FakeObject("parcel", np.array([0.20, 0.30, 0.15]))])
+    return path, py_trees.trees.BehaviourTree(load_tree(tree)), world
+
+
 @pytest.mark.parametrize(
     ("leaf", "says"),
     [
@@ -198,19 +216,7 @@ def test_a_bug_in_a_users_leaf_names_its_line_and_the_leaf(
     # an update() without a return, in 7200 "invalid status" lines until the time limit.
     from planner.tree_problems import LeafCodeError
 
-    path = tmp_path / "buggy_leaves.py"
-    path.write_text(BUGGY, encoding="utf-8")
-    register_leaves([str(path)])
-    tree = tmp_path / "t.xml"
-    tree.write_text(
-        TREE.replace(
-            '<HeightAtLeast name="high" object="parcel" min_height_m="{low}" height_m="{z}"/>',
-            f'<{leaf} object="parcel"/>',
-        ),
-        encoding="utf-8",
-    )
-    world = FakeWorld(objects=[FakeObject("parcel", np.array([0.20, 0.30, 0.15]))])
-    bt = py_trees.trees.BehaviourTree(load_tree(tree))
+    path, bt, world = _buggy_tree(tmp_path, leaf)
     bt.setup(world=world, library=library)
     with pytest.raises(LeafCodeError) as err:
         bt.tick()
@@ -422,19 +428,7 @@ def test_a_bug_in_a_users_setup_or_terminate_names_its_line_and_the_leaf(
     # the run in Duet's traceback, exit 1.
     from planner.tree_problems import LeafCodeError
 
-    path = tmp_path / "buggy_leaves.py"
-    path.write_text(BUGGY, encoding="utf-8")
-    register_leaves([str(path)])
-    tree = tmp_path / "t.xml"
-    tree.write_text(
-        TREE.replace(
-            '<HeightAtLeast name="high" object="parcel" min_height_m="{low}" height_m="{z}"/>',
-            f'<{leaf} object="parcel"/>',
-        ),
-        encoding="utf-8",
-    )
-    world = FakeWorld(objects=[FakeObject("parcel", np.array([0.20, 0.30, 0.15]))])
-    bt = py_trees.trees.BehaviourTree(load_tree(tree))
+    path, bt, world = _buggy_tree(tmp_path, leaf)
     with pytest.raises(LeafCodeError) as err:
         bt.setup(world=world, library=library)
         bt.tick()
