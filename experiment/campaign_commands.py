@@ -298,7 +298,7 @@ def trials_command(args: argparse.Namespace) -> int:
 
 def report_command(args: argparse.Namespace) -> int:
     """A campaign's outcome table with Wilson 95 % intervals, and its picture."""
-    from experiment.report import read_campaigns, report_figure, report_summaries
+    from experiment.report import code_line, read_campaigns, report_figure, report_summaries
     from experiment.results import ResultsFileError
     from experiment.summary import contact_lines, split_line, summary_lines
 
@@ -329,6 +329,9 @@ def report_command(args: argparse.Namespace) -> int:
         split = split_line(summary)
         if split is not None:
             print(split)
+        mixed = code_line(summary)
+        if mixed is not None:
+            print(mixed)
         # One picture per campaign: report.png, or report_1.png, report_2.png ... in order.
         figure = stem.with_name(f"{stem.name}_{k}.png" if several else f"{stem.name}.png")
         try:

@@ -3,7 +3,8 @@
 A record names its world (``world``: name, ``world_sha256``: a hash of its content as read),
 its tree (``tree``: the path relative to the project, or its file name outside it, "" for the
 default; ``tree_sha256``: a hash of the file's bytes), its ``seed``, and where it ran
-(``backend``, ``host``). :func:`campaign_key` is what changes a trial's outcome: a campaign
+(``backend``, ``host``) and with which code (``code_sha256``: :func:`code_hash`).
+:func:`campaign_key` is what changes a trial's outcome: a campaign
 owns only the records whose key is its own; others in the same ``results.jsonl`` are kept,
 untouched, and ignored. Records written before these fields have no key and are owned by no
 campaign, but ``app.py report`` still reads them.
@@ -11,6 +12,7 @@ campaign, but ``app.py report`` still reads them.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
 from pathlib import Path
@@ -19,7 +21,7 @@ from typing import Any
 #: The project's folder: trees inside it are named relative to it.
 PROJECT = Path(__file__).resolve().parents[1]
 
-#: The fields of a record that say where and when it ran, not what happened.
+#: The fields of a record that say where, when and with which code it ran, not what happened.
 RUN_FIELDS = (
     "wall_time_s",
     "physics_wall_s",
@@ -28,7 +30,12 @@ RUN_FIELDS = (
     "host",
     "backend",
     "realtime_factor",
+    "code_sha256",
 )
+
+#: The project's folders whose files make a trial's outcome (the code, the robots' models,
+#: the default skills' demonstrations): :func:`code_hash` hashes them.
+CODE_FOLDERS = ("affordances", "duet_robot", "experiment", "planner", "skills", "worlds")
 
 #: The fields that make a campaign: records agreeing on all of them are the same campaign's.
 KEY_FIELDS = ("world", "world_sha256", "tree", "tree_sha256", "seed", "settings")
@@ -84,6 +91,23 @@ def campaign_key(
         "seed": seed,
         "settings": settings or {},
     }
+
+
+@functools.cache
+def code_hash() -> str:
+    """SHA-256 of the code that runs a trial: ``app.py`` and every file under
+    :data:`CODE_FOLDERS` (compiled caches aside), each by its path in the project and its
+    bytes. Records carry it as ``code_sha256``, so that a campaign resumed after an update
+    says which of its records the other code made (it is not part of the campaign's key: a
+    comment edited does not make every record to be run again)."""
+    digest = hashlib.sha256()
+    files = [PROJECT / "app.py"]
+    for folder in CODE_FOLDERS:
+        files.extend(p for p in (PROJECT / folder).rglob("*") if p.is_file())
+    for path in sorted(f for f in files if "__pycache__" not in f.parts and f.exists()):
+        digest.update(path.relative_to(PROJECT).as_posix().encode("utf-8") + b"\0")
+        digest.update(hashlib.sha256(path.read_bytes()).digest())
+    return digest.hexdigest()
 
 
 def owned_by(record: dict[str, Any], key: dict[str, Any]) -> bool:

@@ -229,6 +229,34 @@ def _failed_goal(record: dict[str, Any]) -> tuple[list[list[float]], list[list[f
 
 
 def report_summaries(campaigns: list[Campaign]) -> list[dict[str, Any]]:
-    """:func:`experiment.summary.summarise` of each campaign, with its label and its key
-    (``"key"``: world and tree with their hashes, seed, settings; None for old records)."""
-    return [{"campaign": c.label, "key": c.key, **summarise(c.records)} for c in campaigns]
+    """:func:`experiment.summary.summarise` of each campaign, with its label, its key
+    (``"key"``: world and tree with their hashes, seed, settings; None for old records) and
+    the code its records were made by (``"code"``: :func:`code_versions`)."""
+    return [
+        {
+            "campaign": c.label,
+            "key": c.key,
+            "code": code_versions(c.records),
+            **summarise(c.records),
+        }
+        for c in campaigns
+    ]
+
+
+def code_versions(records: list[dict[str, Any]]) -> dict[str, int]:
+    """How many records each version of the code made: by ``code_sha256`` (records made
+    before records named their code: ``"unrecorded"``), most first."""
+    counts = Counter(str(r.get("code_sha256") or "unrecorded") for r in records)
+    return dict(counts.most_common())
+
+
+def code_line(summary: dict[str, Any]) -> str | None:
+    """The report's line for a campaign whose records more than one version of the code
+    made (a campaign resumed after an update), else None."""
+    code = summary.get("code") or {}
+    if len(code) < 2:
+        return None
+    parts = ", ".join(f"{h[:8] if h != 'unrecorded' else h}: {n}" for h, n in code.items())
+    return (
+        f"  made by {len(code)} versions of the code (code_sha256 {parts}): its outcome mixes them"
+    )

@@ -21,7 +21,7 @@ import json
 import os
 import signal
 import socket
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -29,7 +29,7 @@ from duet_robot.blas import CORETYPE_VARIABLE
 from experiment.hard import HardTrial, draw_hard, with_pushes
 from experiment.layout import RobotClearance, draw_trial
 from experiment.preflight import tree_task_problems
-from experiment.records import campaign_key, owned_by, tree_hash
+from experiment.records import campaign_key, code_hash, owned_by, tree_hash
 from experiment.results import (
     ResultsFileError,
     campaign_lock,
@@ -106,6 +106,7 @@ def run_trial(job: tuple[dict[str, Any], int, int]) -> dict[str, Any]:
             "failure": failure,
             "backend": base_data.get("backend", "local"),
             "host": socket.gethostname(),
+            "code_sha256": code_hash(),
         }
     )
     if hard is not None:
@@ -291,6 +292,24 @@ def campaign_results(path: Path, key: dict[str, Any]) -> dict[int, dict[str, Any
         for r in read_results(path).records
         if owned_by(r, key)
     }
+
+
+def older_code(records: Iterable[dict[str, Any]]) -> str:
+    """What a resumed campaign's user is told of its records made by other code than this
+    (``code_sha256``, :func:`experiment.records.code_hash`): how many, and how to make them
+    again; "" when every one was made by this code."""
+    here = code_hash()
+    other = sorted(
+        (r["trial"] for r in records if r.get("code_sha256") != here), key=lambda t: int(t)
+    )
+    if not other:
+        return ""
+    shown = ", ".join(str(t) for t in other[:5]) + (", ..." if len(other) > 5 else "")
+    return (
+        f"{len(other)} of this campaign's records (trials {shown}) were made by other code "
+        "than this (their code_sha256 differs, or they have none); they are kept and counted "
+        "as they are: move results.jsonl aside to run them again with this code"
+    )
 
 
 #: Where a campaign's trials can run.
@@ -590,6 +609,9 @@ def _run_locked(
         on_notice(f"{results}: {earlier.skipped_text()}; their trials run again")
     key = campaign_of(base, seed, tree, leaves, main_tree, hard)
     done = campaign_results(results, key)
+    other_code = older_code(done.values())
+    if other_code:
+        on_notice(f"{results}: {other_code}")
     pending = [t for t in range(n) if t not in done]
     payload: dict[str, Any] = {
         "world": base.model_dump(mode="json"),

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import pytest
 
+from experiment.records import code_hash
 from experiment.results import CampaignBusyError, campaign_lock, read_results, repair_tail
 from experiment.trials import campaign_of
 from worlds.world_file import load_world
@@ -123,6 +124,10 @@ def test_a_resumed_campaign_appends_after_a_torn_line(tmp_path: Path) -> None:
     assert "resuming: 2 of 3 trials already in" in err and "1 to run" in err
     read = read_results(path)
     assert [r["trial"] for r in read.records] == [0, 1, 2] and read.skipped == 0
+    # Trials 0 and 1 were written by no code this one knows: resumed, said, kept.
+    assert "2 of this campaign's records (trials 0, 1) were made by other code" in err
+    assert read.records[2]["code_sha256"] == code_hash()
+    assert "code_sha256" not in read.records[0]
 
 
 def _terminal_sigint() -> None:
@@ -205,3 +210,52 @@ def test_a_mesh_or_a_leaf_edited_under_its_name_is_another_campaign(tmp_path: Pa
     tree = tmp_path / "mine.xml"
     assert tree_name(tree) == tree_name(Path(os.path.relpath(tree))) == "mine.xml"
     assert campaign_key("w", {}, None, 0)["tree"] == ""
+
+
+def test_the_code_hash_follows_every_file_of_the_code_and_nothing_else(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from experiment import records
+
+    for folder in records.CODE_FOLDERS:
+        (tmp_path / folder).mkdir()
+    (tmp_path / "app.py").write_text("print()\n", encoding="utf-8")
+    law = tmp_path / "worlds" / "law.py"
+    law.write_text("GAIN = 1.0\n", encoding="utf-8")
+    monkeypatch.setattr(records, "PROJECT", tmp_path)
+
+    def fresh() -> str:
+        records.code_hash.cache_clear()
+        return records.code_hash()
+
+    try:
+        first = fresh()
+        (tmp_path / "worlds" / "__pycache__").mkdir()
+        (tmp_path / "worlds" / "__pycache__" / "law.cpython-311.pyc").write_bytes(b"\0")
+        (tmp_path / "tests.py").write_text("x = 1\n", encoding="utf-8")  # not the code
+        assert fresh() == first
+        law.write_text("GAIN = 2.0\n", encoding="utf-8")
+        assert fresh() != first
+        law.write_text("GAIN = 1.0\n", encoding="utf-8")
+        assert fresh() == first
+        law.rename(tmp_path / "planner" / "law.py")  # the same bytes elsewhere
+        assert fresh() != first
+    finally:
+        records.code_hash.cache_clear()
+
+
+def test_records_of_other_code_are_named_on_resume_and_in_the_report() -> None:
+    from experiment.report import code_line, code_versions
+    from experiment.trials import older_code
+
+    here = code_hash()
+    mine = [{"trial": t, "code_sha256": here} for t in range(3)]
+    assert older_code(mine) == ""
+    theirs = [{"trial": t, "code_sha256": "ab" * 32} for t in range(3, 10)] + [{"trial": 10}]
+    told = older_code(mine + theirs)
+    assert told.startswith("8 of this campaign's records (trials 3, 4, 5, 6, 7, ...)")
+    versions = code_versions(mine + theirs)
+    assert versions == {"ab" * 32: 7, here: 3, "unrecorded": 1}
+    line = code_line({"code": versions})
+    assert line is not None and "3 versions of the code" in line and "abababab: 7" in line
+    assert code_line({"code": code_versions(mine)}) is None
