@@ -19,6 +19,7 @@ from py_trees.ports_utils import get_base_name
 
 from planner.atomic_file import atomic_open
 from planner.loader import TreeFileError, load_tree
+from planner.runner import readable
 
 __all__ = ["FORMATS", "node_kind", "node_type", "render_cli", "render_tree", "short_name"]
 
@@ -239,10 +240,11 @@ def render_tree(root: py_trees.behaviour.Behaviour, fmt: str, show_status: bool 
     ValueError
         For an unknown format.
     """
+    # An unnamed node is named by its type, as BehaviorTree.CPP names it, not py_trees' uuid.
     if fmt == "ascii":
-        return py_trees.display.ascii_tree(root, show_status=show_status)
+        return readable(py_trees.display.ascii_tree(root, show_status=show_status))
     if fmt == "unicode":
-        return py_trees.display.unicode_tree(root, show_status=show_status)
+        return readable(py_trees.display.unicode_tree(root, show_status=show_status))
     if fmt == "dot":
         return str(py_trees.display.dot_tree(root).to_string())
     if fmt == "svg":

@@ -40,6 +40,7 @@ from py_trees.common import Status
 from duet_robot.closing import Closing
 from planner.atomic_file import commit, temporary_beside
 from planner.render import node_kind, node_type
+from planner.runner import readable
 
 __all__ = ["RunLog", "StatusListener", "json_safe", "node_labels"]
 
@@ -94,25 +95,27 @@ def json_safe(value: Any, decimals: int = 6, max_items: int = 64, max_chars: int
 def node_labels(root: py_trees.behaviour.Behaviour) -> dict[uuid.UUID, str]:
     """One label per node of the tree under ``root``, no two alike.
 
-    A node's label is its name where no other node of the tree has that name; otherwise its
-    path from the root: the names from the root down joined by ``/``, each followed by
+    A node's label is its name (an unnamed node's, BehaviorTree.CPP's way, its type:
+    :func:`planner.runner.readable`) where no other node of the tree has that name; otherwise
+    its path from the root: the names from the root down joined by ``/``, each followed by
     ``[i]`` (its index among same-named siblings, from 0) where siblings share it.
     """
-    counts = Counter(node.name for node in root.iterate())
+    names = {node.id: readable(node.name) for node in root.iterate()}
+    counts = Counter(names.values())
     labels: dict[uuid.UUID, str] = {}
 
     def walk(node: py_trees.behaviour.Behaviour, path: str) -> None:
-        labels[node.id] = node.name if counts[node.name] == 1 else path
-        shared = Counter(child.name for child in node.children)
+        labels[node.id] = names[node.id] if counts[names[node.id]] == 1 else path
+        shared = Counter(names[child.id] for child in node.children)
         seen: Counter[str] = Counter()
         for child in node.children:
-            step = child.name
-            if shared[child.name] > 1:
-                step = f"{child.name}[{seen[child.name]}]"
-                seen[child.name] += 1
+            step = names[child.id]
+            if shared[step] > 1:
+                seen[step] += 1
+                step = f"{step}[{seen[step] - 1}]"
             walk(child, f"{path}/{step}")
 
-    walk(root, root.name)
+    walk(root, names[root.id])
     return labels
 
 

@@ -150,6 +150,36 @@ def test_node_labels_are_names_or_paths_where_names_repeat() -> None:
     ]
 
 
+UNNAMED = """<root BTCPP_format="4" main_tree_to_execute="Main"><BehaviorTree ID="Main">
+  <Sequence>
+    <Fallback><AlwaysFailure/><AlwaysSuccess/></Fallback>
+    <Inverter><AlwaysFailure/></Inverter>
+  </Sequence>
+</BehaviorTree></root>"""
+
+
+def test_unnamed_nodes_are_labelled_by_their_type_the_same_in_every_load() -> None:
+    # Groot2 leaves names empty: py_trees names such nodes by a fresh uuid4, which had
+    # reached run.jsonl's labels and `render-tree --format ascii` (another in every run).
+    from planner.render import render_tree
+
+    labels = [list(node_labels(load_tree_string(UNNAMED)).values()) for _ in range(2)]
+    assert labels[0] == labels[1]
+    assert sorted(labels[0]) == sorted(
+        [
+            "Sequence",
+            "Selector",
+            "AlwaysSuccess",
+            "Inverter",
+            "Sequence/Selector/AlwaysFailure",
+            "Sequence/Inverter/AlwaysFailure",
+        ]
+    )
+    text = render_tree(load_tree_string(UNNAMED), "ascii")
+    assert text == render_tree(load_tree_string(UNNAMED), "ascii")
+    assert "-^- Inverter\n" in text and "_" not in text
+
+
 def test_script_and_condition_writes_are_logged_as_a_clients_are(tmp_path: Path) -> None:
     # A script wrote the blackboard past its activity stream: run.jsonl, which says it holds
     # every write, had none of a Script's, a _post's or an _onSuccess's.
