@@ -148,13 +148,18 @@ def check_pose_demonstration(demo: Demonstration) -> None:
         )
 
 
+#: :func:`fit_pose`'s reference changes below which an axis does not scale, m and rad.
+MIN_AMPLITUDE_M = 1e-3
+MIN_ROTATION_RAD = 1e-2
+
+
 def fit_pose(
     demos: Demonstration | Sequence[Demonstration],
     params: DMPParams | None = None,
     position_scaling: Scaling = Scaling.AMPLITUDE,
     orientation_scaling: Scaling = Scaling.AMPLITUDE,
-    min_amplitude: float = 1e-3,
-    min_rotation: float = 1e-2,
+    min_amplitude: float = MIN_AMPLITUDE_M,
+    min_rotation: float = MIN_ROTATION_RAD,
 ) -> PoseModel:
     """Learn a pose DMP from demonstrations with 3-D positions and orientations.
 

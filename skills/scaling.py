@@ -12,6 +12,12 @@ demonstration's) and mapped to a new displacement ``g - y0`` by a matrix ``M`` w
   displacement maps onto the new one; the others are unscaled. For motions on a horizontal
   surface, where "up" must stay up whatever the direction of travel.
 - ``NONE``: ``M = I``; the forcing term is replayed as demonstrated.
+
+``AMPLITUDE``'s ratio has no bound as a reference displacement goes to nothing: a lift whose
+start and goal heights differ by 1.1 mm, sent to a goal 5 cm higher, scales its 10 cm lift by
+45 (a 4.6 m arc). :func:`shape_floor` gives the ``min_amplitude`` that keeps such an axis,
+whose start-to-goal change is small beside its excursion, unscaled: it carries the motion's
+shape, not its displacement.
 """
 
 from __future__ import annotations
@@ -29,6 +35,42 @@ class Scaling(StrEnum):
     NONE = "none"
     AMPLITUDE = "amplitude"
     ROTATION_Z = "rotation_z"
+
+
+#: An axis whose start-to-goal change is under this share of its excursion in the
+#: demonstration carries a shape (a lift, a wave), not a displacement (:func:`shape_floor`).
+SHAPE_SHARE = 0.2
+
+
+def shape_floor(
+    path: Array, reference: Array, floor: float, share: float = SHAPE_SHARE
+) -> tuple[float, list[int]]:
+    """``min_amplitude`` for ``AMPLITUDE`` scaling that leaves a demonstration's shaped axes
+    unscaled, and those axes.
+
+    An axis is shaped where its reference change ``|reference[i]|``, at least ``floor``, is
+    under ``share`` of its excursion along ``path`` (its samples' range): scaled by a new
+    move's change over that small one, its shape would grow without bound. The threshold is
+    just above the largest such change, so every shaped axis (and any axis of a smaller
+    change) replays its forcing as demonstrated.
+
+    Parameters
+    ----------
+    path : ndarray, shape (N, D)
+        The demonstration's samples (positions, or rotation vectors from its start).
+    reference : ndarray, shape (D,)
+        Its start-to-goal change.
+    floor : float
+        The threshold without shaped axes.
+    share : float
+        :data:`SHAPE_SHARE` by default.
+    """
+    change = np.abs(np.asarray(reference, dtype=float))
+    excursion = np.ptp(np.asarray(path, dtype=float), axis=0)
+    shaped = [int(i) for i in np.flatnonzero((change >= floor) & (change < share * excursion))]
+    if not shaped:
+        return floor, []
+    return float(np.nextafter(change[shaped].max(), np.inf)), shaped
 
 
 def scaling_matrix(

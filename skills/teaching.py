@@ -28,6 +28,7 @@ from enum import Enum
 from pathlib import Path
 from typing import TypeVar
 
+from skills import quaternion as quat
 from skills.default_library import default_library
 from skills.demo_conditioning import (
     DEFAULT_SMOOTHING_S,
@@ -42,9 +43,14 @@ from skills.demonstration import Demonstration
 from skills.demos.io import read_demo_csv
 from skills.library import SkillLibrary, check_save_target
 from skills.pose_dmp import fit_pose
-from skills.pose_model import PoseModel, check_pose_demonstration
+from skills.pose_model import (
+    MIN_AMPLITUDE_M,
+    MIN_ROTATION_RAD,
+    PoseModel,
+    check_pose_demonstration,
+)
 from skills.recognition import DEFAULT_THRESHOLD, Recognition, recognise
-from skills.scaling import Scaling
+from skills.scaling import SHAPE_SHARE, Scaling, shape_floor
 from skills.skill import Provenance, Skill, check_label, learnt_skill
 from skills.vocabulary import Action, Space
 
@@ -230,7 +236,9 @@ def teach(
         raise TeachingError(
             f"{field}: expected a new skill name, got {new_name!r} (already in the library)", field
         )
-    model, method = _learn(demo, smoothed, kind)
+    model, method, shaped = _learn(demo, smoothed, kind)
+    if shaped:
+        say(f"note: {shaped}")
     # The skill must do what was shown before it is kept: rolled out between the
     # demonstration's own start and goal, and past its duration, where a forcing fitted to
     # noise throws it off its goal.
@@ -286,23 +294,47 @@ def _member(kind: type[EnumT], value: object, field: str) -> EnumT:
 
 def _learn(
     demo: str | os.PathLike[str], smoothed: Demonstration, kind: Action
-) -> tuple[PoseModel, str]:
-    """The pose DMP fitted to ``smoothed`` and how it was learnt. A transport is turned and
-    scaled about the vertical to any start and goal, as the shipped carry, so that a move in
-    another direction is the same shape."""
+) -> tuple[PoseModel, str, str]:
+    """The pose DMP fitted to ``smoothed``, how it was learnt and what it replays unscaled
+    ("" if nothing). A transport is turned and scaled about the vertical to any start and
+    goal, as the shipped carry, so that a move in another direction is the same shape; any
+    other skill scales each axis by its change (:data:`skills.scaling.Scaling.AMPLITUDE`),
+    but an axis whose change is small beside its excursion keeps its shape as shown
+    (:func:`skills.scaling.shape_floor`)."""
     try:
         if kind is Action.TRANSPORT:
             model = fit_pose(
                 smoothed, position_scaling=Scaling.ROTATION_Z, orientation_scaling=Scaling.NONE
             )
-            return model, METHOD + TRANSPORT_METHOD
-        return fit_pose(smoothed), METHOD
+            return model, METHOD + TRANSPORT_METHOD, ""
+        positions, orientations = smoothed.positions, smoothed.orientations
+        assert orientations is not None  # a pose demonstration (check_pose_demonstration)
+        min_amplitude, shaped = shape_floor(
+            positions, positions[-1] - positions[0], MIN_AMPLITUDE_M
+        )
+        turned = quat.rotation_error(orientations, orientations[0])
+        min_rotation, turns = shape_floor(turned, turned[-1], MIN_ROTATION_RAD)
+        model = fit_pose(smoothed, min_amplitude=min_amplitude, min_rotation=min_rotation)
+        note = _shaped_text(shaped, turns)
+        return model, METHOD + (f"; {note}" if note else ""), note
     except ValueError as err:
         text = str(err)
         # The recording's own name (its file's) may already open the message: once is enough.
         if text.startswith(f"{smoothed.name}: "):
             text = text[len(smoothed.name) + 2 :]
         raise TeachingError(f"{demo}: {text}") from None
+
+
+def _shaped_text(shaped: list[int], turns: list[int]) -> str:
+    """What the method says of the axes :func:`skills.scaling.shape_floor` left unscaled."""
+    axes = [f"{'xyz'[i]}" for i in shaped] + [f"rotation about {'xyz'[i]}" for i in turns]
+    if not axes:
+        return ""
+    return (
+        f"{', '.join(axes)} replayed as shown, unscaled to new starts and goals (the start-to-"
+        f"goal change under {SHAPE_SHARE:.0%} of the excursion: the motion's shape, not its "
+        "displacement)"
+    )
 
 
 def _unsettled(

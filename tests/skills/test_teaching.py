@@ -122,3 +122,63 @@ def test_a_label_another_skill_answers_to_says_which_one_a_move_gets(
     teach(wave_csv, folder, "wave", Space.ABSOLUTE, name="wave3", force=True,
           report=lines.append)  # fmt: skip
     assert lines[-1].startswith("note: 'wave' names 'wave' to a move or a tree that gives it (its")
+
+
+def _lift(dz: float) -> tuple[np.ndarray, np.ndarray]:
+    """2 s of a 0.3 m reach along x over a 10 cm lift, ending ``dz`` m above its start."""
+    t = np.linspace(0.0, 2.0, 401)
+    u = t / 2.0
+    jerk_free = 10 * u**3 - 15 * u**4 + 6 * u**5
+    positions = np.outer(jerk_free, [0.3, 0.0, dz])
+    positions[:, 2] += 0.10 * np.sin(np.pi * u) ** 2
+    return t, positions
+
+
+@pytest.mark.parametrize("dz", [0.0009, 0.0011, 0.003, 0.0])
+def test_a_taught_lift_keeps_its_height_at_a_goal_higher_than_shown(
+    tmp_path: Path, dz: float
+) -> None:
+    # Scaled by the new move's height change over the demonstration's (Ijspeert's amplitude
+    # scaling), a lift ending 1.1 mm above its start, sent 5 cm higher, had risen 4.6 m; one
+    # ending 0.9 mm above, under the 1 mm floor, 0.15 m.
+    from skills import quaternion as quat
+    from skills.pose_dmp import PoseState, pose_rollout
+
+    t, positions = _lift(dz)
+    demo = write_demo_csv(tmp_path / "lift.csv", t, positions, np.tile(quat.IDENTITY, (len(t), 1)))
+    lines: list[str] = []
+    lesson = teach(demo, tmp_path / "lib", "lift", Space.RELATIVE, "approach", report=lines.append)
+    assert lesson.added is not None
+    model = lesson.added.pose_model()
+    goal = np.array([0.3, 0.0, 0.05])
+    target = model.target(positions[0], quat.IDENTITY, goal, quat.IDENTITY, 2.0)
+    path = pose_rollout(model, target, PoseState.at_rest(positions[0], quat.IDENTITY), 0.005, 600)
+    assert 0.14 < path.positions[:, 2].max() < 0.16
+    assert np.linalg.norm(path.positions[-1] - goal) < 0.002
+    shaped = dz >= 0.001  # under the floor the height never scaled
+    assert any("z replayed as shown" in line for line in lines) == shaped
+    assert ("z replayed as shown" in lesson.added.provenance.method) == shaped
+
+
+def test_a_taught_reach_still_scales_the_axes_it_moves_along(tmp_path: Path) -> None:
+    from skills import quaternion as quat
+    from skills.pose_dmp import PoseState, pose_rollout
+    from skills.scaling import shape_floor
+
+    t, positions = _lift(0.08)  # rising 8 cm over a 10 cm arc: a displacement, not a shape
+    assert shape_floor(positions, positions[-1] - positions[0], 1e-3) == (1e-3, [])
+    demo = write_demo_csv(tmp_path / "rise.csv", t, positions, np.tile(quat.IDENTITY, (401, 1)))
+    lesson = teach(demo, tmp_path / "lib", "rise", Space.RELATIVE, "approach")
+    assert lesson.added is not None and "replayed" not in lesson.added.provenance.method
+    model = lesson.added.pose_model()
+    goal = np.array([0.6, 0.0, 0.16])  # twice the reach: the path twice the size
+    target = model.target(positions[0], quat.IDENTITY, goal, quat.IDENTITY, 2.0)
+    path = pose_rollout(model, target, PoseState.at_rest(positions[0], quat.IDENTITY), 0.005, 600)
+    shown = pose_rollout(
+        model,
+        model.target(positions[0], quat.IDENTITY, positions[-1], quat.IDENTITY, 2.0),
+        PoseState.at_rest(positions[0], quat.IDENTITY),
+        0.005,
+        600,
+    )
+    np.testing.assert_allclose(path.positions, 2.0 * shown.positions, atol=1e-9)
