@@ -4,20 +4,57 @@ A coupling term's kernel is plain Python on float arrays, so the same source rea
 formula and runs compiled. The quaternion maths kernels share is :mod:`skills.quaternion`'s
 scalar functions themselves, compiled here.
 
-numba caches each kernel beside its source. Its cache checks only a kernel's own file, so
-after editing a kernel that another file's kernel calls, delete the ``__pycache__/*.nbi``
-and ``*.nbc`` files (a fresh checkout has none).
+numba caches each kernel's machine code, but its cache checks only the kernel's own file: a
+kernel that calls another file's kernel (the composition step calls every coupling's) is
+loaded as compiled before that file was edited. So the cache lives in a folder named by the
+source of every file that can hold a kernel (``skills`` and ``worlds``) and numba's and
+numpy's versions (:func:`kernel_cache_key`), under the user's cache
+(``~/.cache/duet/kernels/<key>``): an update, or an edit of any kernel, compiles afresh, once.
+``NUMBA_CACHE_DIR``, when set, is used as it is.
 """
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any, TypeVar
 
 import numba
 
+from skills import file_cache
 from skills import quaternion as quat
 from skills.types import Array
+
+#: The project's folder; kernels live in its ``skills`` and ``worlds``.
+PROJECT = Path(__file__).resolve().parents[1]
+
+
+def kernel_cache_key(project: Path = PROJECT) -> str:
+    """The name of the compiled kernels' cache folder: a digest of every ``.py`` file under
+    ``project``'s ``skills`` and ``worlds`` and of numba's and numpy's versions."""
+    parts = [
+        *file_cache.source_files(project / "skills"),
+        *file_cache.source_files(project / "worlds"),
+        *file_cache.versions("numba", "numpy"),
+    ]
+    return file_cache.content_key(parts)
+
+
+def _use_kernel_cache() -> None:
+    """Point numba's cache at this source's folder (module docstring); where none can be
+    made, numba's own, beside the sources."""
+    if os.environ.get("NUMBA_CACHE_DIR"):
+        return
+    try:
+        folder = file_cache.cache_folder("kernels", "compiled kernels") / kernel_cache_key()
+        file_cache.private_folder(folder, "compiled kernels")
+    except OSError:
+        return
+    numba.config.CACHE_DIR = str(folder)  # type: ignore[attr-defined]
+
+
+_use_kernel_cache()
 
 F = TypeVar("F", bound=Callable[..., Any])
 

@@ -75,7 +75,7 @@ def potential(
     gain, beta, influence, min_distance
         As :class:`PotentialFieldAvoidance`.
     """
-    r = points - closest
+    r = outward(points, closest, distances)
     rn = np.linalg.norm(r, axis=1)
     speed = np.linalg.norm(velocities, axis=1)
     c = -np.einsum("nk,nk->n", velocities, r) / np.maximum(rn * speed, 1e-300)
@@ -83,6 +83,17 @@ def potential(
     g = np.where(p < influence, 1.0 / p - 1.0 / influence, 0.0)
     u: Array = gain * np.maximum(c, 0.0) ** beta * speed * g
     return u
+
+
+def outward(points: Array, closest: Array, distances: Array) -> Array:
+    """Each point's offset from its nearest obstacle point, turned to point out of the
+    obstacle: ``points - closest`` outside it, the reverse inside (a negative distance), where
+    the surface's nearest point lies beyond the point and the offset points in."""
+    r: Array = points - closest
+    inside = distances < 0.0
+    if inside.any():
+        r[inside] *= -1.0
+    return r
 
 
 def point_accelerations(
@@ -96,7 +107,7 @@ def point_accelerations(
     min_distance: float = 1e-3,
 ) -> Array:
     """``-grad_x U`` per point, shape (N, 3), m/s^2 (arguments as :func:`potential`)."""
-    r = points - closest
+    r = outward(points, closest, distances)
     alpha, kappa = _coefficients(
         rows_dot(r, r),
         rows_dot(velocities, r),
@@ -432,13 +443,14 @@ def potential_kernel(x: Array, b: int, data: Array, o: int, a: Array) -> None:
         vx = vx0 + (wy * az - wz * ay)
         vy = vy0 + (wz * ax - wx * az)
         vz = vz0 + (wx * ay - wy * ax)
-        rx = (px + ax) - near[i, 1]
-        ry = (py + ay) - near[i, 2]
-        rz = (pz + az) - near[i, 3]
+        d = near[i, 0]
+        out = -1.0 if d < 0.0 else 1.0  # inside, the surface's nearest point lies beyond
+        rx = out * ((px + ax) - near[i, 1])
+        ry = out * ((py + ay) - near[i, 2])
+        rz = out * ((pz + az) - near[i, 3])
         q = -(vx * rx + vy * ry + vz * rz)
         if q <= 0.0:
             continue  # receding or sliding past: U is flat
-        d = near[i, 0]
         ip = 1.0 / (d if d > p_min else p_min)
         g = ip - inv_p0
         if g <= 0.0:

@@ -156,6 +156,26 @@ def test_contact_stays_finite() -> None:
     assert np.all(np.isfinite(lin))
 
 
+def test_a_point_inside_is_pushed_out_never_further_in() -> None:
+    # A negative distance (inside) puts the surface's nearest point beyond the point: the
+    # offset from it pointed in, and the field had pushed a point moving out back in (the
+    # compiled kernel too) and let one moving in go deeper.
+    field = one_point(gain=0.05, influence=0.04)
+    inside = [0.5 - RADIUS + 0.005, 0.0, 0.0]  # 5 mm in through the face at x 0.45
+    deeper, _ = field.acceleration(state(inside, [0.1, 0, 0]), TARGET)
+    leaving, _ = field.acceleration(state(inside, [-0.1, 0, 0]), TARGET)
+    assert deeper[0] < 0.0 and np.allclose(deeper[1:], 0.0)  # pushed back out, along -x
+    assert_allclose(leaving, 0.0)  # on its way out: U is flat
+    for velocity in ([0.1, 0, 0], [-0.1, 0, 0], [0.02, 0.1, 0]):
+        lin, ang = kernel_acceleration(field, state(inside, velocity), TARGET)
+        expected = field.acceleration(state(inside, velocity), TARGET)
+        assert_allclose(lin, expected[0], rtol=1e-12, atol=1e-12)
+        assert_allclose(ang, expected[1], atol=1e-12)
+    # Outside the same point moving in is pushed out as before, and the push grows inwards.
+    outside, _ = field.acceleration(state([0.5 - RADIUS - 0.005, 0, 0], [0.1, 0, 0]), TARGET)
+    assert outside[0] < 0.0 and abs(deeper[0]) >= abs(outside[0])
+
+
 def test_bad_parameters_name_the_field() -> None:
     with pytest.raises(ValueError, match="gain"):
         one_point(gain=0.0)
