@@ -15,6 +15,7 @@ depth, by items and by length, whatever the value holds.
 
 from __future__ import annotations
 
+import re
 import reprlib
 from pathlib import Path
 from typing import Any
@@ -70,6 +71,16 @@ def _construct_mapping(loader: yaml.SafeLoader, node: yaml.MappingNode) -> dict[
 
 
 _StrictLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _construct_mapping)
+
+# PyYAML reads YAML 1.1, where a float needs a dot and a signed exponent: ``4e-2`` and
+# ``1.5e3`` were text, and a world's ``radius: 4e-2`` was refused as "expected a number, got
+# '4e-2'". YAML 1.2, which editors and the JSON Schema of `app.py schema` follow, reads them
+# as numbers; so does this loader (integers and 1.1's floats resolve first, as before).
+_StrictLoader.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(r"^[-+]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)[eE][-+]?[0-9]+$"),
+    list("-+.0123456789"),
+)
 
 
 def expanded_size(root: yaml.Node) -> int:

@@ -99,3 +99,33 @@ def test_a_tree_including_devices_is_refused_without_reading_them(tmp_path: Path
     assert done.returncode == 2
     assert "'/dev/zero' (/dev/zero): expected a regular file, got a device or pipe" in done.stderr
     assert "'/dev/stdin'" in done.stderr and "Traceback" not in done.stderr
+
+
+def test_numbers_in_exponent_form_are_numbers_as_yaml_1_2_reads_them(tmp_path: Path) -> None:
+    # YAML 1.1 (PyYAML) reads 4e-2 and 1.5e3 as text: a world's `radius: 4e-2` had been
+    # refused as "expected a number, got '4e-2'".
+    doc = parse_yaml("a: 4e-2\nb: 1.5e3\nc: -2E+1\nd: .5e1\ne: 42\nf: 0.04\ng: 1e5x\nh: 1e400\n")
+    assert doc["a"] == 0.04 and doc["b"] == 1500.0 and doc["c"] == -20.0 and doc["d"] == 5.0
+    assert doc["e"] == 42 and isinstance(doc["e"], int) and doc["f"] == 0.04
+    assert doc["g"] == "1e5x" and doc["h"] == float("inf")
+    world = tmp_path / "w.yaml"
+    text = DEFAULT.read_text(encoding="utf-8")
+    world.write_text(text.replace("radius: 0.04", "radius: 4e-2", 1), encoding="utf-8")
+    assert "radius: 4e-2" in world.read_text(encoding="utf-8")
+    ok = subprocess.run(
+        [sys.executable, str(ROOT / "app.py"), "validate", str(world)],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+    )
+    assert ok.returncode == 0, ok.stderr
+    world.write_text(text.replace("mass: 1.0", "mass: 1e400", 1), encoding="utf-8")
+    bad = subprocess.run(
+        [sys.executable, str(ROOT / "app.py"), "validate", str(world)],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+    )
+    assert (
+        bad.returncode == 2 and "objects[0].mass: expected a finite number, got inf" in bad.stderr
+    )
