@@ -11,6 +11,8 @@ contacts and FCL distance), and the arms never touching each other.
 from __future__ import annotations
 
 import math
+import os
+import shutil
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -243,21 +245,60 @@ def move_keys(world: World) -> list[tuple[str, int]]:
 OUTPUT_NAMES = ("run.jsonl", "run.btlog", "trajectories.png", "animation.gif", "tree.svg")
 
 
-def clear_outputs(out: Path) -> list[str]:
-    """Remove an earlier run's outputs from ``out`` before this run writes its own; the names
-    removed. A link is removed itself, never followed: writing through a link named like an
-    output would overwrite whatever it points at, outside ``out``."""
-    removed = []
-    for name in OUTPUT_NAMES:
-        for stale in stale_temporaries(out, name):  # a killed run's, never renamed into place
-            stale.unlink()
-        path = out / name
-        if path.is_symlink() or path.is_file():
-            path.unlink()
-            removed.append(name)
-        elif path.exists():
-            raise OSError(f"{path}: expected a file this run may replace, got a folder")
-    return removed
+#: The folder inside ``out`` that holds an earlier run's outputs while this one runs.
+EARLIER = ".earlier-run"
+
+
+class EarlierOutputs:
+    """An earlier run's outputs in ``out``, set aside while this run writes its own: put back
+    if this run stops with an error (a bad leaf, a port taken, Ctrl-C), so that nothing
+    already written is lost; dropped once it has run.
+
+    A link is moved itself, never followed: writing through a link named like an output would
+    overwrite whatever it points at, outside ``out``.
+
+    Raises
+    ------
+    OSError
+        If an output's name is a folder, or the outputs cannot be moved.
+    """
+
+    def __init__(self, out: Path) -> None:
+        self.out = out
+        self.folder = out / EARLIER
+        if self.folder.is_symlink() or self.folder.is_file():
+            self.folder.unlink()
+        elif self.folder.is_dir():  # a killed run's: what it replaced was replaced
+            shutil.rmtree(self.folder)
+        for name in OUTPUT_NAMES:
+            for stale in stale_temporaries(out, name):  # a killed run's, never renamed
+                stale.unlink()
+            path = out / name
+            if path.exists() and not (path.is_symlink() or path.is_file()):
+                raise OSError(f"{path}: expected a file this run may replace, got a folder")
+        #: The earlier run's outputs, by name, as set aside.
+        self.names = [n for n in OUTPUT_NAMES if (out / n).is_symlink() or (out / n).is_file()]
+        if self.names:
+            self.folder.mkdir()
+            for name in self.names:
+                os.replace(out / name, self.folder / name)
+
+    def restore(self) -> None:
+        """This run's outputs removed and the earlier run's put back."""
+        for name in OUTPUT_NAMES:
+            path = self.out / name
+            if path.is_symlink() or path.is_file():
+                path.unlink()
+            for stale in stale_temporaries(self.out, name):
+                stale.unlink()
+        for name in self.names:
+            os.replace(self.folder / name, self.out / name)
+        self.drop()
+
+    def drop(self) -> None:
+        """The earlier run's outputs removed for good."""
+        if self.folder.is_dir() and not self.folder.is_symlink():
+            shutil.rmtree(self.folder)
 
 
 def run_episode(
@@ -308,6 +349,37 @@ def run_episode(
     planner.loader.TreeFileError, skills.library.LibraryFileError
         On bad input files (the caller turns them into exit code 2).
     """
+    if out is None:
+        return _episode(
+            world, tree_path, library, None, animation, progress, gui, main_tree, groot_port, truth
+        )
+    out.mkdir(parents=True, exist_ok=True)
+    earlier = EarlierOutputs(out)
+    try:
+        report = _episode(
+            world, tree_path, library, out, animation, progress, gui, main_tree, groot_port, truth
+        )
+    except BaseException:
+        earlier.restore()
+        raise
+    earlier.drop()
+    report.replaced_outputs = list(earlier.names)
+    return report
+
+
+def _episode(
+    world: World,
+    tree_path: Path | None,
+    library: SkillLibrary | None,
+    out: Path | None,
+    animation: bool,
+    progress: Callable[[float, str, str], None] | None,
+    gui: bool,
+    main_tree: str | None,
+    groot_port: int | None,
+    truth: PhysicalTruth | None,
+) -> EpisodeReport:
+    """:func:`run_episode`, its ``out`` (if any) made and the earlier run's outputs set aside."""
     stepped = robot_moves(world)
     moves = move_keys(world)
     # The loader writes constant port values to the blackboard: clear it first, not after.
@@ -327,10 +399,7 @@ def run_episode(
         btlog: BtLog | None = None
         publisher: Any = None
         anim: Animation | None = None
-        replaced: list[str] = []
         if out is not None:
-            out.mkdir(parents=True, exist_ok=True)
-            replaced = clear_outputs(out)
             log = RunLog(out / "run.jsonl", clock=sim.time)
             btlog = BtLog(out / "run.btlog", root, clock=sim.time)  # the same changes, for Groot2
             log.add_status_listener(btlog.record)
@@ -418,7 +487,6 @@ def run_episode(
             placement_objects=objects,
             skills=recorder.column("skill"),
         )
-        report.replaced_outputs = replaced
         report.physics_wall_s = sim.scene.physics_wall_s
         report.control_wall_s = sim.scene.control_wall_s
         report.watch_wall_s = sim.watch_wall_s()

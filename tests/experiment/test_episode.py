@@ -56,8 +56,10 @@ def test_an_obstacle_inside_the_robot_fails_the_run_on_fcl_clearance(tmp_path: P
     assert report.failure == "obstacle spawned inside a body: ball_right inside left_arm"
 
 
-def test_outputs_never_write_through_a_link_and_say_what_they_replaced(tmp_path: Path) -> None:
-    from experiment.episode import clear_outputs
+def test_outputs_never_write_through_a_link_and_come_back_if_the_run_stops(
+    tmp_path: Path,
+) -> None:
+    from experiment.episode import EARLIER, EarlierOutputs
 
     out = tmp_path / "out"
     out.mkdir()
@@ -65,9 +67,61 @@ def test_outputs_never_write_through_a_link_and_say_what_they_replaced(tmp_path:
     elsewhere.write_text("keep me", encoding="utf-8")
     (out / "run.jsonl").symlink_to(elsewhere)
     (out / "tree.svg").write_text("old", encoding="utf-8")
-    assert clear_outputs(out) == ["run.jsonl", "tree.svg"]
-    assert elsewhere.read_text(encoding="utf-8") == "keep me"
+    earlier = EarlierOutputs(out)
+    assert earlier.names == ["run.jsonl", "tree.svg"]
     assert not (out / "run.jsonl").exists() and not (out / "tree.svg").exists()
+    (out / "tree.svg").write_text("new, half written", encoding="utf-8")
+    (out / "run.btlog").write_bytes(b"new")
+    earlier.restore()  # the run stopped: the earlier outputs, as they were
+    assert (out / "run.jsonl").is_symlink() and (out / "tree.svg").read_text() == "old"
+    assert not (out / "run.btlog").exists() and not (out / EARLIER).exists()
+    assert elsewhere.read_text(encoding="utf-8") == "keep me"
+    EarlierOutputs(out).drop()  # the run ran: they are replaced
+    assert sorted(p.name for p in out.iterdir()) == []
+    assert elsewhere.read_text(encoding="utf-8") == "keep me"
     (out / "trajectories.png").mkdir()
     with pytest.raises(OSError, match="expected a file this run may replace, got a folder"):
-        clear_outputs(out)
+        EarlierOutputs(out)
+
+
+@pytest.mark.sim
+def test_a_run_stopped_by_a_users_bug_leaves_the_earlier_runs_outputs(tmp_path: Path) -> None:
+    # The earlier run's outputs had been deleted before the run began: a leaf's bug, a Groot2
+    # port taken or Ctrl-C then left a folder of nothing (or an empty run.jsonl).
+    import subprocess
+    import sys
+
+    leaves = tmp_path / "buggy.py"
+    leaves.write_text(
+        "from py_trees.common import Status\n"
+        "from planner.leaves import WorldLeaf\n\n\n"
+        "class Buggy(WorldLeaf):\n"
+        '    NODE_TYPE = "Action"\n'
+        "    INPUT_PORTS = {}\n"
+        "    OUTPUT_PORTS = {}\n\n"
+        "    def update(self) -> Status:\n"
+        "        return self.world.no_such_method()\n",
+        encoding="utf-8",
+    )
+    tree = tmp_path / "t.xml"
+    tree.write_text(
+        '<root BTCPP_format="4" main_tree_to_execute="Main"><BehaviorTree ID="Main">'
+        "<Buggy/></BehaviorTree></root>",
+        encoding="utf-8",
+    )
+    out = tmp_path / "out"
+    out.mkdir()
+    before = {"run.jsonl": b"{}\n", "trajectories.png": b"png", "tree.svg": b"<svg/>"}
+    for name, data in before.items():
+        (out / name).write_bytes(data)
+    app = Path(__file__).resolve().parents[2] / "app.py"
+    world = str(WORLDS / "parcel_pick_place.yaml")
+    ran = subprocess.run(
+        [sys.executable, str(app), "run", world, "--tree", str(tree), "--leaves", str(leaves)]
+        + ["--out", str(out), "--no-animation"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert ran.returncode == 2 and "buggy.py:11" in ran.stderr, ran.stderr
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before
