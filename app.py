@@ -569,6 +569,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         # The reader (e.g. `| head`) went away: not an error of ours.
         sys.stdout = open(os.devnull, "w")
         return EXIT_OK
+    except OSError as err:
+        # Where the output goes cannot take it (`> /dev/full`, a full disk): said, not a
+        # traceback. Every command names its own files' errors before this; a write to
+        # stdout fails without a file name.
+        print(f"{err.filename or 'stdout'}: cannot write: {err.strerror or err}", file=sys.stderr)
+        sys.stdout = open(os.devnull, "w")  # the interpreter's last flush would fail again
+        return EXIT_BAD_INPUT
 
 
 __all__ = ["EXIT_BAD_INPUT", "EXIT_FAILURE", "EXIT_OK", "build_parser", "main"]

@@ -29,11 +29,6 @@ from experiment.cli_inputs import (
 
 def run_command(args: argparse.Namespace) -> int:
     """Run a world's task in PyBullet, show progress, judge it and write what it shows."""
-    from experiment.episode import run_episode
-    from planner.groot_publisher import GrootUnavailableError
-    from planner.loader import TreeFileError
-    from skills.library import LibraryFileError
-    from worlds.scene import NoDisplayError
 
     world = load_world_or_exit(args.world)
     if register_leaves_or_none(args) is None:
@@ -50,24 +45,38 @@ def run_command(args: argparse.Namespace) -> int:
         world = world.model_copy(update={"sim": world.sim.model_copy(update={"seed": args.seed})})
     out = out_folder_or_exit(Path(args.out))
 
-    try:
-        report = run_episode(
-            world,
-            Path(args.tree) if args.tree else None,
-            out=out,
-            animation=not args.no_animation,
-            progress=_progress,
-            gui=args.gui,
-            main_tree=args.main_tree,
-            groot_port=args.groot,
-        )
-    except (TreeFileError, LibraryFileError, NoDisplayError, GrootUnavailableError) as err:
-        print(err, file=sys.stderr)
-        return EXIT_BAD_INPUT
-    except OSError as err:  # an output the run cannot write (a folder named like it)
-        print(f"--out {out}: {err}", file=sys.stderr)
+    report = _episode_or_none(
+        world,
+        Path(args.tree) if args.tree else None,
+        out=out,
+        animation=not args.no_animation,
+        progress=_progress,
+        gui=args.gui,
+        main_tree=args.main_tree,
+        groot_port=args.groot,
+    )
+    if report is None:
         return EXIT_BAD_INPUT
     return _verdict(report, world.name, out, args.json)
+
+
+def _episode_or_none(world: Any, tree: Path | None, out: Path, **options: Any) -> Any:
+    """:func:`experiment.episode.run_episode` into ``out``; None, once the bad input that
+    stopped it is printed (a tree, a library, no display, a Groot2 port, an output the run
+    cannot write: a folder named like it)."""
+    from experiment.episode import run_episode
+    from planner.groot_publisher import GrootUnavailableError
+    from planner.loader import TreeFileError
+    from skills.library import LibraryFileError
+    from worlds.scene import NoDisplayError
+
+    try:
+        return run_episode(world, tree, out=out, **options)
+    except (TreeFileError, LibraryFileError, NoDisplayError, GrootUnavailableError) as err:
+        print(err, file=sys.stderr)
+    except OSError as err:
+        print(f"--out {out}: {err}", file=sys.stderr)
+    return None
 
 
 def _progress(t: float, leaf: str, feedback: str) -> None:
@@ -100,8 +109,8 @@ def _one_trial(args: argparse.Namespace, world: Any, tree: Path | None, out: Pat
     """``trials --trial K``: trial K of the campaign alone, drawn and run as the campaign runs
     it, with what ``run`` writes (figure, run log, Groot2 replay) and the drawn world as
     ``trial_K.yaml`` in ``out``; no ``results.jsonl``."""
-    from experiment.episode import run_episode
     from experiment.trials import TrialNotDrawn, campaign_of, layout_of, tree_misfit, trial_world
+    from planner.atomic_file import atomic_open
     from worlds.world_file import dump_world
 
     try:
@@ -121,21 +130,28 @@ def _one_trial(args: argparse.Namespace, world: Any, tree: Path | None, out: Pat
             "# Hard mode: the physics this trial ran (masses, frictions, table, actuators) "
             "differs from this file; --trial runs it, app.py run on this file does not."
         )
-    path.write_text("\n".join(header) + "\n" + dump_world(_absolute_paths(drawn)), "utf-8")
+    try:
+        with atomic_open(path) as handle:
+            handle.write("\n".join(header) + "\n" + dump_world(_absolute_paths(drawn)))
+    except OSError as err:
+        print(f"--out {out}: {path}: cannot write it: {err.strerror or err}", file=sys.stderr)
+        return EXIT_BAD_INPUT
     print(f"drawn world: {path}")
     misfit = tree_misfit(drawn, tree, args.main_tree)
     if misfit:
         print(f"trial {args.trial}: {misfit}", file=sys.stderr)
         return EXIT_FAILURE
-    report = run_episode(
+    report = _episode_or_none(
         drawn,
         tree,
-        out=out,
+        out,
         animation=False,
         progress=_progress,
         main_tree=args.main_tree,
         truth=None if hard is None else hard.truth,
     )
+    if report is None:
+        return EXIT_BAD_INPUT
     # The campaign's record of trial K, so that the two compare field by field (wall-clock
     # fields and where it ran aside).
     record: dict[str, Any] = {
@@ -316,7 +332,8 @@ def report_command(args: argparse.Namespace) -> int:
     # The pictures of this report alone: an earlier report's, of other campaigns, would stay
     # beside them and be taken for this one's.
     for old in stem.parent.glob(f"{stem.name}*.png"):
-        if old.name == f"{stem.name}.png" or old.stem[len(stem.name) + 1 :].isdigit():
+        ours = old.name == f"{stem.name}.png" or old.stem[len(stem.name) + 1 :].isdigit()
+        if ours and (old.is_symlink() or old.is_file()):  # a folder: "not written" below
             old.unlink(missing_ok=True)
     unwritten = False
     for k, (campaign, summary) in enumerate(zip(found.campaigns, summaries, strict=True), 1):

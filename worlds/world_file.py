@@ -173,6 +173,9 @@ def _parse(text: str, path: Path, label: str) -> Any:
         except RecursionError:
             problem = WorldFileProblem(None, "a world file", "JSON nested too deeply")
             raise WorldFileError(label, [problem]) from None
+        except ValueError as exc:  # an integer of more digits than Python converts
+            why = f"a number it cannot read: {exc}".split(";")[0]
+            raise WorldFileError(label, [WorldFileProblem(None, "a world file", why)]) from None
     try:
         return parse_yaml(text)
     except YamlFileError as exc:

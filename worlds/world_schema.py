@@ -21,6 +21,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
+import numpy as np
 from pydantic import (
     Field,
     PrivateAttr,
@@ -176,6 +177,18 @@ def _check_mesh(path: Path, file: str, expected: str) -> None:
         raise field_problem(expected, Shown(f"{file!r} ({type(exc).__name__}: {exc})")) from None
     if len(getattr(mesh, "faces", ())) == 0:
         raise field_problem(expected, Shown(f"{file!r} (no triangles in {path})"))
+    vertices = np.asarray(mesh.vertices, dtype=float)
+    if not np.all(np.isfinite(vertices)):
+        raise field_problem(
+            "a mesh of finite vertices", Shown(f"{file!r} (a vertex not a number in {path})")
+        )
+    extents = np.ptp(vertices, axis=0)
+    flat = [axis for axis, extent in zip("xyz", extents, strict=True) if extent <= 0.0]
+    if flat:  # a body without volume has no mass distribution, no faces to grasp
+        raise field_problem(
+            "a mesh with volume (an extent along x, y and z)",
+            Shown(f"{file!r} (flat along {' and '.join(flat)}: extents {extents.tolist()})"),
+        )
 
 
 ShapeModel = Annotated[
