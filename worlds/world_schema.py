@@ -177,7 +177,7 @@ def _check_mesh(path: Path, file: str, expected: str) -> None:
         raise field_problem(expected, Shown(f"{file!r} ({type(exc).__name__}: {exc})")) from None
     if len(getattr(mesh, "faces", ())) == 0:
         raise field_problem(expected, Shown(f"{file!r} (no triangles in {path})"))
-    vertices = np.asarray(mesh.vertices, dtype=float)
+    vertices = np.asarray(getattr(mesh, "vertices", ()), dtype=np.float64)
     if not np.all(np.isfinite(vertices)):
         raise field_problem(
             "a mesh of finite vertices", Shown(f"{file!r} (a vertex not a number in {path})")
