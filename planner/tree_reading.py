@@ -520,6 +520,37 @@ def _translate(elem: ET.Element, registry: Registry, problems: list[TreeProblem]
         elem.tag = DECORATOR_NODES[lower].__name__
 
 
+#: The tags, lower-cased, that the file format or :func:`translate` gives a meaning of their
+#: own (controls, decorators and the document's structure): no leaf can be named so.
+TRANSLATED_TAGS = frozenset(
+    {
+        "root",
+        "behaviortree",
+        "treenodesmodel",
+        "include",
+        "action",
+        "condition",
+        "control",
+        "decorator",
+        "sequence",
+        "reactivesequence",
+        "selector",
+        "fallback",
+        "reactivefallback",
+        "parallel",
+        "retry",
+        "retryuntilsuccessful",
+        "timeout",
+        "repeat",
+        "forcesuccess",
+        "forcefailure",
+        "subtree",
+        "subtreeplus",
+        *DECORATOR_NODES,
+    }
+)
+
+
 def _translate_parallel(elem: ET.Element, problem: Callable[[str], None]) -> None:
     """Map BT.CPP ``success_count``/``failure_count`` to a py_trees policy (default: all)."""
     success = elem.attrib.get("success_count")

@@ -38,10 +38,13 @@ from importlib.metadata import EntryPoint, entry_points
 from pathlib import Path
 from types import ModuleType
 
-from py_trees.ports import get_ports_registry, register_ports_class
+from py_trees.ports import PortInformation, get_ports_registry, register_ports_class
 
 from planner.leaves import WorldLeaf
+from planner.nodes_model import NODE_KINDS
 from planner.script_enums import ScriptEnumError, register_script_enums
+from planner.tree_ports import builtin_nodes
+from planner.tree_reading import TRANSLATED_TAGS
 
 #: The entry-point group an installed package ships leaves in.
 ENTRY_POINT_GROUP = "duet.leaves"
@@ -127,7 +130,7 @@ def _import_source(source: str) -> ModuleType:
                 "(a file needs its .py)"
             ) from None
         raise LeafSourceError(f"--leaves {source}: cannot import it: {_describe(err)}") from None
-    except Exception as err:  # a user's module may raise anything while importing
+    except (Exception, SystemExit) as err:  # a user's module may raise anything, exit too
         raise LeafSourceError(f"--leaves {source}: cannot import it: {_describe(err)}") from None
 
 
@@ -152,7 +155,7 @@ def _import_file(source: str, path: Path) -> ModuleType:
     sys.modules[name] = module
     try:
         spec.loader.exec_module(module)
-    except Exception as err:  # a user's file may raise anything while importing
+    except (Exception, SystemExit) as err:  # a user's file may raise anything, exit too
         del sys.modules[name]
         raise LeafSourceError(
             f"--leaves {source}: cannot import it: {_describe(err, resolved)}"
@@ -168,6 +171,8 @@ def _describe(err: BaseException, file: Path | None = None) -> str:
         line = frames[-1].lineno if frames else None
     message = getattr(err, "msg", None) if isinstance(err, SyntaxError) else str(err)
     where = f" (line {line})" if line is not None else ""
+    if isinstance(err, SystemExit):  # script code outside an `if __name__ == "__main__":`
+        return f"it called sys.exit({err.code!r}){where}"
     return f"{type(err).__name__}: {message}{where}"
 
 
@@ -182,7 +187,7 @@ def _leaves_defined_in(module: ModuleType) -> list[type[WorldLeaf]]:
 def _load_entry_point(ep: EntryPoint) -> object:
     try:
         return ep.load()
-    except Exception as err:  # an installed package may raise anything while importing
+    except (Exception, SystemExit) as err:  # a package may raise anything, exit too
         raise LeafSourceError(
             f"{_entry_point_label(ep)}: cannot load it: {_describe(err)}"
         ) from None
@@ -229,6 +234,16 @@ def _register(
         )
     for cls in concrete:
         name = cls.__name__
+        if name.lower() in TRANSLATED_TAGS or name in builtin_nodes():
+            _restore_registry(before)  # defining it registered it, over the loader's meaning
+            raise LeafSourceError(
+                f"{label}: leaf {name}: expected a name no built-in node has, got that of "
+                f"BehaviorTree.CPP's {name} (a tree's <{name}> would build the leaf)"
+            )
+        wrong = _declaration_problem(cls)
+        if wrong:
+            _restore_registry(before)
+            raise LeafSourceError(f"{label}: leaf {name}: {wrong}")
         other = before.get(name)
         if other is not None and other is not cls:
             with warnings.catch_warnings():
@@ -241,6 +256,32 @@ def _register(
         if get_ports_registry().get(name) is not cls:
             register_ports_class(name, cls)
     return concrete
+
+
+def _declaration_problem(cls: type) -> str:
+    """What is wrong with a leaf's class-level declarations, or "": every port a
+    ``PortInformation`` under a string name, and ``NODE_TYPE`` one the tree formats know."""
+    for table in ("INPUT_PORTS", "OUTPUT_PORTS"):
+        for port, info in getattr(cls, table).items():
+            if not isinstance(port, str) or not isinstance(info, PortInformation):
+                return (
+                    f"{table}[{port!r}]: expected a py_trees.ports.PortInformation under a "
+                    f"port name, got {type(info).__name__} {info!r:.60}"
+                )
+    kind = getattr(cls, "NODE_TYPE", "Action")
+    if kind not in NODE_KINDS:
+        return f"NODE_TYPE: expected one of {', '.join(NODE_KINDS)}, got {kind!r:.60}"
+    return ""
+
+
+def _restore_registry(before: dict[str, type]) -> None:
+    """py_trees' ports registry as it was (``before``): py_trees has no call that removes a
+    tag, so its module's table is set back."""
+    import py_trees.ports
+
+    table: dict[str, type] = py_trees.ports._REGISTRY
+    table.clear()
+    table.update(before)
 
 
 def _has_ports(cls: type) -> bool:

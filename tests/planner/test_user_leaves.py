@@ -309,6 +309,35 @@ def test_an_installed_entry_point_registers_its_leaves(
             r"leaf Transport: expected a name no registered leaf has, got that of "
             r"planner.leaves.transport.Transport",
         ),
+        # These had been registered over BT.CPP's own node (11 problems of "a leaf takes no
+        # children" for a tree's every <Sequence>), a traceback, or exit 0 without a word.
+        (
+            LEAF.replace("HeightAtLeast", "Sequence"),
+            "control.py",
+            r"leaf Sequence: expected a name no built-in node has, got that of "
+            r"BehaviorTree.CPP's Sequence",
+        ),
+        (
+            LEAF.replace("HeightAtLeast", "Sleep"),
+            "sleep.py",
+            r"leaf Sleep: expected a name no built-in node has",
+        ),
+        (
+            LEAF.replace("INPUT_PORTS = {", 'INPUT_PORTS = {"bad": 5, '),
+            "int_port.py",
+            r"leaf HeightAtLeast: INPUT_PORTS\['bad'\]: expected a py_trees.ports.PortInformation "
+            r"under a port name, got int 5",
+        ),
+        (
+            LEAF.replace('NODE_TYPE = "Condition"', 'NODE_TYPE = "Sandwich"'),
+            "kind.py",
+            r"leaf HeightAtLeast: NODE_TYPE: expected one of Action, Condition, got 'Sandwich'",
+        ),
+        (
+            "import sys\n\nsys.exit(3)\n",
+            "script.py",
+            r"script.py: cannot import it: it called sys.exit\(3\) \(line 3\)",
+        ),
     ],
 )
 def test_bad_leaf_sources_exit_2_naming_the_file(
@@ -327,6 +356,7 @@ def test_bad_leaf_sources_exit_2_naming_the_file(
     from planner.leaves import Transport
 
     assert get_ports_registry()["Transport"] is Transport  # a clash leaves the shipped leaf
+    assert not {"Sequence", "Sleep", "HeightAtLeast"} & set(get_ports_registry())
     tree = Path(__file__).resolve().parents[2] / "planner" / "trees" / "pick_and_place.xml"
     assert app.main(["validate", str(tree), "--leaves", str(path)]) == app.EXIT_BAD_INPUT
     assert str(path) in capsys.readouterr().err
