@@ -242,7 +242,11 @@ class MoveRecorder:
                     start[0],
                     np.asarray(goal.goal_position, dtype=float),
                     np.array(positions).reshape(-1, 3),
-                    tuple(obstacles[n] for n in steps[0].obstacles),
+                    # A move never carried: the obstacles the task gives it, as they would be.
+                    tuple(
+                        obstacles[n]
+                        for n in (started.obstacles if started is not None else goal.obstacles)
+                    ),
                     start_orientation=start[1],
                     goal_orientation=goal_q,
                     orientations=np.array(orientations).reshape(-1, 4),

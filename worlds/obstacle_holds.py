@@ -94,7 +94,8 @@ def obstacle_hold_problems(world: World | WorldSpec) -> list[WorldFileProblem]:
                             WorldFileProblem(
                                 f"obstacles[{index[name]}].position",
                                 f"{name} clear of the arms holding {step.object} at the "
-                                f"goal of move {j - 1} when task[{i}].moves[{j}] starts",
+                                f"goal of its move {j} (task[{i}].moves[{j - 1}]) when "
+                                f"task[{i}].moves[{j}] starts",
                                 f"{vec(spec.scene.obstacles[index[name]].position)}: "
                                 f"{what}, with {step.object} at {vec(held.position)}",
                             )

@@ -226,7 +226,11 @@ def start_problems(
                         continue
                     moved = body == step.object
                     at = (
-                        ("at its start pose" if j == 0 else f"at the goal of move {j - 1}")
+                        (
+                            "at its start pose"
+                            if j == 0
+                            else f"at the goal of its move {j} (task[{i}].moves[{j - 1}])"
+                        )
                         if moved
                         else "where it stands"
                     )

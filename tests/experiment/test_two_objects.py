@@ -181,6 +181,13 @@ def test_a_move_never_carried_is_drawn_from_where_its_object_would_rest() -> Non
         assert first.goal == pytest.approx(goals[name][0])
         assert second.start == pytest.approx(goals[name][0])
         assert second.goal == pytest.approx(goals[name][1])
+    # Its obstacles are the task's for that move (they had been left out: a panel "never
+    # carried" drew an empty workspace while the failure named its sphere).
+    moves = [m for s in world.task for m in s.moves]
+    assert [tuple(o.name for o in t.obstacles) for t in traces] == [
+        tuple(m.obstacles) for m in moves
+    ]
+    assert any(t.obstacles for t in traces)
     # The other object is drawn where it lay when the run ended (it never moved).
     for trace, name in zip(traces, PLACED, strict=True):
         (other,) = trace.others

@@ -18,7 +18,8 @@ DEFAULT = ROOT / "worlds" / "parcel_pick_place.yaml"
 IN_THE_ARM = ROOT / "tests" / "data" / "infeasible_worlds" / "obstacle_in_the_holding_arm.yaml"
 EXPECTED = (
     "obstacles[1].position: expected ball_left clear of the arms holding parcel at the goal of "
-    "move 1 when task[0].moves[2] starts, got [0.74, 0, 0.8]: the left arm touches it, with "
+    "its move 2 (task[0].moves[1]) when task[0].moves[2] starts, got [0.74, 0, 0.8]: the left "
+    "arm touches it, with "
     "parcel at [0.7, -0.25, 0.675]"
 )
 

@@ -112,7 +112,8 @@ def test_an_obstacle_resting_on_the_object_is_a_contact(
         return
     assert found == [
         ("obstacles[0].position",
-         "expected ball_right at least 1 mm clear of parcel at the goal of move 0 when "
+         "expected ball_right at least 1 mm clear of parcel at the goal of its move 1 "
+         "(task[0].moves[0]) when "
          f"task[0].moves[1] starts, got [0.65, 0.05, {0.79 + bottom_gap:.3g}]: {words} parcel at "
          "[0.65, 0, 0.675]"),
     ]  # fmt: skip
