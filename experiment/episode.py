@@ -170,13 +170,15 @@ class EpisodeReport:
         out.append(
             "  closest approach to an obstacle: "
             f"{'no obstacle' if dist is None else f'{dist * 1000:.1f} mm'}"
+            + _apart(dist, sum(s["obstacle_contacts"].values()))
         )
         forearm = s["min_forearm_distance_m"]
         if forearm is not None or s["forearm_contacts"]:
+            touching = sum(s["forearm_contacts"].values())
             out.append(
-                f"  forearms: {sum(s['forearm_contacts'].values())} physics steps touching an "
-                "obstacle; closest approach "
+                f"  forearms: {touching} physics steps touching an obstacle; closest approach "
                 f"{'n/a' if forearm is None else f'{forearm * 1000:.1f} mm'}"
+                + _apart(forearm, touching)
             )
         for key, steps in s.get("table_contacts", {}).items():
             out.append(f"  {printable(key)}: {steps} physics steps (a link other than the hand)")
@@ -239,6 +241,16 @@ def task_steps(world: World) -> list[TaskStep]:
 def move_keys(world: World) -> list[tuple[str, int]]:
     """Every move the robot makes, ``(object, index among its moves)``, in task order."""
     return [(s.object, s.first_move + i) for s in task_steps(world) for i in range(s.moves)]
+
+
+def _apart(distance: float | None, touching: int) -> str:
+    """Why a closest approach over 0 stands beside contacts: two measures, not a clash."""
+    if distance is None or distance <= 0.0 or not touching:
+        return ""
+    return (
+        " (the collision model's distance, every control step; the contacts are PyBullet's, "
+        "every physics step, within its contact margin)"
+    )
 
 
 #: What a run writes into its ``out`` folder.

@@ -125,3 +125,27 @@ def test_a_run_stopped_by_a_users_bug_leaves_the_earlier_runs_outputs(tmp_path: 
     )
     assert ran.returncode == 2 and "buggy.py:11" in ran.stderr, ran.stderr
     assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+
+
+def test_a_closest_approach_beside_contacts_says_what_each_measures() -> None:
+    # "641 physics steps touching an obstacle; closest approach 0.9 mm" read as a contradiction.
+    from experiment.episode import EpisodeReport
+
+    def report(distance: float, contacts: int) -> list[str]:
+        return EpisodeReport(
+            False, "FAILURE", "", [0.001], [0.1], distance, {"left_arm ~ s3": contacts}, 0,
+            False, 20.0, 2.0, placement_objects=["parcel"], min_forearm_distance_m=distance,
+            forearm_contacts={"left_forearm ~ s3": contacts},
+        ).lines("w")  # fmt: skip
+
+    said = report(0.0009, 641)
+    assert any(
+        line.startswith("  closest approach to an obstacle: 0.9 mm (the collision model's")
+        for line in said
+    )
+    assert any(
+        line.startswith("  forearms: 641 physics steps touching an obstacle; closest approach 0.9")
+        and "PyBullet's, every physics step" in line
+        for line in said
+    )
+    assert "  closest approach to an obstacle: 12.0 mm" in report(0.012, 0)
