@@ -555,15 +555,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     handler: Callable[[argparse.Namespace], int] = args.handler
+    from duet_robot.text import with_notes
     from planner.tree_problems import LeafCodeError, PortValueError
 
     try:
         return handler(args)
     except (LeafCodeError, PortValueError) as err:  # a user's leaf's bug, a tree's bad value
-        print(f"error: {err}", file=sys.stderr)
+        print(f"error: {with_notes(err)}", file=sys.stderr)
         return EXIT_BAD_INPUT
-    except KeyboardInterrupt:
-        print("interrupted", file=sys.stderr)
+    except KeyboardInterrupt as err:
+        print("\n".join(["interrupted", *getattr(err, "__notes__", ())]), file=sys.stderr)
         return 130
     except BrokenPipeError:
         # The reader (e.g. `| head`) went away: not an error of ours.

@@ -144,6 +144,8 @@ def parse_yaml(text: str) -> Any:
         raise YamlFileError(str(exc)) from None
     except RecursionError:
         raise YamlFileError("YAML nested too deeply") from None
+    except YamlFileError:
+        raise
     except ValueError as exc:  # an integer of more digits than Python converts
         raise YamlFileError(f"a number it cannot read: {exc}".split(";")[0]) from None
     finally:

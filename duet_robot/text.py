@@ -11,4 +11,10 @@ def printable(text: object) -> str:
     return "".join(repr(ch)[1:-1] if unicodedata.category(ch)[0] == "C" else ch for ch in str(text))
 
 
-__all__ = ["printable"]
+def with_notes(err: BaseException) -> str:
+    """An error's message, then each note added to it (``add_note``), one a line: what the
+    command line prints of an error it stops on."""
+    return "\n".join([str(err), *getattr(err, "__notes__", ())])
+
+
+__all__ = ["printable", "with_notes"]

@@ -15,7 +15,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from duet_robot.text import printable
+from duet_robot.text import printable, with_notes
 from experiment.cli_inputs import (
     EXIT_BAD_INPUT,
     EXIT_FAILURE,
@@ -73,9 +73,9 @@ def _episode_or_none(world: Any, tree: Path | None, out: Path, **options: Any) -
     try:
         return run_episode(world, tree, out=out, **options)
     except (TreeFileError, LibraryFileError, NoDisplayError, GrootUnavailableError) as err:
-        print(err, file=sys.stderr)
+        print(with_notes(err), file=sys.stderr)
     except OSError as err:
-        print(f"--out {out}: {err}", file=sys.stderr)
+        print(f"--out {out}: {with_notes(err)}", file=sys.stderr)
     return None
 
 

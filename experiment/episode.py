@@ -253,18 +253,27 @@ def _apart(distance: float | None, touching: int) -> str:
     )
 
 
+def _a_file(path: Path) -> bool:
+    """A file or a link (never followed), not a folder."""
+    return path.is_symlink() or path.is_file()
+
+
 #: What a run writes into its ``out`` folder.
 OUTPUT_NAMES = ("run.jsonl", "run.btlog", "trajectories.png", "animation.gif", "tree.svg")
 
 
 #: The folder inside ``out`` that holds an earlier run's outputs while this one runs.
 EARLIER = ".earlier-run"
+#: The folder inside ``out`` where a run stopped by an error leaves what it wrote, when an
+#: earlier run's outputs are put back in its place.
+STOPPED = "stopped-run"
 
 
 class EarlierOutputs:
     """An earlier run's outputs in ``out``, set aside while this run writes its own: put back
     if this run stops with an error (a bad leaf, a port taken, Ctrl-C), so that nothing
-    already written is lost; dropped once it has run.
+    already written is lost (what the stopped run wrote goes to ``out/stopped-run``);
+    dropped once it has run.
 
     A link is moved itself, never followed: writing through a link named like an output would
     overwrite whatever it points at, outside ``out``.
@@ -295,17 +304,31 @@ class EarlierOutputs:
             for name in self.names:
                 os.replace(out / name, self.folder / name)
 
-    def restore(self) -> None:
-        """This run's outputs removed and the earlier run's put back."""
+    def restore(self) -> str:
+        """After a run stopped with an error: the earlier run's outputs put back, and this
+        run's, if it wrote any beside them, moved to ``out/stopped-run`` (a stopped run's
+        before it there is replaced); with no earlier outputs, this run's stay where they
+        are. What became of them, for the user ("" if nothing was moved)."""
+        written = [n for n in OUTPUT_NAMES if _a_file(self.out / n)]
         for name in OUTPUT_NAMES:
-            path = self.out / name
-            if path.is_symlink() or path.is_file():
-                path.unlink()
             for stale in stale_temporaries(self.out, name):
                 stale.unlink()
+        if not self.names:
+            return ""
+        stopped = self.out / STOPPED
+        if written:
+            if stopped.is_dir() and not stopped.is_symlink():
+                shutil.rmtree(stopped)
+            elif stopped.is_symlink() or stopped.exists():
+                stopped.unlink()
+            stopped.mkdir()
+            for name in written:
+                os.replace(self.out / name, stopped / name)
         for name in self.names:
             os.replace(self.folder / name, self.out / name)
         self.drop()
+        kept = f"; what it wrote is in {stopped}" if written else ""
+        return f"the earlier run's outputs are back in {self.out}{kept}"
 
     def drop(self) -> None:
         """The earlier run's outputs removed for good."""
@@ -371,8 +394,10 @@ def run_episode(
         report = _episode(
             world, tree_path, library, out, animation, progress, gui, main_tree, groot_port, truth
         )
-    except BaseException:
-        earlier.restore()
+    except BaseException as err:
+        told = earlier.restore()
+        if told:
+            err.add_note(told)
         raise
     earlier.drop()
     report.replaced_outputs = list(earlier.names)

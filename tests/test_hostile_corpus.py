@@ -586,7 +586,7 @@ CASES: dict[str, Case] = {
         world_edit(_BALL, "position: [0.65, 0.0, 0.70]"),
         2,
         r"obstacles\[0\]\.position: expected ball_right at least 1 mm clear of parcel at the goal "
-        r"of move 0 "
+        r"of its move 1 \(task\[0\]\.moves\[0\]\) "
         r"when task\[0\]\.moves\[1\] starts, got \[0\.65, 0, 0\.7\]: 90 mm inside parcel",
     ),
     "json_world_repeated_key": Case(

@@ -59,7 +59,7 @@ def test_an_obstacle_inside_the_robot_fails_the_run_on_fcl_clearance(tmp_path: P
 def test_outputs_never_write_through_a_link_and_come_back_if_the_run_stops(
     tmp_path: Path,
 ) -> None:
-    from experiment.episode import EARLIER, EarlierOutputs
+    from experiment.episode import EARLIER, STOPPED, EarlierOutputs
 
     out = tmp_path / "out"
     out.mkdir()
@@ -72,13 +72,24 @@ def test_outputs_never_write_through_a_link_and_come_back_if_the_run_stops(
     assert not (out / "run.jsonl").exists() and not (out / "tree.svg").exists()
     (out / "tree.svg").write_text("new, half written", encoding="utf-8")
     (out / "run.btlog").write_bytes(b"new")
-    earlier.restore()  # the run stopped: the earlier outputs, as they were
+    told = earlier.restore()  # the run stopped: the earlier outputs, as they were
+    assert told == f"the earlier run's outputs are back in {out}; what it wrote is in " + str(
+        out / STOPPED
+    )
     assert (out / "run.jsonl").is_symlink() and (out / "tree.svg").read_text() == "old"
     assert not (out / "run.btlog").exists() and not (out / EARLIER).exists()
+    stopped = {p.name: p.read_bytes() for p in (out / STOPPED).iterdir()}
+    assert stopped == {"run.btlog": b"new", "tree.svg": b"new, half written"}
     assert elsewhere.read_text(encoding="utf-8") == "keep me"
     EarlierOutputs(out).drop()  # the run ran: they are replaced
-    assert sorted(p.name for p in out.iterdir()) == []
+    assert sorted(p.name for p in out.iterdir()) == [STOPPED]
     assert elsewhere.read_text(encoding="utf-8") == "keep me"
+    # Stopped in a folder of no earlier run: what it wrote stays where it is.
+    fresh = tmp_path / "fresh"
+    fresh.mkdir()
+    first = EarlierOutputs(fresh)
+    (fresh / "run.jsonl").write_text("{}\n", encoding="utf-8")
+    assert first.restore() == "" and (fresh / "run.jsonl").is_file()
     (out / "trajectories.png").mkdir()
     with pytest.raises(OSError, match="expected a file this run may replace, got a folder"):
         EarlierOutputs(out)
@@ -124,7 +135,9 @@ def test_a_run_stopped_by_a_users_bug_leaves_the_earlier_runs_outputs(tmp_path: 
         timeout=300,
     )
     assert ran.returncode == 2 and "buggy.py:11" in ran.stderr, ran.stderr
-    assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+    assert f"the earlier run's outputs are back in {out}; what it wrote is in" in ran.stderr
+    assert {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()} == before
+    assert (out / "stopped-run" / "run.jsonl").is_file()  # where the stopped run stopped
 
 
 def test_a_closest_approach_beside_contacts_says_what_each_measures() -> None:
