@@ -43,6 +43,11 @@ Scalar = float | int | str | bool
 LABEL_PATTERN = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 
 
+def is_skill_name(name: str) -> bool:
+    """Whether ``name`` can name a skill: letters, digits, '_' or '-', at least one."""
+    return bool(name) and name.replace("_", "").replace("-", "").isalnum()
+
+
 def check_label(label: str, field_name: str = "skill label") -> str:
     """``label`` if it is an identifier (``[A-Za-z_][A-Za-z0-9_]*``); ValueError otherwise."""
     if not isinstance(label, str) or LABEL_PATTERN.fullmatch(label) is None:
@@ -124,7 +129,7 @@ class Skill:
     label: str = ""
 
     def __post_init__(self) -> None:
-        if not self.name or not self.name.replace("_", "").replace("-", "").isalnum():
+        if not is_skill_name(self.name):
             raise ValueError(f"skill name: expected letters, digits, '_' or '-', got {self.name!r}")
         object.__setattr__(self, "label", check_label(self.label or self.action.value))
         object.__setattr__(self, "params", MappingProxyType(dict(self.params)))

@@ -51,7 +51,7 @@ from skills.pose_model import (
 )
 from skills.recognition import DEFAULT_THRESHOLD, Recognition, recognise
 from skills.scaling import SHAPE_SHARE, Scaling, shape_floor
-from skills.skill import Provenance, Skill, check_label, learnt_skill
+from skills.skill import Provenance, Skill, check_label, is_skill_name, learnt_skill
 from skills.vocabulary import Action, Space
 
 __all__ = ["Lesson", "TeachingError", "teach", "teaching_action"]
@@ -203,6 +203,15 @@ def teach(
         raise TeachingError(
             f"{field}: expected a cosine similarity in [-1, 1], got {threshold}", field
         )
+    new_name = name if name is not None else Path(demo).stem
+    if not is_skill_name(new_name):  # before the recording is read, smoothed and fitted
+        field = name_of("name")
+        given = "" if name is not None else f" (the file's name, without {field})"
+        raise TeachingError(
+            f"{field}: expected a skill name of letters, digits, '_' or '-', got "
+            f"{new_name!r}{given}",
+            field,
+        )
     folder = Path(library)
     try:
         check_save_target(folder)
@@ -230,7 +239,6 @@ def teach(
             f"(use {name_of('force')} to add anyway)"
         )
         return lesson
-    new_name = name if name is not None else Path(demo).stem
     if new_name in skills:
         field = name_of("name")
         raise TeachingError(

@@ -505,7 +505,13 @@ class World(FileModel):
             return tree
         path = _resolve(tree, info)
         if not path.is_file() or path.suffix.lower() != ".xml":
-            reason = "not an .xml file" if path.is_file() else "no such file"
+            reason = (
+                "not an .xml file"
+                if path.is_file()
+                else "a folder"
+                if path.is_dir()
+                else "no such file"
+            )
             raise field_problem(
                 "an existing behaviour tree .xml file", Shown(f"{tree!r} ({reason}: {path})")
             )

@@ -182,3 +182,21 @@ def test_a_taught_reach_still_scales_the_axes_it_moves_along(tmp_path: Path) -> 
         600,
     )
     np.testing.assert_allclose(path.positions, 2.0 * shown.positions, atol=1e-9)
+
+
+def test_a_file_name_that_cannot_name_a_skill_says_so_before_learning(
+    wave_csv: Path, tmp_path: Path
+) -> None:
+    # It had been learnt first, then refused as `name: ... got 'my demo (1)'` of a --name the
+    # user never gave.
+    spaced = tmp_path / "my demo (1).csv"
+    spaced.write_bytes(wave_csv.read_bytes())
+    with pytest.raises(TeachingError) as err:
+        teach(spaced, tmp_path / "lib", "my_wave", Space.ABSOLUTE, names={"name": "--name"})
+    assert str(err.value) == (
+        "--name: expected a skill name of letters, digits, '_' or '-', got 'my demo (1)' "
+        "(the file's name, without --name)"
+    )
+    assert err.value.field == "--name" and not (tmp_path / "lib").exists()
+    lesson = teach(spaced, tmp_path / "lib", "my_wave", Space.ABSOLUTE, name="my_demo_1")
+    assert lesson.added is not None and lesson.added.name == "my_demo_1"
