@@ -162,16 +162,25 @@ def _nodes_command(args: argparse.Namespace) -> int:
 
     packages = ("planner", *dict.fromkeys(c.__module__ for c in user))
     if args.embed:
+        from planner.atomic_file import atomic_open
         from planner.nodes_model import embed_nodes_model
         from planner.tree_problems import TreeFileError
 
+        target = args.out or args.embed  # --out: a copy with the model, the tree left as it is
         try:
             text = embed_nodes_model(args.embed, packages=packages)
-            Path(args.embed).write_text(text, encoding="utf-8")
         except (TreeFileError, OSError) as err:
             print(f"--embed {args.embed}: {err}", file=sys.stderr)
             return EXIT_BAD_INPUT
-        print(f"wrote the TreeNodesModel of the leaves {args.embed} uses into it")
+        try:
+            with atomic_open(target) as handle:  # a failed write leaves the tree whole
+                handle.write(text)
+        except OSError as err:
+            option = "--out" if args.out else "--embed"
+            print(f"{option} {target}: cannot write it: {err.strerror or err}", file=sys.stderr)
+            return EXIT_BAD_INPUT
+        into = "into it" if target == args.embed else f"into {target}"
+        print(f"wrote the TreeNodesModel of the leaves {args.embed} uses {into}")
         return EXIT_OK
     text = nodes_model_xml(packages=packages)
     if args.out:
@@ -404,7 +413,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--embed",
         metavar="TREE.xml",
         help="instead, write the model of the leaves this tree file uses into it (replacing "
-        "its <TreeNodesModel>), so Groot2 opens it with their ports",
+        "its <TreeNodesModel>), so Groot2 opens it with their ports; with --out, into a copy",
     )
     _add_leaves_option(nodes)
     nodes.set_defaults(handler=_nodes_command)

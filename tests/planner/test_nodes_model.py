@@ -178,3 +178,19 @@ def test_embed_keeps_the_subtree_ports_and_the_models_of_nodes_it_cannot_model(
     port = entries["C"].find("input_port")
     assert port is not None and port.attrib == {"name": "ok", "default": "true"}
     assert entries["Wave"].tag == "Action"
+
+
+def test_embed_with_out_writes_a_copy_and_leaves_the_tree(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # --out had been ignored beside --embed, the tree rewritten in place without a word.
+    import app
+
+    tree = tmp_path / "mine.xml"
+    shipped = Path(__file__).resolve().parents[2] / "planner" / "trees" / "pick_and_place.xml"
+    tree.write_bytes(shipped.read_bytes())
+    copy = tmp_path / "with_model.xml"
+    assert app.main(["nodes", "--embed", str(tree), "--out", str(copy)]) == app.EXIT_OK
+    assert tree.read_bytes() == shipped.read_bytes()
+    assert "<TreeNodesModel>" in copy.read_text(encoding="utf-8")
+    assert f"into {copy}" in capsys.readouterr().out
