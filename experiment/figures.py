@@ -177,21 +177,31 @@ def top_view() -> View:
     )
 
 
+#: A move whose goal lies less than this far across the table from its start has no
+#: horizontal heading to draw its side view along, m (a placement's own error is millimetres).
+STILL_M = 0.01
+
+
 def side_view(start: Array, goal: Array) -> View:
     """The vertical plane through the move's start and goal, seen from its right.
 
     Horizontal: distance along the move's horizontal direction from the start; a move with no
-    horizontal travel is seen along y.
+    horizontal travel (under :data:`STILL_M`) is seen along y.
     """
     d = np.array([goal[0] - start[0], goal[1] - start[1], 0.0])
     n = float(np.linalg.norm(d))
-    u = d / n if n > 1e-3 else np.array([0.0, 1.0, 0.0])
-    heading = round(float(np.degrees(np.arctan2(u[1], u[0]))))
+    along = "along the move (m)"
+    if n < STILL_M:  # no horizontal travel: a heading would be the measurement's noise
+        u, title = np.array([0.0, 1.0, 0.0]), "side view, no horizontal travel (along y)"
+        along = "y from the start (m)"
+    else:
+        u = d / n
+        title = f"side view, heading {round(float(np.degrees(np.arctan2(u[1], u[0])))) + 0:d} deg"
     return View(
-        f"side view, heading {heading + 0:d} deg",
+        title,
         np.array([u, [0.0, 0.0, 1.0]]),
         np.array([start[0], start[1], 0.0]),
-        ("along the move (m)", "z (m)"),
+        (along, "z (m)"),
         marks_depth=True,
     )
 
@@ -334,6 +344,10 @@ def draw_move(ax: Any, tr: MoveTrace, view: View, demo_colour: str = "green") ->
 #: right, above the top row (the title), below the bottom row (the horizontal axis label
 #: and the legend), and between panels across and down.
 MARGINS_IN = {"left": 0.75, "right": 0.2, "top": 0.75, "bottom": 0.95, "across": 0.8, "down": 0.8}
+#: The bottom margin's share under the panels that is not the legend's (ticks, axis label and
+#: the legend's gap to the figure's edge), and each line of the legend, in.
+LEGEND_ABOVE_IN = 0.62
+LEGEND_LINE_IN = 0.2
 
 
 def figure_style() -> Any:
@@ -434,12 +448,21 @@ def _drawing(traces: Sequence[MoveTrace], title: str) -> Any:
         handles, labels = ax.get_legend_handles_labels()
         legend.update({lab: h for h, lab in zip(handles, labels, strict=True) if lab not in legend})
     if legend:
+        # as many entries across as the figure's width holds (about 2.2 in each)
+        across = max(1, min(len(legend), 6, int(width / 2.2)))
+        # A narrow figure's legend takes more lines: the figure grows below its panels, so
+        # that the legend stays under the bottom panels' axis labels, not over them.
+        needed = LEGEND_ABOVE_IN + LEGEND_LINE_IN * -(-len(legend) // across)
+        if needed > m["bottom"]:
+            height += needed - m["bottom"]
+            fig.set_size_inches(width, height)
+            grid = axes[0, 0].get_subplotspec().get_gridspec()
+            grid.update(bottom=needed / height, top=1.0 - m["top"] / height)
         fig.legend(
             legend.values(),
             legend.keys(),
             loc="lower center",
-            # as many entries across as the figure's width holds (about 2.2 in each)
-            ncol=max(1, min(len(legend), 6, int(width / 2.2))),
+            ncol=across,
             fontsize=8,
             bbox_to_anchor=(0.5, 0.08 / height),
         )

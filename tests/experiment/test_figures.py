@@ -72,6 +72,41 @@ def test_the_side_view_is_the_vertical_plane_of_the_moves_own_direction() -> Non
     assert "heading 45 deg" in diagonal.name
     upright = side_view(np.zeros(3), np.array([0.0, 0.0, 0.2]))  # no travel across: along y
     assert_allclose(upright.axes[0], [0.0, 1.0, 0.0])
+    # A goal where the object started, measured 2 mm off: its "heading -12 deg" was noise.
+    still = side_view(np.array([0.55, 0.0, 0.675]), np.array([0.552, -0.0004, 0.675]))
+    assert still.name == "side view, no horizontal travel (along y)"
+    assert_allclose(still.axes[0], [0.0, 1.0, 0.0])
+
+
+def test_a_one_move_figures_legend_stays_under_its_axis_labels(tmp_path: Path) -> None:
+    # One column holds two legend entries a line: its three lines had covered "along the move".
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    library = build_default_library()
+    start, goal = np.array([0.5, 0.0, 0.675]), np.array([0.6, 0.1, 0.675])
+    trace = MoveTrace(
+        "parcel move 1",
+        start,
+        goal,
+        np.linspace(start, goal, 50),
+        (),
+        orientations=np.tile(YAW_90, (50, 1)),
+        goal_orientation=YAW_90,
+        shape=PARCEL,
+        skill="pick_and_place",
+        demonstrated=demonstrated_path(library.get("pick_and_place"), start, YAW_90, goal, YAW_90),
+    )
+    fig = trajectory_drawing([trace], "one move")
+    canvas = FigureCanvasAgg(fig)
+    canvas.draw()
+    renderer = canvas.get_renderer()
+    (legend,) = fig.legends
+    box = legend.get_window_extent(renderer)
+    side = fig.axes[-1]  # the bottom panel, the side view
+    assert side.get_title().endswith("heading 45 deg")
+    assert side.xaxis.label.get_window_extent(renderer).y0 > box.y1
+    assert min(t.get_window_extent(renderer).y0 for t in side.get_xticklabels()) > box.y1
+    assert trajectory_figure([trace], tmp_path / "one.png", "one move").stat().st_size > 10_000
 
 
 def test_footprints_are_to_scale_and_turned_with_the_object() -> None:
@@ -232,9 +267,12 @@ def test_a_wrapped_title_stands_above_the_panels_titles() -> None:
         assert ax.title.get_window_extent(renderer).y1 < title.y0
     # The panels keep their size: only the room above them grows.
     assert fig.get_size_inches()[1] > short.get_size_inches()[1]
+    # (to a thousandth: the legend's room below, set once the panels are drawn, moves their
+    # equal-aspect boxes by a hundredth of a pixel)
     assert_allclose(
         fig.axes[0].get_position().height * fig.get_size_inches()[1],
         short.axes[0].get_position().height * short.get_size_inches()[1],
+        rtol=1e-3,
     )
 
 
