@@ -19,6 +19,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from affordances import SemanticAction, spare_grip_acceleration
+from affordances.context import Shape
 from planner.fixture_moves import hover_move
 from planner.held_states import held_lateral_geometry, on_measured_object
 from planner.port import Move, ObjectSensing, Pose, WorldPort
@@ -378,9 +379,15 @@ def box_points(extents: np.ndarray) -> np.ndarray:
 
 
 def goal_error(world: WorldPort, name: str, goal: Pose) -> tuple[float, float]:
-    """Position (m) and orientation (rad) error of an object from a goal pose."""
+    """Position (m) and orientation (rad) error of an object from a goal pose. The orientation
+    error is up to the object's symmetry: a cylinder's the angle between its axes (a turn
+    about its own axis leaves it as it was), a sphere's none."""
     pose = world.object_pose(name)
-    return (
-        float(np.linalg.norm(pose.position - goal.position)),
-        float(quat.angle_between(pose.orientation, goal.orientation)),
-    )
+    shape = world.object_context(name).shape
+    if shape is Shape.SPHERE:
+        turned = 0.0
+    elif shape is Shape.CYLINDER:
+        turned = float(quat.z_axis_angle(pose.orientation, goal.orientation))
+    else:
+        turned = float(quat.angle_between(pose.orientation, goal.orientation))
+    return float(np.linalg.norm(pose.position - goal.position)), turned

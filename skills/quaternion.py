@@ -247,6 +247,15 @@ def tilt(q: ArrayLike) -> Array:
     return np.arctan2(np.hypot(z[..., 0], z[..., 1]), z[..., 2])
 
 
+def z_axis_angle(p: ArrayLike, q: ArrayLike) -> Array:
+    """Angle (rad, in [0, pi]) between the z axes orientations ``p`` and ``q`` turn world z
+    into: how far apart they are for a body symmetric about its own z (a cylinder), whose
+    turns about that axis leave it as it was."""
+    a = rotate(p, np.array([0.0, 0.0, 1.0]))
+    b = rotate(q, np.array([0.0, 0.0, 1.0]))
+    return np.arctan2(np.linalg.norm(np.cross(a, b), axis=-1), np.sum(a * b, axis=-1))
+
+
 def from_axis_angle(axis: ArrayLike, angle: ArrayLike) -> Array:
     """Quaternions ``(..., 4)`` for rotations of ``angle`` rad about unit ``axis`` ``(..., 3)``."""
     ax = np.asarray(axis, dtype=float)

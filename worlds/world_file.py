@@ -42,6 +42,7 @@ from worlds.spec import (
     ObjectState,
     ObstacleKind,
     ObstacleSpec,
+    Quat,
     RobotModelName,
     RobotSpec,
     SceneSpec,
@@ -300,12 +301,34 @@ def _object_spec(obj: WorldObject, world: World) -> ObjectSpec:
     )
 
 
-def _move_spec(move: MoveEntry) -> MoveSpec:
+def _symmetric(obj: WorldObject, move: MoveEntry) -> tuple[Quat, float] | None:
+    """The orientation and yaw a move's goal takes when the object's symmetry makes the one
+    written the one it starts in: any goal of a sphere; an upright goal of a cylinder standing
+    upright (a turn about its own axis leaves it as it was). The robot then does not turn it to
+    a heading nothing can see (a cylinder's 180 degrees had taken two re-grasps), and the
+    judge does not count one (:func:`planner.composition.goal_error`). None: as written."""
+    start = (obj.pose.quaternion_xyzw(), math.radians(obj.pose.rpy_deg[2]))
+    if isinstance(obj.shape, SphereShape):
+        return start
+    if isinstance(obj.shape, CylinderShape) and _upright(start[0]):
+        return start if _upright(move.goal.quaternion_xyzw()) else None
+    return None
+
+
+def _upright(q: Quat) -> bool:
+    """Whether orientation ``q`` keeps a body's z axis within a degree of world z."""
+    x, y, _, _ = q
+    return 1.0 - 2.0 * (x * x + y * y) > math.cos(math.radians(1.0))
+
+
+def _move_spec(move: MoveEntry, same_as_start: tuple[Quat, float] | None = None) -> MoveSpec:
     x, y, z = move.goal.position
+    turned = (move.goal.quaternion_xyzw(), math.radians(move.goal.rpy_deg[2]))
+    quaternion, yaw = turned if same_as_start is None else same_as_start
     return MoveSpec(
         goal_position=(x, y, z),
-        goal_quaternion=move.goal.quaternion_xyzw(),
-        goal_yaw=math.radians(move.goal.rpy_deg[2]),
+        goal_quaternion=quaternion,
+        goal_yaw=yaw,
         obstacles=tuple(move.obstacles),
         skill=move.skill,
         fixture=move.fixture,
@@ -386,7 +409,13 @@ def world_spec(world: World) -> WorldSpec:
         name=world.name,
         scene=scene,
         task=tuple(
-            TaskStepSpec(step.object, tuple(_move_spec(m) for m in step.moves))
+            TaskStepSpec(
+                step.object,
+                tuple(
+                    _move_spec(m, _symmetric(world.object_named(step.object), m))
+                    for m in step.moves
+                ),
+            )
             for step in world.task
         ),
         max_sim_time_s=float(sim.max_sim_time_s),
