@@ -35,6 +35,7 @@ from affordances.config import ReasonerConfig
 from affordances.context import ObjectContext, RobotCapabilities
 from affordances.physics import GraspOption, HardAssessment, assess
 from skills import quaternion as quat
+from skills.turns import turn_steps
 from skills.vocabulary import Arm, GraspType
 from worlds.adapters import object_contexts, robot_capabilities
 from worlds.mesh_sides import CENTRE_TOLERANCE_M, mesh_centre
@@ -239,10 +240,16 @@ def feasibility_problems(
                     f"none for {obj.name}: {_no_grasp(hard, grasps)}",
                 )
             )
+    robot_yaw = math.radians(spec.scene.robot.base_rpy_deg[2])
     for i, step in enumerate(spec.task):
         obj = spec.scene.objects[index[step.object]]
+        yaw = obj.yaw
         for j, move in enumerate(step.moves):
             field = f"task[{i}].moves[{j}].goal.position"
+            before, yaw = yaw, move.goal_yaw
+            stepped = _stepped_into_fixture(move, before, robot.max_turn_rad, robot_yaw)
+            if stepped is not None:
+                problems.append(WorldFileProblem(f"task[{i}].moves[{j}].goal.rpy_deg", *stepped))
             tilted = face_problem(obj, move.goal_quaternion)
             if tilted is not None:
                 problems.append(WorldFileProblem(f"task[{i}].moves[{j}].goal.rpy_deg", *tilted))
@@ -259,6 +266,27 @@ def feasibility_problems(
             if miss is not None:
                 problems.append(WorldFileProblem(field, *miss))
     return start_problems(spec, bad_goals) + problems
+
+
+def _stepped_into_fixture(
+    move: MoveSpec, yaw: float, max_turn: float, robot_yaw: float
+) -> tuple[str, str] | None:
+    """What a move into a fixture should be and is, if its turn from ``yaw`` takes the grip
+    more than one carry (:func:`skills.turns.turn_steps`): the steps before the last would set
+    the object down turned part of the way, where the fixture's walls stand."""
+    if move.fixture is None:
+        return None
+    steps = turn_steps(yaw, move.goal_yaw, max_turn, robot_yaw)
+    if len(steps) < 2:
+        return None
+    turn = math.degrees(steps[-1] - yaw)
+    return (
+        f"a goal in fixture {move.fixture} the grip turns to in one carry (at most "
+        f"{math.degrees(max_turn):.0f} deg from where the object stands before the move)",
+        f"a turn of {turn:.0f} deg, {len(steps)} carries, each set down turned part of the way "
+        f"where the walls stand: turn the fixture, or start the object, within "
+        f"{math.degrees(max_turn):.0f} deg of it",
+    )
 
 
 def _reach_problem(
