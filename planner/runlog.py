@@ -341,7 +341,7 @@ class RunLog(Closing):
             record: dict[str, Any] = {
                 "event": "write",
                 "key": item.key,
-                "client": item.client_name,
+                "client": readable(item.client_name),
                 "activity": item.activity_type,
             }
             if item.activity_type != ActivityType.UNSET.value:

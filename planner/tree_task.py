@@ -92,8 +92,10 @@ def check_tree_moves(
             index = int(raw)
         except ValueError:
             continue  # not a whole number: the port checks report it
-        if index < 0 and index == _port_default(reg, elem.tag):
-            continue  # the node's own "no move" (Approach's -1), as Groot2 writes defaults out
+        if index < 0 and (elem.tag == "SubTree" or index == _port_default(reg, elem.tag)):
+            # The node's own "no move" (Approach's -1), as Groot2 writes defaults out, or a
+            # value a subtree passes on to such nodes (they say so if theirs is not -1).
+            continue
         if name not in moves:
             known = ", ".join(sorted(moves)) or "none"
             problems.append(

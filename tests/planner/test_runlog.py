@@ -208,3 +208,20 @@ def test_script_and_condition_writes_are_logged_as_a_clients_are(tmp_path: Path)
         ("/m", "seq.sc", "WRITE", 4),
         ("/done", "seq.check _onSuccess", "INITIALISED", True),
     ]
+
+
+def test_writes_of_unnamed_nodes_name_their_client_without_uuids(tmp_path: Path) -> None:
+    # "client": "main.Script_55dc3015-..." had differed from run to run.
+    tree = py_trees.trees.BehaviourTree(
+        load_tree_string(
+            '<root BTCPP_format="4"><BehaviorTree ID="Main"><Sequence>'
+            '<Script code="m := 3"/></Sequence></BehaviorTree></root>'
+        )
+    )
+    tree.setup(clock=FakeClock())
+    path = tmp_path / "run.jsonl"
+    with RunLog(path, clock=lambda: 0.0) as log:
+        log.attach(tree)
+        tree.tick()
+    clients = [r["client"] for r in read(path) if r["event"] == "write"]
+    assert clients == ["Script"]

@@ -75,6 +75,25 @@ def test_a_grasps_own_no_move_default_written_out_as_groot2_saves_it_is_not_a_mo
     )
 
 
+def test_a_no_move_passed_through_a_subtree_port_is_left_to_its_nodes() -> None:
+    # <SubTree ID="GraspObject" move="-1" _autoremap="true"/> had been refused at `run` as a
+    # move the task lacks, while the same -1 on the Approach inside it was accepted.
+    xml = """<root BTCPP_format="4" main_tree_to_execute="Main">
+  <BehaviorTree ID="Main">
+    <Sequence>
+      <SubTree ID="GraspObject" object="parcel" move="-1" _autoremap="true"/>
+      <AtGoal object="parcel" move="0"/>
+    </Sequence>
+  </BehaviorTree>
+  <BehaviorTree ID="GraspObject">
+    <Approach object="{object}" move="{move}"/>
+  </BehaviorTree>
+</root>
+"""
+    doc = read_tree_document_string(xml, "saved.xml")
+    assert check_tree_moves(doc, {"parcel": 1}, None) == []
+
+
 def test_the_shipped_tree_matches_a_three_move_task() -> None:
     doc = read_tree_document(PICK_AND_PLACE_XML)
     assert check_tree_moves(doc, {"parcel": 3}, "parcel") == []
