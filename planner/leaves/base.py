@@ -123,6 +123,8 @@ def _failing_softly(hook: Callable[..., Any], name: str) -> Callable[..., Any]:
         try:
             result = hook(self)
         except IMPOSSIBLE_VALUE_ERRORS as err:
+            if isinstance(err, OutputTypeError) and _user_leaf(self):
+                raise _code_error(self, name, err) from err  # its own value, not the world's
             hint = _no_data_hint(self, err) if isinstance(err, NoDataAvailable) else ""
             text = str(err).rstrip(".") if hint else str(err)
             message = f"cannot {name}: {type(err).__name__}: {text}{hint}"
@@ -158,6 +160,11 @@ def _naming_bugs(hook: Callable[..., Any], name: str) -> Callable[..., Any]:
             raise
 
     return guarded
+
+
+class OutputTypeError(TypeError):
+    """A leaf wrote a value its output port's type does not take: the leaf's own bug (a user's
+    leaf's stops the run naming its line), not an impossible value met in the world."""
 
 
 class WorldLeaf(StringPorts, BehaviourWithPorts):
@@ -251,6 +258,19 @@ class WorldLeaf(StringPorts, BehaviourWithPorts):
         return squeeze_force(
             plan, float(self.get_input("force_n")), self.world.robot_capabilities().squeeze_force_n
         )
+
+    def _set_output(self, port_name: str, value: Any) -> None:
+        """As :meth:`PortsMixin._set_output`; a value of another type than the port's is an
+        :class:`OutputTypeError` naming the port."""
+        try:
+            super()._set_output(port_name, value)
+        except TypeError as err:
+            info = type(self).OUTPUT_PORTS.get(port_name)
+            kind = getattr(getattr(info, "data_type", None), "__name__", "the port's type")
+            raise OutputTypeError(
+                f"output port '{port_name}': expected {kind}, got {type(value).__name__} "
+                f"{value!r:.60}"
+            ) from err
 
     def fail(self, message: str) -> Status:
         """Return FAILURE with ``message`` as the explanation."""

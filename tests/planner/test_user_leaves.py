@@ -174,6 +174,16 @@ class BadTerminate(WorldLeaf):
 
     def terminate(self, new_status: Status) -> None:
         self.recording.stop()
+
+
+class WritesText(WorldLeaf):
+    NODE_TYPE = "Action"
+    INPUT_PORTS = {"object": PortInformation(str, description="the object")}
+    OUTPUT_PORTS = {"height_m": PortInformation(float, description="its height, m")}
+
+    def update(self) -> Status:
+        self._set_output("height_m", "tall")
+        return self.succeed("wrote")
 """
 
 
@@ -206,6 +216,14 @@ def _buggy_tree(tmp_path: Path, leaf: str) -> tuple[Path, py_trees.trees.Behavio
         (
             "Silent",
             "leaf 'check.Silent' (Silent) update() returned None: expected a py_trees Status",
+        ),
+        # It had been a task failure (exit 1), "not placed" for every move, as if the world
+        # had given the leaf an impossible value.
+        (
+            "WritesText",
+            "buggy_leaves.py:57: leaf 'check.WritesText' (WritesText) raised OutputTypeError "
+            "in update(): output port 'height_m': expected float, got str 'tall'; a bug in the "
+            "leaf's code",
         ),
     ],
 )
