@@ -36,7 +36,7 @@ from py_trees.ports import PortsMixin
 from duet_robot.closing import Closing
 from planner.decorators import SimTimeout
 from planner.nodes_model import add_node_model
-from planner.render import node_kind, node_type, short_name
+from planner.render import BT_DECORATORS, bt_type, node_kind, short_name
 
 __all__ = ["MAGIC", "PROTOCOL", "STATUS_CODES", "BtLog", "GrootTree", "groot_tree_xml"]
 
@@ -52,28 +52,18 @@ MAX_UID = 0xFFFF
 def _bt_cpp_element(node: py_trees.behaviour.Behaviour) -> tuple[str, dict[str, str], bool]:
     """The BT.CPP spelling of a node: tag, attributes besides name and uid, and whether the tag
     is one of BT.CPP's built-ins (which Groot2 knows without a model)."""
-    if isinstance(node, py_trees.composites.Sequence):
-        return ("Sequence" if node.memory else "ReactiveSequence"), {}, True
-    if isinstance(node, py_trees.composites.Selector):
-        return ("Fallback" if node.memory else "ReactiveFallback"), {}, True
+    tag = bt_type(node)
     if isinstance(node, py_trees.composites.Parallel):
         on_one = isinstance(node.policy, py_trees.common.ParallelPolicy.SuccessOnOne)
-        return "Parallel", {"success_count": "1" if on_one else "-1", "failure_count": "1"}, True
+        return tag, {"success_count": "1" if on_one else "-1", "failure_count": "1"}, True
     if isinstance(node, py_trees.decorators.Retry):
-        return "RetryUntilSuccessful", {"num_attempts": str(node.num_failures)}, True
+        return tag, {"num_attempts": str(node.num_failures)}, True
     if isinstance(node, py_trees.decorators.Repeat):
-        return "Repeat", {"num_cycles": str(node.num_success)}, True
+        return tag, {"num_cycles": str(node.num_success)}, True
     if isinstance(node, SimTimeout):
-        return "Timeout", {"msec": str(round(node.duration * 1000))}, True
-    builtins = {
-        py_trees.decorators.FailureIsSuccess: "ForceSuccess",
-        py_trees.decorators.SuccessIsFailure: "ForceFailure",
-        py_trees.decorators.Inverter: "Inverter",
-    }
-    for cls, tag in builtins.items():
-        if type(node) is cls:
-            return tag, {}, True
-    return node_type(node), {}, False
+        return tag, {"msec": str(round(node.duration * 1000))}, True
+    composite = isinstance(node, py_trees.composites.Sequence | py_trees.composites.Selector)
+    return tag, {}, composite or type(node) in BT_DECORATORS
 
 
 def _model_kind(node: py_trees.behaviour.Behaviour) -> str:

@@ -18,8 +18,9 @@ from py_trees.common import Status
 from py_trees.ports_utils import get_base_name
 
 from planner.atomic_file import atomic_open
+from planner.decorators import SimTimeout
 from planner.loader import TreeFileError, load_tree
-from planner.runner import readable
+from planner.runner import readable, unnamed
 
 __all__ = ["FORMATS", "node_kind", "node_type", "render_cli", "render_tree", "short_name"]
 
@@ -70,9 +71,48 @@ def node_type(behaviour: py_trees.behaviour.Behaviour) -> str:
     return str(getattr(behaviour, "behaviour_class_name", type(behaviour).__name__))
 
 
+def bt_type(behaviour: py_trees.behaviour.Behaviour) -> str:
+    """The node's type as BehaviorTree.CPP spells it (``Fallback``, ``ReactiveSequence``,
+    ``RetryUntilSuccessful``, ``ForceSuccess``; a leaf's tag), not py_trees' class name."""
+    if isinstance(behaviour, py_trees.composites.Sequence):
+        return "Sequence" if behaviour.memory else "ReactiveSequence"
+    if isinstance(behaviour, py_trees.composites.Selector):
+        return "Fallback" if behaviour.memory else "ReactiveFallback"
+    if isinstance(behaviour, py_trees.composites.Parallel):
+        return "Parallel"
+    if isinstance(behaviour, py_trees.decorators.Retry):
+        return "RetryUntilSuccessful"
+    if isinstance(behaviour, py_trees.decorators.Repeat):
+        return "Repeat"
+    if isinstance(behaviour, SimTimeout):
+        return "Timeout"
+    return BT_DECORATORS.get(type(behaviour), node_type(behaviour))
+
+
+#: py_trees' decorators BehaviorTree.CPP has under another name.
+BT_DECORATORS: dict[type, str] = {
+    py_trees.decorators.FailureIsSuccess: "ForceSuccess",
+    py_trees.decorators.SuccessIsFailure: "ForceFailure",
+    py_trees.decorators.Inverter: "Inverter",
+}
+
+
 def short_name(behaviour: py_trees.behaviour.Behaviour) -> str:
-    """The name as written: without the parent prefix or generated uuid the XML parser adds."""
+    """The name as written: without the parent prefix or generated uuid the XML parser adds; a
+    node the file leaves unnamed is named by its type, as BehaviorTree.CPP names it."""
+    if unnamed(behaviour.name):
+        return bt_type(behaviour)
     return get_base_name(behaviour.name, strip_uuid=True) or behaviour.name
+
+
+def shown_name(behaviour: py_trees.behaviour.Behaviour) -> str:
+    """The node's full name without py_trees' uuids, an unnamed node's last part its
+    BehaviorTree.CPP type (:func:`bt_type`): the same in every run."""
+    name = readable(behaviour.name)
+    if not unnamed(behaviour.name):
+        return name
+    head, dot, _ = name.rpartition(".")
+    return f"{head}{dot}{bt_type(behaviour)}"
 
 
 def _children(behaviour: py_trees.behaviour.Behaviour) -> list[py_trees.behaviour.Behaviour]:
@@ -242,14 +282,24 @@ def render_tree(root: py_trees.behaviour.Behaviour, fmt: str, show_status: bool 
     """
     # An unnamed node is named by its type, as BehaviorTree.CPP names it, not py_trees' uuid.
     if fmt == "ascii":
-        return readable(py_trees.display.ascii_tree(root, show_status=show_status))
+        return _bt_names(py_trees.display.ascii_tree(root, show_status=show_status), root)
     if fmt == "unicode":
-        return readable(py_trees.display.unicode_tree(root, show_status=show_status))
+        return _bt_names(py_trees.display.unicode_tree(root, show_status=show_status), root)
     if fmt == "dot":
         return str(py_trees.display.dot_tree(root).to_string())
     if fmt == "svg":
         return render_svg(root, show_status=show_status)
     raise ValueError(f"render: expected format one of {', '.join(FORMATS)}, got {fmt!r}")
+
+
+def _bt_names(text: str, root: py_trees.behaviour.Behaviour) -> str:
+    """``text`` with each unnamed node's py_trees name (``Selector_<uuid4>``, unique by its
+    uuid) its BehaviorTree.CPP type, and py_trees' other uuids taken out."""
+    for node in root.iterate():
+        if unnamed(node.name):
+            own = node.name.rpartition(".")[2]
+            text = text.replace(own, bt_type(node))
+    return readable(text)
 
 
 def render_cli(

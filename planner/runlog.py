@@ -39,7 +39,7 @@ from py_trees.common import Status
 
 from duet_robot.closing import Closing
 from planner.atomic_file import commit, temporary_beside
-from planner.render import node_kind, node_type
+from planner.render import node_kind, node_type, shown_name
 from planner.runner import readable
 
 __all__ = ["RunLog", "StatusListener", "json_safe", "node_labels"]
@@ -100,7 +100,7 @@ def node_labels(root: py_trees.behaviour.Behaviour) -> dict[uuid.UUID, str]:
     its path from the root: the names from the root down joined by ``/``, each followed by
     ``[i]`` (its index among same-named siblings, from 0) where siblings share it.
     """
-    names = {node.id: readable(node.name) for node in root.iterate()}
+    names = {node.id: shown_name(node) for node in root.iterate()}
     counts = Counter(names.values())
     labels: dict[uuid.UUID, str] = {}
 

@@ -122,6 +122,12 @@ def working_leaf(root: py_trees.behaviour.Behaviour) -> py_trees.behaviour.Behav
 #: bare uuid4 it names an unnamed composite above it by (``<uuid4>.``).
 _UUID = r"[0-9a-f]{8}-[0-9a-f]{4}-4[0-9a-f]{3}-[89ab][0-9a-f]{3}-[0-9a-f]{12}"
 _UNNAMED = re.compile(rf"_{_UUID}|(?<![\w-]){_UUID}\.")
+_OWN_UUID = re.compile(rf"_{_UUID}$")
+
+
+def unnamed(name: str) -> bool:
+    """Whether a node's name is one py_trees made for a node the file leaves unnamed."""
+    return _OWN_UUID.search(name) is not None
 
 
 def readable(text: str) -> str:

@@ -85,8 +85,13 @@ def test_unknown_format() -> None:
 
 
 def test_short_names_drop_prefix_and_uuid() -> None:
-    node = py_trees.behaviours.Success(name="a.b.Sequence_0b6e6f4e-8e4b-4c55-9a7b-1f0a2b3c4d5e")
+    uid = "0b6e6f4e-8e4b-4c55-9a7b-1f0a2b3c4d5e"
+    node = py_trees.composites.Sequence(name=f"a.b.Sequence_{uid}", memory=True)
     assert short_name(node) == "Sequence"
+    # Unnamed, a node is named by its type as BehaviorTree.CPP spells it, not py_trees' class.
+    fallback = py_trees.composites.Selector(name=f"a.Selector_{uid}", memory=False)
+    assert short_name(fallback) == "ReactiveFallback"
+    assert short_name(py_trees.composites.Selector(name="a.b.pick", memory=True)) == "pick"
 
 
 def test_render_cli(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

@@ -168,16 +168,16 @@ def test_unnamed_nodes_are_labelled_by_their_type_the_same_in_every_load() -> No
     assert sorted(labels[0]) == sorted(
         [
             "Sequence",
-            "Selector",
+            "Fallback",
             "AlwaysSuccess",
             "Inverter",
-            "Sequence/Selector/AlwaysFailure",
+            "Sequence/Fallback/AlwaysFailure",
             "Sequence/Inverter/AlwaysFailure",
         ]
     )
     text = render_tree(load_tree_string(UNNAMED), "ascii")
     assert text == render_tree(load_tree_string(UNNAMED), "ascii")
-    assert "-^- Inverter\n" in text and "_" not in text
+    assert "-^- Inverter\n" in text and "{o} Fallback\n" in text and "_" not in text
 
 
 def test_script_and_condition_writes_are_logged_as_a_clients_are(tmp_path: Path) -> None:
