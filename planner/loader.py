@@ -142,6 +142,20 @@ def load_tree_string(
     return _load(doc, registry, run_keys)
 
 
+def _name_subtrees(doc: TreeDocument) -> None:
+    """Name each ``<SubTree>`` the file leaves unnamed ``ID::k`` (the k-th of that ID, as
+    BehaviorTree.CPP's paths name an instance by its ID): py_trees would name it by a fresh
+    uuid4, which reached ``run.btlog``'s subtree IDs and ``run.jsonl``'s clients, another in
+    every run. Each is still its own instance, with a blackboard of its own."""
+    count: dict[str, int] = {}
+    for bt in doc.root.findall("BehaviorTree"):
+        for elem in bt.iter("SubTree"):
+            tree_id = elem.attrib.get("ID")
+            if tree_id is not None and not elem.attrib.get("name"):
+                count[tree_id] = count.get(tree_id, 0) + 1
+                elem.attrib["name"] = f"{tree_id}::{count[tree_id]}"
+
+
 def _load(
     doc: TreeDocument, registry: Registry | None, run_keys: Collection[str] | None = None
 ) -> py_trees.behaviour.Behaviour:
@@ -149,6 +163,7 @@ def _load(
     if problems:
         raise TreeFileError(problems)
     assert doc.main_tree_id is not None  # a document without one has a problem above
+    _name_subtrees(doc)
     text = ET.tostring(doc.root, encoding="unicode")
     # The parser reads files only; the translated document is self-contained (includes inlined).
     handle, tmp = tempfile.mkstemp(suffix=".xml", prefix="duet_tree_")

@@ -225,3 +225,29 @@ def test_writes_of_unnamed_nodes_name_their_client_without_uuids(tmp_path: Path)
         tree.tick()
     clients = [r["client"] for r in read(path) if r["event"] == "write"]
     assert clients == ["Script"]
+
+
+def test_unnamed_subtrees_are_named_by_their_id_each_its_own_instance() -> None:
+    # Groot2 saves a <SubTree> without a name: py_trees had named it by a fresh uuid4, which
+    # reached run.btlog's subtree IDs and run.jsonl's labels and clients.
+    xml = """<root BTCPP_format="4" main_tree_to_execute="Main">
+<BehaviorTree ID="Main"><Sequence name="main">
+  <Script name="init" code="a := 0; b := 0"/>
+  <SubTree ID="Put" value="1" out="{a}"/>
+  <SubTree ID="Put" value="2" out="{b}"/>
+  <ScriptCondition name="both" code="a == 1 &amp;&amp; b == 2"/>
+</Sequence></BehaviorTree>
+<BehaviorTree ID="Put"><Script name="put" code="out := value"/></BehaviorTree>
+</root>"""
+    root = load_tree_string(xml)
+    tree = py_trees.trees.BehaviourTree(root)
+    tree.setup(clock=FakeClock())
+    tree.tick()
+    assert root.status == py_trees.common.Status.SUCCESS  # each wrote its own caller's key
+    assert list(node_labels(root).values()) == [
+        "main",
+        "main.init",
+        "main.Put::1.put",
+        "main.Put::2.put",
+        "main.both",
+    ]
