@@ -7,6 +7,7 @@ as an XML attribute would be.
 
 from __future__ import annotations
 
+import numbers
 from typing import Any
 
 from py_trees.ports import CONST_PREFIX, DOT_REPLACEMENT, PortsMixin
@@ -28,10 +29,25 @@ def wire(behaviour: PortsMixin, namespace: str = "/", /, **ports: Any) -> PortsM
                 f"{type(behaviour).__name__} {behaviour.name!r}: unknown port {port!r}; "
                 f"expected one of {', '.join(sorted(known))}"
             )
+        if not isinstance(value, str | numbers.Real):
+            raise TypeError(
+                f"{type(behaviour).__name__} {behaviour.name!r}: port {port!r}: expected a "
+                f"constant as a tree's attribute writes it (text, a number or a bool) or a "
+                f"blackboard key such as '{{{port}}}', got a {type(value).__name__}: put it on "
+                "the blackboard and pass its key"
+            )
         text = str(value)
         if text.startswith("{") and text.endswith("}"):
             remap[port] = text[1:-1]
         else:
             remap[port] = CONST_PREFIX + text.replace(".", DOT_REPLACEMENT)
-    behaviour.setup_ports(port_remappings=remap, subtree_namespace=namespace)
+    try:
+        behaviour.setup_ports(port_remappings=remap, subtree_namespace=namespace)
+    except ValueError as err:  # a constant the port's type cannot take
+        said = str(err)
+        ports_named = [p for p, v in ports.items() if f"'{v}'" in said] or sorted(ports)
+        raise ValueError(
+            f"{type(behaviour).__name__} {behaviour.name!r}: port "
+            f"{', '.join(repr(p) for p in ports_named)}: {said}"
+        ) from err
     return behaviour

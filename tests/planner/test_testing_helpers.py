@@ -54,3 +54,18 @@ def test_a_carry_set_up_as_the_tree_wires_it_places_the_object_and_hands_over(
     assert_allclose(fake_world.object_pose("parcel").position, goal, atol=0.02)
     after = py_trees.blackboard.Blackboard.get("/state")
     assert isinstance(after, DualArmState) and after is not before
+
+
+def test_wiring_a_leaf_by_hand_names_the_leaf_and_the_port_at_fault() -> None:
+    # A test's bad constant had been py_trees' bare "Cannot convert Value 'high' to type
+    # float", and an object passed as a constant its repr, a kilobyte long.
+    import numpy as np
+
+    from planner.leaves.conditions import IsHeld
+    from planner.wiring import wire
+
+    with pytest.raises(ValueError, match=r"^IsHeld 'held': port 'min_force_n': Cannot convert"):
+        wire(IsHeld("held"), object="parcel", min_force_n="high")
+    with pytest.raises(TypeError, match=r"^IsHeld 'held': port 'min_force_n': expected a constant"):
+        wire(IsHeld("held"), object="parcel", min_force_n=np.zeros(3))
+    wire(IsHeld("held"), object="parcel", min_force_n=np.float64(5.0))  # a number is a number
