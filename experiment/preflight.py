@@ -26,6 +26,7 @@ from planner.validate import validate_tree
 from worlds.feasibility import feasibility_problems
 from worlds.obstacle_holds import obstacle_hold_problems
 from worlds.sim_world import task_moves
+from worlds.spec import WorldSpec
 from worlds.world_file import World, WorldFileError, load_world, world_spec, world_summary
 
 
@@ -105,7 +106,23 @@ def tree_task_problems(world: World, doc: TreeDocument) -> list[str]:
         )
     ]
     names = [o.name for o in world.objects]
-    return lines + [str(p) for p in check_tree_objects(doc, names)]
+    return lines + [str(p) for p in check_tree_objects(doc, names)] + _inserts_into_nothing(
+        spec, doc
+    )
+
+
+def _inserts_into_nothing(spec: WorldSpec, doc: TreeDocument) -> list[str]:
+    """A line per ``Insert`` of a tree run on a task none of whose moves goes into a fixture:
+    it had validated, then failed at run time ("move 0 of 'tray' goes into no fixture")."""
+    from planner.tree_reading import describe, source_file, source_line
+
+    if any(m.fixture is not None for step in spec.task for m in step.moves):
+        return []  # which moves an Insert runs on is the tree's data flow: run tells
+    return [
+        f"{source_file(elem, doc.file)}:{source_line(elem)}: {describe(elem)}: inserts into a "
+        "fixture, but no move of the world's task goes into one (a move's `fixture:`)"
+        for elem in doc.root.iter("Insert")
+    ]
 
 
 def steps_note(made: Sequence[Move]) -> str:

@@ -152,3 +152,20 @@ def test_a_turn_made_in_steps_is_named_where_the_moves_are_counted() -> None:
         "4 moves for parcel (indices 0..3) (the world file's move 2 is made in 2 steps, 2 and "
         "3): move 3 would be left undone"
     ]
+
+
+def test_a_tree_that_inserts_on_a_task_of_no_fixture_is_named() -> None:
+    # `validate --tree planner/trees/slot_insertion.xml` of the tray world had said it matched
+    # its task; the run then failed after 13 s: "move 0 of 'tray' goes into no fixture".
+    root = Path(__file__).resolve().parents[2]
+    slot = root / "planner" / "trees" / "slot_insertion.xml"
+    doc = read_tree_document(slot)
+    tray = tree_task_problems(load_world(root / "worlds" / "tray_carry.yaml"), doc)
+    assert any(
+        line.endswith(
+            '<Insert name="insert">: inserts into a fixture, but no move of the world\'s task '
+            "goes into one (a move's `fixture:`)"
+        )
+        for line in tray
+    )
+    assert tree_task_problems(load_world(root / "worlds" / "slot_insertion.yaml"), doc) == []
