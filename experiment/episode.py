@@ -289,16 +289,18 @@ class EarlierOutputs:
         self.folder = out / EARLIER
         if self.folder.is_symlink() or self.folder.is_file():
             self.folder.unlink()
-        elif self.folder.is_dir():  # a killed run's: what it replaced was replaced
-            shutil.rmtree(self.folder)
+        elif self.folder.is_dir():
+            # A run killed before it put them back or dropped them: as if it had stopped.
+            self.names = [n for n in OUTPUT_NAMES if _a_file(self.folder / n)]
+            self.restore()
         for name in OUTPUT_NAMES:
             for stale in stale_temporaries(out, name):  # a killed run's, never renamed
                 stale.unlink()
             path = out / name
-            if path.exists() and not (path.is_symlink() or path.is_file()):
+            if path.exists() and not _a_file(path):
                 raise OSError(f"{path}: expected a file this run may replace, got a folder")
         #: The earlier run's outputs, by name, as set aside.
-        self.names = [n for n in OUTPUT_NAMES if (out / n).is_symlink() or (out / n).is_file()]
+        self.names = [n for n in OUTPUT_NAMES if _a_file(out / n)]
         if self.names:
             self.folder.mkdir()
             for name in self.names:

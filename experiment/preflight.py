@@ -106,8 +106,8 @@ def tree_task_problems(world: World, doc: TreeDocument) -> list[str]:
         )
     ]
     names = [o.name for o in world.objects]
-    return lines + [str(p) for p in check_tree_objects(doc, names)] + _inserts_into_nothing(
-        spec, doc
+    return (
+        lines + [str(p) for p in check_tree_objects(doc, names)] + _inserts_into_nothing(spec, doc)
     )
 
 

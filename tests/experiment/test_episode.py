@@ -84,6 +84,16 @@ def test_outputs_never_write_through_a_link_and_come_back_if_the_run_stops(
     EarlierOutputs(out).drop()  # the run ran: they are replaced
     assert sorted(p.name for p in out.iterdir()) == [STOPPED]
     assert elsewhere.read_text(encoding="utf-8") == "keep me"
+    # A run killed (SIGKILL) with the earlier outputs set aside: the next run finds them,
+    # puts them back, and keeps the killed run's as a stopped run's.
+    (out / "tree.svg").write_text("earlier", encoding="utf-8")
+    EarlierOutputs(out)  # the killed run sets them aside...
+    (out / "tree.svg").write_text("killed, half written", encoding="utf-8")
+    again = EarlierOutputs(out)  # ...and the next run starts
+    assert again.names == ["tree.svg"]
+    again.restore()
+    assert (out / "tree.svg").read_text(encoding="utf-8") == "earlier"
+    assert (out / STOPPED / "tree.svg").read_text(encoding="utf-8") == "killed, half written"
     # Stopped in a folder of no earlier run: what it wrote stays where it is.
     fresh = tmp_path / "fresh"
     fresh.mkdir()
