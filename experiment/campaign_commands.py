@@ -353,10 +353,11 @@ def report_command(args: argparse.Namespace) -> int:
         figure = stem.with_name(f"{stem.name}_{k}.png" if several else f"{stem.name}.png")
         try:
             report_figure(campaign, figure)
-            print(f"  picture: {figure}")
         except OSError as err:
             print(f"not written: {figure}: {err.strerror or err}", file=sys.stderr)
             unwritten = True
+        else:  # stdout's own errors (a reader gone: `| head`) are not the picture's
+            print(f"  picture: {figure}")
     if args.json:
         print(
             strict_json(
