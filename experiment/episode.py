@@ -198,7 +198,7 @@ class EpisodeReport:
                     steps = "no physics step (none of the run started inside its window)"
                 out.append(f"    {printable(entry['object'])} at {entry['at_s']:g} s: {steps}")
             if later:
-                out.append(f"    {later} more drawn for after the run ended")
+                out.append(f"    {later} more set for after the run ended")
         out.append(
             f"  simulated {self.sim_time_s:.1f} s in {self.wall_time_s:.1f} s wall "
             f"({self.sim_time_s / max(self.wall_time_s, 1e-9):.1f}x real time)"

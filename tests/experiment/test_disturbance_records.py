@@ -70,7 +70,7 @@ def test_run_json_lists_each_disturbance_and_its_steps(
     assert pushes["entries"][0]["force_n"] == [0.0, 1.0, 0.0]
     assert "disturbances applied: 1 of 2" in out
     assert "parcel at 0.1 s: physics steps 24 to 35" in out
-    assert "1 more drawn for after the run ended" in out and "at 5 s" not in out
+    assert "1 more set for after the run ended" in out and "at 5 s" not in out
 
 
 def test_a_push_skipped_for_an_object_not_held_says_so() -> None:
@@ -89,4 +89,4 @@ def test_a_push_skipped_for_an_object_not_held_says_so() -> None:
     )  # fmt: skip
     lines = report.lines("w")
     assert "    parcel at 1.1 s: skipped: the object was not held when its window opened" in lines
-    assert "    2 more drawn for after the run ended" in lines
+    assert "    2 more set for after the run ended" in lines
