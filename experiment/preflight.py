@@ -20,7 +20,13 @@ from planner.port import Move
 from planner.tree_dataflow import RUN_WRITES
 from planner.tree_objects import check_tree_objects
 from planner.tree_problems import TreeFileError
-from planner.tree_reading import TreeDocument, read_tree_document
+from planner.tree_reading import (
+    TreeDocument,
+    describe,
+    read_tree_document,
+    source_file,
+    source_line,
+)
 from planner.tree_task import check_tree_moves, tree_grasps
 from planner.validate import validate_tree
 from worlds.feasibility import feasibility_problems
@@ -114,8 +120,6 @@ def tree_task_problems(world: World, doc: TreeDocument) -> list[str]:
 def _inserts_into_nothing(spec: WorldSpec, doc: TreeDocument) -> list[str]:
     """A line per ``Insert`` of a tree run on a task none of whose moves goes into a fixture:
     it had validated, then failed at run time ("move 0 of 'tray' goes into no fixture")."""
-    from planner.tree_reading import describe, source_file, source_line
-
     if any(m.fixture is not None for step in spec.task for m in step.moves):
         return []  # which moves an Insert runs on is the tree's data flow: run tells
     return [
@@ -148,7 +152,6 @@ def skill_problems(world: World, world_file: str, doc: TreeDocument) -> list[str
     from experiment.episode import load_library
     from planner.skill_choice import SkillChoiceError, transport_skill
     from planner.tree_dataflow import port_uses
-    from planner.tree_reading import describe, source_file, source_line
     from skills.library import LibraryFileError
 
     named = {

@@ -335,7 +335,7 @@ def _learn(
 
 def _shaped_text(shaped: list[int], turns: list[int]) -> str:
     """What the method says of the axes :func:`skills.scaling.shape_floor` left unscaled."""
-    axes = [f"{'xyz'[i]}" for i in shaped] + [f"rotation about {'xyz'[i]}" for i in turns]
+    axes = ["xyz"[i] for i in shaped] + [f"rotation about {'xyz'[i]}" for i in turns]
     if not axes:
         return ""
     return (

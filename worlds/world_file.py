@@ -31,6 +31,7 @@ import yaml
 from pydantic import ValidationError
 
 from affordances.safe_yaml import YamlFileError, parse_yaml, read_bounded
+from skills import quaternion as quat
 from worlds.fixture_schema import Fixture
 from worlds.schema_types import Range
 from worlds.spec import (
@@ -317,8 +318,7 @@ def _symmetric(obj: WorldObject, move: MoveEntry) -> tuple[Quat, float] | None:
 
 def _upright(q: Quat) -> bool:
     """Whether orientation ``q`` keeps a body's z axis within a degree of world z."""
-    x, y, _, _ = q
-    return 1.0 - 2.0 * (x * x + y * y) > math.cos(math.radians(1.0))
+    return float(quat.tilt(q)) < math.radians(1.0)
 
 
 def _move_spec(move: MoveEntry, same_as_start: tuple[Quat, float] | None = None) -> MoveSpec:

@@ -180,29 +180,30 @@ def test_unnamed_nodes_are_labelled_by_their_type_the_same_in_every_load() -> No
     assert "-^- Inverter\n" in text and "{o} Fallback\n" in text and "_" not in text
 
 
-def test_script_and_condition_writes_are_logged_as_a_clients_are(tmp_path: Path) -> None:
-    # A script wrote the blackboard past its activity stream: run.jsonl, which says it holds
-    # every write, had none of a Script's, a _post's or an _onSuccess's.
-    import tests.planner.stub_leaves  # noqa: F401
-
-    tree = py_trees.trees.BehaviourTree(
-        load_tree_string(
-            '<root BTCPP_format="4"><BehaviorTree ID="Main"><Sequence name="seq">'
-            '<Script name="sc" code="m := 3; m += 1"/>'
-            '<StubCheck name="check" value="true" _onSuccess="done := true"/>'
-            "</Sequence></BehaviorTree></root>"
-        )
-    )
+def writes_of_one_tick(tmp_path: Path, xml: str) -> list[dict[str, Any]]:
+    """The write events ``run.jsonl`` holds of one tick of the tree in ``xml``."""
+    tree = py_trees.trees.BehaviourTree(load_tree_string(xml))
     tree.setup(clock=FakeClock())
     path = tmp_path / "run.jsonl"
     with RunLog(path, clock=lambda: 0.0) as log:
         log.attach(tree)
         tree.tick()
-    writes = [
-        (r["key"], r["client"], r["activity"], r["value"])
-        for r in read(path)
-        if r["event"] == "write"
-    ]
+    return [r for r in read(path) if r["event"] == "write"]
+
+
+def test_script_and_condition_writes_are_logged_as_a_clients_are(tmp_path: Path) -> None:
+    # A script wrote the blackboard past its activity stream: run.jsonl, which says it holds
+    # every write, had none of a Script's, a _post's or an _onSuccess's.
+    import tests.planner.stub_leaves  # noqa: F401
+
+    records = writes_of_one_tick(
+        tmp_path,
+        '<root BTCPP_format="4"><BehaviorTree ID="Main"><Sequence name="seq">'
+        '<Script name="sc" code="m := 3; m += 1"/>'
+        '<StubCheck name="check" value="true" _onSuccess="done := true"/>'
+        "</Sequence></BehaviorTree></root>",
+    )
+    writes = [(r["key"], r["client"], r["activity"], r["value"]) for r in records]
     assert writes == [
         ("/m", "seq.sc", "INITIALISED", 3),
         ("/m", "seq.sc", "WRITE", 4),
@@ -212,19 +213,12 @@ def test_script_and_condition_writes_are_logged_as_a_clients_are(tmp_path: Path)
 
 def test_writes_of_unnamed_nodes_name_their_client_without_uuids(tmp_path: Path) -> None:
     # "client": "main.Script_55dc3015-..." had differed from run to run.
-    tree = py_trees.trees.BehaviourTree(
-        load_tree_string(
-            '<root BTCPP_format="4"><BehaviorTree ID="Main"><Sequence>'
-            '<Script code="m := 3"/></Sequence></BehaviorTree></root>'
-        )
+    records = writes_of_one_tick(
+        tmp_path,
+        '<root BTCPP_format="4"><BehaviorTree ID="Main"><Sequence>'
+        '<Script code="m := 3"/></Sequence></BehaviorTree></root>',
     )
-    tree.setup(clock=FakeClock())
-    path = tmp_path / "run.jsonl"
-    with RunLog(path, clock=lambda: 0.0) as log:
-        log.attach(tree)
-        tree.tick()
-    clients = [r["client"] for r in read(path) if r["event"] == "write"]
-    assert clients == ["Script"]
+    assert [r["client"] for r in records] == ["Script"]
 
 
 def test_unnamed_subtrees_are_named_by_their_id_each_its_own_instance() -> None:

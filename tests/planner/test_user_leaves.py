@@ -225,19 +225,28 @@ def _buggy_tree(tmp_path: Path, leaf: str) -> tuple[Path, py_trees.trees.Behavio
             "in update(): output port 'height_m': expected float, got str 'tall'; a bug in the "
             "leaf's code",
         ),
+        ("BadSetup", "leaf 'check.BadSetup' (BadSetup) raised KeyError in setup(): 'camera'"),
+        (
+            "BadTerminate",
+            "leaf 'check.BadTerminate' (BadTerminate) raised AttributeError in terminate(): "
+            "'BadTerminate' object has no attribute 'recording'",
+        ),
     ],
 )
 def test_a_bug_in_a_users_leaf_names_its_line_and_the_leaf(
     tmp_path: Path, registry_restored: None, library: SkillLibrary, leaf: str, says: str
 ) -> None:
     # An AttributeError in a user's update() had ended the run in Duet's traceback (exit 1);
-    # an update() without a return, in 7200 "invalid status" lines until the time limit.
+    # an update() without a return, in 7200 "invalid status" lines until the time limit. Only
+    # initialise() and update() had been guarded: a bug in setup() or terminate() ended the
+    # run in Duet's traceback, exit 1, too.
     from planner.tree_problems import LeafCodeError
 
     path, bt, world = _buggy_tree(tmp_path, leaf)
-    bt.setup(world=world, library=library)
     with pytest.raises(LeafCodeError) as err:
+        bt.setup(world=world, library=library)
         bt.tick()
+        bt.root.stop(Status.INVALID)  # halted while running, as a time limit halts it
     assert says in str(err.value)
     assert str(err.value).startswith(str(path))
 
@@ -456,30 +465,3 @@ def test_a_leaves_module_declares_the_enum_names_its_scripts_use(
         LeafSourceError, match=r"other.py: SCRIPT_ENUMS: RED: expected one value, got 1 and 5$"
     ):
         register_leaves([str(other)])
-
-
-@pytest.mark.parametrize(
-    ("leaf", "says"),
-    [
-        ("BadSetup", "leaf 'check.BadSetup' (BadSetup) raised KeyError in setup(): 'camera'"),
-        (
-            "BadTerminate",
-            "leaf 'check.BadTerminate' (BadTerminate) raised AttributeError in terminate(): "
-            "'BadTerminate' object has no attribute 'recording'",
-        ),
-    ],
-)
-def test_a_bug_in_a_users_setup_or_terminate_names_its_line_and_the_leaf(
-    tmp_path: Path, registry_restored: None, library: SkillLibrary, leaf: str, says: str
-) -> None:
-    # Only initialise() and update() had been guarded: a bug in setup() or terminate() ended
-    # the run in Duet's traceback, exit 1.
-    from planner.tree_problems import LeafCodeError
-
-    path, bt, world = _buggy_tree(tmp_path, leaf)
-    with pytest.raises(LeafCodeError) as err:
-        bt.setup(world=world, library=library)
-        bt.tick()
-        bt.root.stop(Status.INVALID)  # halted while running, as a time limit halts it
-    assert says in str(err.value)
-    assert str(err.value).startswith(str(path))
