@@ -28,6 +28,7 @@ __all__ = [
     "SequenceWithMemory",
     "TryCatch",
     "WhileDoElse",
+    "parallel_threshold",
 ]
 
 Behaviour = py_trees.behaviour.Behaviour
@@ -225,10 +226,18 @@ class TryCatch(Control, register=False):
         super().stop(new_status)
 
 
+def parallel_threshold(count: int, children: int) -> int:
+    """BT.CPP's ``Parallel`` count of ``children``: a count of 0 or more as it is, a negative
+    one that many from all but one (-1: all, -2: all but one), never below 0."""
+    return max(children + count + 1, 0) if count < 0 else count
+
+
 class ParallelCount(Control, register=False):
     """BT.CPP's ``Parallel``: tick every child that has not finished; SUCCESS once
-    ``success_count`` children succeeded (-1: all), FAILURE once ``failure_count`` failed
-    (-1: all) or success can no longer be reached. Running children are then halted.
+    ``success_count`` children succeeded, FAILURE once ``failure_count`` failed or success can
+    no longer be reached (counts as :func:`parallel_threshold` reads them: -1 all, -2 all but
+    one). Running children are then halted. As BT.CPP's, it decides after each child it
+    visits, so a count of 0 decides at the first.
 
     Children that finished are not ticked again until the node itself finishes.
     """
@@ -243,41 +252,37 @@ class ParallelCount(Control, register=False):
         self.done: dict[int, Status] = {}
 
     def thresholds(self) -> tuple[int, int] | None:
-        """(successes needed, failures that end it), -1 turned into the number of children;
-        None (and the reason in ``feedback_message``) if they cannot be met."""
+        """(successes needed, failures that end it), as :func:`parallel_threshold` reads the
+        ports; None (and the reason in ``feedback_message``) if one exceeds the children."""
         n = len(self.children)
         success = int(self.get_input("success_count"))
         failure = int(self.get_input("failure_count"))
-        success = n if success < 0 else success
-        failure = n if failure < 0 else failure
-        if not (1 <= success <= n and 1 <= failure <= n):
+        needed, limit = parallel_threshold(success, n), parallel_threshold(failure, n)
+        if needed > n or limit > n:
             self.feedback_message = (
-                f"success_count {success} and failure_count {failure}: expected -1 or 1 to "
-                f"{n} (the number of children)"
+                f"success_count {success} and failure_count {failure}: expected at most {n} "
+                f"(the number of children)"
             )
             return None
-        return success, failure
+        return needed, limit
 
     def step(self) -> Step:
-        """Tick the unfinished children, then count."""
+        """Tick the unfinished children, deciding after each as BT.CPP does."""
         limits = self.thresholds()
         if limits is None:
             return Status.FAILURE
         success_needed, failure_limit = limits
         n = len(self.children)
         for i in range(n):
-            if i in self.done:
-                continue
-            status = yield from self.tick_child(i)
-            if status == Status.RUNNING:
-                continue
-            self.done[i] = status
-            # As BT.CPP, decide after each child: the rest are not ticked once it is decided.
+            if i not in self.done:
+                status = yield from self.tick_child(i)
+                if status != Status.RUNNING:
+                    self.done[i] = status
             successes = sum(s == Status.SUCCESS for s in self.done.values())
             failures = len(self.done) - successes
             if successes >= success_needed:
                 return Status.SUCCESS
-            if failures >= failure_limit or n - failures < success_needed:
+            if failures == failure_limit or n - failures < success_needed:
                 return Status.FAILURE
         return Status.RUNNING
 

@@ -146,6 +146,8 @@ class SetBlackboard(PortsMixin, py_trees.behaviour.Behaviour, register=False):
     OUTPUT_PORTS = {
         "output_key": PortInformation(data_type=object, required=True, description="key written"),
     }
+    #: Output ports a tree must connect (most leaves may leave theirs unconnected).
+    REQUIRED_OUTPUTS = ("output_key",)
 
     def update(self) -> Status:
         """Copy the value and succeed."""

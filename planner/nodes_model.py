@@ -62,10 +62,21 @@ def leaf_kind(cls: type) -> str:
     return str(kind)
 
 
+#: A reST role such as :attr:`~planner.move_result.MoveResult.rested_z`, its target kept.
+_ROLE = re.compile(r":[a-z]+:`~?([^`]+)`")
+#: Where a docstring's first sentence ends: a full stop before a space and a capital.
+_SENTENCE_END = re.compile(r"(?<=[.!?])\s+(?=[A-Z])")
+
+
 def summary_line(cls: type) -> str:
-    """First line of the class's own docstring ('' when it has none)."""
+    """The first sentence of the class's own docstring, its wrapped lines joined and its
+    reST markup dropped (``:attr:`~a.b.c``` reads ``c``, a literal is quoted); '' when it has
+    none."""
     doc = inspect.getdoc(cls) if "__doc__" in vars(cls) and cls.__doc__ else ""
-    return doc.strip().splitlines()[0].strip() if doc else ""
+    paragraph = doc.strip().split("\n\n", 1)[0] if doc else ""
+    text = " ".join(line.strip() for line in paragraph.splitlines() if line.strip())
+    text = _ROLE.sub(lambda m: m.group(1).rsplit(".", 1)[-1], text).replace("``", "'")
+    return _SENTENCE_END.split(text, 1)[0]
 
 
 def _format_default(value: Any) -> str:

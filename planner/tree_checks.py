@@ -231,6 +231,15 @@ class _Checker:
                     f"missing required input port '{port}' ({type_name(info.data_type)}); "
                     f"give a literal or a blackboard key such as {{{port}}}",
                 )
+        for port in getattr(cls, "REQUIRED_OUTPUTS", ()):
+            if port not in elem.attrib:
+                # An output port is required only where the node says so (BT.CPP's
+                # SetBlackboard throws at its first tick without its output_key).
+                self.add(
+                    elem,
+                    f"missing required output port '{port}'; give the blackboard key it "
+                    f"writes, such as {{{port}}}",
+                )
         if issubclass(cls, py_trees.decorators.Decorator):
             self.check_children(elem, 1, 1, "decorator")
         elif issubclass(cls, py_trees.composites.Composite):

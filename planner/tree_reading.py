@@ -15,6 +15,7 @@ from xml.parsers import expat
 from py_trees.parsers.behaviour_tree_xml import DECORATOR_NODES
 from py_trees.ports import get_ports_registry
 
+from planner.bt_controls import parallel_threshold
 from planner.bt_script import Script
 from planner.bt_updated import BUILTIN_UPDATED
 from planner.tree_ports import Registry, builtin_nodes
@@ -566,10 +567,11 @@ def _translate_parallel(elem: ET.Element, problem: Callable[[str], None]) -> Non
                 count = int(value)
             except ValueError:
                 continue  # the port's type check names it
-            if count != -1 and not 1 <= count <= n_children:
+            if parallel_threshold(count, n_children) > n_children:
                 problem(
-                    f"attribute '{name}': expected -1 (all) or 1 to {n_children} (the number "
-                    f"of children), got {count}"
+                    f"attribute '{name}': expected at most {n_children} (the number of "
+                    f"children; a negative count is that many fewer than all but one: -1 "
+                    f"all), got {count}"
                 )
         return
     elem.attrib.pop("success_count", None)

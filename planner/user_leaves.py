@@ -230,7 +230,7 @@ def _register(
         abstract = f" ({', '.join(c.__name__ for c in found)} declare no ports)" if found else ""
         raise LeafSourceError(
             f"{label}: expected at least one planner.leaves.WorldLeaf subclass with "
-            f"INPUT_PORTS and OUTPUT_PORTS defined in it, got none{abstract}"
+            f"INPUT_PORTS or OUTPUT_PORTS defined in it, got none{abstract}"
         )
     for cls in concrete:
         name = cls.__name__
@@ -285,6 +285,10 @@ def _restore_registry(before: dict[str, type]) -> None:
 
 
 def _has_ports(cls: type) -> bool:
-    return isinstance(getattr(cls, "INPUT_PORTS", None), dict) and isinstance(
-        getattr(cls, "OUTPUT_PORTS", None), dict
-    )
+    """A concrete leaf declares its ports: INPUT_PORTS, OUTPUT_PORTS or both (BT.CPP's
+    ``providedPorts()`` may list inputs only). The one it leaves out is set to ``{}``."""
+    inputs = isinstance(getattr(cls, "INPUT_PORTS", None), dict)
+    outputs = isinstance(getattr(cls, "OUTPUT_PORTS", None), dict)
+    if inputs != outputs:
+        setattr(cls, "OUTPUT_PORTS" if inputs else "INPUT_PORTS", {})
+    return inputs or outputs

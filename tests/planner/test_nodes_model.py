@@ -11,7 +11,7 @@ import pytest
 from py_trees.common import Status
 from py_trees.ports import BehaviourWithPorts, PortInformation, get_ports_registry
 
-from planner.nodes_model import leaf_kind, nodes_model_xml
+from planner.nodes_model import leaf_kind, nodes_model_xml, summary_line
 from tests.planner import stub_leaves
 
 
@@ -43,6 +43,18 @@ def test_lists_stub_leaves_with_kind_ports_defaults_and_descriptions() -> None:
     assert nodes["StubForever"].tag == "Action"  # no NODE_TYPE: Action
     (position,) = nodes["StubAt"].iter("input_port")
     assert position.attrib["type"] == "list[float]"
+
+
+def test_a_description_is_the_docstrings_first_sentence_as_groot2_shows_it() -> None:
+    class Wrapped:
+        """Hold the object at ``height_m`` above the table (as
+        :attr:`~planner.move_result.MoveResult.rested_z` says). Groot2 shows one line.
+
+        More detail, not shown."""
+
+    assert summary_line(Wrapped) == (
+        "Hold the object at 'height_m' above the table (as rested_z says)."
+    )
 
 
 def test_default_lists_only_planner_classes() -> None:

@@ -103,6 +103,32 @@ def test_a_leaf_from_a_file_is_validated_and_runs_on_the_fake_world(
     assert register_leaves([str(leaf_file)]) == [cls]
 
 
+def test_a_leaf_with_inputs_only_or_outputs_only_is_registered(
+    tmp_path: Path, registry_restored: None
+) -> None:
+    # BT.CPP's providedPorts() may list inputs only: such a leaf is a leaf, not skipped.
+    source = LEAF.replace(
+        'OUTPUT_PORTS = {"height_m": PortInformation(float, description="its height, m")}', ""
+    ).replace('self._set_output("height_m", z)', "")
+    source += '''
+
+class Tally(WorldLeaf):
+    """Write how many ticks it has seen."""
+
+    OUTPUT_PORTS = {"count": PortInformation(int, description="ticks so far")}
+
+    def update(self) -> Status:
+        self._set_output("count", 1)
+        return Status.SUCCESS
+'''
+    path = tmp_path / "one_sided.py"
+    path.write_text(source, encoding="utf-8")
+    classes = register_leaves([str(path)])
+    assert sorted(c.__name__ for c in classes) == ["HeightAtLeast", "Tally"]
+    assert [c.OUTPUT_PORTS for c in classes if c.__name__ == "HeightAtLeast"] == [{}]
+    assert [c.INPUT_PORTS for c in classes if c.__name__ == "Tally"] == [{}]
+
+
 def test_app_validate_and_nodes_take_leaves(
     leaf_file: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -307,7 +333,7 @@ def test_an_installed_entry_point_registers_its_leaves(
             "X = 1\n",
             "empty.py",
             r"empty.py: expected at least one planner.leaves.WorldLeaf subclass with INPUT_PORTS "
-            r"and OUTPUT_PORTS defined in it, got none$",
+            r"or OUTPUT_PORTS defined in it, got none$",
         ),
         (
             "from planner.leaves import WorldLeaf\n\n\nclass Half(WorldLeaf):\n    pass\n",

@@ -180,7 +180,7 @@ def test_parallel_fails_when_success_is_out_of_reach() -> None:
 
 
 def test_parallel_counts_beyond_the_children_are_refused_at_validate() -> None:
-    with pytest.raises(TreeFileError, match=r"'success_count': expected -1 \(all\) or 1 to 2"):
+    with pytest.raises(TreeFileError, match=r"'success_count': expected at most 2 \(the number"):
         Ticker(f'<Parallel name="p" success_count="5">{leaf("a", "S")}{leaf("b", "S")}</Parallel>')
 
 
@@ -191,4 +191,30 @@ def test_parallel_counts_from_the_blackboard_out_of_range_fail_the_node() -> Non
         "</Sequence>"
     )
     t.run(("p",), [(F,)])
-    assert "expected -1 or 1 to 2" in t.nodes["p"].feedback_message
+    assert "expected at most 2 (the number of children)" in t.nodes["p"].feedback_message
+
+
+def test_parallel_negative_counts_are_counted_from_all_but_one() -> None:
+    # BT.CPP's ParallelNode: a negative threshold is children + threshold + 1 (-2: all but one).
+    t = Ticker(
+        f'<Parallel name="p" success_count="-2" failure_count="3">{leaf("a", "S")}'
+        f"{leaf('b', 'R')}{leaf('c', 'S')}</Parallel>"
+    )
+    t.run(("p", "a", "b", "c"), [(S, S, INV, S)])
+    assert t.nodes["b"].halts == 1
+    t = Ticker(
+        f'<Parallel name="p" success_count="-1" failure_count="-3">{leaf("a", "F")}'
+        f"{leaf('b', 'R,F')}{leaf('c', 'R')}</Parallel>"
+    )
+    # -3 of 3 children is one failure: the first ends it.
+    t.run(("p", "a", "b"), [(F, F, INV)])
+
+
+def test_parallel_success_count_zero_succeeds_after_its_first_child() -> None:
+    # BT.CPP decides after each child it ticks: 0 successes are reached at once.
+    t = Ticker(
+        f'<Parallel name="p" success_count="0" failure_count="2">{leaf("a", "R")}'
+        f"{leaf('b', 'R')}</Parallel>"
+    )
+    t.run(("p", "a", "b"), [(S, INV, INV)])
+    assert t.nodes["b"].ticks == 0

@@ -64,6 +64,12 @@ def test_set_blackboard_writes_a_literal(key: str) -> None:
     assert py_trees.blackboard.Blackboard.get("/answer") == "42"
 
 
+def test_set_blackboard_without_its_output_key_is_refused() -> None:
+    # BT.CPP's SetBlackboard throws "missing port [output_key]" at its first tick.
+    with pytest.raises(TreeFileError, match="missing required output port 'output_key'"):
+        Ticker('<SetBlackboard name="w" value="42"/>')
+
+
 def test_set_blackboard_copies_another_key_and_unset_removes_it() -> None:
     t = Ticker(
         '<Sequence name="s"><SetBlackboard name="a" value="7" output_key="src"/>'
