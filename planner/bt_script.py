@@ -3,7 +3,7 @@ the ``_skipIf`` / ``_post`` ... attributes, parsed by a small tokenizer and a Pr
 our own and evaluated over a blackboard given as a :class:`ScriptEnv`. User text never reaches
 Python's ``eval``.
 
-The language, as BT.CPP 4.x defines it:
+The language, as BT.CPP 4.10 defines it (its Pratt parser, since 4.9):
 
 * statements separated by ``;``; a script returns the value of its last statement;
 * assignment ``:=`` (creates the entry if absent), ``=`` (the entry must exist), ``+=``,
@@ -13,13 +13,15 @@ The language, as BT.CPP 4.x defines it:
 * comparisons ``== != < <= > >=``, chained as a list (``a < b < c`` is ``a < b and b < c``);
   reals are equal within float epsilon; a string compared with a number is read as a number
   (``'true'``, ``'false'`` and enum names included), and is an error if it is not one;
-* ``&&`` and ``||`` share one precedence and group left to right, ``!`` negates; the words
-  ``and``, ``or`` and ``not`` are not operators;
-* ``cond ? a : b``; parentheses; integers, reals (``3.14``, ``3e-2``), hex ``0x1F``,
-  single-quoted strings without escapes, ``true`` and ``false``;
+* ``&&`` binds tighter than ``||`` (4.8 and earlier gave them one level), ``!`` negates; the
+  words ``and``, ``or`` and ``not`` are not operators;
+* ``cond ? a : b`` (``c ? a : b ? x : y`` is ``c ? a : (b ? x : y)``); parentheses;
+  integers, reals (``3.14``, ``3e-2``), hex ``0x1F``, single-quoted strings without
+  escapes, ``true`` and ``false``;
 * enum names registered by the host read as integers, and win over a key of the same name;
-* arithmetic and bitwise operators do not mix without parentheses, nor do ``..`` and
-  comparisons (``a + b & c`` is refused, ``(a + b) & c`` is not), as in BT.CPP.
+* precedence, loosest first: assignment, ``?:``, ``||``, ``&&``, comparisons, ``| ^``,
+  ``&``, ``+ - ..``, ``* /``, the prefixes; binary operators group left to right, so
+  ``a + b & c`` is ``(a + b) & c`` and ``'a' .. 1 + 2`` is ``('a' .. 1) + 2``, an error.
 
 Where Python lets us keep more than BT.CPP's doubles, values stay ``int`` through ``+ - *``
 and the bitwise operators, become ``float`` through ``/``, and comparisons and logic give

@@ -209,32 +209,30 @@ class Assign:
 Node = Literal | Name | Unary | Chain | If | Assign
 
 _ASSIGN_OPS = (":=", "=", "+=", "-=", "*=", "/=")
-#: operator -> (family, left binding power)
+#: operator -> (family, left binding power), BT.CPP 4.10's (its Pratt parser, 4.9 on): ``||``
+#: below ``&&`` below the comparisons below ``|`` ``^`` below ``&`` below ``+`` ``-`` ``..``
+#: below ``*`` ``/``; each left-associative (comparisons chain).
 _BINARY: dict[str, tuple[str, int]] = {
-    "||": ("logic", 3),
-    "&&": ("logic", 3),
-    "==": ("compare", 4),
-    "!=": ("compare", 4),
-    "<": ("compare", 4),
-    "<=": ("compare", 4),
-    ">": ("compare", 4),
-    ">=": ("compare", 4),
-    "..": ("concat", 4),
-    "+": ("math", 5),
-    "-": ("math", 5),
-    "|": ("bit", 5),
-    "^": ("bit", 5),
-    "*": ("math", 6),
-    "/": ("math", 6),
-    "&": ("bit", 6),
+    "||": ("logic", 6),
+    "&&": ("logic", 8),
+    "==": ("compare", 10),
+    "!=": ("compare", 10),
+    "<": ("compare", 10),
+    "<=": ("compare", 10),
+    ">": ("compare", 10),
+    ">=": ("compare", 10),
+    "|": ("bit", 12),
+    "^": ("bit", 12),
+    "&": ("bit", 14),
+    "+": ("math", 16),
+    "-": ("math", 16),
+    "..": ("concat", 16),
+    "*": ("math", 18),
+    "/": ("math", 18),
 }
-#: families that BT.CPP keeps apart unless parenthesised
-_CLASH = {
-    frozenset(("math", "bit")),
-    frozenset(("concat", "compare")),
-    frozenset(("concat", "bit")),
-}
-_PREFIX_BP = 7
+_ASSIGN_BP = 2
+_TERNARY_BP = 4
+_PREFIX_BP = 20
 
 
 class _Parser:
@@ -290,50 +288,37 @@ class _Parser:
                 return left, family
             op = token.text
             if op in _ASSIGN_OPS:
-                if min_bp > 1:
+                # As BT.CPP 4.10: the right side is a whole expression (so ``a := b := 1``
+                # sets both), and nothing follows an assignment but ``;`` or a ``)``.
+                if min_bp > _ASSIGN_BP:
                     return left, family
                 if not isinstance(left, Name) or family is not None:
                     raise self.fail(token, f"the left of '{op}' must be a blackboard key")
                 self.take()
                 self.nest(token)
-                value, _ = self.expression(2)
+                value, _ = self.expression(0)
                 self.depth -= 1
-                left, family = Assign(op, left.key, value, token.column), "assign"
-                if self.peek().kind == "op" and self.peek().text in _ASSIGN_OPS:
-                    raise self.fail(self.peek(), "chained assignment needs parentheses")
-                continue
+                return Assign(op, left.key, value, token.column), "assign"
             if op == "?":
-                if min_bp > 2:
+                # As BT.CPP 4.10: ``c ? a : b ? x : y`` is ``c ? a : (b ? x : y)``.
+                if min_bp > _TERNARY_BP:
                     return left, family
-                if family == "if":
-                    raise self.fail(token, "a nested '?' needs parentheses")
                 self.take()
                 self.nest(token)
                 then, _ = self.expression(0)
                 colon = self.take()
                 if not (colon.kind == "op" and colon.text == ":"):
                     raise self.fail(colon, f"expected ':' of '?', got {self.describe(colon)}")
-                otherwise, _ = self.expression(3)
+                otherwise, _ = self.expression(_TERNARY_BP)
                 self.depth -= 1
-                left, family = If(left, then, otherwise, token.column), "if"
-                continue
+                return If(left, then, otherwise, token.column), "if"
             if op not in _BINARY:
                 return left, family
             op_family, bp = _BINARY[op]
             if bp < min_bp:
                 return left, family
-            if family in ("assign", "if"):
-                raise self.fail(token, f"'{op}' after '?:' or an assignment needs parentheses")
-            if family is not None and frozenset((family, op_family)) in _CLASH:
-                raise self.fail(
-                    token, f"'{op}' cannot mix with {family} operators: add parentheses"
-                )
             self.take()
-            right, right_family = self.expression(bp + 1)
-            if right_family is not None and frozenset((right_family, op_family)) in _CLASH:
-                raise self.fail(
-                    token, f"'{op}' cannot mix with {right_family} operators: add parentheses"
-                )
+            right, _ = self.expression(bp + 1)
             if isinstance(left, Chain) and family == op_family and _chain_bp(left) == bp:
                 left = Chain(op_family, left.first, (*left.rest, (op, token.column, right)))
             else:
