@@ -184,11 +184,15 @@ class Delay(StringPorts, py_trees.decorators.Decorator, register=False):
 
 
 def _none_to_count(node: StringPorts, port: str, status: Status) -> bool:
-    """Whether a loop entered afresh has a count of 0 on ``port``: then, as BT.CPP, it is
-    given ``status`` without ticking its child."""
-    if node.status == Status.RUNNING or int(node.get_input(port)) != 0:
+    """Whether a loop entered afresh has no cycle to run: a count of 0, or negative but -1
+    (for ever), on ``port``. Then, as BT.CPP (its loop runs while ``count < n || n == -1``),
+    it is given ``status`` without ticking its child."""
+    if node.status == Status.RUNNING:
         return False
-    node.feedback_message = f"{port} is 0: the child is not ticked"
+    count = int(node.get_input(port))
+    if count > 0 or count == -1:
+        return False
+    node.feedback_message = f"{port} is {count}: the child is not ticked"
     node.status = status
     return True
 

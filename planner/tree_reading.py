@@ -475,7 +475,7 @@ def _translate(elem: ET.Element, registry: Registry, problems: list[TreeProblem]
     elif lower in ("retry", "retryuntilsuccessful"):
         elem.tag = "Retry"
         attempts = elem.attrib.get("num_attempts")
-        if attempts is not None and (attempts.strip() in ("-1", "0") or attempts.startswith("{")):
+        if attempts is not None and (_not_positive(attempts) or attempts.startswith("{")):
             elem.tag = "RetryForever"  # BT.CPP semantics, the count read when entered
             return
         attempts = _drop_attribute(elem, "num_attempts")
@@ -505,7 +505,7 @@ def _translate(elem: ET.Element, registry: Registry, problems: list[TreeProblem]
     elif lower == "repeat":
         elem.tag = "Repeat"
         count = elem.attrib.get("num_cycles", "")
-        if count.startswith("{") or count.strip() in ("-1", "0"):
+        if count.startswith("{") or _not_positive(count):
             elem.tag = "RepeatFromKey"
             return
         cycles = _drop_attribute(elem, "num_cycles")
@@ -550,6 +550,16 @@ TRANSLATED_TAGS = frozenset(
         *DECORATOR_NODES,
     }
 )
+
+
+def _not_positive(count: str) -> bool:
+    """Whether a loop's literal count is 0 or negative: -1 loops for ever, and BT.CPP's
+    ``Repeat`` and ``RetryUntilSuccessful`` run no cycle at all for 0 and any other negative
+    count (``RetryForever``, ``RepeatFromKey`` read them so)."""
+    try:
+        return int(count.strip()) <= 0
+    except ValueError:
+        return False
 
 
 def _translate_parallel(elem: ET.Element, problem: Callable[[str], None]) -> None:

@@ -88,11 +88,14 @@ def test_repeat_cycles_from_the_blackboard_and_for_ever() -> None:
     t2.run(("r",), [(R,), (R,), (R,), (F,)])
 
 
-@pytest.mark.parametrize("count", ['"0"', '"{n}"'])
-def test_zero_cycles_or_attempts_tick_nothing(count: str) -> None:
-    # BT.CPP: Repeat of 0 cycles succeeds and Retry of 0 attempts fails, the child unticked
-    # (a literal 0 had repeated for ever, a key holding 0 ticked the child once).
-    zero = '<SetBlackboard name="w" value="0" output_key="n"/>'
+@pytest.mark.parametrize(
+    ("count", "held"), [('"0"', "0"), ('"{n}"', "0"), ('"-3"', "0"), ('"{n}"', "-2")]
+)
+def test_zero_or_negative_cycles_or_attempts_tick_nothing(count: str, held: str) -> None:
+    # BT.CPP loops while count < n || n == -1: Repeat of 0 cycles (or -2, -3, ...) succeeds
+    # and Retry of 0 attempts fails, the child unticked (a literal 0 had repeated for ever, a
+    # key holding 0 ticked the child once, and -3 repeated for ever).
+    zero = f'<SetBlackboard name="w" value="{held}" output_key="n"/>'
     t = Ticker(
         f'<Sequence name="s">{zero}<Repeat name="r" num_cycles={count}>{leaf("a", "S")}'
         "</Repeat></Sequence>"
