@@ -146,6 +146,20 @@ def check_pose_demonstration(demo: Demonstration) -> None:
             f"or a rotation of at least {MIN_MOTION[1]:g} rad), got {travel:.3g} m and "
             f"{turn:.3g} rad: the demonstration does not move"
         )
+    # Along the recorded path (signs made continuous), no sample may be half a turn or more
+    # from the start or from the goal: a unit-quaternion DMP's goal error, 2 log(g q^-1), takes
+    # the short way round, so a demonstrated 270 deg turn is learnt as -90 deg and, sent to
+    # other goals, turned the long way (545 deg for a goal of 185 deg).
+    q = quat.make_continuous(demo.orientations)
+    half_turn = min(float(np.min(q @ q[0])), float(np.min(q @ q[-1])))
+    if half_turn < 0.0:
+        widest = np.degrees(2.0 * np.arccos(np.clip(half_turn, -1.0, 1.0)))
+        raise ValueError(
+            f"{demo.name}: orientations: expected a turn of under 180 deg between any sample "
+            f"and the start or the goal (a quaternion DMP's goal error takes the short way "
+            f"round), got one turning {widest:.0f} deg: record it as two skills of under 180 deg "
+            "each"
+        )
 
 
 #: :func:`fit_pose`'s reference changes below which an axis does not scale, m and rad.

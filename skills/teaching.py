@@ -36,6 +36,7 @@ from skills.demo_conditioning import (
     MAX_SETTLE_M,
     Reproduction,
     end_speed,
+    even_steps,
     low_pass,
     reproduction,
 )
@@ -222,7 +223,10 @@ def teach(
         check_pose_demonstration(recorded)  # before recognition compares it with anything
     except ValueError as err:  # DemoFileError, LibraryFileError: the message starts with the file
         raise TeachingError(str(err)) from None
-    smoothed = low_pass(recorded, smoothing_s)  # recognised and learnt smoothed
+    even, resampled = even_steps(recorded)
+    if resampled:
+        say(f"note: {resampled}")
+    smoothed = low_pass(even, smoothing_s)  # recognised and learnt smoothed
     match = recognise(skills, smoothed, space, threshold)
     lesson = Lesson(match, smoothing_s, folder)
     if match.best is None:
@@ -250,7 +254,9 @@ def teach(
     # The skill must do what was shown before it is kept: rolled out between the
     # demonstration's own start and goal, and past its duration, where a forcing fitted to
     # noise throws it off its goal.
-    shown = reproduction(model, smoothed)
+    # Measured against the recording itself: the smoothing's own change is part of what is
+    # learnt (a 40 ms smoothing moved a 0.6 s demonstration 10 mm).
+    shown = reproduction(model, recorded)
     say(
         f"reproduces the demonstration within {1000.0 * shown.rms_m:.1f} mm RMS; after its "
         f"duration stays within {1000.0 * shown.settle_m:.1f} mm and "
@@ -258,6 +264,14 @@ def teach(
     )
     if not shown.settles:
         raise TeachingError(_unsettled(demo, recorded, smoothed, smoothing_s, shown, name_of))
+    if not shown.follows:
+        raise TeachingError(
+            f"{demo}: expected a skill that follows its demonstration (within "
+            f"{1000.0 * shown.allowed_rms_m:.0f} mm RMS, a tenth of its "
+            f"{1000.0 * shown.extent_m:.0f} mm extent), got {1000.0 * shown.rms_m:.0f} mm: "
+            f"spikes or jumps in the recording, or a smoothing ({name_of('smoothing_s')}) too "
+            "wide for so short a motion. Nothing was added."
+        )
     try:
         skill = learnt_skill(
             new_name,
