@@ -58,6 +58,7 @@ from worlds.world_file import (
     TrialSettings,
     World,
     as_world_spec,
+    turn_free,
     world_from_data,
     world_spec,
 )
@@ -346,6 +347,7 @@ def _draw_trial(
     regions = layout.goal_regions()
     drawn = draw_object(layout, regions, object_size(base), seed, trial, redraw)
     cylinder = isinstance(obj.shape, CylinderShape)
+    symmetric = turn_free(obj)
     if cylinder:
         drawn.size[1] = drawn.size[0]  # a scaled cylinder stays round
     if isinstance(obj.shape, TrayShape) and layout.size_scale is not None:
@@ -386,6 +388,10 @@ def _draw_trial(
             elif attempt:  # no sphere fits the robot turning this way: another turn
                 goal_yaws[i] = _uniform(turn_rng, (low, high))
             yaw = math.radians(goal_yaws[i])
+            # An upright goal of an object a turn leaves as it was is reached unturned (the
+            # run sends it so: worlds.world_file.turn_free), so its holds are the start's grip.
+            if symmetric and drawn.pitches[i] == 0.0:
+                yaw = prev_yaw
             postures = move_postures(prev, prev_yaw, goal, yaw, size, max_turn, robot_yaw)
             postures = pitched_goal_postures(postures, goal, half, drawn.pitches[i])
             if not with_obstacle[i]:

@@ -113,6 +113,7 @@ __all__ = [
     "as_world_spec",
     "dump_world",
     "load_world",
+    "turn_free",
     "world_cli_schema",
     "world_cli_validate",
     "world_from_data",
@@ -300,6 +301,15 @@ def _object_spec(obj: WorldObject, world: World) -> ObjectSpec:
         state=tuple(obj.state),
         yaw=math.radians(obj.pose.rpy_deg[2]),
     )
+
+
+def turn_free(obj: WorldObject) -> bool:
+    """Whether a turn about world z leaves ``obj`` as it was where it starts: a sphere, or a
+    cylinder standing upright. Its moves' upright goals take its start's heading
+    (:func:`_symmetric`), so a grip never turns it."""
+    if isinstance(obj.shape, SphereShape):
+        return True
+    return isinstance(obj.shape, CylinderShape) and _upright(obj.pose.quaternion_xyzw())
 
 
 def _symmetric(obj: WorldObject, move: MoveEntry) -> tuple[Quat, float] | None:

@@ -102,3 +102,27 @@ def test_the_orientation_error_is_up_to_the_objects_symmetry(
     err_m, err_rad = goal_error(world, "tin", goal)
     assert err_m == 0.0
     assert math.degrees(err_rad) == pytest.approx(expected, abs=1e-9)
+
+
+@pytest.mark.parametrize(
+    ("shape", "start", "free"),
+    [
+        ({"type": "cylinder", "radius": 0.07, "height": 0.15}, [0, 0, 20], True),
+        ({"type": "cylinder", "radius": 0.07, "height": 0.15}, [90, 0, 0], False),
+        ({"type": "sphere", "radius": 0.07}, [30, 10, 0], True),
+        ({"type": "box", "size": [0.2, 0.2, 0.15]}, [0, 0, 0], False),
+    ],
+)
+def test_a_trial_layout_holds_a_turn_free_object_as_the_run_does(
+    tmp_path: Path, shape: dict[str, Any], start: list[float], free: bool
+) -> None:
+    # The layout's sphere draws keep clear of the holds the run makes: for an object a turn
+    # about z leaves as it was, none turned (experiment.layout._draw_trial).
+    from worlds.world_file import turn_free
+
+    data: dict[str, Any] = copy.deepcopy(yaml.safe_load(DEFAULT.read_text("utf-8")))
+    data["objects"][0]["shape"] = shape
+    data["objects"][0]["pose"]["rpy_deg"] = start
+    path = tmp_path / "w.yaml"
+    path.write_text(yaml.safe_dump(data), encoding="utf-8")
+    assert turn_free(load_world(path).objects[0]) is free
