@@ -190,7 +190,10 @@ class EpisodeReport:
                 if entry["steps"]:
                     steps = f"physics steps {entry['first_step']} to {entry['last_step']}"
                 elif entry.get("skipped"):
-                    steps = "skipped: the object was not held when its window opened"
+                    steps = (
+                        "skipped: the object was not carried (held by both palms, off its "
+                        "support) when its window opened"
+                    )
                 elif entry["at_s"] >= self.sim_time_s:
                     later += 1  # drawn for a run that ended before them: one line for all
                     continue

@@ -88,5 +88,8 @@ def test_a_push_skipped_for_an_object_not_held_says_so() -> None:
         disturbances=[entry(1.1, while_held=True, skipped=True), entry(30.0), entry(31.0)],
     )  # fmt: skip
     lines = report.lines("w")
-    assert "    parcel at 1.1 s: skipped: the object was not held when its window opened" in lines
+    assert (
+        "    parcel at 1.1 s: skipped: the object was not carried (held by both palms, off its "
+        "support) when its window opened"
+    ) in lines
     assert "    2 more set for after the run ended" in lines
