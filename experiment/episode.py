@@ -106,6 +106,10 @@ class EpisodeReport:
     tray: list[dict[str, Any]] = field(default_factory=list)
     #: A world with fixtures: the insertion's figures (:mod:`experiment.insertion`).
     insertion: dict[str, Any] = field(default_factory=dict)
+    #: Per move whose object was pushed along the table top rather than lifted
+    #: (:meth:`experiment.move_recorder.MoveRecorder.slid`): its label, path (m) and most
+    #: rise (m). Printed, not judged nor kept in the summary.
+    slid: list[tuple[str, float, float]] = field(default_factory=list)
 
     def summary(self) -> dict[str, Any]:
         """Plain JSON-safe dictionary (infinite distances as None).
@@ -166,6 +170,11 @@ class EpisodeReport:
         ):
             placed = "not placed" if e is None or d is None else f"{e * 1000:.1f} mm, {d:.1f} deg"
             out.append(f"  {printable(label)}: {placed}")
+        for label, travel, lift in self.slid:
+            out.append(
+                f"  {printable(label)}: slid along the table top, not lifted: its centre went "
+                f"{travel * 1000:.0f} mm and rose at most {lift * 1000:.1f} mm"
+            )
         dist = s["min_obstacle_distance_m"]
         out.append(
             "  closest approach to an obstacle: "
@@ -538,6 +547,7 @@ def _episode(
         report.min_forearm_distance_m = sim.safety.min_forearm_distance_m
         report.table_contacts = dict(sim.safety.table_contacts)
         report.tray = [v.summary() for v in trays]
+        report.slid = recorder.slid()
         if inserted is not None:
             report.insertion = inserted.figures
         if out is not None:

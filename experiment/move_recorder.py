@@ -25,6 +25,11 @@ from worlds.sim_world import SimWorld
 from worlds.trays import riders
 from worlds.truth import true_goal_position
 
+#: A move's object that goes this far across the table (m, its centre's horizontal path)...
+SLID_TRAVEL_M = 0.05
+#: ...never rising this much above where its carry began (m) was slid, not carried.
+SLID_LIFT_M = 0.01
+
 
 @dataclass
 class MoveTrack:
@@ -177,6 +182,24 @@ class MoveRecorder:
         for name, (position, orientation) in last.items():
             pose = self.sim.object_pose(name)
             out.append((name, *_offset(pose.position, pose.orientation, position, orientation)))
+        return out
+
+    def slid(self) -> list[tuple[str, float, float]]:
+        """Per judged move whose object went :data:`SLID_TRAVEL_M` or more across the table
+        without rising :data:`SLID_LIFT_M` above where its carry began: its label, the
+        horizontal path it went (m) and the most it rose (m). A carry the avoidance pressed
+        down can push the object to its goal along the table top, placed as well as a lifted
+        one would be: this says so."""
+        out = []
+        for label, key in zip(move_labels([k[0] for k in self.finals]), self.finals, strict=True):
+            path = [p for k in self._steps_of(key) for p in self.tracks[k].positions]
+            if len(path) < 2:
+                continue
+            xyz = np.asarray(path, dtype=float)
+            travel = float(np.sum(np.linalg.norm(np.diff(xyz[:, :2], axis=0), axis=1)))
+            lift = float(np.max(xyz[:, 2]) - xyz[0, 2])
+            if travel >= SLID_TRAVEL_M and lift < SLID_LIFT_M:
+                out.append((label, travel, lift))
         return out
 
     def standing_moved(self) -> list[tuple[str, float, float]]:

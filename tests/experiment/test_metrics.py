@@ -202,8 +202,18 @@ def test_the_default_world_reports_plausible_grip_metrics() -> None:
     # Measured: slip 1.77 mm (mostly the squeeze settling in the first half second), tilt
     # 0.61 deg, mismatch 0.051 m/s (the palms closing), jerk 71 m/s^3 (setting down), squeeze
     # 32.9 N, one grasp for the three moves.
-    record = run_episode(load_world(DEFAULT), out=None, animation=False).summary()
+    report = run_episode(load_world(DEFAULT), out=None, animation=False)
+    record = report.summary()
     assert record["success"], record["failure"]
+    # Its third move is the flat carry (weight 0.1: the 12 cm lift shown shrinks to 1.2, and
+    # the held parcel lags its palms): the parcel is pushed along the table top, and the run
+    # says so, with the path and the rise (297 mm, 0.1 mm) measured on the object.
+    (slid,) = report.slid
+    assert slid[0] == "parcel move 3" and slid[1] > 0.25 and slid[2] < 0.01
+    assert any(
+        line.startswith("  parcel move 3: slid along the table top") for line in report.lines("w")
+    )
+    assert "slid" not in record  # printed, not judged nor recorded
     for name in m.METRIC_NAMES:
         assert isinstance(record[name], int | float) and math.isfinite(record[name]), name
     assert 0.0 < record["slip_mm"] < 20.0
