@@ -30,6 +30,7 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
+from pydantic import ValidationError
 
 from duet_robot.closing import Closing
 from experiment.flip_draws import draw_object, goal_half_height, pitched_goal_postures
@@ -48,6 +49,7 @@ from worlds.palm_poses import lateral_grasp_palm_poses
 from worlds.placement import start_problems, vec
 from worlds.scene import Scene
 from worlds.trays import riders
+from worlds.world_errors import problems_from
 from worlds.world_file import (
     BoxShape,
     CylinderShape,
@@ -273,6 +275,10 @@ def _in_region(rng: np.random.Generator, region: Region, z: float) -> np.ndarray
     return np.array([_uniform(rng, region.x), _uniform(rng, region.y), z])
 
 
+class DrawnWorldError(RuntimeError):
+    """A trial's draw (a scaled size, a mass) that no world file may hold."""
+
+
 def draw_trial(
     base: World, seed: int, trial: int, robot: RobotClearance | None = None
 ) -> tuple[World, list[str]]:
@@ -455,7 +461,16 @@ def _draw_trial(
         # From a stream of its own: the draws above stay those of a world without it.
         data = place_fixture(data, np.random.default_rng([seed, trial, 3, redraw]))
     data["name"] = f"{base.name}_trial_{trial}"
-    return world_from_data(data, base.source), kinds
+    try:
+        return world_from_data(data, base.source), kinds
+    except ValidationError as exc:
+        # A draw beyond what a world may hold (an object scaled past the largest box): the
+        # draw's ranges are the file's to fix, named with the field the draw broke.
+        problem = problems_from(exc, World)[0].format(f"trial {trial}'s drawn world")
+        raise DrawnWorldError(
+            f"trials: expected size_scale and mass_kg ranges whose draws a world file may "
+            f"hold, got {problem}"
+        ) from None
 
 
 def _half(posture: Posture, half: np.ndarray) -> np.ndarray:
@@ -580,6 +595,8 @@ def check_trial_layout(base: World, seed: int, label: str) -> None:
         raise TrialLayoutError("\n".join(f"{label}: {line}" for line in off))
     try:
         draw_trial(base, seed, 0)
+    except DrawnWorldError as err:
+        raise TrialLayoutError(f"{label}: {err}") from None
     except RuntimeError as err:
         layout = base.trials
         raise TrialLayoutError(

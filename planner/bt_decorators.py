@@ -1,6 +1,6 @@
 """BehaviorTree.CPP v4's built-in decorators that py_trees lacks: KeepRunningUntilFailure,
 RunOnce, Delay (on simulated time) and RetryUntilSuccessful with ``num_attempts="-1"``
-(forever) or ``num_attempts="{key}"`` (read from the blackboard when the node is entered).
+(forever) or ``num_attempts="{key}"`` (read from the blackboard at every tick, as BT.CPP).
 
 Ports-enabled (``register=False``); :data:`BUILTIN_DECORATORS` maps each BT.CPP tag to its class.
 """
@@ -198,10 +198,11 @@ def _none_to_count(node: StringPorts, port: str, status: Status) -> bool:
 
 
 class RetryForever(StringPorts, py_trees.decorators.Decorator, register=False):
-    """BT.CPP ``RetryUntilSuccessful`` whose ``num_attempts`` is -1 (retry forever), 0 (no
-    attempt: FAILURE) or a ``{key}``: SUCCESS when the child succeeds; after a failure,
-    RUNNING and the child is restarted, until ``num_attempts`` attempts have failed (then
-    FAILURE)."""
+    """BT.CPP ``RetryUntilSuccessful`` whose ``num_attempts`` is -1 (retry forever), 0 or
+    less (no attempt: FAILURE) or a ``{key}``: SUCCESS when the child succeeds; after a
+    failure, RUNNING and the child is restarted, until ``num_attempts`` attempts have failed
+    (then FAILURE). As BT.CPP's, the count is read at every tick and again after a failure,
+    so a child that changes it is heard."""
 
     INPUT_PORTS = {
         "num_attempts": PortInformation(data_type=int, required=True, description="-1: forever"),
@@ -223,6 +224,8 @@ class RetryForever(StringPorts, py_trees.decorators.Decorator, register=False):
         if _none_to_count(self, "num_attempts", Status.FAILURE):
             yield self
             return
+        if self.status == Status.RUNNING:
+            self.limit = int(self.get_input("num_attempts"))
         yield from super().tick()
 
     def update(self) -> Status:
@@ -231,7 +234,8 @@ class RetryForever(StringPorts, py_trees.decorators.Decorator, register=False):
         if status != Status.FAILURE:
             return status
         self.failures += 1
-        if 0 <= self.limit <= self.failures:
+        self.limit = int(self.get_input("num_attempts"))  # as BT.CPP, after each failure
+        if self.limit != -1 and self.failures >= self.limit:
             self.feedback_message = f"failed {self.failures} of {self.limit} attempts"
             return Status.FAILURE
         self.feedback_message = f"attempt {self.failures} failed, retrying"
@@ -266,8 +270,8 @@ class TimeoutFromKey(StringPorts, SimTimeout, register=False):
 class RepeatFromKey(StringPorts, py_trees.decorators.Decorator, register=False):
     """BT.CPP ``Repeat num_cycles="{key}"`` (or ``-1``, for ever; or ``0``, never): restart the
     child after each success until it has succeeded ``num_cycles`` times (SUCCESS); a failure
-    is FAILURE. The count is read when the node is entered; between cycles it returns
-    RUNNING."""
+    is FAILURE. As BT.CPP's, the count is read at every tick, before the child; between
+    cycles it returns RUNNING."""
 
     INPUT_PORTS = {
         "num_cycles": PortInformation(data_type=int, required=True, description="-1: forever"),
@@ -289,6 +293,8 @@ class RepeatFromKey(StringPorts, py_trees.decorators.Decorator, register=False):
         if _none_to_count(self, "num_cycles", Status.SUCCESS):
             yield self
             return
+        if self.status == Status.RUNNING:
+            self.cycles = int(self.get_input("num_cycles"))
         yield from super().tick()
 
     def update(self) -> Status:
@@ -297,7 +303,7 @@ class RepeatFromKey(StringPorts, py_trees.decorators.Decorator, register=False):
         if status != Status.SUCCESS:
             return status
         self.successes += 1
-        if 0 <= self.cycles <= self.successes:
+        if self.cycles != -1 and self.successes >= self.cycles:
             return Status.SUCCESS
         return Status.RUNNING
 

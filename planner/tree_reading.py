@@ -476,7 +476,7 @@ def _translate(elem: ET.Element, registry: Registry, problems: list[TreeProblem]
         elem.tag = "Retry"
         attempts = elem.attrib.get("num_attempts")
         if attempts is not None and (_not_positive(attempts) or attempts.startswith("{")):
-            elem.tag = "RetryForever"  # BT.CPP semantics, the count read when entered
+            elem.tag = "RetryForever"  # BT.CPP semantics, the count read every tick
             return
         attempts = _drop_attribute(elem, "num_attempts")
         if attempts is not None:

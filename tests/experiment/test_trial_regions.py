@@ -147,3 +147,19 @@ def test_app_trials_refuses_such_a_world_with_exit_code_2(tmp_path: Path) -> Non
         "trials",
     ]
     assert not (out / "results.jsonl").exists()
+
+
+def test_a_size_scale_beyond_any_world_is_refused_naming_the_field() -> None:
+    # A draw no world file may hold had raised pydantic's ValidationError out of the
+    # campaign's preflight, a traceback.
+    base = load_world(Path(__file__).resolve().parents[2] / "worlds" / "parcel_pick_place.yaml")
+    data = base.model_dump(mode="json")
+    data["trials"]["size_scale"] = [1e6, 1e6]
+    world = world_from_data(data, base.source)
+    with pytest.raises(
+        TrialLayoutError,
+        match=r"w.yaml: trials: expected size_scale and mass_kg ranges whose draws a world file "
+        r"may hold, got trial 0's drawn world: objects\[0\].shape.size\[0\]: expected a number "
+        r"less than or equal to 100",
+    ):
+        check_trial_layout(world, 0, "w.yaml")

@@ -68,6 +68,27 @@ def test_retry_attempts_from_the_blackboard() -> None:
     assert t.nodes["a"].ticks == 2
 
 
+def test_a_child_that_lowers_the_attempts_or_cycles_is_heard() -> None:
+    # BT.CPP's RetryNode reads num_attempts at every tick and again after each failure, its
+    # RepeatNode num_cycles at every tick: a child setting the key changes the count at once.
+    t = Ticker(
+        '<Sequence name="s"><Script name="init" code="k := 5"/>'
+        '<RetryUntilSuccessful name="r" num_attempts="{k}"><Sequence name="try">'
+        f'<Script name="lower" code="k := 2"/>{leaf("a", "F")}</Sequence>'
+        "</RetryUntilSuccessful></Sequence>"
+    )
+    t.run(("s", "r"), [(R, R), (F, F)])
+    assert t.nodes["a"].ticks == 2
+    t2 = Ticker(
+        '<Sequence name="s"><Script name="init" code="k := 5"/>'
+        '<Repeat name="r" num_cycles="{k}"><Sequence name="once">'
+        f'<Script name="lower" code="k := 2"/>{leaf("a", "S")}</Sequence>'
+        "</Repeat></Sequence>"
+    )
+    t2.run(("s", "r"), [(R, R), (S, S)])
+    assert t2.nodes["a"].ticks == 2
+
+
 def test_timeout_msec_from_the_blackboard() -> None:
     t = Ticker(
         '<Sequence name="s"><SetBlackboard name="w" value="200" output_key="ms"/>'
