@@ -241,10 +241,20 @@ def split_line(summary: dict[str, Any]) -> str | None:
     return f"  worker time: {shares}"
 
 
+def _bounds(successes: int, trials: int, rounded: list[float]) -> tuple[float, float]:
+    """The Wilson bounds of a count as printed: from the counts (the summary's are rounded
+    to 4 places), the summary's own for no trials."""
+    if trials < 1:
+        return rounded[0], rounded[1]
+    return wilson_interval(successes, trials)
+
+
 def summary_lines(summary: dict[str, Any]) -> list[str]:
     """The outcome table of :func:`summarise`'s summary, then its grip metrics (those some
     trial measured), as printed lines."""
-    lo, hi = summary["success_interval_95"]
+    # The bounds from the counts, not from the summary's rounded ones: rounded twice, 1 of 1's
+    # 20.655 % lower bound printed 20.6.
+    lo, hi = _bounds(summary["successes"], summary["trials"], summary["success_interval_95"])
     lines = [f"  {'outcome':<44} trials"]
     lines.append(
         f"  {'success':<44} {summary['successes']} of {summary['trials']} "
@@ -255,7 +265,7 @@ def summary_lines(summary: dict[str, Any]) -> list[str]:
     for axis, values in summary["by_condition"].items():
         lines.append(f"  {'by ' + axis:<44} successes")
         for value, rate in values.items():
-            a, b = rate["success_interval_95"]
+            a, b = _bounds(rate["successes"], rate["trials"], rate["success_interval_95"])
             lines.append(
                 f"  {'  ' + printable(value)[:42]:<44} {rate['successes']} of {rate['trials']} "
                 f"({100 * a:.1f}-{100 * b:.1f} %)"
@@ -304,7 +314,11 @@ def campaign_lines(summary: dict[str, Any]) -> list[str]:
     lines += contact_lines(summary)
     lines.append(
         f"  simulated {summary['sim_time_s']:.0f} s in {summary['wall_time_s']:.0f} s of "
-        f"worker time ({summary['realtime_factor']}x real time per worker)"
+        + (
+            f"worker time ({summary['realtime_factor']}x real time per worker)"
+            if math.isfinite(summary["realtime_factor"])
+            else "worker time"
+        )
     )
     split = split_line(summary)
     if split is not None:

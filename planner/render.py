@@ -312,6 +312,13 @@ def render_cli(
     if fmt not in FORMATS:
         print(f"render: expected format one of {', '.join(FORMATS)}, got {fmt!r}", file=sys.stderr)
         return 2
+    if out is not None and _same_file(path, out):
+        print(
+            f"--out {out}: expected a file other than the tree it draws, got the tree itself "
+            "(it would be overwritten by its picture)",
+            file=sys.stderr,
+        )
+        return 2
     try:
         root = load_tree(path, main_tree_id=main_tree)
     except TreeFileError as exc:
@@ -328,3 +335,11 @@ def render_cli(
             print(f"{out}: cannot write: {exc.strerror}", file=sys.stderr)
             return 2
     return 0
+
+
+def _same_file(a: str | os.PathLike[str], b: str | os.PathLike[str]) -> bool:
+    """Whether two paths name one file (through links too); False if either is not there."""
+    try:
+        return os.path.samefile(a, b)
+    except OSError:
+        return False

@@ -105,3 +105,9 @@ def test_render_cli(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert render_cli(TREES / "bad_unknown_port.xml", "svg") == 2
     assert "unknown port 'forse'" in capsys.readouterr().err
     assert render_cli(TREES / "retry_timeout.xml", "gif") == 2
+    # --out naming the tree itself would replace the tree by its picture.
+    mine = tmp_path / "mine.xml"
+    mine.write_bytes((TREES / "retry_timeout.xml").read_bytes())
+    assert render_cli(mine, "svg", out=str(mine)) == 2
+    assert "expected a file other than the tree it draws" in capsys.readouterr().err
+    assert mine.read_bytes() == (TREES / "retry_timeout.xml").read_bytes()
