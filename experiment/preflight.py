@@ -67,6 +67,14 @@ def preflight_problems(
     """
     import planner.leaves  # noqa: F401  (registers the leaves a tree may use)
 
+    if main_tree is not None and tree is None:
+        # The task's tree is made from a template whose main tree is its structure: an ID
+        # asked of it would be ignored without a word.
+        return [
+            f"--main-tree {main_tree}: expected with --tree (the file whose <BehaviorTree "
+            f"ID> it names), got none: {world_file}'s task tree is made from "
+            f"{'its own template' if world.tree is not None else 'the shipped one'}"
+        ]
     # Without --tree, the world's own tree template (its ``tree``) or the shipped one.
     template = world.tree_path() if tree is None else None
     checked = tree if tree is not None else template

@@ -259,3 +259,26 @@ def test_report_json_is_strict_and_an_unwritten_picture_exits_2(
     monkeypatch.setattr(report, "report_figure", refused)
     assert exit_code(["report", str(tmp_path)]) == app.EXIT_BAD_INPUT
     assert "not written: " in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["run", DEFAULT, "--main-tree", "Nope"],
+        ["trials", DEFAULT, "--n", "2", "--main-tree", "Nope"],
+        ["validate", DEFAULT, "--main-tree", "Nope"],
+    ],
+)
+def test_main_tree_without_a_tree_file_is_refused_not_ignored(
+    argv: list[str], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # It had run the shipped task tree, and filed trials as a campaign of their own.
+    if argv[0] != "validate":
+        argv = [*argv, "--out", str(tmp_path / "out")]
+    try:
+        code = app.main(argv)
+    except SystemExit as stop:  # the campaign commands exit from their preflight
+        code = stop.code
+    assert code == app.EXIT_BAD_INPUT
+    assert "--main-tree Nope: expected with --tree" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
