@@ -156,7 +156,9 @@ def skill_problems(world: World, world_file: str, doc: TreeDocument) -> list[str
     """One line per skill the world's library cannot carry a move with, named by a move's
     ``skill`` field, then by a node's literal ``skill`` port of the tree that runs (on the
     node, or on a ``<SubTree>`` feeding it: it had validated, and failed the run at its first
-    carry). The library is read once, and only when something names a skill."""
+    carry). The library is read once: always when the world names a folder of its own (a
+    damaged one had validated and then failed every trial of a campaign), else only when
+    something names a skill (the default one is learnt, a cost a run pays anyway)."""
     from experiment.episode import load_library
     from planner.skill_choice import SkillChoiceError, transport_skill
     from planner.tree_dataflow import port_uses
@@ -173,7 +175,7 @@ def skill_problems(world: World, world_file: str, doc: TreeDocument) -> list[str
             where = use.binding.origin if use.binding.origin is not None else use.elem
             node = f"{source_file(where, doc.file)}:{source_line(where)}: {describe(where)}"
             named[(f"{node}: port 'skill'", str(use.binding.literal))] = None
-    if not named:
+    if not named and world.skills.library == "default":
         return []
     try:
         library = load_library(world)

@@ -282,3 +282,31 @@ def test_main_tree_without_a_tree_file_is_refused_not_ignored(
     assert code == app.EXIT_BAD_INPUT
     assert "--main-tree Nope: expected with --tree" in capsys.readouterr().err
     assert not (tmp_path / "out").exists()
+
+
+def test_a_damaged_library_of_the_worlds_own_is_refused_before_any_trial(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # No move names one of its skills, so the library had been read by the first trial only:
+    # validate said ok and a campaign filed every trial as an error.
+    from skills.default_library import default_library
+
+    library = tmp_path / "lib"
+    default_library().save(library)
+    text = (library / "library.json").read_text(encoding="utf-8")
+    (library / "library.json").write_text(text[: len(text) // 2], encoding="utf-8")
+    world = tmp_path / "w.yaml"
+    world.write_text(
+        Path(DEFAULT)
+        .read_text(encoding="utf-8")
+        .replace("  library: default ", f"  library: {library} "),
+        encoding="utf-8",
+    )
+    assert app.main(["validate", str(world)]) == app.EXIT_BAD_INPUT
+    assert "library.json:" in capsys.readouterr().err
+    try:
+        code = app.main(["trials", str(world), "--n", "1", "--out", str(tmp_path / "out")])
+    except SystemExit as stop:
+        code = stop.code
+    assert code == app.EXIT_BAD_INPUT
+    assert not (tmp_path / "out" / "results.jsonl").exists()
