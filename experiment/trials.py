@@ -41,6 +41,7 @@ from experiment.results import (
 from experiment.summary import composition_label as composition_label
 from experiment.summary import reason_of as reason_of
 from experiment.summary import summarise as summarise
+from planner.tree_problems import LeafCodeError, PortValueError
 from planner.tree_reading import read_tree_document
 from planner.user_leaves import register_leaves
 from worlds.bodies import build_robot
@@ -91,6 +92,10 @@ def run_trial(job: tuple[dict[str, Any], int, int]) -> dict[str, Any]:
             record = report.summary()
             record.pop("outputs", None)
             failure = record["failure"] or ""
+    except (LeafCodeError, PortValueError) as err:
+        # A bug in a user's leaf, a value a tree gives that its port cannot take: every trial
+        # would meet it. The campaign stops on it, as a run does (exit 2), nothing recorded.
+        return {"trial": trial, STOP_KEY: f"{type(err).__name__}: {err}"}
     except Exception as err:  # a trial that crashes is a failed trial with its reason
         record = {"success": False, "sim_time_s": 0.0, "wall_time_s": 0.0}
         kinds, where = [], {}
@@ -112,6 +117,16 @@ def run_trial(job: tuple[dict[str, Any], int, int]) -> dict[str, Any]:
     if hard is not None:
         record.update({"mode": "hard", "hard": hard.summary()})
     return record
+
+
+#: The key of what :func:`run_trial` returns instead of a record when a user's code or tree
+#: stopped the trial (:class:`CampaignStopped`).
+STOP_KEY = "stopped_by"
+
+
+class CampaignStopped(RuntimeError):
+    """A trial stopped by a bug in a user's leaf or a tree's bad value: no trial can go past
+    it, so the campaign stops there (exit 2), the trials recorded before it kept."""
 
 
 class TrialNotDrawn(RuntimeError):
@@ -638,6 +653,11 @@ def _run_locked(
 
         def keep(rec: dict[str, Any]) -> None:
             nonlocal finished
+            if STOP_KEY in rec:
+                raise CampaignStopped(
+                    f"trial {rec['trial']}: {rec[STOP_KEY]} (the campaign stopped: every trial "
+                    f"would meet it; the trials recorded before it are kept in {results})"
+                )
             try:
                 fh.write(json.dumps(rec) + "\n")
                 fh.flush()

@@ -35,3 +35,44 @@ def test_a_spawned_worker_registers_the_leaves_it_is_sent(tmp_path: Path) -> Non
     assert sent["tree_status"] == "SUCCESS"  # the user's leaf ran; the task itself is undone
     assert not sent["success"]
     assert "unknown node type 'HeightAtLeast': register it with --leaves" in unsent["failure"]
+
+
+BUGGY = '''
+from py_trees.common import Status
+
+from planner.leaves import WorldLeaf
+
+
+class Buggy(WorldLeaf):
+    """Calls what the world does not have."""
+
+    INPUT_PORTS: dict = {}
+
+    def update(self) -> Status:
+        return self.world.no_such_method()
+'''
+
+
+@pytest.mark.sim
+def test_a_bug_in_a_users_leaf_stops_the_campaign_with_exit_2(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # Every trial had been filed as an "error" record and the campaign exited 1: the bug,
+    # which every trial meets, was in results.jsonl only. A run stops on it with exit 2.
+    import app
+
+    (tmp_path / "bug.py").write_text(BUGGY, encoding="utf-8")
+    tree = tmp_path / "tree.xml"
+    tree.write_text(
+        '<root BTCPP_format="4" main_tree_to_execute="T"><BehaviorTree ID="T">'
+        '<Sequence name="s"><Buggy name="b"/></Sequence></BehaviorTree></root>',
+        encoding="utf-8",
+    )
+    out = tmp_path / "out"
+    argv = ["trials", str(ROOT / "worlds" / "parcel_pick_place.yaml"), "--n", "2"]
+    argv += ["--workers", "1", "--tree", str(tree), "--leaves", str(tmp_path / "bug.py")]
+    assert app.main([*argv, "--out", str(out)]) == app.EXIT_BAD_INPUT
+    err = capsys.readouterr().err
+    assert "trial 0: LeafCodeError: " in err and "bug.py:13: leaf 's.b' (Buggy)" in err
+    assert "the campaign stopped: every trial would meet it" in err
+    assert (out / "results.jsonl").read_text(encoding="utf-8") == ""
