@@ -92,6 +92,11 @@ def _verdict(
     records them), what it replaced or could not write; its exit code."""
     for line in report.lines(name):
         print(line)
+    if report.killed_run_outputs is not None:
+        print(
+            f"a run killed in {out} before this one left outputs: kept in "
+            f"{report.killed_run_outputs}"
+        )
     if report.replaced_outputs:
         print(f"replaced the earlier run's {', '.join(report.replaced_outputs)} in {out}")
     for problem in report.output_errors:

@@ -73,6 +73,8 @@ class EpisodeReport:
     output_errors: list[str] = field(default_factory=list)
     #: Outputs of an earlier run this one replaced (links among them removed, not followed).
     replaced_outputs: list[str] = field(default_factory=list)
+    #: Where the outputs of a run killed in ``out`` before this one were kept, if any.
+    killed_run_outputs: Path | None = None
     #: Per move, the composition that placed the object: ``{"transport_weight": w,
     #: "avoid_gain": g}`` of the Transport leaf that succeeded (its published
     #: :class:`planner.move_result.MoveResult`), or None if none did.
@@ -281,6 +283,33 @@ EARLIER = ".earlier-run"
 STOPPED = "stopped-run"
 
 
+def _keep_stopped(out: Path, written: list[str]) -> Path | None:
+    """Move a stopped run's outputs ``written`` (names in ``out``), and those it was still
+    writing (their temporaries, :func:`planner.atomic_file.stale_temporaries`, under their
+    own names), into a fresh ``out/stopped-run``; one already there is moved on to the first
+    free ``stopped-run.N`` first. The folder, or None if there was nothing to keep."""
+    moves = [(out / name, name) for name in written]
+    for name in OUTPUT_NAMES:
+        stale = stale_temporaries(out, name)
+        if stale and name not in written:  # the latest of them, under its own name
+            moves.append((max(stale, key=lambda p: p.stat().st_mtime), name))
+    if not moves:
+        return None
+    stopped = out / STOPPED
+    if stopped.is_symlink() or stopped.exists():
+        n = 1
+        while (out / f"{STOPPED}.{n}").is_symlink() or (out / f"{STOPPED}.{n}").exists():
+            n += 1
+        os.replace(stopped, out / f"{STOPPED}.{n}")
+    stopped.mkdir()
+    for path, name in moves:
+        os.replace(path, stopped / name)
+    for name in OUTPUT_NAMES:  # temporaries older than those kept: empty or superseded
+        for stale in stale_temporaries(out, name):
+            stale.unlink()
+    return stopped
+
+
 class EarlierOutputs:
     """An earlier run's outputs in ``out``, set aside while this run writes its own: put back
     if this run stops with an error (a bad leaf, a port taken, Ctrl-C), so that nothing
@@ -301,13 +330,19 @@ class EarlierOutputs:
         self.folder = out / EARLIER
         if self.folder.is_symlink() or self.folder.is_file():
             self.folder.unlink()
-        elif self.folder.is_dir():
+        #: Where a killed run's outputs were kept as this one began (None: there were none).
+        self.kept_stopped: Path | None = None
+        #: Where :meth:`restore` last moved a stopped run's outputs (None: nowhere).
+        self.stopped_to: Path | None = None
+        if self.folder.is_dir() and not self.folder.is_symlink():
             # A run killed before it put them back or dropped them: as if it had stopped.
             self.names = [n for n in OUTPUT_NAMES if _a_file(self.folder / n)]
             self.restore()
+            self.kept_stopped = self.stopped_to
+        # A killed run's outputs it was still writing (never renamed from their temporaries):
+        # what it wrote, up to where it was killed, kept, not deleted.
+        self.kept_stopped = _keep_stopped(out, []) or self.kept_stopped
         for name in OUTPUT_NAMES:
-            for stale in stale_temporaries(out, name):  # a killed run's, never renamed
-                stale.unlink()
             path = out / name
             if path.exists() and not _a_file(path):
                 raise OSError(f"{path}: expected a file this run may replace, got a folder")
@@ -321,27 +356,17 @@ class EarlierOutputs:
     def restore(self) -> str:
         """After a run stopped with an error: the earlier run's outputs put back, and this
         run's, if it wrote any beside them, moved to ``out/stopped-run`` (a stopped run's
-        before it there is replaced); with no earlier outputs, this run's stay where they
-        are. What became of them, for the user ("" if nothing was moved)."""
-        written = [n for n in OUTPUT_NAMES if _a_file(self.out / n)]
-        for name in OUTPUT_NAMES:
-            for stale in stale_temporaries(self.out, name):
-                stale.unlink()
+        before it there moved on to ``stopped-run.1``, ``.2``...: never deleted), those it was
+        still writing too; with no earlier outputs, this run's stay where they are. What
+        became of them, for the user ("" if nothing was moved)."""
         if not self.names:
             return ""
-        stopped = self.out / STOPPED
-        if written:
-            if stopped.is_dir() and not stopped.is_symlink():
-                shutil.rmtree(stopped)
-            elif stopped.is_symlink() or stopped.exists():
-                stopped.unlink()
-            stopped.mkdir()
-            for name in written:
-                os.replace(self.out / name, stopped / name)
+        written = [n for n in OUTPUT_NAMES if _a_file(self.out / n)]
+        stopped = self.stopped_to = _keep_stopped(self.out, written)
         for name in self.names:
             os.replace(self.folder / name, self.out / name)
         self.drop()
-        kept = f"; what it wrote is in {stopped}" if written else ""
+        kept = f"; what it wrote is in {stopped}" if stopped is not None else ""
         return f"the earlier run's outputs are back in {self.out}{kept}"
 
     def drop(self) -> None:
@@ -415,6 +440,7 @@ def run_episode(
         raise
     earlier.drop()
     report.replaced_outputs = list(earlier.names)
+    report.killed_run_outputs = earlier.kept_stopped
     return report
 
 

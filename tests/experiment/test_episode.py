@@ -94,6 +94,20 @@ def test_outputs_never_write_through_a_link_and_come_back_if_the_run_stops(
     again.restore()
     assert (out / "tree.svg").read_text(encoding="utf-8") == "earlier"
     assert (out / STOPPED / "tree.svg").read_text(encoding="utf-8") == "killed, half written"
+    assert again.kept_stopped == out / STOPPED
+    # The stopped run before it is not deleted: moved on to stopped-run.1.
+    kept = {p.name: p.read_bytes() for p in (out / f"{STOPPED}.1").iterdir()}
+    assert kept == {"run.btlog": b"new", "tree.svg": b"new, half written"}
+    # A run killed while it wrote run.jsonl left it under its temporary name: the next run
+    # keeps it as the killed run's run.jsonl (it had deleted it), the one before moved on.
+    (out / ".run.jsonl.k1ll3d.part.jsonl").write_text('{"t": 1.5}\n', encoding="utf-8")
+    after_kill = EarlierOutputs(out)
+    assert after_kill.kept_stopped == out / STOPPED
+    assert (out / STOPPED / "run.jsonl").read_text(encoding="utf-8") == '{"t": 1.5}\n'
+    assert (out / f"{STOPPED}.2" / "tree.svg").read_text(encoding="utf-8") == (
+        "killed, half written"
+    )
+    assert not list(out.glob(".run.jsonl.*"))
     # Stopped in a folder of no earlier run: what it wrote stays where it is.
     fresh = tmp_path / "fresh"
     fresh.mkdir()
