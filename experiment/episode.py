@@ -290,9 +290,9 @@ def _keep_stopped(out: Path, written: list[str]) -> Path | None:
     free ``stopped-run.N`` first. The folder, or None if there was nothing to keep."""
     moves = [(out / name, name) for name in written]
     for name in OUTPUT_NAMES:
-        stale = stale_temporaries(out, name)
-        if stale and name not in written:  # the latest of them, under its own name
-            moves.append((max(stale, key=lambda p: p.stat().st_mtime), name))
+        temporaries = stale_temporaries(out, name)
+        if temporaries and name not in written:  # the latest of them, under its own name
+            moves.append((max(temporaries, key=lambda p: p.stat().st_mtime), name))
     if not moves:
         return None
     stopped = out / STOPPED
