@@ -331,6 +331,12 @@ def report_command(args: argparse.Namespace) -> int:
         return EXIT_BAD_INPUT
     if found.skipped:
         print(f"warning: {found.path}: {found.skipped_text}", file=sys.stderr)
+    for conflict in found.conflicts:
+        print(
+            f"warning: {found.path}: {printable(conflict)} is recorded more than once, and the "
+            "records disagree (merged from two runs?): the last one counts",
+            file=sys.stderr,
+        )
     summaries = report_summaries(found.campaigns)
     stem = out / "report" if out.is_dir() else out.with_name(f"{out.stem}_report")
     several = len(found.campaigns) > 1

@@ -10,11 +10,11 @@ from __future__ import annotations
 import json
 import math
 from collections import Counter
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from experiment.records import KEY_FIELDS, group_of
+from experiment.records import KEY_FIELDS, RUN_FIELDS, group_of
 from experiment.results import ResultsFileError, read_results
 from experiment.summary import reason_of, summarise
 
@@ -42,6 +42,9 @@ class CampaignFile:
     campaigns: list[Campaign]
     skipped: int
     skipped_text: str = ""
+    #: Trials recorded twice in one campaign by records that disagree (beyond where and how
+    #: fast they ran), as "<campaign>: trial K"; the last of each counts.
+    conflicts: list[str] = field(default_factory=list)
 
 
 def results_path(out: Path) -> Path:
@@ -78,8 +81,13 @@ def read_campaigns(out: Path) -> CampaignFile:
             + (f"; {read.skipped_text()}" if read.skipped else "")
         )
     groups: dict[tuple[str, ...], dict[int, dict[str, Any]]] = {}
+    disagreeing: dict[tuple[str, ...], list[int]] = {}
     for rec in read.records:
-        groups.setdefault(group_of(rec), {})[rec["trial"]] = rec
+        by_trial = groups.setdefault(group_of(rec), {})
+        before = by_trial.get(rec["trial"])
+        if before is not None and _outcome(before) != _outcome(rec):
+            disagreeing.setdefault(group_of(rec), []).append(int(rec["trial"]))
+        by_trial[rec["trial"]] = rec
     firsts = [next(iter(by_trial.values())) for by_trial in groups.values()]
     labels = [_label(first) for first in firsts]
     campaigns = []
@@ -88,7 +96,19 @@ def read_campaigns(out: Path) -> CampaignFile:
             label += _told_apart(first)
         key = {f: first[f] for f in KEY_FIELDS if f in first} or None
         campaigns.append(Campaign(label, [by_trial[t] for t in sorted(by_trial)], key))
-    return CampaignFile(path, campaigns, read.skipped, read.skipped_text() if read.skipped else "")
+    conflicts = [
+        f"{label}: trial {t}"
+        for (group, trials), label in zip(groups.items(), labels, strict=True)
+        for t in sorted(set(disagreeing.get(group, ())))
+    ]
+    return CampaignFile(
+        path, campaigns, read.skipped, read.skipped_text() if read.skipped else "", conflicts
+    )
+
+
+def _outcome(record: dict[str, Any]) -> dict[str, Any]:
+    """A record but for where and how fast it ran (:data:`experiment.records.RUN_FIELDS`)."""
+    return {k: v for k, v in record.items() if k not in RUN_FIELDS}
 
 
 def _label(first: dict[str, Any]) -> str:

@@ -239,3 +239,23 @@ def test_a_failed_trial_marks_the_goal_it_failed_at_not_the_ones_it_never_tried(
     knocked = {"goals": goals, "placement_error_m": [0.001, 0.002, 0.003]}
     assert _failed_goal(knocked) == ([goals[2]], goals[:2])
     assert _failed_goal({"goals": goals}) == (goals, [])  # an old record: it does not say
+
+
+def test_a_trial_recorded_twice_differently_is_named_not_silently_replaced(
+    tmp_path: Path,
+) -> None:
+    from experiment.report import read_campaigns
+
+    lines = (ROOT / "bench" / "results" / "trials_seed0_n100.jsonl").read_text().splitlines()
+    records = [json.loads(line) for line in lines[:3]]
+    same = dict(records[0], wall_time_s=99.0)  # where and how fast it ran: the same trial
+    other = dict(records[1], success=False, failure="dropped parcel")
+    text = "\n".join(json.dumps(r) for r in [*records, same, other]) + "\n"
+    (tmp_path / "results.jsonl").write_text(text, encoding="utf-8")
+    found = read_campaigns(tmp_path)
+    assert [c.split(": ")[-1] for c in found.conflicts] == ["trial 1"]
+    (campaign,) = found.campaigns
+    assert [r["success"] for r in campaign.records] == [True, False, True]  # the last counts
+    done = app("report", str(tmp_path))
+    assert done.returncode == 0, done.stderr
+    assert "trial 1 is recorded more than once, and the records disagree" in done.stderr
