@@ -62,7 +62,10 @@ EnumT = TypeVar("EnumT", bound=Enum)
 #: How the skill is learnt, as its provenance records it.
 METHOD = "pose DMP, 50 RBF per dimension, ridge regression"
 #: What a ``transport`` skill adds to :data:`METHOD`.
-TRANSPORT_METHOD = "; forcing turned and scaled about the vertical to new starts and goals"
+TRANSPORT_METHOD = (
+    "; forcing turned and scaled about the vertical to new starts and goals, its turn scaled "
+    "to theirs"
+)
 
 
 class TeachingError(ValueError):
@@ -324,18 +327,25 @@ def _learn(
     but an axis whose change is small beside its excursion keeps its shape as shown
     (:func:`skills.scaling.shape_floor`)."""
     try:
-        if kind is Action.TRANSPORT:
-            model = fit_pose(
-                smoothed, position_scaling=Scaling.ROTATION_Z, orientation_scaling=Scaling.NONE
-            )
-            return model, METHOD + TRANSPORT_METHOD, ""
         positions, orientations = smoothed.positions, smoothed.orientations
         assert orientations is not None  # a pose demonstration (check_pose_demonstration)
+        turned = quat.rotation_error(orientations, orientations[0])
+        min_rotation, turns = shape_floor(turned, turned[-1], MIN_ROTATION_RAD)
+        if kind is Action.TRANSPORT:
+            # Its turn scaled to each move's, as its path is turned to each move's direction:
+            # replayed as shown, a demonstrated 30 degree turn swung the object 22 degrees on
+            # a move of none, and overshot a -30 degree goal to -49.
+            model = fit_pose(
+                smoothed,
+                position_scaling=Scaling.ROTATION_Z,
+                orientation_scaling=Scaling.AMPLITUDE,
+                min_rotation=min_rotation,
+            )
+            note = _shaped_text([], turns)
+            return model, METHOD + TRANSPORT_METHOD + (f"; {note}" if note else ""), note
         min_amplitude, shaped = shape_floor(
             positions, positions[-1] - positions[0], MIN_AMPLITUDE_M
         )
-        turned = quat.rotation_error(orientations, orientations[0])
-        min_rotation, turns = shape_floor(turned, turned[-1], MIN_ROTATION_RAD)
         model = fit_pose(smoothed, min_amplitude=min_amplitude, min_rotation=min_rotation)
         note = _shaped_text(shaped, turns)
         return model, METHOD + (f"; {note}" if note else ""), note

@@ -269,3 +269,41 @@ def test_a_skill_that_does_not_follow_its_recording_is_refused(tmp_path: Path) -
         teach(demo, tmp_path / "lib", "sway", Space.ABSOLUTE, smoothing_s=0.3)
     assert not (tmp_path / "lib").exists()
     assert teach(demo, tmp_path / "lib", "sway", Space.ABSOLUTE).added is not None
+
+
+@pytest.mark.parametrize("goal_deg", [0.0, -30.0, 60.0])
+def test_a_taught_transport_turns_as_its_move_asks_not_as_it_was_shown(
+    tmp_path: Path, goal_deg: float
+) -> None:
+    # Its orientation forcing had been replayed unscaled: a demonstrated 0 -> 30 degree turn
+    # swung the object 22 degrees on a move of no turn, and overshot -30 to -49.
+    from skills import quaternion as quat
+    from skills.composer import DualArmComposer, grasped_state
+    from skills.couplings.forcing import LearntForcing
+    from skills.dual_arm import GraspGeometry
+
+    t, positions = _lift(0.0)
+    _, q = _turn_about_z(30.0)
+    lesson = teach(
+        write_demo_csv(tmp_path / "carry.csv", t, positions, q),
+        tmp_path / "lib",
+        "carry",
+        Space.ABSOLUTE,
+    )
+    assert lesson.added is not None and lesson.added.action is Action.TRANSPORT
+    grip = GraspGeometry.lateral(0.2, 0.02)
+    start = grasped_state(
+        [0.55, 0.0, 0.675],
+        quat.IDENTITY,
+        (grip.left_position, grip.left_orientation),
+        (grip.right_position, grip.right_orientation),
+    )
+    half = np.radians(goal_deg) / 2.0
+    goal = np.array([0.0, 0.0, np.sin(half), np.cos(half)])
+    forcing = LearntForcing(lesson.added.pose_model())
+    path = DualArmComposer.start(start, [0.7, 0.0, 0.675], goal, 4.0, [(forcing, 1.0)])
+    o = path.rollout(360, 1.0 / 60.0).object_orientations
+    yaw = np.degrees(2.0 * np.arctan2(o[:, 2], o[:, 3]))
+    low, high = sorted((0.0, goal_deg))
+    assert low - 1.0 < yaw.min() and yaw.max() < high + 1.0  # no swing, no overshoot
+    assert yaw[-1] == pytest.approx(goal_deg, abs=0.5)
