@@ -345,22 +345,48 @@ class PoseDMP:
             )
         return dmp
 
-    def set_goal(self, goal_position: ArrayLike, goal_orientation: ArrayLike | None = None) -> None:
-        """Move the attractor while running; the forcing rescales to the new displacement."""
+    def set_goal(
+        self,
+        goal_position: ArrayLike,
+        goal_orientation: ArrayLike | None = None,
+        blend_fraction: float = 0.1,
+    ) -> None:
+        """Move the attractor while running; the forcing rescales to the new displacement.
+        The acceleration's step at the switch fades over about ``blend_fraction * tau`` as a
+        :meth:`start`'s does (0: the step is kept; a 2 cm goal shift had changed the
+        acceleration by 0.2 m/s^2 in one step)."""
         q = self.target.goal_orientation if goal_orientation is None else goal_orientation
-        self.target = self.model.target(
+        target = self.model.target(
             self.target.start_position,
             self.target.start_orientation,
             goal_position,
             q,
             self.target.tau,
         )
+        self._retarget(target, blend_fraction)
 
-    def set_tau(self, tau: float) -> None:
-        """Change the temporal scaling while running."""
+    def set_tau(self, tau: float, blend_fraction: float = 0.1) -> None:
+        """Change the temporal scaling while running, the acceleration's step at the switch
+        faded as :meth:`set_goal`'s."""
         if not (np.isfinite(tau) and tau > 0):
             raise ValueError(f"tau: expected a positive duration in s, got {tau!r}")
-        self.target = replace(self.target, tau=float(tau))
+        self._retarget(replace(self.target, tau=float(tau)), blend_fraction)
+
+    def _retarget(self, target: PoseTarget, blend_fraction: float) -> None:
+        """Run on towards ``target``, with a :class:`HandoverBlend` of the acceleration the
+        change would step (none for a ``blend_fraction`` of 0)."""
+        if blend_fraction > 0.0:
+            acc, ang = pose_acceleration(self.state, self.model, self.target, self.couplings)
+            new_acc, new_ang = pose_acceleration(self.state, self.model, target, self.couplings)
+            self.couplings.append(
+                HandoverBlend(
+                    acc - new_acc,
+                    ang - new_ang,
+                    self.state.phase,
+                    1.0 / (self.model.params.alpha_s * blend_fraction),
+                )
+            )
+        self.target = target
 
     def step(self, dt: float, measured: PoseState | None = None) -> PoseState:
         """Advance by ``dt`` from the measured state if given, else from the internal one.

@@ -223,6 +223,38 @@ def test_goal_and_tau_can_change_while_running(demo: Demonstration) -> None:
     assert np.linalg.norm(dmp.state.position - [0.3, 0.3, 0.9]) < 1e-4
 
 
+@pytest.mark.parametrize("change", ["goal", "tau", "goal, unblended"])
+def test_a_goal_or_tau_changed_while_running_keeps_the_acceleration_continuous(
+    demo: Demonstration, change: str
+) -> None:
+    # The paper's full-state continuity (Sec. 3.3), as a new skill's start keeps it: a 2 cm
+    # goal shift had stepped the acceleration by 0.2 m/s^2 in one step, ten times a step's
+    # change before it.
+    model = fit_pose(demo)
+    start = PoseState.at_rest(demo.positions[0], demo.orientations[0])
+    dmp = PoseDMP.start(model, start, demo.positions[-1], demo.orientations[-1])
+    for _ in range(300):
+        dmp.step(DT)
+    before = dmp.state
+    usual = np.linalg.norm(dmp.step(DT).acceleration - before.acceleration)
+    before = dmp.state
+    if change == "tau":
+        dmp.set_tau(dmp.target.tau * 1.1)
+    else:
+        dmp.set_goal(
+            demo.positions[-1] + [0.02, 0.0, 0.0], blend_fraction=0.0 if "un" in change else 0.1
+        )
+    jump = np.linalg.norm(dmp.step(DT).acceleration - before.acceleration)
+    if "un" in change:
+        assert jump > 5.0 * usual  # what the blend takes away
+    else:
+        assert jump < 2.0 * usual + 1e-9
+    for _ in range(4000):
+        dmp.step(DT)
+    goal = demo.positions[-1] + ([0.02, 0.0, 0.0] if "goal" in change else 0.0)
+    assert np.linalg.norm(dmp.state.position - goal) < 1e-4  # it still ends at the goal
+
+
 def test_position_dmp_closed_loop_with_a_coupling() -> None:
     demo = pick_place_demo()
     model = fit_position(demo)
