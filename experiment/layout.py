@@ -275,6 +275,11 @@ def _in_region(rng: np.random.Generator, region: Region, z: float) -> np.ndarray
     return np.array([_uniform(rng, region.x), _uniform(rng, region.y), z])
 
 
+#: The first trials the campaign's preflight tries to draw: a layout none of which it can
+#: draw is refused (exit 2).
+PREFLIGHT_TRIALS = 5
+
+
 class DrawnWorldError(RuntimeError):
     """A trial's draw (a scaled size, a mass) that no world file may hold."""
 
@@ -593,15 +598,25 @@ def check_trial_layout(base: World, seed: int, label: str) -> None:
     off = region_problems(base)
     if off:
         raise TrialLayoutError("\n".join(f"{label}: {line}" for line in off))
-    try:
-        draw_trial(base, seed, 0)
-    except DrawnWorldError as err:
-        raise TrialLayoutError(f"{label}: {err}") from None
-    except RuntimeError as err:
+    # A layout some of whose trials cannot be drawn is a campaign that records them as not
+    # drawn; one whose first few all fail is a file to fix. (Trial 0 alone had refused a 14 cm
+    # cylinder's campaign that draws 7 trials of 12.)
+    first: RuntimeError | None = None
+    with RobotClearance(base) as robot:
+        for trial in range(PREFLIGHT_TRIALS):
+            try:
+                draw_trial(base, seed, trial, robot)
+                return
+            except DrawnWorldError as err:
+                raise TrialLayoutError(f"{label}: {err}") from None
+            except RuntimeError as err:
+                first = first or err
+    if first is not None:
         layout = base.trials
         raise TrialLayoutError(
             f"{label}: trials: expected a layout whose obstacles can be drawn, got none for "
-            f"trial 0 ({err}); draw smaller or farther spheres (trials.sphere_radius "
+            f"trials 0 to {PREFLIGHT_TRIALS - 1} (trial 0: {first}); draw smaller or farther "
+            f"spheres (trials.sphere_radius "
             f"{vec(layout.sphere_radius)} m, trials.line_gap {vec(layout.line_gap)} m, "
             f"trials.ahead_gap {vec(layout.ahead_gap)} m: the defaults are the iiwas'), lower "
             f"trials.clearance ({layout.clearance:g} m) or trials.robot_clearance "

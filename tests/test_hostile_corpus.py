@@ -541,7 +541,7 @@ CASES: dict[str, Case] = {
         17,
         world_edit("clearance: 0.02 ", "clearance: 5 ", "trials"),
         2,
-        r"trials: expected a layout whose obstacles can be drawn, got none for trial 0",
+        r"trials: expected a layout whose obstacles can be drawn, got none for trials 0 to 4",
     ),
     "trials_of_a_ball": Case(
         17,

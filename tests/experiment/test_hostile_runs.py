@@ -89,7 +89,7 @@ def test_a_trials_layout_that_cannot_be_drawn_is_one_error() -> None:
     with pytest.raises(
         TrialLayoutError,
         match=r"w\.yaml: trials: expected a layout whose "
-        r"obstacles can be drawn, got none for trial 0 .*trials\.clearance \(5 m\)",
+        r"obstacles can be drawn, got none for trials 0 to 4 .*trials\.clearance \(5 m\)",
     ):
         check_trial_layout(_world(far), 0, "w.yaml")
 

@@ -163,3 +163,30 @@ def test_a_size_scale_beyond_any_world_is_refused_naming_the_field() -> None:
         r"less than or equal to 100",
     ):
         check_trial_layout(world, 0, "w.yaml")
+
+
+def test_a_layout_is_refused_only_when_none_of_its_first_trials_draws(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # Trial 0 alone had decided it: a 14 cm cylinder's campaign that draws 7 trials of 12 was
+    # refused whole when its trial 0 was one of the 5 that did not.
+    import experiment.layout as layout
+
+    base = load_world(Path(__file__).resolve().parents[2] / "worlds" / "parcel_pick_place.yaml")
+    tried: list[int] = []
+
+    def draw(world: Any, seed: int, trial: int, robot: Any = None) -> Any:
+        tried.append(trial)
+        if trial < drawable_from:
+            raise RuntimeError(f"no room for trial {trial}'s sphere")
+        return world, []
+
+    monkeypatch.setattr(layout, "draw_trial", draw)
+    drawable_from = 2
+    check_trial_layout(base, 0, "w.yaml")
+    assert tried == [0, 1, 2]
+    tried.clear()
+    drawable_from = layout.PREFLIGHT_TRIALS
+    with pytest.raises(TrialLayoutError, match=r"got none for trials 0 to 4 \(trial 0: no room"):
+        check_trial_layout(base, 0, "w.yaml")
+    assert tried == [0, 1, 2, 3, 4]
