@@ -348,6 +348,9 @@ MARGINS_IN = {"left": 0.75, "right": 0.2, "top": 0.75, "bottom": 0.95, "across":
 #: the legend's gap to the figure's edge), and each line of the legend, in.
 LEGEND_ABOVE_IN = 0.62
 LEGEND_LINE_IN = 0.2
+#: The legend's frame and padding, in (a one-move figure's three lines had covered its
+#: bottom panel's axis label without it).
+LEGEND_FRAME_IN = 0.25
 
 
 def figure_style() -> Any:
@@ -452,7 +455,7 @@ def _drawing(traces: Sequence[MoveTrace], title: str) -> Any:
         across = max(1, min(len(legend), 6, int(width / 2.2)))
         # A narrow figure's legend takes more lines: the figure grows below its panels, so
         # that the legend stays under the bottom panels' axis labels, not over them.
-        needed = LEGEND_ABOVE_IN + LEGEND_LINE_IN * -(-len(legend) // across)
+        needed = LEGEND_ABOVE_IN + LEGEND_FRAME_IN + LEGEND_LINE_IN * -(-len(legend) // across)
         if needed > m["bottom"]:
             height += needed - m["bottom"]
             fig.set_size_inches(width, height)
