@@ -202,6 +202,12 @@ def _render_tree_command(args: argparse.Namespace) -> int:
     """Render a tree file as ascii, dot or svg."""
     if register_leaves_or_none(args) is None:
         return EXIT_BAD_INPUT
+    for leaves in args.leaves or ():  # a leaves file is the user's code: never overwritten
+        if args.out is not None and Path(leaves).is_file() and os.path.samefile(leaves, args.out):
+            print(
+                f"--out {args.out}: expected a file other than --leaves {leaves}", file=sys.stderr
+            )
+            return EXIT_BAD_INPUT
     from planner.render import render_cli
 
     return render_cli(args.tree, args.format, args.out, args.main_tree)

@@ -226,6 +226,11 @@ class RetryForever(StringPorts, py_trees.decorators.Decorator, register=False):
             return
         if self.status == Status.RUNNING:
             self.limit = int(self.get_input("num_attempts"))
+            if self.limit != -1 and self.failures >= self.limit:  # lowered since: no attempt
+                self.feedback_message = f"failed {self.failures} of {self.limit} attempts"
+                self.stop(Status.FAILURE)
+                yield self
+                return
         yield from super().tick()
 
     def update(self) -> Status:
@@ -295,6 +300,10 @@ class RepeatFromKey(StringPorts, py_trees.decorators.Decorator, register=False):
             return
         if self.status == Status.RUNNING:
             self.cycles = int(self.get_input("num_cycles"))
+            if self.cycles != -1 and self.successes >= self.cycles:  # lowered since: done
+                self.stop(Status.SUCCESS)
+                yield self
+                return
         yield from super().tick()
 
     def update(self) -> Status:

@@ -21,6 +21,7 @@ from planner.atomic_file import atomic_open
 from planner.decorators import SimTimeout
 from planner.loader import TreeFileError, load_tree
 from planner.runner import readable, unnamed
+from planner.tree_reading import read_tree_document, source_file
 
 __all__ = ["FORMATS", "node_kind", "node_type", "render_cli", "render_tree", "short_name"]
 
@@ -312,17 +313,23 @@ def render_cli(
     if fmt not in FORMATS:
         print(f"render: expected format one of {', '.join(FORMATS)}, got {fmt!r}", file=sys.stderr)
         return 2
-    if out is not None and _same_file(path, out):
-        print(
-            f"--out {out}: expected a file other than the tree it draws, got the tree itself "
-            "(it would be overwritten by its picture)",
-            file=sys.stderr,
-        )
-        return 2
     try:
         root = load_tree(path, main_tree_id=main_tree)
+        # Every file the tree was read from: the one named and those it includes.
+        read = {str(path)} | {
+            source_file(e, str(path))
+            for e in read_tree_document(path, main_tree_id=main_tree).root.iter()
+        }
     except TreeFileError as exc:
         print(exc, file=sys.stderr)
+        return 2
+    overwritten = sorted(f for f in read if out is not None and _same_file(f, out))
+    if out is not None and overwritten:
+        print(
+            f"--out {out}: expected a file other than the tree's, got {overwritten[0]}, which "
+            "the tree was read from (it would be overwritten by its picture)",
+            file=sys.stderr,
+        )
         return 2
     text = render_tree(root, fmt)
     if out is None:

@@ -128,7 +128,7 @@ def even_steps(demo: Demonstration) -> tuple[Demonstration, str]:
         orientations = q / np.linalg.norm(q, axis=1, keepdims=True)
     worst = int(np.argmax(gaps))
     note = (
-        f"its time stamps were uneven (gaps {1000.0 * float(gaps.min()):.2g} to "
+        f"its time stamps were uneven (gaps {1000.0 * float(gaps.min()):.3g} to "
         f"{1000.0 * float(gaps[worst]):.3g} ms, the longest at {t[worst] - t[0]:.2f} s): "
         f"learnt from {n} samples interpolated at even {1000.0 * (times[1] - times[0]):.3g} ms "
         "steps"

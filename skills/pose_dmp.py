@@ -257,6 +257,12 @@ def _with_final_acceleration(
     return traj
 
 
+#: Below this phase (about 150 tau into a skill) a :class:`HandoverBlend` is not added: its
+#: decay ``(s / s0)^rate`` would divide by a subnormal phase (a retarget 300 s into a 1 s
+#: skill threw it 1e44 m away). The step it would fade is then kept.
+BLEND_PHASE_FLOOR = 1e-250
+
+
 @dataclass(frozen=True)
 class HandoverBlend:
     """Fades the acceleration mismatch at a skill switch, so acceleration stays continuous.
@@ -333,7 +339,7 @@ class PoseDMP:
         st = state.with_phase(1.0) if fresh_phase else state
         target = model.target(st.position, st.orientation, goal_position, goal_orientation, tau)
         dmp = PoseDMP(model, target, st, list(couplings))
-        if blend_fraction > 0:
+        if blend_fraction > 0 and st.phase > BLEND_PHASE_FLOOR:
             acc, ang = pose_acceleration(st, model, target, dmp.couplings)
             dmp.couplings.append(
                 HandoverBlend(
@@ -375,7 +381,7 @@ class PoseDMP:
     def _retarget(self, target: PoseTarget, blend_fraction: float) -> None:
         """Run on towards ``target``, with a :class:`HandoverBlend` of the acceleration the
         change would step (none for a ``blend_fraction`` of 0)."""
-        if blend_fraction > 0.0:
+        if blend_fraction > 0.0 and self.state.phase > BLEND_PHASE_FLOOR:
             acc, ang = pose_acceleration(self.state, self.model, self.target, self.couplings)
             new_acc, new_ang = pose_acceleration(self.state, self.model, target, self.couplings)
             self.couplings.append(

@@ -109,5 +109,19 @@ def test_render_cli(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     mine = tmp_path / "mine.xml"
     mine.write_bytes((TREES / "retry_timeout.xml").read_bytes())
     assert render_cli(mine, "svg", out=str(mine)) == 2
-    assert "expected a file other than the tree it draws" in capsys.readouterr().err
+    assert "which the tree was read from" in capsys.readouterr().err
     assert mine.read_bytes() == (TREES / "retry_timeout.xml").read_bytes()
+    # Nor a file the tree includes.
+    (tmp_path / "sub.xml").write_text(
+        '<root BTCPP_format="4"><BehaviorTree ID="Sub"><AlwaysSuccess/></BehaviorTree></root>',
+        encoding="utf-8",
+    )
+    (tmp_path / "main.xml").write_text(
+        '<root BTCPP_format="4" main_tree_to_execute="Main"><include path="sub.xml"/>'
+        '<BehaviorTree ID="Main"><SubTree ID="Sub"/></BehaviorTree></root>',
+        encoding="utf-8",
+    )
+    included = (tmp_path / "sub.xml").read_bytes()
+    assert render_cli(tmp_path / "main.xml", "ascii", out=str(tmp_path / "sub.xml")) == 2
+    assert "sub.xml, which the tree was read from" in capsys.readouterr().err
+    assert (tmp_path / "sub.xml").read_bytes() == included

@@ -386,3 +386,21 @@ def test_the_rollout_filter_is_lfilters_bit_for_bit() -> None:
         out = np.empty((n, dims))
         second_order_filter(a, float(dt * dt), u, zi, out)
         assert out.tobytes() == expected.tobytes(), trial
+
+
+def test_a_retarget_long_after_the_phase_has_run_out_stays_finite() -> None:
+    # 300 s into a 1 s skill the phase is subnormal (5e-323): a blend decaying from it had
+    # thrown the skill 1e44 m away.
+    t = np.linspace(0.0, 1.0, 101)
+    s = 10 * t**3 - 15 * t**4 + 6 * t**5
+    p = np.column_stack([0.4 + 0.3 * s, 0 * s, 0.675 + 0 * s])
+    q = np.tile([0.0, 0.0, 0.0, 1.0], (101, 1))
+    model = fit_pose(Demonstration.create(t, p, q, "d"))
+    dmp = PoseDMP.start(model, PoseState.at_rest(p[0]), p[-1], q[-1], 1.0, blend_fraction=0.0)
+    for _ in range(30000):
+        dmp.step(0.01)
+    assert dmp.state.phase < 1e-300
+    dmp.set_goal(p[-1] + [0.02, 0.0, 0.0])
+    for _ in range(500):
+        dmp.step(0.01)
+    assert np.linalg.norm(dmp.state.position - (p[-1] + [0.02, 0.0, 0.0])) < 1e-3

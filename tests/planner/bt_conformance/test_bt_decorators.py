@@ -87,6 +87,16 @@ def test_a_child_that_lowers_the_attempts_or_cycles_is_heard() -> None:
     )
     t2.run(("s", "r"), [(R, R), (S, S)])
     assert t2.nodes["a"].ticks == 2
+    # Lowered below the cycles already run, it ends at its next tick, the child unticked
+    # (BT.CPP's loop condition is read before the child).
+    t3 = Ticker(
+        '<Sequence name="s"><Script name="init" code="k := 5"/>'
+        '<Repeat name="r" num_cycles="{k}"><Sequence name="once">'
+        f'<Script name="lower" code="k := 1"/>{leaf("a", "S")}</Sequence>'
+        "</Repeat></Sequence>"
+    )
+    t3.run(("s", "r"), [(R, R), (S, S)])
+    assert t3.nodes["a"].ticks == 1
 
 
 def test_timeout_msec_from_the_blackboard() -> None:
