@@ -191,6 +191,8 @@ class EpisodeReport:
                 f"{'n/a' if forearm is None else f'{forearm * 1000:.1f} mm'}"
                 + _apart(forearm, touching)
             )
+        for key, steps in s["obstacle_contacts"].items():  # shown though the failure is another
+            out.append(f"  {printable(key)}: {steps} physics steps touching")
         for key, steps in s.get("table_contacts", {}).items():
             out.append(f"  {printable(key)}: {steps} physics steps (a link other than the hand)")
         if "disturbances" in s:

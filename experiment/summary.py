@@ -290,6 +290,12 @@ def contact_lines(summary: dict[str, Any]) -> list[str]:
         f"  trials with any obstacle contact: {summary['obstacle_contacts']}; closest approach "
         f"{'n/a' if dist is None else f'{dist * 1000:.1f} mm'}"
     ]
+    if summary["obstacle_contacts"] and dist is not None and dist > 0.0:
+        # Contacts and a gap above 0 are two measures, as a run says (experiment.episode).
+        lines.append(
+            "    (the closest approach is the collision model's distance, every control "
+            "step; the contacts are PyBullet's, every physics step, within its contact margin)"
+        )
     if "forearm_contacts" in summary:
         forearm = summary["min_forearm_distance_m"]
         lines.append(

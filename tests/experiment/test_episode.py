@@ -186,3 +186,6 @@ def test_a_closest_approach_beside_contacts_says_what_each_measures() -> None:
         for line in said
     )
     assert "  closest approach to an obstacle: 12.0 mm" in report(0.012, 0)
+    # Each contact by link and obstacle, whatever the failure names (a dropped parcel's run
+    # had shown an arm's 104 steps on a sphere nowhere but in its JSON).
+    assert "  left_arm ~ s3: 641 physics steps touching" in said

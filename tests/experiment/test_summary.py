@@ -185,3 +185,14 @@ def test_a_sphere_kind_never_drawn_over_a_campaign_is_said() -> None:
     both = [{"obstacles": ["line", "ahead" if k % 2 else "line"]} for k in range(12)]
     (line,) = undrawn_kinds(listed, both)
     assert line.startswith("warning: move 1's 'ahead' sphere")
+
+
+def test_a_campaigns_contacts_beside_a_gap_say_what_each_measures() -> None:
+    # "trials with any obstacle contact: 3; closest approach 0.9 mm" read as a contradiction.
+    from experiment.summary import contact_lines
+
+    touched = {"obstacle_contacts": 3, "min_obstacle_distance_m": 0.0009}
+    lines = contact_lines(touched)
+    assert lines[0] == "  trials with any obstacle contact: 3; closest approach 0.9 mm"
+    assert "the contacts are PyBullet's, every physics step" in lines[1]
+    assert len(contact_lines({**touched, "obstacle_contacts": 0})) == 1
