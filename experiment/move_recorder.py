@@ -153,19 +153,40 @@ class MoveRecorder:
             if not shift.any():
                 return told
             return float(np.linalg.norm(position - np.asarray(move.goal.position) - shift))
-        dz = truth.table_dz_m
-        if not dz:
+        true_goal = self._true_table_goal(key)
+        if true_goal is None:
             return told
-        goal = move.goal
-        table = self.sim.spec.scene.table
-        true_goal = true_goal_position(
-            goal.position,
-            goal.orientation,
-            self.sim.object_extents(key[0]),
-            table.position[2],
-            dz,
-        )
         return float(np.linalg.norm(position - true_goal))
+
+    def _true_table_goal(self, key: tuple[str, int]) -> np.ndarray | None:
+        """Move ``key``'s goal on the true table top (:func:`worlds.truth.true_goal_position`),
+        or None when the truth left the table where the file states it."""
+        dz = self.sim.scene.truth.table_dz_m
+        if not dz:
+            return None
+        goal = self.stepped[key[0]][key[1]].goal
+        return np.asarray(
+            true_goal_position(
+                goal.position,
+                goal.orientation,
+                self.sim.object_extents(key[0]),
+                self.sim.spec.scene.table.position[2],
+                dz,
+            ),
+            dtype=float,
+        )
+
+    def goal_shift(self, key: tuple[str, int]) -> np.ndarray:
+        """Where move ``key``'s goal is judged less where the file states it, m (3,): its
+        fixture's shift, or the goal moved onto the true table top; zero when the truth moved
+        neither (for drawing: the judge's own arithmetic is :meth:`_true_error_m`'s)."""
+        move = self.stepped[key[0]][key[1]]
+        if move.fixture is not None:
+            return np.asarray(self.sim.scene.truth.fixture_shift(move.fixture), dtype=float)
+        true_goal = self._true_table_goal(key)
+        if true_goal is None:
+            return np.zeros(3)
+        return true_goal - np.asarray(move.goal.position, dtype=float)
 
     def moved_since_placed(self) -> list[tuple[str, float, float]]:
         """Per object whose last move was placed: how far (m) and how much (deg) it lies now
@@ -263,7 +284,8 @@ class MoveRecorder:
                 MoveTrace(
                     label,
                     start[0],
-                    np.asarray(goal.goal_position, dtype=float),
+                    # Where it is judged: on the true table, with its fixture (Hard mode).
+                    np.asarray(goal.goal_position, dtype=float) + self.goal_shift(key),
                     np.array(positions).reshape(-1, 3),
                     # A move never carried: the obstacles the task gives it, as they would be.
                     tuple(

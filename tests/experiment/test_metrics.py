@@ -227,3 +227,27 @@ def test_the_default_world_reports_plausible_grip_metrics() -> None:
     parts = [record[k] for k in ("physics_wall_s", "control_wall_s", "watch_wall_s")]
     assert all(p > 0.0 for p in parts), parts
     assert sum(parts) <= record["wall_time_s"] + 3e-3  # each rounded to 1 ms
+
+
+def test_a_hard_trials_figure_draws_the_goal_where_it_is_judged() -> None:
+    # On a table 2.8 cm lower than stated the placement is judged at the goal lowered with it,
+    # and the figure had drawn the stated goal: a good placement looked 2.7 cm low.
+    from types import SimpleNamespace
+
+    from experiment.move_recorder import MoveRecorder
+    from planner.port import Move, Pose
+
+    move = Move(Pose.of([0.6, 0.0, 0.675]))
+    recorder = MoveRecorder.__new__(MoveRecorder)
+    recorder.stepped = {"parcel": (move,)}
+    table = SimpleNamespace(position=(0.65, 0.0, 0.6))
+    recorder.sim = SimpleNamespace(
+        scene=SimpleNamespace(truth=SimpleNamespace(table_dz_m=-0.028)),
+        spec=SimpleNamespace(scene=SimpleNamespace(table=table)),
+        object_extents=lambda name: np.array([0.2, 0.3, 0.15]),
+    )
+    assert recorder.goal_shift(("parcel", 0)) == pytest.approx([0.0, 0.0, -0.028])
+    placed = np.array([0.6, 0.0, 0.647])
+    assert recorder._true_error_m(("parcel", 0), placed, 0.028) == pytest.approx(0.0, abs=1e-9)
+    recorder.sim.scene.truth.table_dz_m = 0.0
+    assert not recorder.goal_shift(("parcel", 0)).any()
