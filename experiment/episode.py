@@ -25,7 +25,7 @@ import planner.leaves  # noqa: F401  (registers the leaves for the XML loader)
 from duet_robot.text import printable
 from experiment.figures import Animation, trajectory_figure
 from experiment.insertion import insertion_verdict
-from experiment.judge import judge, move_labels
+from experiment.judge import CLOSEST_VS_CONTACTS, judge, move_labels
 from experiment.metrics import GripMetrics
 from experiment.move_recorder import MoveRecorder
 from experiment.tray import tray_verdicts
@@ -263,10 +263,7 @@ def _apart(distance: float | None, touching: int) -> str:
     """Why a closest approach over 0 stands beside contacts: two measures, not a clash."""
     if distance is None or distance <= 0.0 or not touching:
         return ""
-    return (
-        " (the collision model's distance, every control step; the contacts are PyBullet's, "
-        "every physics step, within its contact margin)"
-    )
+    return f" ({CLOSEST_VS_CONTACTS})"
 
 
 def _a_file(path: Path) -> bool:

@@ -611,14 +611,13 @@ def check_trial_layout(base: World, seed: int, label: str) -> None:
                 raise TrialLayoutError(f"{label}: {err}") from None
             except RuntimeError as err:
                 first = first or err
-    if first is not None:
-        layout = base.trials
-        raise TrialLayoutError(
-            f"{label}: trials: expected a layout whose obstacles can be drawn, got none for "
-            f"trials 0 to {PREFLIGHT_TRIALS - 1} (trial 0: {first}); draw smaller or farther "
-            f"spheres (trials.sphere_radius "
-            f"{vec(layout.sphere_radius)} m, trials.line_gap {vec(layout.line_gap)} m, "
-            f"trials.ahead_gap {vec(layout.ahead_gap)} m: the defaults are the iiwas'), lower "
-            f"trials.clearance ({layout.clearance:g} m) or trials.robot_clearance "
-            f"({layout.robot_clearance:g} m), or move the regions apart"
-        ) from None
+    layout = base.trials
+    raise TrialLayoutError(
+        f"{label}: trials: expected a layout whose obstacles can be drawn, got none for "
+        f"trials 0 to {PREFLIGHT_TRIALS - 1} (trial 0: {first}); draw smaller or farther "
+        f"spheres (trials.sphere_radius "
+        f"{vec(layout.sphere_radius)} m, trials.line_gap {vec(layout.line_gap)} m, "
+        f"trials.ahead_gap {vec(layout.ahead_gap)} m: the defaults are the iiwas'), lower "
+        f"trials.clearance ({layout.clearance:g} m) or trials.robot_clearance "
+        f"({layout.robot_clearance:g} m), or move the regions apart"
+    )

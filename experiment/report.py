@@ -83,10 +83,11 @@ def read_campaigns(out: Path) -> CampaignFile:
     groups: dict[tuple[str, ...], dict[int, dict[str, Any]]] = {}
     disagreeing: dict[tuple[str, ...], list[int]] = {}
     for rec in read.records:
-        by_trial = groups.setdefault(group_of(rec), {})
+        group = group_of(rec)
+        by_trial = groups.setdefault(group, {})
         before = by_trial.get(rec["trial"])
         if before is not None and _outcome(before) != _outcome(rec):
-            disagreeing.setdefault(group_of(rec), []).append(int(rec["trial"]))
+            disagreeing.setdefault(group, []).append(int(rec["trial"]))
         by_trial[rec["trial"]] = rec
     firsts = [next(iter(by_trial.values())) for by_trial in groups.values()]
     labels = [_label(first) for first in firsts]

@@ -13,7 +13,7 @@ from collections.abc import Iterable, Sequence
 from typing import Any
 
 from duet_robot.text import printable
-from experiment.judge import STANDING_SUFFIX
+from experiment.judge import CLOSEST_VS_CONTACTS, STANDING_SUFFIX
 from experiment.metrics import METRIC_LABELS
 
 #: The normal quantile of a two-sided 95 % interval.
@@ -291,11 +291,7 @@ def contact_lines(summary: dict[str, Any]) -> list[str]:
         f"{'n/a' if dist is None else f'{dist * 1000:.1f} mm'}"
     ]
     if summary["obstacle_contacts"] and dist is not None and dist > 0.0:
-        # Contacts and a gap above 0 are two measures, as a run says (experiment.episode).
-        lines.append(
-            "    (the closest approach is the collision model's distance, every control "
-            "step; the contacts are PyBullet's, every physics step, within its contact margin)"
-        )
+        lines.append(f"    (the closest approach is {CLOSEST_VS_CONTACTS})")
     if "forearm_contacts" in summary:
         forearm = summary["min_forearm_distance_m"]
         lines.append(

@@ -46,7 +46,7 @@ from planner.tree_reading import (
     read_tree_document_string,
 )
 
-__all__ = ["TreeFileError", "load_tree", "load_tree_string", "subtree_ids"]
+__all__ = ["TreeFileError", "load_document", "load_tree", "load_tree_string", "subtree_ids"]
 
 #: For each root the loader built: the ``<BehaviorTree ID>`` of each named ``<SubTree>`` instance
 #: (by its name), where one name has one ID. Weak keys: a tree dropped is forgotten.
@@ -126,7 +126,7 @@ def load_tree(
         For anything wrong with the file; ``str()`` lists ``file:line: <Tag name="..">: what
         was expected`` one per line (XML syntax errors give ``file:line:col``).
     """
-    return _load(read_tree_document(path, registry, main_tree_id), registry, run_keys)
+    return load_document(read_tree_document(path, registry, main_tree_id), registry, run_keys)
 
 
 def load_tree_string(
@@ -139,7 +139,7 @@ def load_tree_string(
 ) -> py_trees.behaviour.Behaviour:
     """Build a tree from XML text; ``source`` labels it in messages (see :func:`load_tree`)."""
     doc = read_tree_document_string(text, source, registry, main_tree_id)
-    return _load(doc, registry, run_keys)
+    return load_document(doc, registry, run_keys)
 
 
 def _name_subtrees(doc: TreeDocument) -> None:
@@ -156,9 +156,12 @@ def _name_subtrees(doc: TreeDocument) -> None:
                 elem.attrib["name"] = f"{tree_id}::{count[tree_id]}"
 
 
-def _load(
-    doc: TreeDocument, registry: Registry | None, run_keys: Collection[str] | None = None
+def load_document(
+    doc: TreeDocument, registry: Registry | None = None, run_keys: Collection[str] | None = None
 ) -> py_trees.behaviour.Behaviour:
+    """Build the main tree of a document already read (:func:`planner.tree_reading.
+    read_tree_document`), as :func:`load_tree` does: for a caller that needs the document too
+    (the files it was read from)."""
     problems = check_tree_document(doc, registry, run_keys=run_keys)
     if problems:
         raise TreeFileError(problems)

@@ -19,7 +19,7 @@ from py_trees.ports_utils import get_base_name
 
 from planner.atomic_file import atomic_open
 from planner.decorators import SimTimeout
-from planner.loader import TreeFileError, load_tree
+from planner.loader import TreeFileError, load_document
 from planner.runner import readable, unnamed
 from planner.tree_reading import read_tree_document, source_file
 
@@ -314,17 +314,15 @@ def render_cli(
         print(f"render: expected format one of {', '.join(FORMATS)}, got {fmt!r}", file=sys.stderr)
         return 2
     try:
-        root = load_tree(path, main_tree_id=main_tree)
+        doc = read_tree_document(path, main_tree_id=main_tree)
         # Every file the tree was read from: the one named and those it includes.
-        read = {str(path)} | {
-            source_file(e, str(path))
-            for e in read_tree_document(path, main_tree_id=main_tree).root.iter()
-        }
+        read = {str(path)} | {source_file(e, str(path)) for e in doc.root.iter()}
+        root = load_document(doc)
     except TreeFileError as exc:
         print(exc, file=sys.stderr)
         return 2
     overwritten = sorted(f for f in read if out is not None and _same_file(f, out))
-    if out is not None and overwritten:
+    if overwritten:
         print(
             f"--out {out}: expected a file other than the tree's, got {overwritten[0]}, which "
             "the tree was read from (it would be overwritten by its picture)",

@@ -32,6 +32,7 @@ from skills import quaternion as quat
 from skills.default_library import default_library
 from skills.demo_conditioning import (
     DEFAULT_SMOOTHING_S,
+    MAX_REPRODUCTION_SHARE,
     MAX_SETTLE_DEG,
     MAX_SETTLE_M,
     Reproduction,
@@ -270,7 +271,7 @@ def teach(
     if not shown.follows:
         raise TeachingError(
             f"{demo}: expected a skill that follows its demonstration (within "
-            f"{1000.0 * shown.allowed_rms_m:.0f} mm RMS, a tenth of its "
+            f"{1000.0 * shown.allowed_rms_m:.0f} mm RMS, {MAX_REPRODUCTION_SHARE:.0%} of its "
             f"{1000.0 * shown.extent_m:.0f} mm extent), got {1000.0 * shown.rms_m:.0f} mm: "
             f"spikes or jumps in the recording, or a smoothing ({name_of('smoothing_s')}) too "
             "wide for so short a motion. Nothing was added."
