@@ -170,7 +170,8 @@ def _out_of_reach(option: GraspOption, reach: Mapping[Arm, ArmReach]) -> str | N
         if distance > sphere.radius_m:
             return (
                 f"{option.grasp.value} puts the {arm.value} palm at {_vec(palm)}, "
-                f"{_fmt(distance)} m from the {arm.value} shoulder {_vec(sphere.shoulder)}; "
+                f"{_fmt(distance)} m from the centre of the {arm.value} arm's reach "
+                f"({sphere.joint} at {_vec(sphere.shoulder)}); "
                 f"the arm reaches at most {_fmt(sphere.radius_m)} m"
             )
     return None

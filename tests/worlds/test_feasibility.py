@@ -40,8 +40,9 @@ PROBLEMS = {
     ),
     "goal_out_of_reach.yaml": (
         "task[0].moves[2].goal.position: expected a goal within the arms' reach, got "
-        "two_palm_lateral puts the left palm at [1.45, 0.3, 0.675], 1.42 m from the left "
-        "shoulder [0.0563, 0.35, 0.956]; the arm reaches at most 0.969 m"
+        "two_palm_lateral puts the left palm at [1.45, 0.3, 0.675], 1.42 m from the centre "
+        "of the left arm's reach (lbr_iiwa_joint_2 at [0.0563, 0.35, 0.956]); the arm reaches "
+        "at most 0.969 m"
     ),
     "robot_in_the_table.yaml": (
         "robot.base.position: expected a robot beside the table, its arms' bases off the "
@@ -120,6 +121,8 @@ def test_icub_reach_is_about_its_torso_and_arm_length() -> None:
     # hand and its palm.
     assert_allclose(reach[Arm.LEFT].shoulder, reach[Arm.RIGHT].shoulder, atol=1e-12)
     assert_allclose(reach[Arm.LEFT].shoulder[2], spec.scene.robot.mount_height, atol=0.01)
+    # A refusal names that centre as the torso's joint, not as a shoulder.
+    assert reach[Arm.LEFT].joint == reach[Arm.RIGHT].joint == "torso_pitch"
     for arm in (Arm.LEFT, Arm.RIGHT):
         assert 0.6 < reach[arm].radius_m < 0.8
 

@@ -41,10 +41,14 @@ class ArmReach:
         (3,) centre, world frame, m: the last point of the chain fixed in the world.
     radius_m : float
         Sum of the chain's segment lengths from the shoulder to the palm centre, m.
+    joint : str
+        The URDF joint whose origin is that centre: the iiwa's second joint, but the iCub's
+        torso joint (the torso moves both shoulders), which a message names.
     """
 
     shoulder: tuple[float, float, float]
     radius_m: float
+    joint: str = ""
 
     def distance_m(self, point: tuple[float, float, float]) -> float:
         """Distance of a world point from the shoulder, m."""
@@ -173,7 +177,7 @@ def chain_reach(
         float(np.linalg.norm(origins[k + 1] - origins[k])) for k in range(centre, len(origins) - 1)
     ]
     x, y, z = (float(v) for v in origins[centre])
-    return ArmReach((x, y, z), sum(lengths) + travel)
+    return ArmReach((x, y, z), sum(lengths) + travel, chain[centre].name)
 
 
 def arm_reach(model: RobotModel) -> dict[Arm, ArmReach]:
