@@ -153,6 +153,12 @@ def _import_file(source: str, path: Path) -> ModuleType:
         )
     module = importlib.util.module_from_spec(spec)
     sys.modules[name] = module
+    # Its folder is searched for its own helper modules (`from helpers import speed` beside
+    # it), as `python file.py` and pytest search it; last, so that no file of the user's
+    # shadows a module Duet or a package imports.
+    folder = str(resolved.parent)
+    if folder not in sys.path:
+        sys.path.append(folder)
     try:
         spec.loader.exec_module(module)
     except (Exception, SystemExit) as err:  # a user's file may raise anything, exit too
@@ -268,9 +274,39 @@ def _declaration_problem(cls: type) -> str:
                     f"{table}[{port!r}]: expected a py_trees.ports.PortInformation under a "
                     f"port name, got {type(info).__name__} {info!r:.60}"
                 )
+            wrong = port_name_problem(port)
+            if wrong:
+                return f"{table}[{port!r}]: {wrong}"
     kind = getattr(cls, "NODE_TYPE", "Action")
     if kind not in NODE_KINDS:
         return f"NODE_TYPE: expected one of {', '.join(NODE_KINDS)}, got {kind!r:.60}"
+    return ""
+
+
+#: What BehaviorTree.CPP v4 forbids in a port's name (``findForbiddenChar``).
+_FORBIDDEN_IN_PORT_NAMES = frozenset(" \t\n\r<>&\"'/\\:*?|.")
+#: Attributes a node's XML element keeps for itself (``IsReservedAttribute``): its ``name``,
+#: ``ID`` and ``_autoremap`` (the scripting attributes start with ``_`` too).
+_RESERVED_PORT_NAMES = frozenset({"name", "ID", "_autoremap"})
+
+
+def port_name_problem(port: str) -> str:
+    """What BehaviorTree.CPP v4 refuses in a port's name (``IsAllowedPortName``), or "": it
+    starts with an ASCII letter (``_`` is kept for the scripting attributes), holds no
+    character that breaks XML or paths, and is not an attribute the element keeps for itself
+    (a port ``name`` would read the node's name; one starting with ``_`` could never be
+    set)."""
+    first = port[:1]
+    if not (first.isascii() and first.isalpha()):
+        return "expected a port name starting with a letter (BehaviorTree.CPP reserves '_')"
+    bad = sorted({c for c in port if c in _FORBIDDEN_IN_PORT_NAMES})
+    if bad:
+        return f"expected a port name without {' '.join(repr(c) for c in bad)}"
+    if port in _RESERVED_PORT_NAMES:
+        return (
+            f"expected a port name other than {', '.join(sorted(_RESERVED_PORT_NAMES))}, "
+            "which a node's element keeps for itself"
+        )
     return ""
 
 

@@ -381,6 +381,25 @@ def test_an_installed_entry_point_registers_its_leaves(
             r"leaf HeightAtLeast: INPUT_PORTS\['bad'\]: expected a py_trees.ports.PortInformation "
             r"under a port name, got int 5",
         ),
+        # Port names BehaviorTree.CPP refuses: "name" had silently read the node's own path,
+        # and a port starting with "_" could never be set from a tree.
+        (
+            LEAF.replace('"min_height_m": PortInformation', '"name": PortInformation'),
+            "name_port.py",
+            r"leaf HeightAtLeast: INPUT_PORTS\['name'\]: expected a port name other than ID, "
+            r"_autoremap, name, which a node's element keeps for itself",
+        ),
+        (
+            LEAF.replace('"height_m": PortInformation', '"_height": PortInformation'),
+            "underscore_port.py",
+            r"leaf HeightAtLeast: OUTPUT_PORTS\['_height'\]: expected a port name starting "
+            r"with a letter",
+        ),
+        (
+            LEAF.replace('"height_m": PortInformation', '"height.m": PortInformation'),
+            "dotted_port.py",
+            r"OUTPUT_PORTS\['height.m'\]: expected a port name without '\.'",
+        ),
         (
             LEAF.replace('NODE_TYPE = "Condition"', 'NODE_TYPE = "Sandwich"'),
             "kind.py",
@@ -491,3 +510,23 @@ def test_a_leaves_module_declares_the_enum_names_its_scripts_use(
         LeafSourceError, match=r"other.py: SCRIPT_ENUMS: RED: expected one value, got 1 and 5$"
     ):
         register_leaves([str(other)])
+
+
+def test_a_leaf_file_imports_a_helper_module_beside_it(
+    tmp_path: Path, registry_restored: None, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr(sys, "path", [*sys.path])  # the folder is added to a copy
+    # It had failed, "No module named 'heights'", run from anywhere, that folder too.
+    (tmp_path / "heights.py").write_text("def lowest() -> float:\n    return 0.25\n")
+    leaf = LEAF.replace(
+        "from planner.leaves import WorldLeaf",
+        "from planner.leaves import WorldLeaf\n\nfrom heights import lowest",
+    ).replace("default_value=0.5", "default_value=lowest()")
+    path = tmp_path / "beside.py"
+    path.write_text(leaf, encoding="utf-8")
+    try:
+        (cls,) = register_leaves([str(path)])
+    finally:
+        sys.modules.pop("heights", None)
+    assert cls.INPUT_PORTS["min_height_m"].default_value == 0.25
+    assert sys.path[-1] == str(tmp_path)  # searched after Duet's own packages
