@@ -4,11 +4,13 @@ from __future__ import annotations
 
 import functools
 import inspect
+import numbers
 import re
 import traceback
 from collections.abc import Callable, Sequence
 from typing import Any, ClassVar
 
+import numpy as np
 import py_trees
 from py_trees.common import Status
 from py_trees.ports import BehaviourWithPorts, NoDataAvailable, PortInformation
@@ -167,6 +169,23 @@ class OutputTypeError(TypeError):
     leaf's stops the run naming its line), not an impossible value met in the world."""
 
 
+def as_port_number(value: Any, data_type: Any) -> Any:
+    """``value`` as a ``bool``, ``int`` or ``float`` port's own kind where it is a number that
+    converts without loss (``np.True_`` to True, ``np.float32`` or an ``int`` to float,
+    ``np.int64`` or 3.0 to 3); anything else as it is."""
+    if data_type is bool and isinstance(value, np.bool_):
+        return bool(value)
+    if data_type not in (int, float) or isinstance(value, bool | np.bool_):
+        return value
+    if not isinstance(value, numbers.Real) or type(value) is data_type:
+        return value
+    if data_type is float:
+        return float(value)
+    if float(value).is_integer():
+        return int(value)
+    return value
+
+
 class WorldLeaf(StringPorts, BehaviourWithPorts):
     """A leaf that talks to the world through :class:`~planner.port.WorldPort`.
 
@@ -260,15 +279,22 @@ class WorldLeaf(StringPorts, BehaviourWithPorts):
         )
 
     def _set_output(self, port_name: str, value: Any) -> None:
-        """As :meth:`PortsMixin._set_output`; a value of another type than the port's is an
-        :class:`OutputTypeError` naming the port."""
+        """As :meth:`PortsMixin._set_output`; a number is written as the port's kind where
+        that loses nothing (a numpy scalar, an integer on a float port, an integral float on
+        an integer port: BT.CPP's blackboard converts numbers so); a value of another type
+        than the port's is an :class:`OutputTypeError` naming the port."""
+        info = type(self).OUTPUT_PORTS.get(port_name)
+        data_type = getattr(info, "data_type", None)
+        value = as_port_number(value, data_type)
         try:
             super()._set_output(port_name, value)
         except TypeError as err:
-            info = type(self).OUTPUT_PORTS.get(port_name)
-            kind = getattr(getattr(info, "data_type", None), "__name__", "the port's type")
+            kind = getattr(data_type, "__name__", "the port's type")
+            given = type(value)
+            named = given.__name__ if given.__module__ == "builtins" else given.__qualname__
+            module = "" if given.__module__ == "builtins" else f"{given.__module__}."
             raise OutputTypeError(
-                f"output port '{port_name}': expected {kind}, got {type(value).__name__} "
+                f"output port '{port_name}': expected {kind}, got {module}{named} "
                 f"{value!r:.60}"
             ) from err
 

@@ -530,3 +530,49 @@ def test_a_leaf_file_imports_a_helper_module_beside_it(
         sys.modules.pop("heights", None)
     assert cls.INPUT_PORTS["min_height_m"].default_value == 0.25
     assert sys.path[-1] == str(tmp_path)  # searched after Duet's own packages
+
+
+def test_a_number_is_written_as_its_output_ports_kind_where_nothing_is_lost(
+    registry_restored: None,
+) -> None:
+    # A numpy comparison, a numpy mean or a plain 0 on a float port had stopped the run
+    # ("expected bool, got bool np.True_"); BT.CPP's blackboard converts numbers so.
+    from py_trees.ports import PortInformation
+
+    from planner.leaves import WorldLeaf
+    from planner.leaves.base import OutputTypeError
+    from planner.wiring import wire
+
+    class Writes(WorldLeaf):
+        INPUT_PORTS: dict[str, PortInformation] = {}
+        OUTPUT_PORTS = {
+            "f": PortInformation(float, description="a float"),
+            "i": PortInformation(int, description="an integer"),
+            "b": PortInformation(bool, description="a flag"),
+        }
+
+        def update(self) -> Status:
+            return Status.SUCCESS
+
+    leaf = Writes("writes")
+    wire(leaf, f="{f}", i="{i}", b="{b}")
+    board = py_trees.blackboard.Client(name="reader")
+    for key in ("f", "i", "b"):
+        board.register_key(key, access=py_trees.common.Access.READ)
+    for port, value, stored in (
+        ("b", np.float64(0.1) < 0.2, True),
+        ("f", 0, 0.0),
+        ("f", np.float32(0.5), 0.5),
+        ("f", np.float64(0.25), 0.25),
+        ("i", np.int64(3), 3),
+        ("i", 4.0, 4),
+    ):
+        leaf._set_output(port, value)
+        got = board.get(port)
+        assert got == stored and type(got) is type(stored), (port, value, got)
+    with pytest.raises(OutputTypeError, match=r"output port 'i': expected int, got float 0\.5"):
+        leaf._set_output("i", 0.5)
+    with pytest.raises(
+        OutputTypeError, match=r"output port 'f': expected float, got numpy\.str_ np\.str_\('x'\)"
+    ):
+        leaf._set_output("f", np.str_("x"))
