@@ -30,8 +30,9 @@ from typing import Any
 import py_trees
 from py_trees.ports import PortInformation, PortsMixin, get_ports_registry
 
-from planner.tree_ports import Registry, registry_class, type_name
-from planner.tree_reading import read_tree_document
+from planner.tree_ports import Registry, builtin_nodes, registry_class, type_name
+from planner.tree_problems import TreeFileError, TreeProblem
+from planner.tree_reading import TRANSLATED_TAGS, read_tree_document
 
 __all__ = ["add_node_model", "embed_nodes_model", "leaf_kind", "nodes_model_xml", "summary_line"]
 
@@ -196,12 +197,35 @@ def embed_nodes_model(
         if tag in used:
             add_node_model(model, tag, cls)
             made.add(tag)
+    kept = set()
     for old in doc.root.findall("TreeNodesModel"):
         for entry in old:
             entry_id = entry.attrib.get("ID")
             if entry.tag == "SubTree" or (entry_id in used and entry_id not in made):
                 entry.tail = None
                 model.append(entry)
+                kept.add(entry_id)
+    # A leaf nothing models would open in Groot2 as an unknown node, its ports lost.
+    unknown = sorted(
+        tag
+        for tag in used - made - kept
+        if tag != "SubTree"
+        and tag.lower() not in TRANSLATED_TAGS
+        and tag not in builtin_nodes()
+        and registry_class(reg[tag] if tag in reg else None) is None
+    )
+    if unknown:
+        raise TreeFileError(
+            [
+                TreeProblem(
+                    str(path),
+                    None,
+                    "",
+                    f"expected leaves Duet or a --leaves file models, got {', '.join(unknown)} "
+                    "(register them with --leaves FILE.py|MODULE; nothing was written)",
+                )
+            ]
+        )
     ET.indent(model, level=1)
     block = "\n\n  " + ET.tostring(model, encoding="unicode")
     with open(path, encoding="utf-8") as handle:

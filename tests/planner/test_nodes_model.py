@@ -206,3 +206,26 @@ def test_embed_with_out_writes_a_copy_and_leaves_the_tree(
     assert tree.read_bytes() == shipped.read_bytes()
     assert "<TreeNodesModel>" in copy.read_text(encoding="utf-8")
     assert f"into {copy}" in capsys.readouterr().out
+
+
+def test_embed_refuses_a_tree_whose_leaves_nothing_models(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # It had written the model without them, exit 0: Groot2 then opened them as unknown
+    # nodes, their ports lost (validate refuses the same tree).
+    import app
+
+    tree = tmp_path / "mine.xml"
+    text = (
+        '<root BTCPP_format="4" main_tree_to_execute="M">\n'
+        '  <BehaviorTree ID="M"><Sequence><HeldStill object="parcel"/><AlwaysSuccess/>'
+        '<IsHeld object="parcel"/></Sequence></BehaviorTree>\n</root>\n'
+    )
+    tree.write_text(text, encoding="utf-8")
+    assert app.main(["nodes", "--embed", str(tree)]) == app.EXIT_BAD_INPUT
+    err = capsys.readouterr().err
+    assert (
+        f"{tree}: expected leaves Duet or a --leaves file models, got HeldStill (register "
+        "them with --leaves FILE.py|MODULE; nothing was written)"
+    ) in err
+    assert tree.read_text(encoding="utf-8") == text
