@@ -32,11 +32,14 @@ from skills import quaternion as quat
 from skills.default_library import default_library
 from skills.demo_conditioning import (
     DEFAULT_SMOOTHING_S,
+    END_SPEED_SHARE,
+    END_WINDOW_SHARE,
     MAX_REPRODUCTION_SHARE,
     MAX_SETTLE_DEG,
     MAX_SETTLE_M,
     Reproduction,
     end_speed,
+    ends_moving,
     even_steps,
     low_pass,
     reproduction,
@@ -266,8 +269,16 @@ def teach(
         f"duration stays within {1000.0 * shown.settle_m:.1f} mm and "
         f"{shown.settle_deg:.1f} deg of its goal"
     )
+    moving = _moving_end(recorded, smoothed, smoothing_s)
+    if moving:
+        # Whether or not its skill strays: the motion's end was never shown.
+        raise TeachingError(
+            f"{demo}: expected a recording that ends at rest (its last "
+            f"{END_WINDOW_SHARE:.0%} under {END_SPEED_SHARE:.0%} of its peak speed), got "
+            f"{moving}: record until the motion has stopped. Nothing was added."
+        )
     if not shown.settles:
-        raise TeachingError(_unsettled(demo, recorded, smoothed, smoothing_s, shown, name_of))
+        raise TeachingError(_unsettled(demo, shown, smoothing_s, name_of))
     if not shown.follows:
         raise TeachingError(
             f"{demo}: expected a skill that follows its demonstration (within "
@@ -370,29 +381,30 @@ def _shaped_text(shaped: list[int], turns: list[int]) -> str:
     )
 
 
+def _moving_end(recorded: Demonstration, smoothed: Demonstration, smoothing_s: float) -> str:
+    """How a recording ends moving (``one that ends at 0.152 m/s, its peak 0.236 m/s``), read
+    smoothed at least as the default does (raw, its speeds are the noise's); "" if it ends at
+    rest (:func:`skills.demo_conditioning.ends_moving`)."""
+    settled = smoothed if smoothing_s >= DEFAULT_SMOOTHING_S else low_pass(recorded)
+    if not ends_moving(settled):
+        return ""
+    final, peak = end_speed(settled)
+    return f"one that ends at {final:.3f} m/s, its peak {peak:.3f} m/s"
+
+
 def _unsettled(
     demo: str | os.PathLike[str],
-    recorded: Demonstration,
-    smoothed: Demonstration,
-    smoothing_s: float,
     shown: Reproduction,
+    smoothing_s: float,
     name_of: Callable[[str], str],
 ) -> str:
-    """Why a skill that strays from its goal was not added: a recording cut before the motion
-    stopped, or one too noisy for the smoothing."""
-    # Its end speed read smoothed at least as the default does (raw, it is the noise's).
-    settled = smoothed if smoothing_s >= DEFAULT_SMOOTHING_S else low_pass(recorded)
-    final, peak = end_speed(settled)
-    why = (
-        f"the recording ends moving, at {final:.3f} m/s (its peak {peak:.3f} m/s): "
-        "record until the motion has stopped"
-        if final > 0.1 * peak
-        else f"the recording is too noisy to learn from as it is (smoothed over "
-        f"{1000.0 * smoothing_s:g} ms); try a larger {name_of('smoothing_s')}"
-    )
+    """Why a skill that strays from its goal was not added, from a recording that ends at
+    rest (:func:`_moving_end`): one too noisy for the smoothing."""
     return (
         f"{demo}: expected a skill that settles at its goal (within "
         f"{1000.0 * MAX_SETTLE_M:.0f} mm and {MAX_SETTLE_DEG:g} deg after its duration), got "
         f"one that strays {1000.0 * shown.settle_m:.0f} mm and {shown.settle_deg:.1f} deg "
-        f"from it: {why}. Nothing was added."
+        f"from it: the recording is too noisy to learn from as it is (smoothed over "
+        f"{1000.0 * smoothing_s:g} ms); try a larger {name_of('smoothing_s')}. Nothing was "
+        "added."
     )

@@ -198,18 +198,40 @@ def test_teach_smooths_a_noisy_recording_and_refuses_one_it_cannot_learn(
     assert "--smooth-ms: expected 0 to 1000 ms, got -5.0" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize("share", [0.8, 0.5])
 def test_teach_says_when_a_recording_was_cut_before_the_motion_stopped(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], share: float
 ) -> None:
+    # Cut at half its duration, near its fastest, the skill had settled well enough: it was
+    # added with exit 0, a motion whose end was never shown.
     demo = waved_carry(0.0, seed=2)
     assert demo.orientations is not None
-    keep = demo.t <= demo.t[0] + 0.8 * demo.duration  # stopped recording mid-carry
+    keep = demo.t <= demo.t[0] + share * demo.duration  # stopped recording mid-carry
     csv = write_demo_csv(
         tmp_path / "cut.csv", demo.t[keep], demo.positions[keep], demo.orientations[keep]
     )
     argv = ["teach", str(csv), "--label", "cut", "--space", "absolute", "--force"]
     assert app.main([*argv, "--library", str(tmp_path / "lib")]) == app.EXIT_BAD_INPUT
     err = capsys.readouterr().err
-    assert err.startswith(f"{csv}: expected a skill that settles at its goal"), err
-    assert "the recording ends moving, at" in err and "record until the motion has stopped" in err
+    assert err.startswith(
+        f"{csv}: expected a recording that ends at rest (its last 5% under 25% of its peak "
+        "speed), got one that ends at "
+    ), err
+    assert err.rstrip().endswith("record until the motion has stopped. Nothing was added.")
     assert not (tmp_path / "lib").exists()
+
+
+def test_teach_tells_a_noisy_recording_from_a_cut_one(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # With 2 mm of noise a sample's own speed at the end had been taken for a cut motion.
+    demo = waved_carry(0.0, seed=2)
+    assert demo.orientations is not None
+    noisy = demo.positions + 2e-3 * np.random.default_rng(1).standard_normal(demo.positions.shape)
+    csv = write_demo_csv(tmp_path / "noisy.csv", demo.t, noisy, demo.orientations)
+    argv = ["teach", str(csv), "--label", "noisy", "--space", "absolute", "--force"]
+    code = app.main([*argv, "--library", str(tmp_path / "lib"), "--smooth-ms", "10"])
+    err = capsys.readouterr().err
+    assert code == app.EXIT_BAD_INPUT  # it strays 650 mm from its goal
+    assert "ends at rest" not in err and "record until" not in err
+    assert "the recording is too noisy to learn from as it is (smoothed over 10 ms); try a " in err
