@@ -294,8 +294,7 @@ class WorldLeaf(StringPorts, BehaviourWithPorts):
             named = given.__name__ if given.__module__ == "builtins" else given.__qualname__
             module = "" if given.__module__ == "builtins" else f"{given.__module__}."
             raise OutputTypeError(
-                f"output port '{port_name}': expected {kind}, got {module}{named} "
-                f"{value!r:.60}"
+                f"output port '{port_name}': expected {kind}, got {module}{named} {value!r:.60}"
             ) from err
 
     def fail(self, message: str) -> Status:
