@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from affordances.context import check_positive
+from affordances.context import check_non_negative, check_positive
 
 #: Standard gravity, m/s^2.
 GRAVITY = 9.81
@@ -21,7 +21,7 @@ class ReasonerConfig:
         ``k`` in ``2 * mu * F_squeeze >= k * m * g``: margin for accelerations while
         transporting and for friction uncertainty (> 0, default 1.5).
     gravity : float
-        Gravitational acceleration, m/s^2.
+        Gravitational acceleration, m/s^2, >= 0 (:meth:`under` a world's).
     one_hand_width_factor : float
         One hand holds objects up to this many palm widths across (fingers and thumb wrap
         around roughly twice the palm width), default 2.0.
@@ -49,10 +49,18 @@ class ReasonerConfig:
     yaw_tolerance_rad: float = math.radians(5.0)
     carry_lift_m: float = 0.12
 
+    @classmethod
+    def under(cls, gravity: float) -> ReasonerConfig:
+        """The defaults under a world's ``gravity`` along z, m/s^2 (negative: down)."""
+        return cls(gravity=abs(float(gravity)))
+
     def __post_init__(self) -> None:
+        # Zero gravity is a world's to choose (nothing then weighs anything to hold).
+        object.__setattr__(
+            self, "gravity", check_non_negative(self.gravity, "ReasonerConfig", "gravity")
+        )
         for name in (
             "safety_factor",
-            "gravity",
             "one_hand_width_factor",
             "min_contact_height_factor",
             "path_margin_m",

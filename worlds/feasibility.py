@@ -209,7 +209,7 @@ def feasibility_problems(
     if standing is not None:  # every other check assumes the robot stands beside the table
         return [standing]
     robot = robot_capabilities(spec)
-    config = ReasonerConfig()
+    config = ReasonerConfig.under(spec.scene.gravity)
     contexts = {c.name: c for c in object_contexts(spec)}
     reach = arm_reach(robot_model_of(spec.scene.robot))
     index = {obj.name: k for k, obj in enumerate(spec.scene.objects)}
@@ -322,7 +322,7 @@ def goal_checker(
     context = next(c for c in object_contexts(spec) if c.name == name)
     robot = robot_capabilities(spec)
     reach = arm_reach(robot_model_of(spec.scene.robot))
-    config = ReasonerConfig()
+    config = ReasonerConfig.under(spec.scene.gravity)
 
     def check(xy: Sequence[float], yaw_deg: float) -> tuple[str, str] | None:
         yaw = math.radians(yaw_deg)

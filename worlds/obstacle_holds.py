@@ -72,7 +72,7 @@ def obstacle_hold_problems(world: World | WorldSpec) -> list[WorldFileProblem]:
         for c in object_contexts(spec)
         if any(
             o.grasp is GraspType.TWO_PALM_LATERAL
-            for o in assess(c, robot, ReasonerConfig()).options
+            for o in assess(c, robot, ReasonerConfig.under(spec.scene.gravity)).options
         )
     }
     asked = {(i, j) for i, j in moving if spec.task[i].object in lateral}

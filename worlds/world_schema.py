@@ -38,7 +38,6 @@ from worlds.schema_types import (
     SKILL_NAME,
     Angles3,
     FileModel,
-    Finite,
     FiniteVector3,
     Name,
     NonNegative,
@@ -372,18 +371,28 @@ class DisturbanceEntry(FileModel):
 class SimSettings(FileModel):
     """Simulation rates, seed and limits."""
 
-    physics_hz: Annotated[int, Field(strict=True, ge=60, le=10_000)] = Field(
-        default=240, description="physics rate, Hz, 60 to 10000"
+    # The lowest rates the palms' impedance law and the leaves' force loops hold at: at 60 Hz
+    # physics the grasp never reached its squeeze; at 20 Hz control the arms flailed and flung
+    # the parcel off the table, at 24 Hz the release never let go (30 Hz and 120 Hz run).
+    physics_hz: Annotated[int, Field(strict=True, ge=120, le=10_000)] = Field(
+        default=240,
+        description="physics rate, Hz, 120 to 10000 (below 120 the grasp is not held)",
     )
-    control_hz: Annotated[int, Field(strict=True, ge=10, le=1000)] = Field(
-        default=60, description="control rate, Hz, 10 to 1000, divides physics_hz"
+    control_hz: Annotated[int, Field(strict=True, ge=30, le=1000)] = Field(
+        default=60,
+        description="control rate, Hz, 30 to 1000, divides physics_hz (below 30 the palms' "
+        "force loops are unstable)",
     )
     seed: NonNegativeInt = Field(
         default=0,
         description="seed of a run's random choices, >= 0; a run of the shipped leaves makes "
         "none (physics, skills and tree are deterministic); trials draw from their own seed",
     )
-    gravity: Finite = Field(default=-9.81, description="gravity along world z, m/s^2")
+    gravity: Annotated[float, Field(strict=True, allow_inf_nan=False, le=0, ge=-1000)] = Field(
+        default=-9.81,
+        description="gravity along world z, m/s^2, -1000 to 0: down, or none (a positive "
+        "value would fling the objects off the table)",
+    )
     max_sim_time_s: Annotated[float, Field(strict=True, allow_inf_nan=False, gt=0, le=86_400)] = (
         Field(default=120.0, description="simulated time limit, s, > 0, at most a day")
     )

@@ -181,9 +181,10 @@ def as_port_number(value: Any, data_type: Any) -> Any:
         return value
     if data_type is float:
         return float(value)
-    if float(value).is_integer():
+    if isinstance(value, numbers.Integral):
         return int(value)
-    return value
+    number = float(value)
+    return int(number) if number.is_integer() else value
 
 
 class WorldLeaf(StringPorts, BehaviourWithPorts):

@@ -10,6 +10,7 @@ from py_trees.common import Status
 from py_trees.ports import PortInformation
 
 from affordances import SemanticAction, reason
+from affordances.config import ReasonerConfig
 from planner.leaves.base import WorldLeaf
 from planner.port import ObjectSensing, ObstacleScene, PalmControl
 from skills.vocabulary import Action, GraspType
@@ -95,7 +96,10 @@ class SelectSkills(WorldLeaf):
             return self.fail(str(err))
         world = self.world
         ranked = reason(
-            world.object_context(name), world.robot_capabilities(), scene=world.scene_query()
+            world.object_context(name),
+            world.robot_capabilities(),
+            scene=world.scene_query(),
+            config=ReasonerConfig.under(world.gravity()),  # the world's, not the Earth's
         )
         for action in ranked:
             if action.grasp is wanted:

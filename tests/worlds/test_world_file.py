@@ -7,7 +7,7 @@ import json
 import math
 import os
 import re
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -629,3 +629,56 @@ def test_an_optional_section_left_empty_is_left_out_a_required_one_is_not(
     data["objects"] = None
     path.write_text(yaml.safe_dump(data), encoding="utf-8")
     assert "objects: expected a list, got None" in str(_error(path))
+
+
+@pytest.mark.parametrize(
+    ("sim", "match"),
+    [
+        # 60 Hz physics: the grasp never reached its squeeze; 20 Hz control: the arms flailed
+        # and flung the parcel off the table (both had validated "ok").
+        (
+            {"physics_hz": 60, "control_hz": 60},
+            r"sim\.physics_hz: expected a number greater "
+            r"than or equal to 120, got 60",
+        ),
+        (
+            {"control_hz": 20},
+            r"sim\.control_hz: expected a number greater than or equal to 30, "
+            r"got 20",
+        ),
+        # Up, a sign slip: the parcel had flown 89 m and the run failed as "arms touched".
+        (
+            {"gravity": 9.81},
+            r"sim\.gravity: expected a number less than or equal to 0, got "
+            r"9\.81",
+        ),
+    ],
+)
+def test_sim_settings_the_robot_cannot_run_are_refused(
+    default_data: dict[str, Any],
+    write_world: Callable[[dict[str, Any], str], Path],
+    sim: dict[str, Any],
+    match: str,
+) -> None:
+    data = copy.deepcopy(default_data)  # the module's, shared
+    data["sim"].update(sim)
+    path = write_world(data, "rates.yaml")
+    with pytest.raises(WorldFileError, match=rf"^{re.escape(str(path))}: {match}"):
+        load_world(path)
+
+
+def test_the_grasp_is_reasoned_under_the_worlds_gravity(
+    default_data: dict[str, Any], write_world: Callable[[dict[str, Any], str], Path]
+) -> None:
+    # The reasoner had weighed the parcel under 9.81 m/s^2 whatever the file said: at -40
+    # it validated "ok" and slipped out of the palms.
+    from skills.vocabulary import GraspType
+    from worlds.feasibility import feasibility_problems
+
+    data = copy.deepcopy(default_data)  # the module's, shared
+    data["sim"]["gravity"] = -40.0
+    lateral = {GraspType.TWO_PALM_LATERAL}  # the shipped tree's grasp
+    (problem,) = feasibility_problems(load_world(write_world(data, "heavy_g.yaml")), lateral)
+    assert "two_palm_lateral: needs 46.9 N per palm > 40 N available" in problem.received
+    data["sim"]["gravity"] = 0.0  # weightless: nothing to hold up
+    assert feasibility_problems(load_world(write_world(data, "no_g.yaml")), lateral) == []
