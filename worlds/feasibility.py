@@ -245,6 +245,7 @@ def feasibility_problems(
     for i, step in enumerate(spec.task):
         obj = spec.scene.objects[index[step.object]]
         yaw = obj.yaw
+        pitch = 0.0  # the start stands upright (_not_upright)
         for j, move in enumerate(step.moves):
             field = f"task[{i}].moves[{j}].goal.position"
             before, yaw = yaw, move.goal_yaw
@@ -256,6 +257,12 @@ def feasibility_problems(
                 problems.append(WorldFileProblem(f"task[{i}].moves[{j}].goal.rpy_deg", *tilted))
                 bad_goals.add((i, j))
                 continue
+            turned = _turn_problem(obj, move.goal_quaternion, pitch)
+            if turned is not None:
+                problems.append(WorldFileProblem(f"task[{i}].moves[{j}].goal.rpy_deg", *turned))
+                bad_goals.add((i, j))
+                continue
+            pitch = grasp_pitch(move.goal_quaternion)
             table = _table_problem(obj, move, spec.scene.table)
             if table is not None:
                 problems.append(WorldFileProblem(field, *table))
@@ -267,6 +274,61 @@ def feasibility_problems(
             if miss is not None:
                 problems.append(WorldFileProblem(field, *miss))
     return start_problems(spec, bad_goals) + problems
+
+
+#: The most a carry turns an object about its grasp axis (its y axis), deg: the box flip's
+#: quarter turn, up or down (a half turn had been split into four carries and dropped).
+MAX_PITCH_DEG = 90.0
+
+
+def grasp_pitch(quaternion: Sequence[float]) -> float:
+    """The turn about its own y axis (the grasp's) that, after a yaw, poses an object at
+    ``quaternion`` from upright, rad (its y axis level: ``Rz(yaw) Ry(pitch)``)."""
+    rotation = quat.to_matrix(np.asarray(quaternion, dtype=float))
+    return math.atan2(-float(rotation[2, 0]), float(rotation[2, 2]))
+
+
+def _turn_problem(
+    obj: ObjectSpec, goal: Sequence[float], pitch_before: float
+) -> tuple[str, str] | None:
+    """What a goal's orientation should be and is, if the grip cannot turn ``obj`` to it
+    from where its last move left it (``pitch_before``, rad): the grip, across the object's
+    y faces, turns it about world z and about that y axis (:mod:`skills.flip`), a quarter turn
+    at most in one carry; a roll tilts the y axis itself, which it cannot make. None if it
+    can."""
+    rotation = quat.to_matrix(np.asarray(goal, dtype=float))
+    rpy = _vec(np.round(np.degrees(quat.to_rpy(np.asarray(goal, dtype=float))), 6) + 0.0)
+    expected = (
+        f"a goal the grip turns {obj.name} to: about the vertical, and about its own y axis "
+        f"(the grip's) by at most {MAX_PITCH_DEG:g} deg in a move, its y axis level within "
+        f"{_fmt(REST_TILT_DEG)} deg (a roll of 0: rpy_deg [0, pitch, yaw])"
+    )
+    tilt = math.degrees(math.asin(min(1.0, abs(float(rotation[2, 1])))))
+    if tilt > REST_TILT_DEG:
+        same = (
+            "; a cylinder lying along y is rpy_deg [0, 90, 90]"
+            if obj.shape.kind is Shape.CYLINDER
+            else ""
+        )
+        return (
+            expected,
+            f"rpy_deg {rpy}: its y axis {_fmt(tilt)} deg from level, a roll the grip across "
+            f"its y faces cannot make{same}",
+        )
+    pitch = grasp_pitch(goal)
+    turn = abs(math.degrees(math.remainder(pitch - pitch_before, 2.0 * math.pi)))
+    if turn > MAX_PITCH_DEG + REST_TILT_DEG:
+        upside = (
+            " (a cylinder upside down is the same cylinder upright: rpy_deg [0, 0, yaw])"
+            if obj.shape.kind is Shape.CYLINDER
+            else ""
+        )
+        return (
+            expected,
+            f"rpy_deg {rpy}: a turn of {_fmt(turn)} deg about its y axis from where its last "
+            f"move left it{upside}",
+        )
+    return None
 
 
 def _stepped_into_fixture(

@@ -211,3 +211,69 @@ def test_an_object_the_task_moves_must_start_upright(
             else ""
         )
     )
+
+
+@pytest.mark.parametrize(
+    ("shape", "moves", "received"),
+    [
+        # Each had validated "ok" and been dropped in physics: the reasoner plans only the
+        # turn about the grasp's y axis, so a roll was carried as no turn at all.
+        (
+            None,
+            [([0.65, 0.0, 0.75], [90, 0, 0])],
+            "rpy_deg [90, 0, 0]: its y axis 90 deg from level, a roll the grip across its y "
+            "faces cannot make",
+        ),
+        (
+            None,
+            [([0.65, 0.0, 0.675], [0, 180, 0])],
+            "rpy_deg [180, 0, 180]: a turn of 180 deg about its y axis from where its last move "
+            "left it",
+        ),
+        (  # two quarter turns the same way: the second is a half turn from upright too
+            None,
+            [([0.65, 0.0, 0.7], [0, 90, 0]), ([0.65, 0.1, 0.7], [0, -90, 0])],
+            "rpy_deg [0, -90, 0]: a turn of 180 deg about its y axis",
+        ),
+        (
+            {"type": "cylinder", "radius": 0.06, "height": 0.15},
+            [([0.65, 0.0, 0.675], [180, 0, 0])],
+            "(a cylinder upside down is the same cylinder upright: rpy_deg [0, 0, yaw])",
+        ),
+    ],
+)
+def test_a_goal_the_grip_cannot_turn_the_object_to_is_refused(
+    tmp_path: Path,
+    shape: dict[str, object] | None,
+    moves: list[tuple[list[float], list[float]]],
+    received: str,
+) -> None:
+    import yaml
+
+    data = yaml.safe_load((ROOT / "worlds" / "parcel_pick_place.yaml").read_text())
+    if shape is not None:
+        data["objects"][0]["shape"] = shape
+        data["objects"][0]["category"] = "tin"
+    data["task"][0]["moves"] = [{"goal": {"position": p, "rpy_deg": r}} for p, r in moves]
+    path = tmp_path / "turned.yaml"
+    path.write_text(yaml.safe_dump(data), encoding="utf-8")
+    problems = feasibility_problems(load_world(path), LATERAL)
+    assert len(problems) == 1, [p.format("w") for p in problems]
+    (problem,) = problems
+    assert problem.field == f"task[0].moves[{len(moves) - 1}].goal.rpy_deg"
+    assert problem.expected.startswith("a goal the grip turns ")
+    assert received in problem.received
+
+
+def test_the_box_flips_quarter_turns_and_yaws_are_feasible(tmp_path: Path) -> None:
+    import yaml
+
+    data = yaml.safe_load((ROOT / "worlds" / "parcel_pick_place.yaml").read_text())
+    data["task"][0]["moves"] = [
+        {"goal": {"position": [0.65, 0.0, 0.7], "rpy_deg": [0, 90, 0]}},
+        {"goal": {"position": [0.6, 0.1, 0.7], "rpy_deg": [0, 90, 40]}},
+        {"goal": {"position": [0.6, -0.1, 0.675], "rpy_deg": [0, 0, 135]}},
+    ]
+    path = tmp_path / "flips.yaml"
+    path.write_text(yaml.safe_dump(data), encoding="utf-8")
+    assert feasibility_problems(load_world(path), LATERAL) == []
