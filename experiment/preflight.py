@@ -33,6 +33,7 @@ from worlds.feasibility import feasibility_problems
 from worlds.obstacle_holds import obstacle_hold_problems
 from worlds.sim_world import task_moves
 from worlds.spec import WorldSpec
+from worlds.start_checks import start_pose_problems
 from worlds.world_file import World, WorldFileError, load_world, world_spec, world_summary
 
 
@@ -96,7 +97,9 @@ def preflight_problems(
     except TreeFileError as err:
         return [str(p) for p in err.problems]
     lines = [p.format(world_file) for p in feasibility_problems(world, tree_grasps(doc))]
-    if not lines:  # the arms posed at goals the checks above found sound
+    if not lines:  # the robot where a run starts, then posed at goals found sound above
+        lines = [p.format(world_file) for p in start_pose_problems(world)]
+    if not lines:
         lines = [p.format(world_file) for p in obstacle_hold_problems(world)]
     if tree is not None:
         lines += tree_task_problems(world, doc)
