@@ -33,8 +33,12 @@ _TYPES: dict[str, type] = {
     **dict.fromkeys(("uint8_t", "uint16_t", "uint32_t", "uint64_t", "unsigned", "size_t"), int),
     **dict.fromkeys(("double", "float"), float),
     **dict.fromkeys(("bool",), bool),
-    **dict.fromkeys(("std::string", "string", "str", "BT::AnyTypeAllowed"), str),
+    **dict.fromkeys(("std::string", "string", "str"), str),
 }
+#: A port of no type, or of one BT.CPP does not hold to (``AnyTypeAllowed``), or of a C++
+#: type Python has none for: carried as a string, and any type may share its key
+#: (:func:`planner.tree_dataflow.type_problems`).
+_ANY_TYPE = "BT::AnyTypeAllowed"
 _PORT_TAGS = {"input_port": "in", "inout_port": "in", "output_port": "out"}
 
 
@@ -99,6 +103,7 @@ def model_stub_classes(path: str | os.PathLike[str]) -> dict[str, type]:
                 problem('expected an ID="..." attribute naming the node')
                 continue
             ports: dict[str, dict[str, PortInformation]] = {"in": {}, "out": {}}
+            untyped: set[str] = set()
             for port in elem:
                 if port.tag not in _PORT_TAGS:
                     continue  # MetadataFields and the like
@@ -106,7 +111,10 @@ def model_stub_classes(path: str | os.PathLike[str]) -> dict[str, type]:
                 if not name:
                     problem(f'<{port.tag}>: expected a name="..." attribute', port)
                     continue
-                data_type = _TYPES.get(port.attrib.get("type", "").strip(), str)
+                type_text = port.attrib.get("type", "").strip()
+                data_type = _TYPES.get(type_text, str)
+                if type_text == _ANY_TYPE or type_text not in _TYPES:
+                    untyped.add(name)
                 default = None
                 if "default" in port.attrib:
                     try:
@@ -120,14 +128,17 @@ def model_stub_classes(path: str | os.PathLike[str]) -> dict[str, type]:
                     description=(port.text or "").strip(),
                     default_value=default,
                 )
-            classes[node_id] = _stub_class(node_id, elem.tag, ports)
+            classes[node_id] = _stub_class(node_id, elem.tag, ports, frozenset(untyped))
     if problems:
         raise TreeFileError(problems)
     return classes
 
 
 def _stub_class(
-    node_id: str, kind: str, ports: dict[str, dict[str, PortInformation]]
+    node_id: str,
+    kind: str,
+    ports: dict[str, dict[str, PortInformation]],
+    untyped: frozenset[str] = frozenset(),
 ) -> type[PortsMixin]:
     base: type = {
         "Decorator": _StubDecorator,
@@ -137,6 +148,7 @@ def _stub_class(
         "INPUT_PORTS": ports["in"],
         "OUTPUT_PORTS": {k: v for k, v in ports["out"].items() if k not in ports["in"]},
         "NODE_TYPE": "Condition" if kind == "Condition" else "Action",
+        "UNTYPED_PORTS": untyped,
         "__doc__": f"Stub of the {kind} '{node_id}' from a TreeNodesModel.",
         "__module__": __name__,
     }

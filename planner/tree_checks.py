@@ -14,7 +14,7 @@ from py_trees.ports import PortInformation, PortsMixin
 
 from planner.bt_controls import CHILD_COUNTS
 from planner.bt_switch import SWITCH_CHILD_COUNTS
-from planner.tree_dataflow import dataflow_problems
+from planner.tree_dataflow import dataflow_problems, type_problems
 from planner.tree_limits import subtree_cycle_problems, tree_size_problems
 from planner.tree_ports import (
     Registry,
@@ -394,5 +394,6 @@ def check_tree_document(
         *doc.problems,
         *_Checker(doc, registry).run(),
         *subtree_cycle_problems(doc),
+        *type_problems(doc, registry),
         *(dataflow_problems(doc, registry, run_keys) if run_keys is not None else ()),
     ]

@@ -22,13 +22,19 @@ import re
 import xml.etree.ElementTree as ET
 from collections.abc import Collection
 from dataclasses import dataclass
-from typing import Literal
+from typing import Any, Literal
 
 from py_trees.parsers.behaviour_tree_xml import DECORATOR_NODES
 from py_trees.ports import PortsMixin
 
 from planner.tree_bindings import Binding, resolve, subtree_bindings
-from planner.tree_ports import Registry, effective_registry, key_problem, registry_class
+from planner.tree_ports import (
+    Registry,
+    effective_registry,
+    key_problem,
+    registry_class,
+    type_name,
+)
 from planner.tree_problems import TreeProblem
 from planner.tree_reading import TreeDocument, describe, source_file, source_line
 from planner.tree_syntax import ROOT_PREFIX
@@ -188,6 +194,52 @@ def dataflow_problems(
     return problems
 
 
+def _port_type(use: PortUse, reg: Registry) -> Any:
+    """The declared type of the leaf port ``use`` is, or None: a node without typed ports
+    (``SetBlackboard``, a script, a decorator's parameter) or one typed ``Any``/``object``."""
+    cls = registry_class(reg.get(use.elem.tag)) if use.elem.tag in reg else None
+    if cls is None or not issubclass(cls, PortsMixin):
+        return None
+    if use.port in getattr(cls, "UNTYPED_PORTS", ()):
+        return None  # a model's port of no type (planner.model_stubs)
+    table = cls.output_ports() if use.direction == "write" else cls.input_ports()
+    info = table.get(use.port)
+    data_type = getattr(info, "data_type", None)
+    return None if data_type in (None, Any, object) else data_type
+
+
+def type_problems(doc: TreeDocument, registry: Registry | None = None) -> list[TreeProblem]:
+    """One problem per leaf port given a ``{key}`` whose entry a port of another declared
+    type made first, as BehaviorTree.CPP refuses the tree when it builds it ("the port [key]
+    was initially created with type [double] and, later type [std::string]"): the entry's
+    type is that of the first typed port that uses it, in document order; an entry a ``str``
+    port made takes any (BT.CPP converts from strings). Such a tree had validated, then
+    failed at the reader's first tick."""
+    reg = effective_registry(registry)
+    made: dict[str, tuple[Any, PortUse]] = {}
+    problems: list[TreeProblem] = []
+    for use in port_uses(doc, registry):
+        key = use.binding.key
+        data_type = _port_type(use, reg) if key is not None else None
+        if key is None or data_type is None:
+            continue
+        first = made.setdefault(key, (data_type, use))
+        kind, maker = first
+        if kind is data_type or kind is str:
+            continue
+        problem = TreeProblem(
+            source_file(use.elem, doc.file),
+            source_line(use.elem),
+            describe(use.elem),
+            f"port '{use.port}' ({type_name(data_type)}) uses {{{use.name}}} (blackboard key "
+            f"{key}), which {describe(maker.elem)} port '{maker.port}' made "
+            f"{type_name(kind)}: expected ports of one type on a key",
+        )
+        if problem not in problems:
+            problems.append(problem)
+    return problems
+
+
 __all__ = [
     "RUN_WRITES",
     "TASK_OBJECT_KEY",
@@ -195,4 +247,5 @@ __all__ = [
     "PortUse",
     "dataflow_problems",
     "port_uses",
+    "type_problems",
 ]

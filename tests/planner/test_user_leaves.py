@@ -576,3 +576,33 @@ def test_a_number_is_written_as_its_output_ports_kind_where_nothing_is_lost(
         OutputTypeError, match=r"output port 'f': expected float, got numpy\.str_ np\.str_\('x'\)"
     ):
         leaf._set_output("f", np.str_("x"))
+
+
+def test_validate_refuses_a_key_written_as_one_type_and_read_as_another(
+    leaf_file: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # A float written and read by a str port had validated "ok", then failed at the reader's
+    # first tick ("cannot convert 0.1 (float) to str"); BT.CPP refuses it as it builds the
+    # tree. A key a str port made first takes any type (BT.CPP converts from strings).
+    tree = leaf_file.parent / "typed.xml"
+    body = (
+        '<HeightAtLeast name="high" object="parcel" height_m="{z}"/>\n'
+        '      <IsHeld name="held" object="{z}"/>'
+    )
+    tree.write_text(TREE.replace(TREE.splitlines()[3].strip(), body), encoding="utf-8")
+    argv = ["validate", str(tree), "--leaves", str(leaf_file)]
+    assert app.main(argv) == app.EXIT_BAD_INPUT
+    err = capsys.readouterr().err
+    assert (
+        f"{tree}:5: <IsHeld name=\"held\">: port 'object' (str) uses {{z}} (blackboard key "
+        "/z), which <HeightAtLeast name=\"high\"> port 'height_m' made float: expected ports of "
+        "one type on a key"
+    ) in err
+    # Two str ports on one key, which a SetBlackboard (of no type) wrote: the same type.
+    shared = (
+        '<SetBlackboard value="parcel" output_key="name"/>\n'
+        '      <IsHeld name="held" object="{name}"/>\n'
+        '      <HeightAtLeast name="high" object="{name}" height_m="{z}"/>'
+    )
+    tree.write_text(TREE.replace(TREE.splitlines()[3].strip(), shared), encoding="utf-8")
+    assert app.main(argv) == app.EXIT_OK, capsys.readouterr().err
