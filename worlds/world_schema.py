@@ -627,16 +627,6 @@ class World(FileModel):
                         show_value(disturbance.object),
                     )
                 )
-            if disturbance.at_s >= self.sim.max_sim_time_s:
-                # A window the run never reaches would be a push that silently never happens.
-                issues.append(
-                    Issue(
-                        ("disturbances", d, "at_s"),
-                        f"a start before sim.max_sim_time_s ({self.sim.max_sim_time_s:g} s), "
-                        "when a run ends",
-                        show_value(disturbance.at_s),
-                    )
-                )
         issues += fixture_issues(self)
         low = self.trials.hard.table_dz_m[0]
         if self.table.size[2] + low <= 0.0:

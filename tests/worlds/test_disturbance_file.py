@@ -96,12 +96,6 @@ def test_a_valid_entry_loads_into_the_scene_spec(
             r"duration_s, torque_nm, while_held, got unknown key 'colour'",
         ),
         (
-            # The default world's runs end at 120 s: this push would never come.
-            {**PUSH, "at_s": 120.0},
-            r"disturbances\[0\]\.at_s: expected a start before sim\.max_sim_time_s \(120 s\), "
-            r"when a run ends, got 120\.0",
-        ),
-        (
             {k: v for k, v in PUSH.items() if k != "duration_s"},
             r"disturbances\[0\]\.duration_s: expected a value \(length of the window, s, > 0\)",
         ),
