@@ -19,9 +19,22 @@ def wire(behaviour: PortsMixin, namespace: str = "/", /, **ports: Any) -> PortsM
     Raises
     ------
     KeyError
-        For a port the behaviour does not declare (names the behaviour and the port).
+        For a port the behaviour does not declare, or a required input port (one without a
+        default) left out: names the behaviour and the port.
     """
     known = set(behaviour.input_ports()) | set(behaviour.output_ports())
+    missing = [
+        f"'{port}'"
+        for port, info in behaviour.input_ports().items()
+        if info.required and not info.has_default and port not in ports
+    ]
+    if missing:
+        # As a tree file's element without it is refused, not a NoDataAvailable at the first
+        # tick naming a uuid-made key.
+        raise KeyError(
+            f"{type(behaviour).__name__} {behaviour.name!r}: missing required input port"
+            f"{'s' if len(missing) > 1 else ''} {', '.join(missing)}"
+        )
     remap: dict[str, str] = {}
     for port, value in ports.items():
         if port not in known:

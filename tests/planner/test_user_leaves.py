@@ -606,3 +606,14 @@ def test_validate_refuses_a_key_written_as_one_type_and_read_as_another(
     )
     tree.write_text(TREE.replace(TREE.splitlines()[3].strip(), shared), encoding="utf-8")
     assert app.main(argv) == app.EXIT_OK, capsys.readouterr().err
+
+
+def test_wiring_in_code_refuses_a_missing_required_port_as_a_tree_file_does() -> None:
+    # It had wired, and the leaf failed at its first tick with NoDataAvailable on a key named
+    # after a uuid ("/still_dd57a0a7-.../object").
+    from planner.leaves import IsHeld
+    from planner.wiring import wire
+
+    with pytest.raises(KeyError, match=r"IsHeld 'held': missing required input port 'object'"):
+        wire(IsHeld("held"))
+    assert wire(IsHeld("held"), object="parcel").name == "held"
