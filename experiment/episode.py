@@ -49,6 +49,10 @@ from worlds.world_file import World, as_world_spec
 #: An object is held, for the grip metrics, while both palms press on it with at least this
 #: force, N: the default ``min_force_n`` of the IsHeld leaf (and of Transport and Turning).
 HELD_FORCE_N = float(IsHeld.INPUT_PORTS["min_force_n"].default_value)
+#: A run whose grip slipped further than this along a face is told so in its text, mm: the
+#: slide the shipped trees' IsHeld takes for a broken grip (its ``max_slip_m`` default). A
+#: push that shoved the parcel 12 cm through the palms had been said only in the JSON.
+SLIP_NOTE_MM = 1000.0 * float(IsHeld.INPUT_PORTS["max_slip_m"].default_value)
 
 
 @dataclass
@@ -176,6 +180,12 @@ class EpisodeReport:
             out.append(
                 f"  {printable(label)}: slid along the table top, not lifted: its centre went "
                 f"{travel * 1000:.0f} mm and rose at most {lift * 1000:.1f} mm"
+            )
+        slip = s.get("slip_mm")
+        if slip is not None and slip > SLIP_NOTE_MM:
+            out.append(
+                f"  grip: slipped {slip:.0f} mm along a face while held (more than the "
+                f"{SLIP_NOTE_MM:.0f} mm a grip is taken for broken at; slip_mm)"
             )
         dist = s["min_obstacle_distance_m"]
         out.append(

@@ -251,3 +251,23 @@ def test_a_hard_trials_figure_draws_the_goal_where_it_is_judged() -> None:
     assert recorder._true_error_m(("parcel", 0), placed, 0.028) == pytest.approx(0.0, abs=1e-9)
     recorder.sim.scene.truth.table_dz_m = 0.0
     assert not recorder.goal_shift(("parcel", 0)).any()
+
+
+def test_a_grip_that_slipped_past_what_is_taken_for_broken_is_said_in_the_text() -> None:
+    # A push that shoved the parcel 12.5 cm through the palms, a run judged a success: only
+    # the JSON had said it (slip_mm 124.7).
+    from experiment.episode import SLIP_NOTE_MM, EpisodeReport
+
+    def report(slip_mm: float) -> EpisodeReport:
+        return EpisodeReport(
+            True, "SUCCESS", "", [0.0065], [0.4], 0.05, {}, 0, False, 20.0, 2.0,
+            placement_objects=["parcel"], grip=m.GripMetrics(slip_mm=slip_mm),
+        )  # fmt: skip
+
+    assert SLIP_NOTE_MM == 50.0  # IsHeld's max_slip_m
+    lines = report(124.7).lines("w")
+    assert (
+        "  grip: slipped 125 mm along a face while held (more than the 50 mm a grip is taken "
+        "for broken at; slip_mm)"
+    ) in lines
+    assert not any("grip: slipped" in line for line in report(12.0).lines("w"))
