@@ -212,26 +212,31 @@ def type_problems(doc: TreeDocument, registry: Registry | None = None) -> list[T
     """One problem per leaf port given a ``{key}`` whose entry a port of another declared
     type made first, as BehaviorTree.CPP refuses the tree when it builds it ("the port [key]
     was initially created with type [double] and, later type [std::string]"): the entry's
-    type is that of the first typed port that uses it, in document order; an entry a ``str``
-    port made takes any (BT.CPP converts from strings). Such a tree had validated, then
+    type is that of the first port that uses it, in document order; an entry a ``str`` port
+    or a port of no declared type made takes any (BT.CPP converts from strings, and checks
+    no type on an entry an untyped port made). Such a tree had validated, then
     failed at the reader's first tick."""
     reg = effective_registry(registry)
+    # Per key, the type of the port that used it first: None, a port of no declared type
+    # (SetBlackboard's output_key, a script), after which BT.CPP checks no type on it.
     made: dict[str, tuple[Any, PortUse]] = {}
     problems: list[TreeProblem] = []
     for use in port_uses(doc, registry):
         key = use.binding.key
-        data_type = _port_type(use, reg) if key is not None else None
-        if key is None or data_type is None:
+        if key is None:
             continue
-        first = made.setdefault(key, (data_type, use))
-        kind, maker = first
-        if kind is data_type or kind is str:
+        data_type = _port_type(use, reg)
+        kind, maker = made.setdefault(key, (data_type, use))
+        if data_type is None or kind is None or kind == data_type or kind is str:
             continue
+        name = use.name
+        if name.startswith(ROOT_PREFIX):  # a {@key}, passed down under another name
+            name = "@" + name[len(ROOT_PREFIX) :]
         problem = TreeProblem(
             source_file(use.elem, doc.file),
             source_line(use.elem),
             describe(use.elem),
-            f"port '{use.port}' ({type_name(data_type)}) uses {{{use.name}}} (blackboard key "
+            f"port '{use.port}' ({type_name(data_type)}) uses {{{name}}} (blackboard key "
             f"{key}), which {describe(maker.elem)} port '{maker.port}' made "
             f"{type_name(kind)}: expected ports of one type on a key",
         )

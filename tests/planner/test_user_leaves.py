@@ -617,3 +617,39 @@ def test_wiring_in_code_refuses_a_missing_required_port_as_a_tree_file_does() ->
     with pytest.raises(KeyError, match=r"IsHeld 'held': missing required input port 'object'"):
         wire(IsHeld("held"))
     assert wire(IsHeld("held"), object="parcel").name == "held"
+
+
+def test_type_check_takes_equal_generic_types_untyped_first_uses_and_names_root_keys(
+    tmp_path: Path, registry_restored: None
+) -> None:
+    # A reviewer's cases: two list[float] ports had been refused ("made list[float]"), as
+    # had a key a SetBlackboard made before a typed port; a {@key} was named ROOT__key.
+    from planner.loader import load_tree_string
+
+    leaves = tmp_path / "lists.py"
+    leaves.write_text(
+        "from py_trees.common import Status\nfrom py_trees.ports import PortInformation\n"
+        "from planner.leaves import WorldLeaf\n\n\n"
+        "class Points(WorldLeaf):\n"
+        '    OUTPUT_PORTS = {"points": PortInformation(list[float], description="p")}\n\n'
+        "    def update(self) -> Status:\n        return Status.SUCCESS\n\n\n"
+        "class UsesPoints(WorldLeaf):\n"
+        '    INPUT_PORTS = {"points": PortInformation(list[float], description="p")}\n\n'
+        "    def update(self) -> Status:\n        return Status.SUCCESS\n",
+        encoding="utf-8",
+    )
+    register_leaves([str(leaves)])
+    tree = """<root BTCPP_format="4" main_tree_to_execute="M"><BehaviorTree ID="M"><Sequence>
+      <Points points="{p}"/><UsesPoints points="{p}"/>
+      <SetBlackboard output_key="m" value="1"/>
+      <LoopDouble queue="1.0;2.0" value="{m}"><Sleep msec="{m}"/></LoopDouble>
+      </Sequence></BehaviorTree></root>"""
+    load_tree_string(tree)  # no problem
+    rooted = """<root BTCPP_format="4" main_tree_to_execute="M">
+      <BehaviorTree ID="M"><Sequence><LoopDouble queue="1.0" value="{@m}">
+        <SubTree ID="S"/></LoopDouble></Sequence></BehaviorTree>
+      <BehaviorTree ID="S"><Sleep msec="{@m}"/></BehaviorTree></root>"""
+    with pytest.raises(
+        TreeFileError, match=r"port 'msec' \(int\) uses \{@m\} \(blackboard key /m\)"
+    ):
+        load_tree_string(rooted)
