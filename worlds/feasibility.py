@@ -242,13 +242,16 @@ def feasibility_problems(
                 )
             )
     robot_yaw = math.radians(spec.scene.robot.base_rpy_deg[2])
+    # Where each object's last move left it, over the task's steps: its yaw and its turn
+    # about its grasp axis (it starts upright, _not_upright).
+    left_at = {obj.name: (obj.yaw, 0.0) for obj in spec.scene.objects}
     for i, step in enumerate(spec.task):
         obj = spec.scene.objects[index[step.object]]
-        yaw = obj.yaw
-        pitch = 0.0  # the start stands upright (_not_upright)
+        yaw, pitch = left_at[obj.name]
         for j, move in enumerate(step.moves):
             field = f"task[{i}].moves[{j}].goal.position"
             before, yaw = yaw, move.goal_yaw
+            left_at[obj.name] = (yaw, pitch)
             stepped = _stepped_into_fixture(move, before, robot.max_turn_rad, robot_yaw)
             if stepped is not None:
                 problems.append(WorldFileProblem(f"task[{i}].moves[{j}].goal.rpy_deg", *stepped))
@@ -257,12 +260,14 @@ def feasibility_problems(
                 problems.append(WorldFileProblem(f"task[{i}].moves[{j}].goal.rpy_deg", *tilted))
                 bad_goals.add((i, j))
                 continue
-            turned = _turn_problem(obj, move.goal_quaternion, pitch)
+            written = _goal_rpy(world, i, j)
+            turned = _turn_problem(obj, move.goal_quaternion, pitch, written)
             if turned is not None:
                 problems.append(WorldFileProblem(f"task[{i}].moves[{j}].goal.rpy_deg", *turned))
                 bad_goals.add((i, j))
                 continue
             pitch = grasp_pitch(move.goal_quaternion)
+            left_at[obj.name] = (yaw, pitch)
             table = _table_problem(obj, move, spec.scene.table)
             if table is not None:
                 problems.append(WorldFileProblem(field, *table))
@@ -288,8 +293,18 @@ def grasp_pitch(quaternion: Sequence[float]) -> float:
     return math.atan2(-float(rotation[2, 0]), float(rotation[2, 2]))
 
 
+def _goal_rpy(world: World | WorldSpec, step: int, move: int) -> Sequence[float] | None:
+    """A goal's ``rpy_deg`` as the world file writes it (None for a spec built in code)."""
+    if not isinstance(world, World):
+        return None
+    return world.task[step].moves[move].goal.rpy_deg
+
+
 def _turn_problem(
-    obj: ObjectSpec, goal: Sequence[float], pitch_before: float
+    obj: ObjectSpec,
+    goal: Sequence[float],
+    pitch_before: float,
+    written: Sequence[float] | None = None,
 ) -> tuple[str, str] | None:
     """What a goal's orientation should be and is, if the grip cannot turn ``obj`` to it
     from where its last move left it (``pitch_before``, rad): the grip, across the object's
@@ -297,7 +312,8 @@ def _turn_problem(
     at most in one carry; a roll tilts the y axis itself, which it cannot make. None if it
     can."""
     rotation = quat.to_matrix(np.asarray(goal, dtype=float))
-    rpy = _vec(np.round(np.degrees(quat.to_rpy(np.asarray(goal, dtype=float))), 6) + 0.0)
+    shown = written if written is not None else np.degrees(quat.to_rpy(np.asarray(goal, float)))
+    rpy = _vec(np.round(np.asarray(shown, dtype=float), 6) + 0.0)
     expected = (
         f"a goal the grip turns {obj.name} to: about the vertical, and about its own y axis "
         f"(the grip's) by at most {MAX_PITCH_DEG:g} deg in a move, its y axis level within "

@@ -227,7 +227,7 @@ def test_an_object_the_task_moves_must_start_upright(
         (
             None,
             [([0.65, 0.0, 0.675], [0, 180, 0])],
-            "rpy_deg [180, 0, 180]: a turn of 180 deg about its y axis from where its last move "
+            "rpy_deg [0, 180, 0]: a turn of 180 deg about its y axis from where its last move "
             "left it",
         ),
         (  # two quarter turns the same way: the second is a half turn from upright too
@@ -277,3 +277,31 @@ def test_the_box_flips_quarter_turns_and_yaws_are_feasible(tmp_path: Path) -> No
     path = tmp_path / "flips.yaml"
     path.write_text(yaml.safe_dump(data), encoding="utf-8")
     assert feasibility_problems(load_world(path), LATERAL) == []
+
+
+def test_the_turn_check_goes_on_from_where_an_earlier_task_step_left_the_object(
+    tmp_path: Path,
+) -> None:
+    # It had started every task step from upright: a second step turning the box back by a
+    # half turn validated, and one turning it on by a quarter turn was refused.
+    import yaml
+
+    data = yaml.safe_load((ROOT / "worlds" / "parcel_pick_place.yaml").read_text())
+    first = {"goal": {"position": [0.65, 0.0, 0.7], "rpy_deg": [0, 90, 0]}}
+
+    def problems(second: list[float], z: float) -> list[str]:
+        data["task"] = [
+            {"object": "parcel", "moves": [first]},
+            {
+                "object": "parcel",
+                "moves": [{"goal": {"position": [0.6, 0.1, z], "rpy_deg": second}}],
+            },
+        ]
+        path = tmp_path / "steps.yaml"
+        path.write_text(yaml.safe_dump(data), encoding="utf-8")
+        return [p.format("w") for p in feasibility_problems(load_world(path), LATERAL)]
+
+    (back,) = problems([0, -90, 0], 0.7)
+    assert back.startswith("w: task[1].moves[0].goal.rpy_deg: expected a goal the grip turns")
+    assert "got rpy_deg [0, -90, 0]: a turn of 180 deg about its y axis" in back
+    assert problems([0, 180, 0], 0.675) == []  # on over: a quarter turn from where it lay
