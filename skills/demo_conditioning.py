@@ -164,33 +164,67 @@ def low_pass(demo: Demonstration, sigma_s: float = DEFAULT_SMOOTHING_S) -> Demon
     return Demonstration.create(demo.t, smooth[:, :d], orientations, demo.name)
 
 
-#: The share of a recording's duration, at its end, over which :func:`end_speed` averages.
+#: The window at a recording's end over which :func:`end_speed` averages, s: at most this,
+#: and at most :data:`END_WINDOW_SHARE` of the duration (a share alone had grown with rest
+#: recorded before the motion, and taken its last deceleration for motion).
+END_WINDOW_S = 0.1
+#: The most of a short recording's duration that window takes.
 END_WINDOW_SHARE = 0.05
 #: A recording whose :func:`end_speed` is more than this share of its peak ends moving: cut
 #: before the motion stopped (by that measure, smoothed, a carry of a cosine speed profile
 #: ends at 0.12 of its peak, 0.16 with 2 mm of noise; one cut at its fastest at 0.6).
 END_SPEED_SHARE = 0.25
+#: Peaks below these are no motion to end, m/s and rad/s: a turn in place moves its position
+#: by the tracker's noise alone (a peak of 6 mm/s), a carry may not turn at all.
+MOTION_FLOOR = (0.02, 0.1)
+
+
+def _end_start(t: Array) -> int:
+    """Index of the first sample of :func:`end_speed`'s window (at least one step back)."""
+    window = min(END_WINDOW_S, END_WINDOW_SHARE * float(t[-1] - t[0]))
+    return min(int(np.searchsorted(t, t[-1] - window)), t.size - 2)
 
 
 def end_speed(demo: Demonstration) -> tuple[float, float]:
-    """The speed ``demo`` ends at and its peak speed, m/s: the end's the mean over the last
-    :data:`END_WINDOW_SHARE` of its duration (the distance between the window's ends over its
-    length, at least one step: a sample's own speed is its noise's); the peak its positions'
-    finite differences (give it smoothed, :func:`low_pass`, or the noise is what they
-    measure). A skill learnt from a recording cut before the motion stopped stops short of
-    where it was going, or overshoots, as one learnt from noise strays from its goal."""
+    """The speed ``demo`` ends at and its peak speed, m/s: the end's the mean over its last
+    :data:`END_WINDOW_S` (or :data:`END_WINDOW_SHARE` of a short one; the distance between
+    the window's ends over its length, at least one step: a sample's own speed is its
+    noise's); the peak its positions' finite differences (give it smoothed, :func:`low_pass`,
+    or the noise is what they measure). A skill learnt from a recording cut before the
+    motion stopped stops short of where it was going, or overshoots, as one learnt from noise
+    strays from its goal."""
     speed = np.linalg.norm(demo.position_derivatives()[0], axis=1)
     t = demo.t
-    start = min(int(np.searchsorted(t, t[-1] - END_WINDOW_SHARE * (t[-1] - t[0]))), t.size - 2)
+    start = _end_start(t)
     moved = float(np.linalg.norm(demo.positions[-1] - demo.positions[start]))
     return moved / float(t[-1] - t[start]), float(speed.max())
 
 
-def ends_moving(demo: Demonstration) -> bool:
-    """Whether ``demo`` (smoothed) ends moving, at more than :data:`END_SPEED_SHARE` of its
-    peak speed (:func:`end_speed`)."""
+def end_turn_rate(demo: Demonstration) -> tuple[float, float]:
+    """As :func:`end_speed`, for the orientation: the mean turn rate over the end's window
+    (the angle between its end orientations over its length) and the peak, rad/s; (0, 0)
+    without orientations."""
+    if demo.orientations is None:
+        return 0.0, 0.0
+    rate = np.linalg.norm(demo.orientation_derivatives()[0], axis=1)
+    t = demo.t
+    start = _end_start(t)
+    turned = float(quat.angle_between(demo.orientations[-1], demo.orientations[start]))
+    return turned / float(t[-1] - t[start]), float(rate.max())
+
+
+def ends_moving(demo: Demonstration) -> str:
+    """How ``demo`` (smoothed) ends moving, its position or its turn at more than
+    :data:`END_SPEED_SHARE` of its peak (:func:`end_speed`, :func:`end_turn_rate`; a peak
+    under :data:`MOTION_FLOOR` is no motion), e.g. "moving at 0.145 m/s, its peak 0.239
+    m/s"; "" when it ends at rest."""
     final, peak = end_speed(demo)
-    return final > END_SPEED_SHARE * peak
+    if peak >= MOTION_FLOOR[0] and final > END_SPEED_SHARE * peak:
+        return f"moving at {final:.3f} m/s, its peak {peak:.3f} m/s"
+    final, peak = end_turn_rate(demo)
+    if peak >= MOTION_FLOOR[1] and final > END_SPEED_SHARE * peak:
+        return f"turning at {np.degrees(final):.1f} deg/s, its peak {np.degrees(peak):.1f} deg/s"
+    return ""
 
 
 @dataclass(frozen=True)
@@ -260,14 +294,17 @@ def reproduction(model: PoseModel, demo: Demonstration, dt: float = 1.0 / 120.0)
 __all__ = [
     "DEFAULT_SMOOTHING_S",
     "END_SPEED_SHARE",
+    "END_WINDOW_S",
     "END_WINDOW_SHARE",
     "MAX_EVEN_SAMPLES",
     "MAX_REPRODUCTION_SHARE",
     "MAX_SETTLE_DEG",
     "MAX_SETTLE_M",
     "MIN_REPRODUCTION_M",
+    "MOTION_FLOOR",
     "Reproduction",
     "end_speed",
+    "end_turn_rate",
     "ends_moving",
     "even_steps",
     "low_pass",

@@ -33,12 +33,11 @@ from skills.default_library import default_library
 from skills.demo_conditioning import (
     DEFAULT_SMOOTHING_S,
     END_SPEED_SHARE,
-    END_WINDOW_SHARE,
+    END_WINDOW_S,
     MAX_REPRODUCTION_SHARE,
     MAX_SETTLE_DEG,
     MAX_SETTLE_M,
     Reproduction,
-    end_speed,
     ends_moving,
     even_steps,
     low_pass,
@@ -273,9 +272,10 @@ def teach(
     if moving:
         # Whether or not its skill strays: the motion's end was never shown.
         raise TeachingError(
-            f"{demo}: expected a recording that ends at rest (its last "
-            f"{END_WINDOW_SHARE:.0%} under {END_SPEED_SHARE:.0%} of its peak speed), got "
-            f"{moving}: record until the motion has stopped. Nothing was added."
+            f"{demo}: expected a recording that ends at rest (over its last "
+            f"{1000.0 * END_WINDOW_S:.0f} ms under {END_SPEED_SHARE:.0%} of its peak speed and "
+            f"turn rate), got {moving}: record until the motion has stopped. Nothing was "
+            "added."
         )
     if not shown.settles:
         raise TeachingError(_unsettled(demo, shown, smoothing_s, name_of))
@@ -382,14 +382,12 @@ def _shaped_text(shaped: list[int], turns: list[int]) -> str:
 
 
 def _moving_end(recorded: Demonstration, smoothed: Demonstration, smoothing_s: float) -> str:
-    """How a recording ends moving (``one that ends at 0.152 m/s, its peak 0.236 m/s``), read
-    smoothed at least as the default does (raw, its speeds are the noise's); "" if it ends at
-    rest (:func:`skills.demo_conditioning.ends_moving`)."""
+    """How a recording ends moving (``one that ends moving at 0.152 m/s, its peak 0.236
+    m/s``), read smoothed at least as the default does (raw, its speeds are the noise's); ""
+    if it ends at rest (:func:`skills.demo_conditioning.ends_moving`)."""
     settled = smoothed if smoothing_s >= DEFAULT_SMOOTHING_S else low_pass(recorded)
-    if not ends_moving(settled):
-        return ""
-    final, peak = end_speed(settled)
-    return f"one that ends at {final:.3f} m/s, its peak {peak:.3f} m/s"
+    how = ends_moving(settled)
+    return f"one that ends {how}" if how else ""
 
 
 def _unsettled(
