@@ -25,6 +25,7 @@ expected. The registration is global to the process: a worker process of a campa
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import importlib
 import importlib.util
@@ -33,7 +34,7 @@ import re
 import sys
 import traceback
 import warnings
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Iterator, Sequence
 from importlib.metadata import EntryPoint, entry_points
 from pathlib import Path
 from types import ModuleType
@@ -153,20 +154,48 @@ def _import_file(source: str, path: Path) -> ModuleType:
         )
     module = importlib.util.module_from_spec(spec)
     sys.modules[name] = module
-    # Its folder is searched for its own helper modules (`from helpers import speed` beside
-    # it), as `python file.py` and pytest search it; last, so that no file of the user's
-    # shadows a module Duet or a package imports.
-    folder = str(resolved.parent)
-    if folder not in sys.path:
-        sys.path.append(folder)
     try:
-        spec.loader.exec_module(module)
+        with _own_folder_first(resolved.parent):
+            spec.loader.exec_module(module)
     except (Exception, SystemExit) as err:  # a user's file may raise anything, exit too
         del sys.modules[name]
         raise LeafSourceError(
             f"--leaves {source}: cannot import it: {_describe(err, resolved)}"
         ) from None
     return module
+
+
+#: The helper modules each leaf file's folder gave, by folder: module names to modules.
+_FOLDER_MODULES: dict[Path, dict[str, ModuleType]] = {}
+
+
+@contextlib.contextmanager
+def _own_folder_first(folder: Path) -> Iterator[None]:
+    """While a leaf file is imported, its folder is searched first for the modules it
+    imports (``from helpers import speed`` beside it), as ``python file.py`` searches it, and
+    a module of that name another leaf folder gave is set aside (two folders' ``helpers.py``
+    each the one its own file imports); afterwards the search path is as it was."""
+    before = set(sys.modules)
+    setting_aside = {
+        module_name: module
+        for other, modules in _FOLDER_MODULES.items()
+        if other != folder
+        for module_name, module in modules.items()
+        if sys.modules.get(module_name) is module
+    }
+    for module_name in setting_aside:
+        del sys.modules[module_name]
+    sys.path.insert(0, str(folder))
+    try:
+        yield
+    finally:
+        sys.path.remove(str(folder))
+        own = _FOLDER_MODULES.setdefault(folder, {})
+        for module_name in set(sys.modules) - before:
+            module = sys.modules[module_name]
+            file = getattr(module, "__file__", None)
+            if file is not None and Path(file).resolve().is_relative_to(folder):
+                own[module_name] = module
 
 
 def _describe(err: BaseException, file: Path | None = None) -> str:

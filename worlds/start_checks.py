@@ -3,8 +3,8 @@
 A robot whose two arms stand inside each other (an ``arm_separation`` below the width of the
 iiwas' bases) validated and then failed every run as "arms touched", from the first physics
 step. :func:`start_pose_problems` builds the run's scene as it starts (the palms where a run
-places them) and asks PyBullet for the arms' closest points: any pair nearer than 0 is
-refused, naming the field and the links.
+places them) and asks PyBullet for the arms' closest points: any pair touching or nearer is
+refused, naming the field and the links (the run's judge counts a touch).
 """
 
 from __future__ import annotations
@@ -37,12 +37,14 @@ def start_pose_problems(world: World | WorldSpec) -> list[WorldFileProblem]:
             for body, link in ((left, deepest[3]), (right, deepest[4]))
         ]
     separation = spec.scene.robot.arm_separation
+    depth = -1000.0 * deepest[8]
+    how = f"is {fmt(depth)} mm into" if depth >= 0.05 else "touches"
     return [
         WorldFileProblem(
             "robot.arm_separation",
             "arms apart where a run starts (their bases and the palms where a run places them)",
-            f"{fmt(separation)} m: the left arm's {names[0]} is {fmt(-1000.0 * deepest[8])} mm "
-            f"into the right arm's {names[1]}; set them farther apart",
+            f"{separation:g} m: the left arm's {names[0]} {how} the right arm's {names[1]}; set "
+            "them farther apart",
         )
     ]
 

@@ -173,18 +173,24 @@ def as_port_number(value: Any, data_type: Any) -> Any:
     """``value`` as a ``bool``, ``int`` or ``float`` port's own kind where it is a number that
     converts without loss (``np.True_`` to True, ``np.float32`` or an ``int`` to float,
     ``np.int64`` or 3.0 to 3); anything else as it is."""
-    if data_type is bool and isinstance(value, np.bool_):
-        return bool(value)
-    if data_type not in (int, float) or isinstance(value, bool | np.bool_):
+    if isinstance(value, np.bool_):
+        return bool(value)  # then as a Python bool: a bool port's, or an int's (py_trees')
+    if data_type not in (int, float) or isinstance(value, bool):
         return value
     if not isinstance(value, numbers.Real) or type(value) is data_type:
         return value
-    if data_type is float:
-        return float(value)
-    if isinstance(value, numbers.Integral):
-        return int(value)
-    number = float(value)
-    return int(number) if number.is_integer() else value
+    try:
+        if data_type is float:
+            number = float(value)
+            # An integer is taken only where the float holds it exactly (not 2**53 + 1).
+            lossless = not isinstance(value, numbers.Integral) or int(number) == int(value)
+            return number if lossless else value
+        if isinstance(value, numbers.Integral):
+            return int(value)
+        number = float(value)
+        return int(number) if number.is_integer() else value
+    except OverflowError:  # 10**400: no float; refused as of another type
+        return value
 
 
 class WorldLeaf(StringPorts, BehaviourWithPorts):
@@ -286,8 +292,8 @@ class WorldLeaf(StringPorts, BehaviourWithPorts):
         than the port's is an :class:`OutputTypeError` naming the port."""
         info = type(self).OUTPUT_PORTS.get(port_name)
         data_type = getattr(info, "data_type", None)
-        value = as_port_number(value, data_type)
         try:
+            value = as_port_number(value, data_type)
             super()._set_output(port_name, value)
         except TypeError as err:
             kind = getattr(data_type, "__name__", "the port's type")

@@ -524,12 +524,20 @@ def test_a_leaf_file_imports_a_helper_module_beside_it(
     ).replace("default_value=0.5", "default_value=lowest()")
     path = tmp_path / "beside.py"
     path.write_text(leaf, encoding="utf-8")
+    # Another folder's heights.py, imported by another leaf file: each file its own.
+    other = tmp_path / "other"
+    other.mkdir()
+    (other / "heights.py").write_text("def lowest() -> float:\n    return 0.75\n")
+    second = other / "beside_too.py"
+    second.write_text(leaf.replace("HeightAtLeast", "HeightAtLeastToo"), encoding="utf-8")
     try:
         (cls,) = register_leaves([str(path)])
+        (too,) = register_leaves([str(second)])
     finally:
         sys.modules.pop("heights", None)
     assert cls.INPUT_PORTS["min_height_m"].default_value == 0.25
-    assert sys.path[-1] == str(tmp_path)  # searched after Duet's own packages
+    assert too.INPUT_PORTS["min_height_m"].default_value == 0.75
+    assert str(tmp_path) not in sys.path and str(other) not in sys.path  # as it was
 
 
 def test_a_number_is_written_as_its_output_ports_kind_where_nothing_is_lost(
@@ -570,6 +578,12 @@ def test_a_number_is_written_as_its_output_ports_kind_where_nothing_is_lost(
         leaf._set_output(port, value)
         got = board.get(port)
         assert got == stored and type(got) is type(stored), (port, value, got)
+    leaf._set_output("i", np.True_)  # as a Python True, which an int port takes (py_trees)
+    assert board.get("i") is True
+    with pytest.raises(OutputTypeError, match=r"output port 'f': expected float, got int"):
+        leaf._set_output("f", 2**53 + 1)  # no float holds it
+    with pytest.raises(OutputTypeError, match=r"output port 'f': expected float, got int"):
+        leaf._set_output("f", 10**400)
     with pytest.raises(OutputTypeError, match=r"output port 'i': expected int, got float 0\.5"):
         leaf._set_output("i", 0.5)
     with pytest.raises(
