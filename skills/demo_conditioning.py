@@ -227,6 +227,46 @@ def ends_moving(demo: Demonstration) -> str:
     return ""
 
 
+#: A sample is still while its speed and turn rate are under this share of their peaks.
+REST_SHARE = 0.05
+#: Rest kept before a motion's first moving sample and after its last, s: the onset and the
+#: settling, and the window :func:`ends_moving` reads at rest.
+REST_KEPT_S = 0.15
+#: Rest shorter than this in all is left as recorded, s.
+REST_TRIMMED_S = 0.25
+
+
+def trim_rest(demo: Demonstration, smoothed: Demonstration) -> tuple[Demonstration, float, float]:
+    """``demo`` without the rest recorded before its motion and after it, and how long each
+    was, s: a skill learnt with it waits that long at every use (a carry recorded from 2 s
+    before the hand moved idled 2 s, and one stopped 5 s late lasted 7.5 s for 2.5 of
+    motion). The motion runs from the first to the last sample of ``smoothed`` (``demo``
+    smoothed, on the same stamps or ``demo``'s span) moving at :data:`REST_SHARE` or more of
+    its peak speed or turn rate (a peak under :data:`MOTION_FLOOR` is no motion);
+    :data:`REST_KEPT_S` of rest is kept at each end. A recording with less rest than
+    :data:`REST_TRIMMED_S` in all, or no motion, is returned as it is, with (0, 0)."""
+    t = smoothed.t
+    moving = np.zeros(t.size, dtype=bool)
+    speed = np.linalg.norm(smoothed.position_derivatives()[0], axis=1)
+    if speed.max() >= MOTION_FLOOR[0]:
+        moving |= speed >= REST_SHARE * speed.max()
+    if smoothed.orientations is not None:
+        rate = np.linalg.norm(smoothed.orientation_derivatives()[0], axis=1)
+        if rate.max() >= MOTION_FLOOR[1]:
+            moving |= rate >= REST_SHARE * rate.max()
+    if not moving.any():
+        return demo, 0.0, 0.0
+    begin = max(float(t[np.argmax(moving)]) - REST_KEPT_S, float(demo.t[0]))
+    end = min(float(t[t.size - 1 - np.argmax(moving[::-1])]) + REST_KEPT_S, float(demo.t[-1]))
+    before, after = begin - float(demo.t[0]), float(demo.t[-1]) - end
+    keep = (demo.t >= begin - 1e-9) & (demo.t <= end + 1e-9)
+    if before + after < REST_TRIMMED_S or keep.sum() < 3:
+        return demo, 0.0, 0.0
+    orientations = None if demo.orientations is None else demo.orientations[keep]
+    trimmed = Demonstration.create(demo.t[keep], demo.positions[keep], orientations, demo.name)
+    return trimmed, before, after
+
+
 @dataclass(frozen=True)
 class Reproduction:
     """How a learnt skill, rolled out from its demonstration's start to its goal, compares.
@@ -302,6 +342,9 @@ __all__ = [
     "MAX_SETTLE_M",
     "MIN_REPRODUCTION_M",
     "MOTION_FLOOR",
+    "REST_KEPT_S",
+    "REST_SHARE",
+    "REST_TRIMMED_S",
     "Reproduction",
     "end_speed",
     "end_turn_rate",
@@ -309,4 +352,5 @@ __all__ = [
     "even_steps",
     "low_pass",
     "reproduction",
+    "trim_rest",
 ]

@@ -42,6 +42,7 @@ from skills.demo_conditioning import (
     even_steps,
     low_pass,
     reproduction,
+    trim_rest,
 )
 from skills.demonstration import Demonstration
 from skills.demos.io import read_demo_csv
@@ -232,6 +233,16 @@ def teach(
     even, resampled = even_steps(recorded)
     if resampled:
         say(f"note: {resampled}")
+    # The rest before the motion and after it, found smoothed at least as the default does,
+    # is cut from the recording and from what is learnt alike.
+    motion = low_pass(even, max(smoothing_s, DEFAULT_SMOOTHING_S))
+    even, before, after = trim_rest(even, motion)
+    if before or after:
+        recorded, _, _ = trim_rest(recorded, motion)
+        say(
+            f"note: trimmed the rest recorded before the motion ({before:.2f} s) and after it "
+            f"({after:.2f} s): the skill would have waited as long at every use"
+        )
     smoothed = low_pass(even, smoothing_s)  # recognised and learnt smoothed
     match = recognise(skills, smoothed, space, threshold)
     lesson = Lesson(match, smoothing_s, folder)

@@ -266,3 +266,37 @@ def test_teach_judges_a_turn_in_place_by_its_turn_not_its_positions_noise(
         else:
             assert code == app.EXIT_BAD_INPUT
             assert "got one that ends turning at " in err and "record until the motion" in err
+
+
+def test_teach_trims_the_rest_recorded_before_and_after_the_motion(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # Recorded from 2 s before the hand moved to 5 s after it stopped: the skill had kept
+    # both, waiting 2 s at every use and lasting 9.5 s for 2.5 of motion (5 s before it, it
+    # strayed 36 mm after its duration and was refused as "too noisy").
+    from skills.demos.io import read_demo_csv
+    from skills.library import SkillLibrary
+
+    demo = read_demo_csv(ROOT / "skills" / "demos" / "pick_place.csv").demonstration
+    assert demo.orientations is not None
+    dt = float(np.median(np.diff(demo.t)))
+    before = demo.t[0] - dt * np.arange(round(2.0 / dt), 0, -1)
+    after = demo.t[-1] + dt * np.arange(1, round(5.0 / dt) + 1)
+    t = np.concatenate([before, demo.t, after])
+    p = np.concatenate(
+        [np.repeat(demo.positions[:1], before.size, 0), demo.positions,
+         np.repeat(demo.positions[-1:], after.size, 0)]
+    )  # fmt: skip
+    q = np.concatenate(
+        [np.repeat(demo.orientations[:1], before.size, 0), demo.orientations,
+         np.repeat(demo.orientations[-1:], after.size, 0)]
+    )  # fmt: skip
+    csv = write_demo_csv(tmp_path / "resting.csv", t, p, q)
+    lib = tmp_path / "lib"
+    argv = ["teach", str(csv), "--label", "resting", "--space", "absolute", "--library", str(lib)]
+    assert app.main([*argv, "--force"]) == app.EXIT_OK
+    out = capsys.readouterr().out
+    assert "note: trimmed the rest recorded before the motion (1.9" in out
+    assert "and after it (4.9" in out
+    taught = SkillLibrary.load(lib).named("resting")
+    assert float(taught.params["demo_tau"]) == pytest.approx(demo.duration, abs=0.35)
