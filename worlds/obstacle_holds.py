@@ -81,27 +81,38 @@ def obstacle_hold_problems(world: World | WorldSpec) -> list[WorldFileProblem]:
     max_turn = robot.max_turn_rad
     robot_yaw = math.radians(spec.scene.robot.base_rpy_deg[2])
     problems: list[WorldFileProblem] = []
+    # Where each object stands when a task step takes it up: where the step before of the
+    # same object let it go, else where it starts. A step's first move grasps it there, in
+    # the move's first grip; a later move goes on from the grip the move before ended in.
+    left_at = {
+        o.name: (np.asarray(o.position, dtype=float), float(o.yaw)) for o in spec.scene.objects
+    }
     with SimWorld(spec) as sim:
         for i, step in enumerate(spec.task):
-            obj = next(o for o in spec.scene.objects if o.name == step.object)
-            position, yaw = np.asarray(obj.position, dtype=float), float(obj.yaw)
-            held = None
+            position, yaw = left_at[step.object]
+            held: Hold | None = None
             for j, move in enumerate(step.moves):
-                if j and (i, j) in asked and held is not None:
+                goal = np.asarray(move.goal_position, dtype=float)
+                goal_yaw = yaw_of(move.goal_quaternion)
+                if j == 0:
+                    held = move_holds(position, yaw, goal, goal_yaw, max_turn, robot_yaw)[0]
+                if (i, j) in asked and held is not None:
                     touched = sim.hold_touches(step.object, move.obstacles, held)
+                    where = (
+                        f"at the goal of its move {j} (task[{i}].moves[{j - 1}])"
+                        if j
+                        else "where it stands, in the grasp the move starts from"
+                    )
                     for name, what in touched.items():
                         problems.append(
                             WorldFileProblem(
                                 f"obstacles[{index[name]}].position",
-                                f"{name} clear of the arms holding {step.object} at the "
-                                f"goal of its move {j} (task[{i}].moves[{j - 1}]) when "
+                                f"{name} clear of the arms holding {step.object} {where} when "
                                 f"task[{i}].moves[{j}] starts",
                                 f"{vec(spec.scene.obstacles[index[name]].position)}: "
                                 f"{what}, with {step.object} at {vec(held.position)}",
                             )
                         )
-                goal = np.asarray(move.goal_position, dtype=float)
-                goal_yaw = yaw_of(move.goal_quaternion)
                 # Where the lateral holds say how it is held: upright, carried (not seated
                 # in a fixture, which the palms may let go of). Else not asked after it.
                 upright = quat.rotate(np.asarray(move.goal_quaternion), _Z)[2] > _UPRIGHT_COS
@@ -123,6 +134,7 @@ def obstacle_hold_problems(world: World | WorldSpec) -> list[WorldFileProblem]:
                     else None
                 )
                 position, yaw = goal, goal_yaw
+            left_at[step.object] = (position, yaw)
     return problems
 
 

@@ -113,3 +113,29 @@ def test_a_goal_with_one_grip_into_its_obstacle_and_one_clear_passes() -> None:
         # The same goal turned -60 reaches one grip only: the problem names it.
         lines = goal_hold_touches(sim, "parcel", ("ball_left",), goal, np.radians(-60.0))
     assert lines == ["grip 30 deg: the right arm touches it (ball_left)"]
+
+
+def test_an_obstacle_in_the_arm_grasping_the_object_where_it_stands_is_refused() -> None:
+    # A first move's sphere in the iCub's left arm, as the arm holds the parcel where it
+    # stands: it had validated (only second and later moves were asked), and the run spent
+    # 35 s on four grasps before failing as "obstacle spawned inside a body".
+    def edit(data: dict[str, Any]) -> None:
+        data["obstacles"] = [
+            {
+                "name": "blk",
+                "shape": {"type": "sphere", "radius": 0.03},
+                "position": [0.29, 0.065, 0.8],
+            }
+        ]
+        data["task"][0]["moves"] = [
+            {"goal": {"position": [0.29, 0.13, 0.68], "rpy_deg": [0, 0, 0]}, "obstacles": ["blk"]}
+        ]
+        data["trials"] = None
+
+    world = _edited(ROOT / "worlds" / "icub_parcel_pick_place.yaml", edit)
+    (problem,) = obstacle_hold_problems(world)
+    assert problem.format("w.yaml") == (
+        "w.yaml: obstacles[0].position: expected blk clear of the arms holding parcel where it "
+        "stands, in the grasp the move starts from when task[0].moves[0] starts, got [0.29, "
+        "0.065, 0.8]: the left arm touches it, with parcel at [0.29, 0, 0.68]"
+    )
