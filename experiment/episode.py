@@ -25,7 +25,7 @@ import planner.leaves  # noqa: F401  (registers the leaves for the XML loader)
 from duet_robot.text import printable
 from experiment.figures import Animation, trajectory_figure
 from experiment.insertion import insertion_verdict
-from experiment.judge import CLOSEST_VS_CONTACTS, judge, move_labels
+from experiment.judge import CLOSEST_VS_CONTACTS, judge, knocked_away, move_labels
 from experiment.metrics import GripMetrics
 from experiment.move_recorder import MoveRecorder
 from experiment.tray import tray_verdicts
@@ -116,6 +116,10 @@ class EpisodeReport:
     #: (:meth:`experiment.move_recorder.MoveRecorder.slid`): its label, path (m) and most
     #: rise (m). Printed, not judged nor kept in the summary.
     slid: list[tuple[str, float, float]] = field(default_factory=list)
+    #: Each object that ends beyond the placement tolerance from where its last move placed
+    #: it, or a bystander from where it stood (:func:`knocked_away`): said under a failure
+    #: whose reason is another, not judged again nor recorded.
+    knocked: list[str] = field(default_factory=list)
 
     def summary(self) -> dict[str, Any]:
         """Plain JSON-safe dictionary (infinite distances as None).
@@ -176,6 +180,9 @@ class EpisodeReport:
         ):
             placed = "not placed" if e is None or d is None else f"{e * 1000:.1f} mm, {d:.1f} deg"
             out.append(f"  {printable(label)}: {placed}")
+        for line in self.knocked:
+            if not self.success and line not in self.failure:
+                out.append(f"  {printable(line)}")
         for label, travel, lift in self.slid:
             out.append(
                 f"  {printable(label)}: slid along the table top, not lifted: its centre went "
@@ -539,14 +546,15 @@ def _episode(
                 publisher.close()
         objects = [name for name, _ in recorder.finals]
         errors_m, errors_deg = recorder.column("error_m"), recorder.column("error_deg")
+        moved, standing = recorder.moved_since_placed(), recorder.standing_moved()
         ok, failure = judge(
             result,
             sim,
             objects,
             errors_m,
             errors_deg,
-            recorder.moved_since_placed(),
-            recorder.standing_moved(),
+            moved,
+            standing,
             [why for name in dict.fromkeys(objects) if (why := off_the_table(sim, name))],
         )
         trays = tray_verdicts(sim.scene.spec.objects, sim.watched, recorder.grip)
@@ -583,6 +591,7 @@ def _episode(
         report.table_contacts = dict(sim.safety.table_contacts)
         report.tray = [v.summary() for v in trays]
         report.slid = recorder.slid()
+        report.knocked = knocked_away(moved, standing)
         if inserted is not None:
             report.insertion = inserted.figures
         if out is not None:

@@ -72,16 +72,30 @@ def judge(
         where = "; ".join(f"{o} inside {', '.join(b)}" for o, b in sorted(s.spawned_inside.items()))
         return False, f"obstacle spawned inside a body: {where}"
     ok, failure = _task_outcome(result, s, objects, errors_m, errors_deg)
-    for rows, said in ((moved, "after it was placed"), (standing, STANDING_SUFFIX)):
-        for name, metres, degrees in rows:
-            if ok and (metres > PLACE_TOLERANCE_M or degrees > PLACE_TOLERANCE_DEG):
-                ok = False
-                failure = f"{name} moved {metres * 100:.1f} cm, {degrees:.1f} deg {said}"
+    knocked = knocked_away(moved, standing)
+    if ok and knocked:
+        ok, failure = False, knocked[-1]
     if not ok and s.dropped:
         return False, f"dropped {s.dropped_object}" if s.dropped_object else "dropped"
     if not ok and off_table:
         return False, off_table[0]
     return ok, failure
+
+
+def knocked_away(
+    moved: Sequence[tuple[str, float, float]], standing: Sequence[tuple[str, float, float]]
+) -> list[str]:
+    """The judge's words for each object ``moved`` (m, deg) beyond the placement tolerance
+    from where it was placed, or ``standing`` from where it stood: ``parcel moved 35.0 cm,
+    68.7 deg after it was placed``: a success's failure (the last of them), and said under
+    a failure whose reason is another (a run that failed so had not said that an approach
+    swept its placed parcel 35 cm across the table)."""
+    return [
+        f"{name} moved {metres * 100:.1f} cm, {degrees:.1f} deg {said}"
+        for rows, said in ((moved, "after it was placed"), (standing, STANDING_SUFFIX))
+        for name, metres, degrees in rows
+        if metres > PLACE_TOLERANCE_M or degrees > PLACE_TOLERANCE_DEG
+    ]
 
 
 def _task_outcome(
@@ -125,5 +139,6 @@ __all__ = [
     "PLACE_TOLERANCE_M",
     "STANDING_SUFFIX",
     "judge",
+    "knocked_away",
     "move_labels",
 ]

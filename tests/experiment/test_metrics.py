@@ -271,3 +271,25 @@ def test_a_grip_that_slipped_past_what_is_taken_for_broken_is_said_in_the_text()
         "for broken at; slip_mm)"
     ) in lines
     assert not any("grip: slipped" in line for line in report(12.0).lines("w"))
+
+
+def test_a_failed_run_says_a_placed_object_was_knocked_away_after_it_was_placed() -> None:
+    # An approach to a second object swept the placed parcel 35 cm away; the run failed for
+    # the other object, and nothing had said what became of the parcel.
+    from experiment.episode import EpisodeReport
+    from experiment.judge import knocked_away
+
+    knocked = knocked_away([("parcel", 0.35, 68.7), ("cube", 0.001, 0.2)], [("tin", 0.03, 1.0)])
+    assert knocked == [
+        "parcel moved 35.0 cm, 68.7 deg after it was placed",
+        "tin moved 3.0 cm, 1.0 deg from where it stood (the task does not move it)",
+    ]
+    failure = "cube lies off the table, out of reach"
+    report = EpisodeReport(
+        False, "FAILURE", "", [0.0007, None], [0.2, None], 0.05, {}, 0, False, 30.0, 2.0,
+        placement_objects=["parcel", "cube"], failure=failure, knocked=knocked,
+    )  # fmt: skip
+    lines = report.lines("w")
+    assert "  parcel moved 35.0 cm, 68.7 deg after it was placed" in lines
+    report.failure = knocked[0]  # said once, as the reason
+    assert "  parcel moved 35.0 cm, 68.7 deg after it was placed" not in report.lines("w")
