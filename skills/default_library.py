@@ -22,6 +22,7 @@ insert             absolute    pose DMP of a descent; admittance by least square
 
 from __future__ import annotations
 
+import os
 import sys
 import tempfile
 from dataclasses import dataclass, replace
@@ -370,8 +371,14 @@ _SKILLS_DIR = Path(__file__).resolve().parent
 def default_library_key(demos_dir: Path = DEMOS_DIR) -> str:
     """The name of the default library learnt from ``demos_dir``: a digest of everything the
     learning reads (every CSV there, the source of the whole ``skills`` package, the Python,
-    numpy and scipy it runs on), so an edit to any of them is a new name."""
-    parts: list[bytes | str] = [sys.version, *file_cache.versions("numpy", "scipy")]
+    numpy and scipy it runs on, and the BLAS kernel asked of OpenBLAS), so an edit to any of
+    them is a new name."""
+    # The BLAS kernel numpy's products ran on (duet_robot.blas pins it, by this variable):
+    # learnt on another, the library differs in its last bits, and a trial run with it can
+    # end elsewhere (a library learnt by a process that had not pinned it changed trial 352
+    # of the default world's campaign once it was cached).
+    kernel = f"OPENBLAS_CORETYPE={os.environ.get('OPENBLAS_CORETYPE', '')}"
+    parts: list[bytes | str] = [sys.version, kernel, *file_cache.versions("numpy", "scipy")]
     for path in sorted(demos_dir.glob("*.csv")):
         parts += [path.name, path.read_bytes()]
     return file_cache.content_key([*parts, *file_cache.source_files(_SKILLS_DIR)])

@@ -130,3 +130,17 @@ def test_a_changed_demonstration_names_another_library(tmp_path: Path) -> None:
     pick = demos / "pick_place.csv"
     pick.write_bytes(pick.read_bytes() + b"\n")  # one more byte
     assert default_library_key(demos) != default_library_key()
+
+
+def test_a_library_learnt_on_another_blas_kernel_is_cached_apart(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # A library learnt by a process that had not pinned OpenBLAS's kernel (its last bits
+    # differ) had been cached under the pinned runs' name: trial 352 of the default world's
+    # campaign then ran differently, whatever its own process pinned.
+    pinned = default_library_key()
+    monkeypatch.setenv("OPENBLAS_CORETYPE", "Haswell")
+    haswell = default_library_key()
+    assert haswell != pinned
+    monkeypatch.setenv("OPENBLAS_CORETYPE", "Haswell")
+    assert default_library_key() == haswell  # a name of its content, as any other
