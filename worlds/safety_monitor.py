@@ -274,7 +274,12 @@ class SafetyMonitor:
         for name in self.watched:
             pos, _ = self.scene.object_pose(name)
             lifted = pos[2] > self._rest_z[name] + 0.01
-            if not lifted or self.record.dropped:
+            if not lifted:
+                # Set down: a later fall is a drop only if the palms have lifted it again (a
+                # parcel placed, let go, then swept off the table by an arm was no drop).
+                self._held_lifted.discard(name)
+                continue
+            if self.record.dropped:
                 continue
             # The contact forces are read only for a lifted object (reads, no effect): once
             # to see it held, then only as it falls.
