@@ -321,7 +321,7 @@ def report_command(args: argparse.Namespace) -> int:
     """A campaign's outcome table with Wilson 95 % intervals, and its picture."""
     from experiment.report import code_line, read_campaigns, report_figure, report_summaries
     from experiment.results import ResultsFileError
-    from experiment.summary import contact_lines, split_line, summary_lines
+    from experiment.summary import campaign_lines
 
     out = Path(args.out)
     try:
@@ -350,13 +350,8 @@ def report_command(args: argparse.Namespace) -> int:
     for k, (campaign, summary) in enumerate(zip(found.campaigns, summaries, strict=True), 1):
         count = summary["trials"]
         print(f"{printable(summary['campaign'])}: {count} trial{'s' * (count != 1)}")
-        for line in summary_lines(summary):
+        for line in campaign_lines(summary):  # as `app.py trials` prints it
             print(line)
-        for line in contact_lines(summary):
-            print(line)
-        split = split_line(summary)
-        if split is not None:
-            print(split)
         mixed = code_line(summary)
         if mixed is not None:
             print(mixed)

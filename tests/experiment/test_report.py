@@ -259,3 +259,16 @@ def test_a_trial_recorded_twice_differently_is_named_not_silently_replaced(
     done = app("report", str(tmp_path))
     assert done.returncode == 0, done.stderr
     assert "trial 1 is recorded more than once, and the records disagree" in done.stderr
+
+
+def test_report_prints_a_campaign_as_trials_does(tmp_path: Path) -> None:
+    # It had left out the compositions the moves were placed with, and the simulated time.
+    with open(tmp_path / "results.jsonl", "w", encoding="utf-8") as fh:
+        for record in _shipped_records(6):
+            fh.write(json.dumps(record) + "\n")
+    done = app("report", str(tmp_path))
+    assert done.returncode == 0, done.stderr
+    lines = done.stdout.splitlines()
+    assert any(line.startswith("  moves placed with") for line in lines)
+    assert any(line.startswith("  pick-and-place x") for line in lines)
+    assert any(line.startswith("  simulated ") and "worker time" in line for line in lines)
