@@ -84,17 +84,20 @@ def obstacle_hold_problems(world: World | WorldSpec) -> list[WorldFileProblem]:
     # Where each object stands when a task step takes it up: where the step before of the
     # same object let it go, else where it starts. A step's first move grasps it there, in
     # the move's first grip; a later move goes on from the grip the move before ended in.
+    # (An object a step left off upright, or seated in a fixture, is not asked after it: the
+    # lateral holds do not say how it is held.)
     left_at = {
-        o.name: (np.asarray(o.position, dtype=float), float(o.yaw)) for o in spec.scene.objects
+        o.name: (np.asarray(o.position, dtype=float), float(o.yaw), True)
+        for o in spec.scene.objects
     }
     with SimWorld(spec) as sim:
         for i, step in enumerate(spec.task):
-            position, yaw = left_at[step.object]
+            position, yaw, standing = left_at[step.object]
             held: Hold | None = None
             for j, move in enumerate(step.moves):
                 goal = np.asarray(move.goal_position, dtype=float)
                 goal_yaw = yaw_of(move.goal_quaternion)
-                if j == 0:
+                if j == 0 and standing:
                     held = move_holds(position, yaw, goal, goal_yaw, max_turn, robot_yaw)[0]
                 if (i, j) in asked and held is not None:
                     touched = sim.hold_touches(step.object, move.obstacles, held)
@@ -134,7 +137,7 @@ def obstacle_hold_problems(world: World | WorldSpec) -> list[WorldFileProblem]:
                     else None
                 )
                 position, yaw = goal, goal_yaw
-            left_at[step.object] = (position, yaw)
+            left_at[step.object] = (position, yaw, held is not None)
     return problems
 
 
