@@ -111,23 +111,26 @@ def _subtree_segments(
     return node.name[len(prefix) :].split(".")[:-1]
 
 
-def groot_tree_xml(root: py_trees.behaviour.Behaviour, tree_id: str = "MainTree") -> GrootTree:
+def groot_tree_xml(root: py_trees.behaviour.Behaviour, tree_id: str | None = None) -> GrootTree:
     """The tree under ``root`` as BT.CPP's ``WriteTreeToXML`` with uids writes it.
 
     A tree the loader built has its SubTrees expanded as Groot2 expects: in the parent tree a
     ``<SubTree ID=... _fullpath=... _uid=...>`` node, and for each instance its own
     ``<BehaviorTree ID=... _fullpath=...>`` (``_fullpath``: the instance names from the main
     tree down, joined by ``/``; ``ID``: the subtree's, or the instance name where the loader
-    could not tell).
+    could not tell). The main tree is ``tree_id``, by default the ID the loader built it from
+    (``MainTree`` for a tree built in code).
 
     Raises
     ------
     ValueError
         If the tree has more nodes than a uid can number (65535).
     """
-    from planner.loader import subtree_ids
+    from planner.loader import main_tree_id, subtree_ids
 
     ids = subtree_ids(root)
+    # The main tree by its own ID, as BT.CPP writes it (a tree built in code: MainTree).
+    tree_id = tree_id or main_tree_id(root) or "MainTree"
     document = ET.Element("root", {"BTCPP_format": "4"})
     model = ET.Element("TreeNodesModel")
     modelled: set[str] = set()

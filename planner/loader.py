@@ -46,11 +46,22 @@ from planner.tree_reading import (
     read_tree_document_string,
 )
 
-__all__ = ["TreeFileError", "load_document", "load_tree", "load_tree_string", "subtree_ids"]
+__all__ = [
+    "TreeFileError",
+    "load_document",
+    "load_tree",
+    "load_tree_string",
+    "main_tree_id",
+    "subtree_ids",
+]
 
 #: For each root the loader built: the ``<BehaviorTree ID>`` of each named ``<SubTree>`` instance
 #: (by its name), where one name has one ID. Weak keys: a tree dropped is forgotten.
 _SUBTREE_IDS: weakref.WeakKeyDictionary[py_trees.behaviour.Behaviour, dict[str, str]] = (
+    weakref.WeakKeyDictionary()
+)
+#: For each root the loader built: the ``<BehaviorTree ID>`` it is the root of.
+_MAIN_TREE_IDS: weakref.WeakKeyDictionary[py_trees.behaviour.Behaviour, str] = (
     weakref.WeakKeyDictionary()
 )
 
@@ -84,6 +95,12 @@ def _once_per_class(
 py_trees.ports_utils.collect_type_hints = _once_per_class(  # type: ignore[assignment]
     py_trees.ports_utils.collect_type_hints
 )
+
+
+def main_tree_id(root: py_trees.behaviour.Behaviour) -> str | None:
+    """The ``<BehaviorTree ID>`` a tree this module loaded was built from (its main tree), or
+    None for a tree built otherwise."""
+    return _MAIN_TREE_IDS.get(root)
 
 
 def subtree_ids(root: py_trees.behaviour.Behaviour) -> dict[str, str] | None:
@@ -186,6 +203,7 @@ def load_document(
             if "name" in elem.attrib and "ID" in elem.attrib:
                 ids.setdefault(elem.attrib["name"], set()).add(elem.attrib["ID"])
     _SUBTREE_IDS[root] = {name: next(iter(i)) for name, i in ids.items() if len(i) == 1}
+    _MAIN_TREE_IDS[root] = doc.main_tree_id
     trees = doc.behaviour_trees()
     attach_conditions(trees[doc.main_tree_id], root, trees, "/")
     propagate_skips(root)

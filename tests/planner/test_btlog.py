@@ -103,8 +103,10 @@ def test_default_run_on_the_fake_world(
     # the subtrees as Groot2 expects them: a SubTree node, and a BehaviorTree per instance
     document = ET.fromstring(got.xml)
     instances = [(bt.attrib["ID"], bt.attrib["_fullpath"]) for bt in document.iter("BehaviorTree")]
+    # The main tree by its own ID, as BT.CPP's WriteTreeToXML writes it (it had been
+    # MainTree whatever the file called it).
     assert instances[:3] == [
-        ("MainTree", ""), ("PickAndPlace", "first_object"),
+        ("Task", ""), ("PickAndPlace", "first_object"),
         ("GraspObject", "first_object/grasp_object"),
     ]  # fmt: skip
     assert ("Move", "first_object/move_left") in instances
