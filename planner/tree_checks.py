@@ -14,7 +14,7 @@ from py_trees.ports import PortInformation, PortsMixin
 
 from planner.bt_controls import CHILD_COUNTS
 from planner.bt_switch import SWITCH_CHILD_COUNTS
-from planner.tree_dataflow import dataflow_problems, type_problems
+from planner.tree_dataflow import dataflow_problems, port_uses, type_problems
 from planner.tree_limits import subtree_cycle_problems, tree_size_problems
 from planner.tree_ports import (
     Registry,
@@ -390,10 +390,11 @@ def check_tree_document(
     limits = tree_size_problems(doc)
     if limits:
         return [*doc.problems, *limits]
+    uses = port_uses(doc, registry)  # walked once for both checks of the blackboard
     return [
         *doc.problems,
         *_Checker(doc, registry).run(),
         *subtree_cycle_problems(doc),
-        *type_problems(doc, registry),
-        *(dataflow_problems(doc, registry, run_keys) if run_keys is not None else ()),
+        *type_problems(doc, registry, uses),
+        *(dataflow_problems(doc, registry, run_keys, uses) if run_keys is not None else ()),
     ]

@@ -160,14 +160,16 @@ def dataflow_problems(
     doc: TreeDocument,
     registry: Registry | None = None,
     run_keys: Collection[str] = RUN_WRITES,
+    uses: list[PortUse] | None = None,
 ) -> list[TreeProblem]:
     """One problem per node port reading a ``{key}`` that nothing writes.
 
     A key counts as written if any node instance of the tree writes it (an output port,
     ``SetBlackboard``, a script assignment), wherever in the tree, or the run sets it before
-    the first tick (``run_keys``, by default :data:`RUN_WRITES`).
+    the first tick (``run_keys``, by default :data:`RUN_WRITES`). ``uses``: the document's
+    :func:`port_uses`, where the caller has them already.
     """
-    uses = port_uses(doc, registry)
+    uses = port_uses(doc, registry) if uses is None else uses
     written = set(run_keys) | {
         u.binding.key for u in uses if u.direction == "write" and u.binding.key
     }
@@ -177,10 +179,7 @@ def dataflow_problems(
         if use.direction != "read" or key is None or key in written:
             continue
         seeded = ", ".join("{" + k.lstrip("/") + "}" for k in sorted(run_keys)) or "none"
-        # A {@key} is passed down under another name (planner.tree_syntax): say it as written.
-        name = use.name
-        if name.startswith(ROOT_PREFIX):
-            name = "@" + name[len(ROOT_PREFIX) :]
+        name = _as_written(use.name)
         problem = TreeProblem(
             source_file(use.elem, doc.file),
             source_line(use.elem),
@@ -192,6 +191,12 @@ def dataflow_problems(
         if problem not in problems:
             problems.append(problem)
     return problems
+
+
+def _as_written(name: str) -> str:
+    """A key's name as the file writes it: a ``{@key}`` is passed down under another name
+    (:mod:`planner.tree_syntax`)."""
+    return "@" + name[len(ROOT_PREFIX) :] if name.startswith(ROOT_PREFIX) else name
 
 
 def _port_type(use: PortUse, reg: Registry) -> Any:
@@ -208,20 +213,22 @@ def _port_type(use: PortUse, reg: Registry) -> Any:
     return None if data_type in (None, Any, object) else data_type
 
 
-def type_problems(doc: TreeDocument, registry: Registry | None = None) -> list[TreeProblem]:
+def type_problems(
+    doc: TreeDocument, registry: Registry | None = None, uses: list[PortUse] | None = None
+) -> list[TreeProblem]:
     """One problem per leaf port given a ``{key}`` whose entry a port of another declared
     type made first, as BehaviorTree.CPP refuses the tree when it builds it ("the port [key]
     was initially created with type [double] and, later type [std::string]"): the entry's
     type is that of the first port that uses it, in document order; an entry a ``str`` port
     or a port of no declared type made takes any (BT.CPP converts from strings, and checks
     no type on an entry an untyped port made). Such a tree had validated, then
-    failed at the reader's first tick."""
+    failed at the reader's first tick. ``uses``: as for :func:`dataflow_problems`."""
     reg = effective_registry(registry)
     # Per key, the type of the port that used it first: None, a port of no declared type
     # (SetBlackboard's output_key, a script), after which BT.CPP checks no type on it.
     made: dict[str, tuple[Any, PortUse]] = {}
     problems: list[TreeProblem] = []
-    for use in port_uses(doc, registry):
+    for use in port_uses(doc, registry) if uses is None else uses:
         key = use.binding.key
         if key is None:
             continue
@@ -229,15 +236,12 @@ def type_problems(doc: TreeDocument, registry: Registry | None = None) -> list[T
         kind, maker = made.setdefault(key, (data_type, use))
         if data_type is None or kind is None or kind == data_type or kind is str:
             continue
-        name = use.name
-        if name.startswith(ROOT_PREFIX):  # a {@key}, passed down under another name
-            name = "@" + name[len(ROOT_PREFIX) :]
         problem = TreeProblem(
             source_file(use.elem, doc.file),
             source_line(use.elem),
             describe(use.elem),
-            f"port '{use.port}' ({type_name(data_type)}) uses {{{name}}} (blackboard key "
-            f"{key}), which {describe(maker.elem)} port '{maker.port}' made "
+            f"port '{use.port}' ({type_name(data_type)}) uses {{{_as_written(use.name)}}} "
+            f"(blackboard key {key}), which {describe(maker.elem)} port '{maker.port}' made "
             f"{type_name(kind)}: expected ports of one type on a key",
         )
         if problem not in problems:

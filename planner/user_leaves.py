@@ -176,15 +176,10 @@ def _own_folder_first(folder: Path) -> Iterator[None]:
     a module of that name another leaf folder gave is set aside (two folders' ``helpers.py``
     each the one its own file imports); afterwards the search path is as it was."""
     before = set(sys.modules)
-    setting_aside = {
-        module_name: module
-        for other, modules in _FOLDER_MODULES.items()
-        if other != folder
-        for module_name, module in modules.items()
-        if sys.modules.get(module_name) is module
-    }
-    for module_name in setting_aside:
-        del sys.modules[module_name]
+    for other, modules in _FOLDER_MODULES.items():
+        for module_name, module in modules.items():
+            if other != folder and sys.modules.get(module_name) is module:
+                del sys.modules[module_name]
     sys.path.insert(0, str(folder))
     try:
         yield

@@ -251,7 +251,6 @@ def feasibility_problems(
         for j, move in enumerate(step.moves):
             field = f"task[{i}].moves[{j}].goal.position"
             before, yaw = yaw, move.goal_yaw
-            left_at[obj.name] = (yaw, pitch)
             stepped = _stepped_into_fixture(move, before, robot.max_turn_rad, robot_yaw)
             if stepped is not None:
                 problems.append(WorldFileProblem(f"task[{i}].moves[{j}].goal.rpy_deg", *stepped))
@@ -267,7 +266,6 @@ def feasibility_problems(
                 bad_goals.add((i, j))
                 continue
             pitch = grasp_pitch(move.goal_quaternion)
-            left_at[obj.name] = (yaw, pitch)
             table = _table_problem(obj, move, spec.scene.table)
             if table is not None:
                 problems.append(WorldFileProblem(field, *table))
@@ -278,6 +276,7 @@ def feasibility_problems(
             miss = _reach_problem(contexts[obj.name], move, robot, config, reach, grasps)
             if miss is not None:
                 problems.append(WorldFileProblem(field, *miss))
+        left_at[obj.name] = (yaw, pitch)
     return start_problems(spec, bad_goals) + problems
 
 

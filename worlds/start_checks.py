@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import pybullet as pb
 
+from skills.vocabulary import Arm
 from worlds.placement import fmt
 from worlds.sim_world import SimWorld
 from worlds.spec import WorldSpec
@@ -33,8 +34,8 @@ def start_pose_problems(world: World | WorldSpec) -> list[WorldFileProblem]:
             return []
         deepest = min(points, key=lambda p: p[8])
         names = [
-            _link_name(scene.client, body, link)
-            for body, link in ((left, deepest[3]), (right, deepest[4]))
+            sim.collision.link_name(Arm.LEFT, deepest[3]),
+            sim.collision.link_name(Arm.RIGHT, deepest[4]),
         ]
     separation = spec.scene.robot.arm_separation
     depth = -1000.0 * deepest[8]
@@ -47,12 +48,6 @@ def start_pose_problems(world: World | WorldSpec) -> list[WorldFileProblem]:
             "them farther apart",
         )
     ]
-
-
-def _link_name(client: int, body: int, link: int) -> str:
-    if link < 0:
-        return "base"
-    return pb.getJointInfo(body, link, physicsClientId=client)[12].decode()
 
 
 __all__ = ["start_pose_problems"]
