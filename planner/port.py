@@ -386,6 +386,27 @@ class PalmControl(Protocol):
 
 
 @runtime_checkable
+class ArmJoints(Protocol):
+    """An arm's joints, for a palm the palm law could not move (not part of
+    :class:`WorldPort`: a world without joints, or one that keeps them to itself, leaves it
+    out, and a leaf does without it)."""
+
+    def arm_joints(self, arm: Arm) -> Array:
+        """Measured joint positions of an arm, rad, (n,)."""
+        ...
+
+    def rest_joints(self, arm: Arm) -> Array:
+        """The arm's joint positions when its palm is at :meth:`PalmControl.rest_palm_pose`,
+        rad, (n,)."""
+        ...
+
+    def command_joints(self, arm: Arm, q: Array) -> None:
+        """Hold the arm's joints at ``q`` (rad, (n,)) in joint space, its palm's command set
+        aside until the next :meth:`PalmControl.command_palm` of the arm."""
+        ...
+
+
+@runtime_checkable
 class ObstacleScene(Protocol):
     """The obstacles of the present move and the collision queries against them."""
 

@@ -345,6 +345,19 @@ class SimWorld(Closing):
             ),
         )
 
+    def arm_joints(self, arm: Arm) -> Array:
+        """Measured joint positions of ``arm``, rad, (n,)."""
+        return self.scene.controller.arm_joint_positions(arm)
+
+    def rest_joints(self, arm: Arm) -> Array:
+        """``arm``'s joints with its palm at its rest pose (its posture target), rad."""
+        return self.scene.controller.arm_rest_posture(arm)
+
+    def command_joints(self, arm: Arm, q: Array) -> None:
+        """Hold ``arm``'s joints at ``q`` in joint space until its next :meth:`command_palm`
+        (:meth:`worlds.control.DualArmImpedanceController.set_joint_target`)."""
+        self.scene.controller.set_joint_target(arm, q)
+
     def hold_palms(self) -> None:
         """Hold the last commanded poses with zero twist."""
         for arm in ARMS:

@@ -11,7 +11,7 @@ from planner.grips import grasp_options, lateral_geometry, move_turn, robot_yaw
 from planner.leaves.base import grasp_move_port
 from planner.leaves.palm_motion import ViaPointLeaf, ViaPointMotion, measured_state
 from planner.leaves.palm_routes import PalmRoute, margin_port, take_clear_route
-from planner.port import ObjectSensing, ObstacleScene, PalmControl, Pose, WorldPort
+from planner.port import ArmJoints, ObjectSensing, ObstacleScene, PalmControl, Pose, WorldPort
 from skills import quaternion as quat
 from skills.flip import vertical_half_extent
 from skills.pose_dmp import PoseState
@@ -152,7 +152,7 @@ class Approach(ViaPointLeaf):
     world's 1000).
     """
 
-    WORLD_ROLES: ClassVar[tuple[type, ...]] = (ObjectSensing, PalmControl, ObstacleScene)
+    WORLD_ROLES: ClassVar[tuple[type, ...]] = (ObjectSensing, PalmControl, ObstacleScene, ArmJoints)
 
     INPUT_PORTS = {
         "object": PortInformation(str, description="object to approach"),

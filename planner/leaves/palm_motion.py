@@ -14,7 +14,7 @@ import numpy as np
 from py_trees.common import Status
 
 from planner.leaves.base import MotionLeaf
-from planner.port import Pose
+from planner.port import ArmJoints, Pose
 from skills import quaternion as quat
 from skills.pose_dmp import PoseDMP, PoseModel, PoseState
 from skills.vocabulary import Arm
@@ -146,6 +146,13 @@ class ViaPointLeaf(MotionLeaf):
         self.route_note = ""
         #: Why ``initialise()`` planned no motion (the leaf then fails at once), or None.
         self.refusal: str | None = None
+        #: The arms being taken home in joint space now (:class:`ArmsHome`), or None.
+        self.freeing: ArmsHome | None = None
+
+    def terminate(self, new_status: Status) -> None:
+        """Forget this run's freeing of the arms (a halt holds the palms, which ends it)."""
+        self.freeing = None
+        super().terminate(new_status)
 
     def update(self) -> Status:
         """Command one step of the motion; SUCCESS at the last via-point."""
@@ -154,25 +161,106 @@ class ViaPointLeaf(MotionLeaf):
         if self.refusal is not None:
             return self.fail(self.refusal)
         assert self.motion is not None
+        if self.freeing is not None and not self.freeing.arrived():
+            return self._free_arms()
         for arm, st in self.motion.step(self.control_dt).items():
             self.world.command_palm(arm, Pose(st.position, st.orientation), st.twist())
         note = f" ({self.route_note})" if self.route_note else ""
         if self.motion.done():
-            if (short := self.short_of_arrival()) is not None:
-                return self.fail(short + note)
-            return self.succeed(self.ARRIVED + note)
+            short = self.short_arms()
+            if not short:
+                return self.succeed(self.ARRIVED + note)
+            if self.freeing is None and isinstance(self.world, ArmJoints):
+                # Last resort before failing: the stuck arms home in joint space, and from
+                # there to the motion's last poses.
+                self.freeing = ArmsHome.of(self.world, tuple(short))
+                self.route_note = f"{self.route_note}; " if self.route_note else ""
+                self.route_note += f"{' and '.join(a.value for a in short)} arm freed"
+                return self._free_arms()
+            arm, gap = next(iter(short.items()))
+            return self.fail(
+                f"the {arm.value} palm stopped {gap * 1000:.0f} mm from its pose (more than "
+                f"{self.ARRIVAL_M * 1000:.0f} mm): its arm did not follow the motion "
+                "(held against something, or a joint at its limit)" + note
+            )
         return self.running(f"{self.MOVING}: {self.motion.remaining():.3f} m to go{note}")
 
-    def short_of_arrival(self) -> str | None:
-        """Why the palms are not where the arrived motion left them (a palm measured more
-        than :attr:`ARRIVAL_M` from its last pose), or None."""
+    def _free_arms(self) -> Status:
+        """Take the stuck arms one step nearer home in joint space; once there, plan the
+        last stretch from where the palms are to the motion's last poses."""
+        assert self.freeing is not None and self.motion is not None
+        world = self.world
+        assert isinstance(world, ArmJoints)
+        for arm, q in self.freeing.step(self.control_dt).items():
+            world.command_joints(arm, q)
+        if self.freeing.arrived():
+            if not self.short_arms():
+                # Home is the motion's end (a retreat's rest poses): the palm law holds it.
+                for arm, waypoints in self.motion.waypoints.items():
+                    world.command_palm(arm, waypoints[-1])
+                return self.succeed(f"{self.ARRIVED} ({self.route_note})")
+            here = {arm: world.palm_pose(arm) for arm in self.motion.waypoints}
+            self.motion = ViaPointMotion(
+                {arm: measured_state(pose, world.palm_twist(arm)) for arm, pose in here.items()},
+                {arm: [w[-1]] for arm, w in self.motion.waypoints.items()},
+                self.motion.segment_tau,
+                self.motion.switch_at,
+                self.motion.model,
+            )
+        return self.running(f"{self.MOVING}: {self.route_note}, going home in joint space")
+
+    def short_arms(self) -> dict[Arm, float]:
+        """The palms measured more than :attr:`ARRIVAL_M` from their last poses, with how
+        far, m (empty when the arms followed the motion)."""
         assert self.motion is not None
+        out = {}
         for arm, waypoints in self.motion.waypoints.items():
             gap = float(np.linalg.norm(self.world.palm_pose(arm).position - waypoints[-1].position))
             if gap > self.ARRIVAL_M:
-                return (
-                    f"the {arm.value} palm stopped {gap * 1000:.0f} mm from its pose (more than "
-                    f"{self.ARRIVAL_M * 1000:.0f} mm): its arm did not follow the motion "
-                    "(held against something, or a joint at its limit)"
-                )
-        return None
+                out[arm] = gap
+        return out
+
+
+class ArmsHome:
+    """Arms going from where their joints are to their rest postures in joint space, on a
+    minimum-jerk path, then holding still there :attr:`SETTLE_S`.
+
+    Parameters
+    ----------
+    starts, homes : mapping Arm -> ndarray
+        Joint positions now and at rest, rad.
+    """
+
+    #: Mean joint speed of the way home, rad/s, the farthest joint setting the duration (the
+    #: peak is 1.875 times it, within the iiwa's 1.5-2.3 rad/s).
+    SPEED = 1.0
+    #: Shortest way home, s.
+    LEAST_S = 0.8
+    #: Time held at home before the palm law takes over again, s.
+    SETTLE_S = 0.25
+
+    def __init__(self, starts: Mapping[Arm, np.ndarray], homes: Mapping[Arm, np.ndarray]) -> None:
+        self.starts = {arm: np.asarray(q, dtype=float) for arm, q in starts.items()}
+        self.homes = {arm: np.asarray(homes[arm], dtype=float) for arm in starts}
+        farthest = max(float(np.max(np.abs(self.homes[a] - q))) for a, q in self.starts.items())
+        self.duration = max(self.LEAST_S, farthest / self.SPEED)
+        self.elapsed = 0.0
+
+    @classmethod
+    def of(cls, world: ArmJoints, arms: Sequence[Arm]) -> ArmsHome:
+        """``arms`` of ``world`` from their measured joints to their rest postures."""
+        return cls(
+            {arm: world.arm_joints(arm) for arm in arms},
+            {arm: world.rest_joints(arm) for arm in arms},
+        )
+
+    def step(self, dt: float) -> dict[Arm, np.ndarray]:
+        """Advance ``dt``: each arm's joint targets, rad."""
+        self.elapsed += dt
+        u = min(1.0, self.elapsed / self.duration)
+        s = u * u * u * (10.0 - 15.0 * u + 6.0 * u * u)
+        return {arm: q + s * (self.homes[arm] - q) for arm, q in self.starts.items()}
+
+    def arrived(self) -> bool:
+        """Home and held there :attr:`SETTLE_S`."""
+        return self.elapsed >= self.duration + self.SETTLE_S - 1e-9

@@ -14,7 +14,7 @@ from planner.leaves.base import MotionLeaf
 from planner.leaves.palm_motion import ViaPointLeaf, measured_state
 from planner.leaves.palm_routes import PalmRoute, margin_port, take_clear_route
 from planner.leaves.set_down import lowered, palm_load_n, supported_below_n
-from planner.port import Clock, ObjectSensing, ObstacleScene, PalmControl, Pose
+from planner.port import ArmJoints, Clock, ObjectSensing, ObstacleScene, PalmControl, Pose
 from planner.skill_terms import opening_terms
 from skills import quaternion as quat
 from skills.composer import DualArmComposer, DualArmState, commands_for
@@ -196,7 +196,7 @@ class Retreat(ViaPointLeaf):
     path, rising straight without backing away, or backing away and staying there.
     """
 
-    WORLD_ROLES: ClassVar[tuple[type, ...]] = (PalmControl, ObstacleScene)
+    WORLD_ROLES: ClassVar[tuple[type, ...]] = (PalmControl, ObstacleScene, ArmJoints)
 
     INPUT_PORTS = {
         "back_m": PortInformation(
