@@ -231,9 +231,10 @@ class ArmsHome:
         Joint positions now and at rest, rad.
     """
 
-    #: Mean joint speed of the way home, rad/s, the farthest joint setting the duration (the
-    #: peak is 1.875 times it, within the iiwa's 1.5-2.3 rad/s).
-    SPEED = 1.0
+    #: Mean joint speed of the way home, rad/s, the farthest joint setting the duration: its
+    #: peak, 1.875 times it (minimum jerk), is 1.31 rad/s, the slowest iiwa 14 joint's
+    #: 75 deg/s (A4; the others 85-135).
+    SPEED = 0.7
     #: Shortest way home, s.
     LEAST_S = 0.8
     #: Time held at home before the palm law takes over again, s.
