@@ -123,7 +123,11 @@ class ViaPointLeaf(MotionLeaf):
     """A leaf that moves both palms through via-points: subclasses plan ``self.motion``.
 
     ``initialise()`` builds a :class:`ViaPointMotion`; ``update()`` (here) commands one step
-    of it per tick and succeeds when both palms are at their last pose.
+    of it per tick and succeeds when both palms are at their last pose. A palm still more
+    than :attr:`ARRIVAL_M` from it when the motion has arrived is an arm the palm law could
+    not move: where the world offers :class:`planner.port.ArmJoints`, that arm goes home in
+    joint space (:class:`ArmsHome`) and from there to the last pose, once, before the leaf
+    fails.
     """
 
     #: What the feedback says while moving and when done.
@@ -135,8 +139,8 @@ class ViaPointLeaf(MotionLeaf):
     #: the iCub the palms arrived within 3 mm to 29 mm (Hard mode's biased, lagging
     #: actuators); an iiwa arm whose elbow had reached its joint limit with the wrist on the
     #: table stopped 15-29 cm short of every way in and out it was sent on (trials 516 and
-    #: 699 of the default world's 1000-trial record). In 2 of 300 Hard trials (121, 196) a
-    #: step back's palm stopped 12-13 cm short, and the tree went on another way to succeed.
+    #: 699 of the default world's 1000-trial record; freed in joint space, both succeed).
+    #: In 2 of 300 Hard trials (121, 196) a step back's palm stopped 12-13 cm short.
     ARRIVAL_M: ClassVar[float] = 0.08
 
     def __init__(self, name: str, **kwargs: Any) -> None:
