@@ -385,6 +385,24 @@ class PalmControl(Protocol):
         ...
 
 
+def role_methods(role: type) -> frozenset[str]:
+    """Names of the methods a role Protocol (or a union of roles) declares."""
+    names: set[str] = set()
+    for cls in role.__mro__:
+        if cls is object or not getattr(cls, "_is_protocol", False):
+            continue
+        names.update(n for n, v in vars(cls).items() if callable(v) and not n.startswith("_"))
+    return frozenset(names)
+
+
+def offers(world: object, role: type) -> bool:
+    """Whether ``world`` has every method of ``role``, asked by attribute lookup: a world
+    seen through :class:`planner.testing.RoleView` (or any other proxy) answers as the
+    world behind it does (``isinstance`` on a runtime-checkable Protocol does not look
+    through ``__getattr__`` from Python 3.12 on)."""
+    return all(callable(getattr(world, name, None)) for name in role_methods(role))
+
+
 @runtime_checkable
 class ArmJoints(Protocol):
     """An arm's joints, for a palm the palm law could not move (not part of
@@ -396,8 +414,9 @@ class ArmJoints(Protocol):
         ...
 
     def rest_joints(self, arm: Arm) -> Array:
-        """The arm's joint positions when its palm is at :meth:`PalmControl.rest_palm_pose`,
-        rad, (n,)."""
+        """The arm's rest posture, rad, (n,): its palm at :meth:`PalmControl.rest_palm_pose`
+        with joints the arm shares with the other (a torso) at their own rest; where those
+        stand elsewhere, the palm is elsewhere too."""
         ...
 
     def command_joints(self, arm: Arm, q: Array) -> None:

@@ -8,13 +8,13 @@ through without stopping or jumping.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from typing import Any, ClassVar
+from typing import Any, ClassVar, cast
 
 import numpy as np
 from py_trees.common import Status
 
 from planner.leaves.base import MotionLeaf
-from planner.port import ArmJoints, Pose
+from planner.port import ArmJoints, ObstacleScene, Pose, offers
 from skills import quaternion as quat
 from skills.pose_dmp import PoseDMP, PoseModel, PoseState
 from skills.vocabulary import Arm
@@ -142,6 +142,9 @@ class ViaPointLeaf(MotionLeaf):
     #: 699 of the default world's 1000-trial record; freed in joint space, both succeed).
     #: In 2 of 300 Hard trials (121, 196) a step back's palm stopped 12-13 cm short.
     ARRIVAL_M: ClassVar[float] = 0.08
+    #: How near its last pose a palm freed and taken home must be for the leaf to end there
+    #: (a retreat's rest poses), m; farther, it plans the last stretch there (checked clear).
+    SETTLED_M: ClassVar[float] = 0.01
 
     def __init__(self, name: str, **kwargs: Any) -> None:
         super().__init__(name=name, **kwargs)
@@ -154,7 +157,12 @@ class ViaPointLeaf(MotionLeaf):
         self.freeing: ArmsHome | None = None
 
     def terminate(self, new_status: Status) -> None:
-        """Forget this run's freeing of the arms (a halt holds the palms, which ends it)."""
+        """Forget this run's freeing of the arms; an arm still held in joint space (the leaf
+        halted or failing on the way home) is given back to the palm law where it is, not sent
+        back to the pose it could not reach."""
+        if self.freeing is not None and not self.freeing.arrived() and self._world is not None:
+            for arm in self.freeing.starts:
+                self._world.command_palm(arm, self._world.palm_pose(arm))
         self.freeing = None
         super().terminate(new_status)
 
@@ -174,44 +182,59 @@ class ViaPointLeaf(MotionLeaf):
             short = self.short_arms()
             if not short:
                 return self.succeed(self.ARRIVED + note)
-            if self.freeing is None and isinstance(self.world, ArmJoints):
+            if self.freeing is None and offers(self.world, ArmJoints):
                 # Last resort before failing: the stuck arms home in joint space, and from
                 # there to the motion's last poses.
-                self.freeing = ArmsHome.of(self.world, tuple(short))
+                self.freeing = ArmsHome.of(cast(ArmJoints, self.world), tuple(short))
                 self.route_note = f"{self.route_note}; " if self.route_note else ""
-                self.route_note += f"{' and '.join(a.value for a in short)} arm freed"
+                self.route_note += f"{_arms(tuple(short))} freed"
                 return self._free_arms()
-            arm, gap = next(iter(short.items()))
-            return self.fail(
-                f"the {arm.value} palm stopped {gap * 1000:.0f} mm from its pose (more than "
-                f"{self.ARRIVAL_M * 1000:.0f} mm): its arm did not follow the motion "
-                "(held against something, or a joint at its limit)" + note
-            )
+            return self.fail(_stopped_short(short, self.ARRIVAL_M) + note)
         return self.running(f"{self.MOVING}: {self.motion.remaining():.3f} m to go{note}")
 
     def _free_arms(self) -> Status:
-        """Take the stuck arms one step nearer home in joint space; once there, plan the
-        last stretch from where the palms are to the motion's last poses."""
+        """Take the stuck arms one step nearer home in joint space; once there, give them back
+        to the palm law and go on from where the palms are to the motion's last poses (at
+        once where they are there already, a retreat's rest poses)."""
         assert self.freeing is not None and self.motion is not None
-        world = self.world
-        assert isinstance(world, ArmJoints)
+        world = cast(ArmJoints, self.world)
         for arm, q in self.freeing.step(self.control_dt).items():
             world.command_joints(arm, q)
-        if self.freeing.arrived():
-            if not self.short_arms():
-                # Home is the motion's end (a retreat's rest poses): the palm law holds it.
-                for arm, waypoints in self.motion.waypoints.items():
-                    world.command_palm(arm, waypoints[-1])
-                return self.succeed(f"{self.ARRIVED} ({self.route_note})")
-            here = {arm: world.palm_pose(arm) for arm in self.motion.waypoints}
-            self.motion = ViaPointMotion(
-                {arm: measured_state(pose, world.palm_twist(arm)) for arm, pose in here.items()},
-                {arm: [w[-1]] for arm, w in self.motion.waypoints.items()},
-                self.motion.segment_tau,
-                self.motion.switch_at,
-                self.motion.model,
+        if not self.freeing.arrived():
+            return self.running(f"{self.MOVING}: {self.route_note}, going home in joint space")
+        palms = self.world
+        here = {arm: palms.palm_pose(arm) for arm in self.motion.waypoints}
+        last = {arm: w[-1] for arm, w in self.motion.waypoints.items()}
+        if all(_gap(here[a], last[a]) <= self.SETTLED_M for a in last):
+            for arm, pose in last.items():
+                palms.command_palm(arm, pose)
+            return self.succeed(f"{self.ARRIVED} ({self.route_note})")
+        for arm in self.freeing.starts:
+            palms.command_palm(arm, here[arm])
+        starts = {arm: measured_state(pose, palms.palm_twist(arm)) for arm, pose in here.items()}
+        waypoints = {arm: [pose] for arm, pose in last.items()}
+        tau = self.motion.segment_tau
+        if offers(palms, ObstacleScene):
+            from planner.leaves.palm_routes import predict_palm_path
+
+            path = predict_palm_path(starts, waypoints, tau, self.control_dt)
+            check = cast(ObstacleScene, palms).check_palm_path(
+                path.positions, path.orientations, self._margin_m()
             )
-        return self.running(f"{self.MOVING}: {self.route_note}, going home in joint space")
+            if not check.clear:
+                return self.fail(
+                    f"{_arms(tuple(self.freeing.starts))} freed and home, but the way from "
+                    f"there to the last poses is not clear: {check.detail}"
+                )
+        self.motion = ViaPointMotion(
+            starts, waypoints, tau, self.motion.switch_at, self.motion.model
+        )
+        return self.running(f"{self.MOVING}: {self.route_note}, from home")
+
+    def _margin_m(self) -> float:
+        """The clearance the leaf's ways keep (its ``margin_m`` port; 0 without one), m."""
+        ports = getattr(self, "INPUT_PORTS", {})
+        return float(self.get_input("margin_m")) if "margin_m" in ports else 0.0
 
     def short_arms(self) -> dict[Arm, float]:
         """The palms measured more than :attr:`ARRIVAL_M` from their last poses, with how
@@ -219,10 +242,30 @@ class ViaPointLeaf(MotionLeaf):
         assert self.motion is not None
         out = {}
         for arm, waypoints in self.motion.waypoints.items():
-            gap = float(np.linalg.norm(self.world.palm_pose(arm).position - waypoints[-1].position))
+            gap = _gap(self.world.palm_pose(arm), waypoints[-1])
             if gap > self.ARRIVAL_M:
                 out[arm] = gap
         return out
+
+
+def _gap(a: Pose, b: Pose) -> float:
+    return float(np.linalg.norm(a.position - b.position))
+
+
+def _arms(arms: Sequence[Arm]) -> str:
+    """ "the left arm", "the left and right arms"."""
+    return f"{' and '.join(a.value for a in arms)} arm{'s' if len(arms) > 1 else ''}"
+
+
+def _stopped_short(short: Mapping[Arm, float], limit_m: float) -> str:
+    """Why the leaf fails: each palm short of its last pose and by how much."""
+    palms = " and ".join(f"the {arm.value} palm {gap * 1000:.0f} mm" for arm, gap in short.items())
+    palms = palms.replace(" palm ", " palm stopped ", 1)
+    return (
+        f"{palms} from {'their poses' if len(short) > 1 else 'its pose'} (more than "
+        f"{limit_m * 1000:.0f} mm): {'their arms' if len(short) > 1 else 'its arm'} did not "
+        "follow the motion (held against something, or a joint at its limit)"
+    )
 
 
 class ArmsHome:
@@ -241,6 +284,10 @@ class ArmsHome:
     SPEED = 0.7
     #: Shortest way home, s.
     LEAST_S = 0.8
+    #: Longest way home, s: the shipped trees' 6 s guards around a step back (about 2.2 s)
+    #: leave room for it and :attr:`SETTLE_S`. A joint farther than ``SPEED * LONGEST_S``
+    #: from rest goes faster than :attr:`SPEED`.
+    LONGEST_S = 3.0
     #: Time held at home before the palm law takes over again, s.
     SETTLE_S = 0.25
 
@@ -248,7 +295,7 @@ class ArmsHome:
         self.starts = {arm: np.asarray(q, dtype=float) for arm, q in starts.items()}
         self.homes = {arm: np.asarray(homes[arm], dtype=float) for arm in starts}
         farthest = max(float(np.max(np.abs(self.homes[a] - q))) for a, q in self.starts.items())
-        self.duration = max(self.LEAST_S, farthest / self.SPEED)
+        self.duration = min(max(self.LEAST_S, farthest / self.SPEED), self.LONGEST_S)
         self.elapsed = 0.0
 
     @classmethod

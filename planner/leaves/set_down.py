@@ -7,10 +7,11 @@ The one home of what Transport (placing at a goal), Insert (seating in a fixture
 from __future__ import annotations
 
 from dataclasses import replace
+from typing import cast
 
 import numpy as np
 
-from planner.port import ObjectSensing, PalmControl
+from planner.port import ObjectSensing, PalmControl, offers
 from skills.composer import DualArmState
 from skills.flip import vertical_half_extent
 from skills.vocabulary import ARMS
@@ -50,7 +51,8 @@ def table_found_dz(world: ObjectSensing, name: str) -> float:
 
     Where ``world`` has no palms (:class:`~planner.port.PalmControl`), the object is taken
     as resting."""
-    if isinstance(world, PalmControl) and palm_load_n(world, name) > supported_below_n(world, name):
+    palms = cast(PalmControl, world)
+    if offers(world, PalmControl) and palm_load_n(palms, name) > supported_below_n(world, name):
         return 0.0
     pose = world.object_pose(name)
     extents = world.object_extents(name)

@@ -5,15 +5,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 from typing import Any
 
-
-def role_methods(role: type) -> frozenset[str]:
-    """Names of the methods a role Protocol (or a union of roles) declares."""
-    names: set[str] = set()
-    for cls in role.__mro__:
-        if cls is object or not getattr(cls, "_is_protocol", False):
-            continue
-        names.update(n for n, v in vars(cls).items() if callable(v) and not n.startswith("_"))
-    return frozenset(names)
+from planner.port import role_methods
 
 
 class RoleView:

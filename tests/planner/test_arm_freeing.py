@@ -11,10 +11,11 @@ from py_trees.common import Status
 
 from planner.leaves import Retreat
 from planner.leaves.palm_motion import ArmsHome
-from planner.port import ArmJoints, Pose
+from planner.port import ArmJoints, ObstacleInfo, Pose
 from planner.testing import FakeWorld
 from planner.testing.fake_world import FakeObject
-from planner.testing.harness import TickLog
+from planner.testing.harness import TickLog, set_up
+from skills.library import SkillLibrary
 from skills.types import Array
 from skills.vocabulary import ARMS, Arm
 
@@ -134,3 +135,50 @@ def test_the_way_home_takes_the_farthest_joint_at_the_mean_speed() -> None:
     for _ in range(round(ArmsHome.SETTLE_S / dt) + 1):
         home.step(dt)
     assert home.arrived()
+
+
+def test_a_leaf_halted_on_the_way_home_gives_the_arm_back_where_it_is(
+    library: SkillLibrary,
+) -> None:
+    world = PinnedArmWorld(Arm.LEFT, unpins=False)
+    leaf = set_up(Retreat("back_off"), world, library, segment_s=1.0)
+    for _ in range(2000):
+        leaf.tick_once()
+        if "going home in joint space" in leaf.feedback_message:
+            break
+        world.advance(DT)
+    else:
+        pytest.fail("the retreat never started freeing its arm")
+    for _ in range(10):
+        world.advance(DT)
+        leaf.tick_once()
+    assert leaf.status == Status.RUNNING
+    stuck_at = world.palm_pose(Arm.LEFT).position
+    leaf.stop(Status.INVALID)  # a parent's Timeout
+    # The palm law holds the arm where it is, not at the rest pose it could not reach.
+    assert world.palm_target(Arm.LEFT).position == pytest.approx(stuck_at, abs=1e-12)
+    assert leaf.freeing is None
+
+
+def test_after_going_home_the_last_stretch_must_be_clear(tick_leaf: Tick) -> None:
+    class ComesHomeAside(PinnedArmWorld):
+        """Going home brings the palm 20 cm beside its rest pose, behind a sphere."""
+
+        def command_joints(self, arm: Arm, q: Array) -> None:
+            super().command_joints(arm, q)
+            if arm not in self.pinned and arm is Arm.LEFT and not self.moved_aside:
+                rest = self.rest_palm_pose(arm)
+                aside = Pose(rest.position + np.array([0.0, 0.2, 0.0]), rest.orientation)
+                self._palms[arm] = self._targets[arm] = aside
+                self.moved_aside = True
+
+    world = ComesHomeAside(Arm.LEFT)
+    world.moved_aside = False
+    rest = world.rest_palm_pose(Arm.LEFT).position
+    world._all_obstacles["ball"] = ObstacleInfo("ball", rest + np.array([0.0, 0.1, 0.0]), 0.03)
+    world.set_active_obstacles(["ball"])
+    log = tick_leaf(Retreat("back_off"), world, segment_s=1.0, margin_m=0.01)
+    assert log.final == Status.FAILURE
+    assert log.feedback.startswith(
+        "left arm freed and home, but the way from there to the last poses is not clear"
+    ), log.feedback
