@@ -48,9 +48,9 @@ IntArray = NDArray[np.intp]
 
 #: Posture weight of the joints of an arm held in joint space
 #: (:meth:`DualArmImpedanceController.set_joint_target`): with the default gains' posture
-#: spring and damper (5 N m/rad, 1 N m s/rad), 60 N m/rad and 12 N m s/rad on every joint. On the iiwa it took an arm folded
-#: against two limits, its forearm pressed on the table, to its rest posture in 1.5 s
-#: (the default world's 1000-trial record, trial 516).
+#: spring and damper (5 N m/rad, 1 N m s/rad), 60 N m/rad and 12 N m s/rad on every joint.
+#: On the iiwa it took an arm folded against two limits, its forearm pressed on the table,
+#: to its rest posture (the default world's 1000-trial record, trial 516).
 JOINT_HOLD_WEIGHT = 12.0
 
 
@@ -315,9 +315,10 @@ class DualArmImpedanceController:
         leaves the law (no palm spring, and the posture no longer projected away from the
         palm's directions) until the next :meth:`set_command` of the arm. Gravity and the
         joint-limit repulsion stay; a posture band's pull off the limits
-        (``posture_limit_band``) gives way to the hold on the arm's joints. A way out for an arm the palm law cannot move: folded
-        against its limits with a link pressed on the table, it pushes that link harder into
-        the table the higher it is asked to lift its palm."""
+        (``posture_limit_band``) gives way to the hold on the arm's joints. A way out for an
+        arm the palm law cannot move: folded against its limits with a link pressed on the
+        table, it pushes that link harder into the table the higher it is asked to lift its
+        palm."""
         i = self.ARMS.index(Arm(arm))
         rows = self._arm_rows[i]
         self._joint_target[rows] = checked_vector(q, (self._n,), "set_joint_target")
