@@ -8,6 +8,7 @@ through without stopping or jumping.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from typing import Any, ClassVar, cast
 
 import numpy as np
@@ -17,7 +18,8 @@ from planner.leaves.base import MotionLeaf
 from planner.port import ArmJoints, ObstacleScene, Pose, offers
 from skills import quaternion as quat
 from skills.pose_dmp import PoseDMP, PoseModel, PoseState
-from skills.vocabulary import Arm
+from skills.types import Array
+from skills.vocabulary import ARMS, Arm
 
 
 class ViaPointMotion:
@@ -119,6 +121,61 @@ def measured_state(pose: Pose, twist: np.ndarray) -> PoseState:
     )
 
 
+@dataclass(frozen=True)
+class PalmPath:
+    """A route's predicted palm path, one row per control step from the start.
+
+    Attributes
+    ----------
+    positions : ndarray, shape (N, 2, 3)
+        Left and right palm positions, world frame, m.
+    orientations : ndarray, shape (N, 2, 4)
+        Their orientations, scalar-last.
+    segments : ndarray, shape (N, 2)
+        Index of the via-point each palm heads for at each step.
+    """
+
+    positions: Array
+    orientations: Array
+    segments: Array
+
+
+def predict_palm_path(
+    starts: Mapping[Arm, PoseState],
+    waypoints: Mapping[Arm, Sequence[Pose]],
+    segment_tau: float,
+    dt: float,
+) -> PalmPath:
+    """Roll out the via-point motion the leaf would run, open loop, until it ends.
+
+    Parameters
+    ----------
+    starts : mapping Arm -> PoseState
+        Where each palm starts.
+    waypoints : mapping Arm -> sequence of Pose
+        Via-points then the final pose, world frame.
+    segment_tau : float
+        Duration scale of each segment, s.
+    dt : float
+        Control step, s.
+    """
+    motion = ViaPointMotion(starts, waypoints, segment_tau)
+    most = max(len(w) for w in waypoints.values())
+    # Every segment but the last hands over at ``switch_at``; the last converges in a few tau.
+    n_max = int(np.ceil((most * motion.switch_at + 4.0) * segment_tau / dt))
+    positions = [np.stack([starts[a].position for a in ARMS])]
+    orientations = [np.stack([starts[a].orientation for a in ARMS])]
+    segments = [np.zeros(2, dtype=int)]
+    for _ in range(n_max):
+        states = motion.step(dt)
+        positions.append(np.stack([states[a].position for a in ARMS]))
+        orientations.append(np.stack([states[a].orientation for a in ARMS]))
+        segments.append(np.array([motion.index[a] for a in ARMS]))
+        if motion.done():
+            break
+    return PalmPath(np.array(positions), np.array(orientations), np.array(segments))
+
+
 class ViaPointLeaf(MotionLeaf):
     """A leaf that moves both palms through via-points: subclasses plan ``self.motion``.
 
@@ -215,8 +272,6 @@ class ViaPointLeaf(MotionLeaf):
         waypoints = {arm: [pose] for arm, pose in last.items()}
         tau = self.motion.segment_tau
         if offers(palms, ObstacleScene):
-            from planner.leaves.palm_routes import predict_palm_path
-
             path = predict_palm_path(starts, waypoints, tau, self.control_dt)
             check = cast(ObstacleScene, palms).check_palm_path(
                 path.positions, path.orientations, self._margin_m()

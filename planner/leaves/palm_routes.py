@@ -17,10 +17,14 @@ from dataclasses import dataclass
 import numpy as np
 from py_trees.ports import PortInformation
 
-from planner.leaves.palm_motion import ViaPointLeaf, ViaPointMotion
+from planner.leaves.palm_motion import (
+    PalmPath,
+    ViaPointLeaf,
+    ViaPointMotion,
+    predict_palm_path,
+)
 from planner.port import ObstacleInfo, ObstacleScene, PathCheck, Pose
 from skills.pose_dmp import PoseState
-from skills.types import Array
 from skills.vocabulary import ARMS, Arm
 
 #: How far beyond an obstacle's bounding sphere a detour's via-point puts the palm, m: about a
@@ -57,25 +61,6 @@ class PalmRoute:
 
 
 @dataclass(frozen=True)
-class PalmPath:
-    """A route's predicted palm path, one row per control step from the start.
-
-    Attributes
-    ----------
-    positions : ndarray, shape (N, 2, 3)
-        Left and right palm positions, world frame, m.
-    orientations : ndarray, shape (N, 2, 4)
-        Their orientations, scalar-last.
-    segments : ndarray, shape (N, 2)
-        Index of the via-point each palm heads for at each step.
-    """
-
-    positions: Array
-    orientations: Array
-    segments: Array
-
-
-@dataclass(frozen=True)
 class RouteChoice:
     """The route a leaf takes and why.
 
@@ -103,42 +88,6 @@ class RouteChoice:
     contact_free: bool
     note: str
     ends_in_contact: str = ""
-
-
-def predict_palm_path(
-    starts: Mapping[Arm, PoseState],
-    waypoints: Mapping[Arm, Sequence[Pose]],
-    segment_tau: float,
-    dt: float,
-) -> PalmPath:
-    """Roll out the via-point motion the leaf would run, open loop, until it ends.
-
-    Parameters
-    ----------
-    starts : mapping Arm -> PoseState
-        Where each palm starts.
-    waypoints : mapping Arm -> sequence of Pose
-        Via-points then the final pose, world frame.
-    segment_tau : float
-        Duration scale of each segment, s.
-    dt : float
-        Control step, s.
-    """
-    motion = ViaPointMotion(starts, waypoints, segment_tau)
-    most = max(len(w) for w in waypoints.values())
-    # Every segment but the last hands over at ``switch_at``; the last converges in a few tau.
-    n_max = int(np.ceil((most * motion.switch_at + 4.0) * segment_tau / dt))
-    positions = [np.stack([starts[a].position for a in ARMS])]
-    orientations = [np.stack([starts[a].orientation for a in ARMS])]
-    segments = [np.zeros(2, dtype=int)]
-    for _ in range(n_max):
-        states = motion.step(dt)
-        positions.append(np.stack([states[a].position for a in ARMS]))
-        orientations.append(np.stack([states[a].orientation for a in ARMS]))
-        segments.append(np.array([motion.index[a] for a in ARMS]))
-        if motion.done():
-            break
-    return PalmPath(np.array(positions), np.array(orientations), np.array(segments))
 
 
 def detour(route: PalmRoute, path: PalmPath, obstacles: Sequence[ObstacleInfo]) -> PalmRoute:
