@@ -11,8 +11,8 @@ from py_trees.common import Status
 
 from planner.leaves import Retreat
 from planner.leaves.palm_motion import ArmsHome
-from planner.port import ArmJoints, ObstacleInfo, Pose
-from planner.testing import FakeWorld
+from planner.port import ArmJoints, ObstacleInfo, PalmControl, Pose, offers
+from planner.testing import FakeWorld, RoleView
 from planner.testing.fake_world import FakeObject
 from planner.testing.harness import TickLog, set_up
 from skills.library import SkillLibrary
@@ -182,3 +182,11 @@ def test_after_going_home_the_last_stretch_must_be_clear(tick_leaf: Tick) -> Non
     assert log.feedback.startswith(
         "left arm freed and home, but the way from there to the last poses is not clear"
     ), log.feedback
+
+
+def test_a_world_offers_a_role_through_a_role_view_only_if_the_view_declares_it() -> None:
+    world = PinnedArmWorld(Arm.LEFT)
+    assert offers(world, ArmJoints)
+    assert offers(RoleView(world, Retreat.WORLD_ROLES), ArmJoints)
+    assert not offers(RoleView(world, (PalmControl,)), ArmJoints)
+    assert not offers(FakeWorld(), ArmJoints)
