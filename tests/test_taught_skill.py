@@ -169,14 +169,20 @@ def test_a_taught_wave_carries_the_parcel_in_physics(taught: Path, tmp_path: Pat
     assert all(e is not None and e < 0.01 for e in report.placement_error_m)
 
 
+def noisy_carry_csv(path: Path, sigma_m: float, seed: int) -> Path:
+    """The pick-and-place teacher's carry with ``sigma_m`` of white noise on each sample's
+    position, written as a demonstration CSV at ``path``."""
+    demo = waved_carry(0.0, seed=2)
+    assert demo.orientations is not None
+    noise = sigma_m * np.random.default_rng(seed).standard_normal(demo.positions.shape)
+    return write_demo_csv(path, demo.t, demo.positions + noise, demo.orientations)
+
+
 def test_teach_smooths_a_noisy_recording_and_refuses_one_it_cannot_learn(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     # The pick-and-place teacher's carry recorded with 0.5 mm of white noise per sample.
-    demo = waved_carry(0.0, seed=2)
-    assert demo.orientations is not None
-    noisy = demo.positions + 5e-4 * np.random.default_rng(0).standard_normal(demo.positions.shape)
-    csv = write_demo_csv(tmp_path / "noisy.csv", demo.t, noisy, demo.orientations)
+    csv = noisy_carry_csv(tmp_path / "noisy.csv", 5e-4, seed=0)
     argv = ["teach", str(csv), "--label", "noisy", "--space", "absolute", "--force"]
     # As recorded, the forcing fits the noise and the skill leaves its goal: nothing is saved.
     raw = tmp_path / "raw"
@@ -225,10 +231,7 @@ def test_teach_tells_a_noisy_recording_from_a_cut_one(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     # With 2 mm of noise a sample's own speed at the end had been taken for a cut motion.
-    demo = waved_carry(0.0, seed=2)
-    assert demo.orientations is not None
-    noisy = demo.positions + 2e-3 * np.random.default_rng(1).standard_normal(demo.positions.shape)
-    csv = write_demo_csv(tmp_path / "noisy.csv", demo.t, noisy, demo.orientations)
+    csv = noisy_carry_csv(tmp_path / "noisy.csv", 2e-3, seed=1)
     argv = ["teach", str(csv), "--label", "noisy", "--space", "absolute", "--force"]
     code = app.main([*argv, "--library", str(tmp_path / "lib"), "--smooth-ms", "10"])
     err = capsys.readouterr().err

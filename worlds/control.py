@@ -227,7 +227,6 @@ class DualArmImpedanceController:
         self._applied = self._tau
         self._q_lin = np.zeros(total)
         self._joint_target = np.zeros(total)
-        self._joint_rows = np.zeros(total, dtype=bool)
         self._terms: list[ImpedanceTerms] = []
         self._jacobians: list[FloatArray] = []  # per batch, (k, 6t, n), as last linearised
         self._targets_changed = True
@@ -323,12 +322,10 @@ class DualArmImpedanceController:
         rows = self._arm_rows[i]
         self._joint_target[rows] = checked_vector(q, (self._n,), "set_joint_target")
         self._joint_space[i] = True
-        self._joint_rows[rows] = True
         self._steps_since_refresh = self.refresh_every
 
     def _leave_joint_space(self, i: int) -> None:
         self._joint_space[i] = False
-        self._joint_rows[self._arm_rows[i]] = False
         self._steps_since_refresh = self.refresh_every
 
     def in_joint_space(self, arm: Arm) -> bool:
@@ -510,7 +507,10 @@ class DualArmImpedanceController:
         if self._avoids_limits:
             gains, rest = self._limit_posture(gains, rows, rest)
         if True in self._joint_space:
-            held = self._joint_rows[rows]
+            held = np.zeros(len(self._driven), dtype=bool)
+            for i, on in enumerate(self._joint_space):
+                held[self._arm_rows[i]] = on
+            held = held[rows]
             rest = np.where(held, self._joint_target[rows], rest)
             weight = gains.posture_weight
             weight = np.ones_like(rest) if weight is None else weight

@@ -254,9 +254,9 @@ class ViaPointLeaf(MotionLeaf):
         to the palm law and go on from where the palms are to the motion's last poses (at
         once where they are there already, a retreat's rest poses)."""
         assert self.freeing is not None and self.motion is not None
-        world = cast(ArmJoints, self.world)
+        joints = cast(ArmJoints, self.world)
         for arm, q in self.freeing.step(self.control_dt).items():
-            world.command_joints(arm, q)
+            joints.command_joints(arm, q)
         if not self.freeing.arrived():
             return self.running(f"{self.MOVING}: {self.route_note}, going home in joint space")
         palms = self.world
@@ -288,8 +288,7 @@ class ViaPointLeaf(MotionLeaf):
 
     def _margin_m(self) -> float:
         """The clearance the leaf's ways keep (its ``margin_m`` port; 0 without one), m."""
-        ports = getattr(self, "INPUT_PORTS", {})
-        return float(self.get_input("margin_m")) if "margin_m" in ports else 0.0
+        return float(self.get_input("margin_m")) if "margin_m" in self.INPUT_PORTS else 0.0
 
     def short_arms(self) -> dict[Arm, float]:
         """The palms measured more than :attr:`ARRIVAL_M` from their last poses, with how
@@ -314,8 +313,10 @@ def _arms(arms: Sequence[Arm]) -> str:
 
 def _stopped_short(short: Mapping[Arm, float], limit_m: float) -> str:
     """Why the leaf fails: each palm short of its last pose and by how much."""
-    palms = " and ".join(f"the {arm.value} palm {gap * 1000:.0f} mm" for arm, gap in short.items())
-    palms = palms.replace(" palm ", " palm stopped ", 1)
+    palms = " and ".join(
+        f"the {arm.value} palm{' stopped' if k == 0 else ''} {gap * 1000:.0f} mm"
+        for k, (arm, gap) in enumerate(short.items())
+    )
     return (
         f"{palms} from {'their poses' if len(short) > 1 else 'its pose'} (more than "
         f"{limit_m * 1000:.0f} mm): {'their arms' if len(short) > 1 else 'its arm'} did not "
